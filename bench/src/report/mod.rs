@@ -1,0 +1,1 @@
+//! Learning-curve statistics and plots (being written).

@@ -1,0 +1,117 @@
+//! Simulated plants of Grondman's thesis (Appendix A) and the pieces every plant shares.
+//!
+//! * [`Dynamics`] — a continuous-time system `ẋ = f(x, u)`; implemented by
+//!   [`pendulum::Pendulum`] (Appendix A.1), [`two_link::TwoLink`] (Appendix A.2) and
+//!   [`double_integrator::DoubleIntegrator`] (a linear check system).
+//! * [`rk4`] — fixed-step fourth-order Runge–Kutta with a zero-order-hold input.
+//! * [`reward::QuadraticReward`] — Eq. 3.16 / 5.1 / 5.2 / 6.20 with ∂ρ/∂x and ∂ρ/∂u.
+//! * [`task::Task`] — everything an experiment needs to know about a system: dynamics,
+//!   sampling time, action bounds, reward, start states, trial length.
+//! * [`Plant`] — the step function: saturate the action, integrate one sample period,
+//!   wrap the angles.
+//!
+//! Conventions: SI units; angles wrapped to [-π, π); actions saturated at the plant
+//! whatever the caller sends; non-finite actions replaced by the safe action (zero).
+
+pub mod angle;
+pub mod double_integrator;
+pub mod pendulum;
+pub mod reward;
+pub mod rk4;
+pub mod task;
+pub mod two_link;
+
+pub use reward::QuadraticReward;
+pub use task::{SystemName, Task};
+
+/// Largest state dimension of any system in this crate (the two-link arm has 4; a
+/// finite-horizon learner appends time, which lives in the agent, not here).
+pub const MAX_STATE: usize = 8;
+/// Largest action dimension of any system in this crate.
+pub const MAX_ACTION: usize = 4;
+
+/// A continuous-time system `ẋ = f(x, u)`.
+pub trait Dynamics: Send + Sync {
+    /// Number of state components `n`.
+    fn state_dim(&self) -> usize;
+    /// Number of action components `m`.
+    fn action_dim(&self) -> usize;
+    /// Writes `f(x, u)` into `dx` (all slices have the lengths above).
+    fn derivative(&self, x: &[f64], u: &[f64], dx: &mut [f64]);
+}
+
+/// The simulated plant: one sample period of a [`Task`]'s system per [`Plant::step`].
+///
+/// The action is saturated to the task's bounds (Eq. 6.11's `sat`); a non-finite action
+/// component is replaced by zero, the safe action, and counted.
+pub struct Plant {
+    task: std::sync::Arc<Task>,
+    x: Vec<f64>,
+    applied: Vec<f64>,
+    rejected_actions: u64,
+}
+
+impl Plant {
+    /// A plant for `task`, at the task's first start state.
+    pub fn new(task: std::sync::Arc<Task>) -> Self {
+        let x = task.initial_states[0].clone();
+        let applied = vec![0.0; task.action_dim()];
+        Self { task, x, applied, rejected_actions: 0 }
+    }
+
+    /// The task this plant simulates.
+    pub fn task(&self) -> &Task {
+        &self.task
+    }
+
+    /// Puts the plant at state `x0` (angles wrapped).
+    pub fn reset(&mut self, x0: &[f64]) {
+        self.x.copy_from_slice(x0);
+        self.task.wrap_state(&mut self.x);
+    }
+
+    /// The current state `x_k`.
+    pub fn state(&self) -> &[f64] {
+        &self.x
+    }
+
+    /// The action applied by the last [`Plant::step`] (after saturation).
+    pub fn applied_action(&self) -> &[f64] {
+        &self.applied
+    }
+
+    /// How many non-finite action components have been replaced by the safe action.
+    pub fn rejected_actions(&self) -> u64 {
+        self.rejected_actions
+    }
+
+    /// Saturates `u` to the action bounds, replacing non-finite components by zero.
+    /// Returns how many components were non-finite.
+    pub fn saturate(task: &Task, u: &[f64], out: &mut [f64]) -> u64 {
+        let mut rejected = 0;
+        for i in 0..out.len() {
+            let ui = u[i];
+            out[i] = if ui.is_finite() {
+                ui.clamp(task.action_low[i], task.action_high[i])
+            } else {
+                rejected += 1;
+                0.0
+            };
+        }
+        rejected
+    }
+
+    /// Applies `u` (saturated) for one sample period `Ts` and returns the reward
+    /// `ρ(x_k, u_k)` of the transition: the state before it and the action actually applied
+    /// (Eq. 3.16).
+    pub fn step(&mut self, u: &[f64]) -> f64 {
+        self.rejected_actions += Self::saturate(&self.task, u, &mut self.applied);
+        let r = self.task.reward.reward(&self.x, &self.applied);
+        let h = self.task.ts / self.task.substeps as f64;
+        for _ in 0..self.task.substeps {
+            rk4::step(self.task.dynamics.as_ref(), &mut self.x, &self.applied, h);
+        }
+        self.task.wrap_state(&mut self.x);
+        r
+    }
+}

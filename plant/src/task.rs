@@ -1,0 +1,302 @@
+//! Tasks: a system together with everything an experiment on it needs.
+
+use std::f64::consts::PI;
+
+use serde::{Deserialize, Serialize};
+
+use crate::angle::wrap;
+use crate::double_integrator::DoubleIntegrator;
+use crate::pendulum::Pendulum;
+use crate::two_link::TwoLink;
+use crate::{Dynamics, QuadraticReward};
+
+/// The systems an experiment can run on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SystemName {
+    /// Pendulum swing-up, §3.6 and §6.4.1 (Appendix A.1).
+    Pendulum,
+    /// Two-link arm in the vertical plane, Case I (§5.3): inject damping.
+    ArmVertical,
+    /// Two-link arm in the horizontal plane, Case II (§5.4): reach a reference.
+    ArmHorizontal,
+    /// Linear double integrator with a quadratic reward (LQR check).
+    DoubleIntegrator,
+}
+
+impl SystemName {
+    /// All systems, for `--help` texts and validation messages.
+    pub const ALL: [SystemName; 4] = [
+        SystemName::Pendulum,
+        SystemName::ArmVertical,
+        SystemName::ArmHorizontal,
+        SystemName::DoubleIntegrator,
+    ];
+
+    /// The command-line / config spelling.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SystemName::Pendulum => "pendulum",
+            SystemName::ArmVertical => "arm-vertical",
+            SystemName::ArmHorizontal => "arm-horizontal",
+            SystemName::DoubleIntegrator => "double-integrator",
+        }
+    }
+}
+
+impl std::fmt::Display for SystemName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// A system with its sampling, limits, reward and trial definition.
+pub struct Task {
+    /// Which system this is.
+    pub name: SystemName,
+    /// `ẋ = f(x, u)`.
+    pub dynamics: Box<dyn Dynamics>,
+    /// Sampling time `Ts` [s].
+    pub ts: f64,
+    /// RK4 sub-steps per sample period (see [`crate::rk4`]).
+    pub substeps: usize,
+    /// Lower action bounds.
+    pub action_low: Vec<f64>,
+    /// Upper action bounds.
+    pub action_high: Vec<f64>,
+    /// Which state components are angles (wrapped to [-π, π)).
+    pub angle_mask: Vec<bool>,
+    /// The reward `ρ(x, u)`.
+    pub reward: QuadraticReward,
+    /// Start states; trial `i` starts in `initial_states[i % len]`.
+    pub initial_states: Vec<Vec<f64>>,
+    /// Trial length [s].
+    pub trial_seconds: f64,
+    /// The region of the state space that parametric approximators cover (RBF grids,
+    /// tilings): `(low, high)` per state component.
+    pub state_range: Vec<(f64, f64)>,
+    /// Short names of the state components, for files and plots.
+    pub state_names: Vec<&'static str>,
+}
+
+impl Task {
+    /// The task for `name` with the thesis's settings.
+    pub fn new(name: SystemName) -> Self {
+        match name {
+            SystemName::Pendulum => Self::pendulum(),
+            SystemName::ArmVertical => Self::arm(name, TwoLink::vertical(), vec![-1.1, 1.0, 0.0, 0.0], vec![0.0; 4], 6.0),
+            SystemName::ArmHorizontal => Self::arm(
+                name,
+                TwoLink::horizontal(),
+                vec![-3.0, 1.0, 0.0, 0.0],
+                vec![1.1, -0.5, 0.0, 0.0],
+                6.0,
+            ),
+            SystemName::DoubleIntegrator => Self::double_integrator(),
+        }
+    }
+
+    /// Pendulum swing-up (§3.6, Table A.1): `Ts = 0.03 s`, `u ∈ [−3, 3] V`, 3 s trials
+    /// from `[π, 0]`, reward Eq. 3.16 with `Q = diag(5, 0.1)`, `P = 1`. Parametric
+    /// approximators cover `φ̇ ∈ [−8π, 8π]`, the bound footnote 4 of §3.6 assumes.
+    pub fn pendulum() -> Self {
+        Self {
+            name: SystemName::Pendulum,
+            dynamics: Box::new(Pendulum::default()),
+            ts: 0.03,
+            substeps: 20,
+            action_low: vec![-3.0],
+            action_high: vec![3.0],
+            angle_mask: vec![true, false],
+            reward: QuadraticReward {
+                q: vec![5.0, 0.1],
+                p: vec![1.0],
+                reference: vec![0.0, 0.0],
+                angle_mask: vec![true, false],
+            },
+            initial_states: vec![vec![PI, 0.0]],
+            trial_seconds: 3.0,
+            state_range: vec![(-PI, PI), (-8.0 * PI, 8.0 * PI)],
+            state_names: vec!["phi", "phi_dot"],
+        }
+    }
+
+    /// Two-link arm of Chapter 5 (Table A.2), `Ts = 0.03 s`, reward Eq. 5.1/5.2 with
+    /// `Q = diag(5, 5, 0.1, 0.1)`, `P = I`. The thesis gives no torque limit for this
+    /// arm; ±1 N m is used here.
+    fn arm(name: SystemName, arm: TwoLink, x0: Vec<f64>, reference: Vec<f64>, trial_seconds: f64) -> Self {
+        let angle_mask = vec![true, true, false, false];
+        Self {
+            name,
+            dynamics: Box::new(arm),
+            ts: 0.03,
+            substeps: 10,
+            action_low: vec![-1.0, -1.0],
+            action_high: vec![1.0, 1.0],
+            angle_mask: angle_mask.clone(),
+            reward: QuadraticReward { q: vec![5.0, 5.0, 0.1, 0.1], p: vec![1.0, 1.0], reference, angle_mask },
+            initial_states: vec![x0],
+            trial_seconds,
+            state_range: vec![(-PI, PI), (-PI, PI), (-2.0 * PI, 2.0 * PI), (-2.0 * PI, 2.0 * PI)],
+            state_names: vec!["phi1", "phi2", "phi1_dot", "phi2_dot"],
+        }
+    }
+
+    /// Double integrator: `Ts = 0.05 s`, `u ∈ [−5, 5] N`, `Q = diag(1, 0.1)`, `P = 0.1`,
+    /// 3 s trials from `[1, 0]`.
+    fn double_integrator() -> Self {
+        Self {
+            name: SystemName::DoubleIntegrator,
+            dynamics: Box::new(DoubleIntegrator::default()),
+            ts: 0.05,
+            substeps: 1,
+            action_low: vec![-5.0],
+            action_high: vec![5.0],
+            angle_mask: vec![false, false],
+            reward: QuadraticReward {
+                q: vec![1.0, 0.1],
+                p: vec![0.1],
+                reference: vec![0.0, 0.0],
+                angle_mask: vec![false, false],
+            },
+            initial_states: vec![vec![1.0, 0.0]],
+            trial_seconds: 3.0,
+            state_range: vec![(-2.0, 2.0), (-2.0, 2.0)],
+            state_names: vec!["p", "v"],
+        }
+    }
+
+    /// State dimension `n`.
+    pub fn state_dim(&self) -> usize {
+        self.dynamics.state_dim()
+    }
+
+    /// Action dimension `m`.
+    pub fn action_dim(&self) -> usize {
+        self.dynamics.action_dim()
+    }
+
+    /// Samples per trial.
+    pub fn steps_per_trial(&self) -> usize {
+        (self.trial_seconds / self.ts).round() as usize
+    }
+
+    /// Wraps the angle components of `x` to [-π, π).
+    pub fn wrap_state(&self, x: &mut [f64]) {
+        for (xi, &is_angle) in x.iter_mut().zip(&self.angle_mask) {
+            if is_angle {
+                *xi = wrap(*xi);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Plant;
+    use std::sync::Arc;
+
+    fn trajectory(task: Task, u: impl Fn(usize) -> f64) -> Vec<Vec<f64>> {
+        let mut plant = Plant::new(Arc::new(task));
+        let x0 = plant.task().initial_states[0].clone();
+        plant.reset(&x0);
+        let steps = plant.task().steps_per_trial();
+        (0..steps)
+            .map(|k| {
+                plant.step(&[u(k)]);
+                plant.state().to_vec()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn halving_the_substep_changes_little() {
+        // A 3 s swing with a sign-alternating input, so the trajectory is far from trivial.
+        let u = |k: usize| if (k / 20) % 2 == 0 { 3.0 } else { -3.0 };
+        let coarse = trajectory(Task::pendulum(), u);
+        let mut fine_task = Task::pendulum();
+        fine_task.substeps *= 2;
+        let fine = trajectory(fine_task, u);
+        let max_dev = coarse
+            .iter()
+            .zip(&fine)
+            .flat_map(|(a, b)| a.iter().zip(b).map(|(p, q)| wrap(p - q).abs()))
+            .fold(0.0, f64::max);
+        assert!(max_dev < 1e-6, "max deviation {max_dev}");
+        // And the trajectory really moves: it leaves the bottom by more than a radian.
+        assert!(coarse.iter().any(|x| x[0].abs() < PI - 1.0));
+    }
+
+    #[test]
+    fn undamped_pendulum_conserves_energy() {
+        let p = Pendulum { damping: 0.0, torque_constant: 0.0, ..Pendulum::default() };
+        let mut task = Task::pendulum();
+        task.dynamics = Box::new(p.clone());
+        task.initial_states = vec![vec![PI - 0.5, 0.0]];
+        let e0 = p.energy(&task.initial_states[0]);
+        let traj = trajectory(task, |_| 0.0);
+        let max_err = traj.iter().map(|x| (p.energy(x) - e0).abs()).fold(0.0, f64::max);
+        // Relative to the potential-energy scale M g l.
+        let scale = p.mass * p.gravity * p.length;
+        assert!(max_err / scale < 1e-6, "relative energy drift {}", max_err / scale);
+        assert!(traj.iter().any(|x| x[1].abs() > 1.0), "the pendulum must actually swing");
+    }
+
+    #[test]
+    fn actions_are_saturated_and_non_finite_rejected() {
+        let mut plant = Plant::new(Arc::new(Task::pendulum()));
+        plant.step(&[10.0]);
+        assert_eq!(plant.applied_action(), &[3.0]);
+        plant.step(&[-1e9]);
+        assert_eq!(plant.applied_action(), &[-3.0]);
+        plant.step(&[f64::NAN]);
+        assert_eq!(plant.applied_action(), &[0.0]);
+        plant.step(&[f64::INFINITY]);
+        assert_eq!(plant.applied_action(), &[0.0]);
+        assert_eq!(plant.rejected_actions(), 2);
+        assert!(plant.state().iter().all(|v| v.is_finite()));
+    }
+
+    #[test]
+    fn reward_uses_state_before_transition_and_applied_action() {
+        let mut plant = Plant::new(Arc::new(Task::pendulum()));
+        plant.reset(&[PI, 0.0]);
+        let r = plant.step(&[7.0]);
+        assert!((r - (-5.0 * PI * PI - 9.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn saturated_input_cannot_lift_the_pendulum_directly() {
+        // §3.6: |u| ≤ 3 V makes a direct swing-up impossible. Constant +3 V balances
+        // gravity 48° from the bottom (sin φ = (K/R)·3 / (M g l) = 0.75), so the step
+        // response overshoots to at most ~96° from the bottom and never comes within 60°
+        // of upright.
+        let traj = trajectory(Task::pendulum(), |_| 3.0);
+        assert!(traj.iter().all(|x| x[0].abs() > PI / 3.0));
+        assert!(traj.iter().any(|x| x[0].abs() < PI / 2.0), "but it does pass the horizontal");
+    }
+
+    #[test]
+    fn arm_horizontal_without_input_keeps_its_angles() {
+        let task = Task::new(SystemName::ArmHorizontal);
+        let mut plant = Plant::new(Arc::new(task));
+        plant.reset(&[-3.0, 1.0, 0.0, 0.0]);
+        for _ in 0..100 {
+            plant.step(&[0.0, 0.0]);
+        }
+        assert!((plant.state()[0] + 3.0).abs() < 1e-12 && (plant.state()[1] - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn arm_vertical_swings_without_input() {
+        let mut plant = Plant::new(Arc::new(Task::new(SystemName::ArmVertical)));
+        plant.reset(&[-1.1, 1.0, 0.0, 0.0]);
+        let mut max_speed: f64 = 0.0;
+        for _ in 0..200 {
+            plant.step(&[0.0, 0.0]);
+            max_speed = max_speed.max(plant.state()[2].abs());
+        }
+        assert!(max_speed > 0.5, "gravity must accelerate link 1");
+    }
+}
