@@ -1,1 +1,41 @@
-//! placeholder
+//! Learning agents of Grondman's thesis: function approximators (§3.5) and the
+//! actor-critic algorithms SAC, MLAC and RMAC (Chapter 3, Algorithms 1–3).
+//!
+//! * [`approx`] — RBF ([`approx::rbf`]), LLR ([`approx::llr`]) and tile coding
+//!   ([`approx::tiles`]) behind the [`approx::Approximator`] traits.
+//! * [`actor_critic`] — Template 2.1, the loop every algorithm shares; [`sac`],
+//!   [`mlac`], [`rmac`] — what each algorithm does differently; [`model`] — the learned
+//!   process model; [`explore`] — Gaussian exploration.
+//! * [`config`], [`preset`], [`build()`] — from a configuration to a running agent.
+//!
+//! An [`Agent`] is a plain step function; it knows nothing about processes or
+//! transport.
+
+pub mod actor_critic;
+pub mod approx;
+mod build;
+pub mod config;
+pub mod explore;
+pub mod mlac;
+pub mod model;
+pub mod preset;
+pub mod rmac;
+pub mod sac;
+pub mod seed;
+
+pub use build::{LLR_REBUILD_EVERY, build};
+
+/// A learning controller, driven one sample at a time.
+///
+/// Per trial: [`Agent::start_trial`] with `x_0` gives `u_0`; then for every sample
+/// [`Agent::learn`] with `r_{k+1} = ρ(x_k, u_k)` and `x_{k+1}` learns from the transition
+/// and — unless it is the trial's last — gives `u_{k+1}`.
+pub trait Agent: Send {
+    /// Starts a trial in `x0` (clears eligibility traces) and writes the first action.
+    fn start_trial(&mut self, x0: &[f64], u: &mut [f64]);
+    /// Learns from the last transition; writes the next action if `u` is given.
+    fn learn(&mut self, r: f64, x_next: &[f64], u: Option<&mut [f64]>);
+    /// The greedy action in `x` — no exploration, no learning. `u_prev` is the action
+    /// applied in the previous sample (zero at a trial start).
+    fn greedy(&self, x: &[f64], u_prev: &[f64], u: &mut [f64]);
+}

@@ -1,0 +1,602 @@
+//! Local linear regression (§3.5.2): a memory of samples `[x | y]`; a query fits an
+//! affine model to the K nearest samples and evaluates it.
+//!
+//! * **Distance**: weighted Euclidean, the input scaling `diag(W)` of Table 6.2
+//!   (coordinates are stored pre-multiplied by `W`); angle inputs are compared by their
+//!   wrapped difference, so `φ = −π + ε` and `φ = π − ε` are neighbours.
+//! * **Neighbour search**: a [`KdTree`] over the memory, rebuilt every
+//!   [`LlrParams::rebuild_every`] insertions; newer samples are scanned linearly. Never a
+//!   sort of the whole memory.
+//! * **Fit**: `β = Y Xᵀ (X Xᵀ)⁻¹` solved as a centred ridge regression in coordinates
+//!   relative to the query: with `dᵢ = W (xᵢ − x_q)` (angles wrapped), the slope is
+//!   `B = (Σ d̃ d̃ᵀ + εI)⁻¹ Σ d̃ ỹᵀ` (tilde: minus the mean) and the prediction
+//!   `ŷ_q = ȳ − Bᵀ d̄`. The tiny ridge `ε` keeps the solve well-conditioned when the
+//!   neighbours are fewer than `n + 1` or coincide (repeated samples): the slope then
+//!   shrinks to zero and the prediction to the neighbours' mean — the "smallest-norm
+//!   solution" the thesis prescribes for an under-determined set.
+//! * **Memory management** ([`Eviction`]): when full, purge the oldest sample; or, with
+//!   [`Eviction::Redundant`], first let a new sample replace a stored one closer than a
+//!   given (scaled) distance — a repeated sample then refreshes its twin instead of
+//!   pushing an old, distinct sample out.
+//! * **Updates** (§3.5.2, "Application to SAC/MLAC/RMAC"): [`Approximator::shift`]
+//!   stores `[x | f(x)]` and adds the step to the output of it and its K−1 nearest
+//!   neighbours; [`Approximator::fit`] moves the neighbours' outputs towards the target and
+//!   stores `[x | target]`; a critic's [`Traced::visit`] stores `[x | V(x)]` and gives it
+//!   and its neighbours eligibility 1, decaying all others. Outputs can be bounded (the
+//!   actor's memory is saturated to the input bounds, so it never proposes an action
+//!   beyond them).
+
+use std::collections::VecDeque;
+
+use super::kdtree::{Best, Candidate, KdTree, MAX_DIM, MAX_K, dist2};
+use super::solve::cholesky_solve;
+use super::{Approximator, Differentiable, MAX_OUT, Traced};
+
+/// Traces below this are dropped (with λγ = 0.63 that is after 30 steps).
+const TRACE_CUTOFF: f64 = 1e-6;
+/// Ridge added to the scaled-input covariance of a fit, per neighbour.
+const RIDGE: f64 = 1e-9;
+
+/// What to remove when a sample arrives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Eviction {
+    /// When full, purge the oldest sample.
+    Oldest,
+    /// Replace a stored sample whose scaled distance to the new one is below the given
+    /// radius; otherwise, when full, purge the oldest.
+    Redundant(f64),
+}
+
+/// Parameters of one LLR memory (Tables 3.2 and 6.2).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LlrParams {
+    /// Memory size `N`.
+    pub memory: usize,
+    /// Nearest neighbours `K`.
+    pub neighbours: usize,
+    /// Input scaling `diag(W)`.
+    pub weights: Vec<f64>,
+    /// Which inputs are angles (period 2π).
+    pub periodic: Vec<bool>,
+    /// Output dimension `m`.
+    pub outputs: usize,
+    /// Optional output bounds `(low, high)`; stored outputs are clamped to them.
+    pub bounds: Option<(Vec<f64>, Vec<f64>)>,
+    /// Memory management rule.
+    pub eviction: Eviction,
+    /// Insertions between k-d tree rebuilds.
+    pub rebuild_every: usize,
+}
+
+/// The neighbourhood of a query and the local affine model fitted to it.
+struct Local {
+    best: Best,
+    /// Prediction at the query.
+    y: [f64; MAX_OUT],
+    /// Slope `∂y/∂x` in unscaled input units, row-major `m × n`.
+    jac: [f64; MAX_OUT * MAX_DIM],
+}
+
+/// An LLR memory.
+pub struct Llr {
+    n: usize,
+    m: usize,
+    k: usize,
+    cap: usize,
+    weights: Vec<f64>,
+    /// Period of each scaled input (2π·w for angles, 0 otherwise).
+    period: Vec<f64>,
+    bounds: Option<(Vec<f64>, Vec<f64>)>,
+    eviction: Eviction,
+    rebuild_every: usize,
+    // Sample storage, by slot.
+    inputs: Vec<f64>,
+    outputs: Vec<f64>,
+    seq: Vec<u64>,
+    trace: Vec<f64>,
+    len: usize,
+    next_seq: u64,
+    /// Slots in insertion order (lazily cleaned: an entry is stale when the slot's
+    /// sequence number has changed).
+    fifo: VecDeque<(u32, u64)>,
+    // Index.
+    tree: KdTree,
+    fresh: Vec<(u32, u64)>,
+    /// Slots with a non-zero trace.
+    traced: Vec<(u32, u64)>,
+}
+
+impl Llr {
+    /// An empty memory.
+    ///
+    /// # Panics
+    /// If the parameters are inconsistent (validated beforehand by the configuration).
+    pub fn new(p: &LlrParams) -> Self {
+        let n = p.weights.len();
+        assert!(n >= 1 && n <= MAX_DIM, "LLR input dimension {n} not in 1..={MAX_DIM}");
+        assert!(p.outputs >= 1 && p.outputs <= MAX_OUT);
+        assert!(p.neighbours >= 1 && p.neighbours <= MAX_K);
+        assert!(p.memory >= 1 && p.periodic.len() == n);
+        let period = p
+            .weights
+            .iter()
+            .zip(&p.periodic)
+            .map(|(w, &per)| if per { 2.0 * std::f64::consts::PI * w } else { 0.0 })
+            .collect();
+        Self {
+            n,
+            m: p.outputs,
+            k: p.neighbours,
+            cap: p.memory,
+            weights: p.weights.clone(),
+            period,
+            bounds: p.bounds.clone(),
+            eviction: p.eviction,
+            rebuild_every: p.rebuild_every.max(1),
+            inputs: Vec::with_capacity(p.memory * n),
+            outputs: Vec::with_capacity(p.memory * p.outputs),
+            seq: Vec::with_capacity(p.memory),
+            trace: Vec::with_capacity(p.memory),
+            len: 0,
+            next_seq: 0,
+            fifo: VecDeque::with_capacity(p.memory + 1),
+            tree: KdTree::default(),
+            fresh: Vec::new(),
+            traced: Vec::new(),
+        }
+    }
+
+    /// Number of stored samples.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the memory is empty.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The stored samples as `(x, y)` pairs in slot order (for plots and checkpoints).
+    pub fn samples(&self) -> impl Iterator<Item = (Vec<f64>, &[f64])> + '_ {
+        (0..self.len).map(move |s| {
+            let x = self.inputs[s * self.n..(s + 1) * self.n].iter().zip(&self.weights).map(|(v, w)| v / w).collect();
+            (x, &self.outputs[s * self.m..(s + 1) * self.m])
+        })
+    }
+
+    fn scale(&self, x: &[f64], out: &mut [f64; MAX_DIM]) {
+        for j in 0..self.n {
+            let mut v = x[j];
+            if self.period[j] > 0.0 {
+                v = plant::angle::wrap(v);
+            }
+            out[j] = v * self.weights[j];
+        }
+    }
+
+    fn coords(&self, slot: u32) -> &[f64] {
+        &self.inputs[slot as usize * self.n..(slot as usize + 1) * self.n]
+    }
+
+    /// The K nearest stored samples to the scaled query `q`.
+    fn nearest(&self, q: &[f64]) -> Best {
+        let mut best = Best::new(self.k);
+        for &(slot, seq) in &self.fresh {
+            if self.seq[slot as usize] == seq {
+                best.offer(Candidate { d2: dist2(self.coords(slot), q, &self.period), seq, slot });
+            }
+        }
+        self.tree.search(q, &self.period, &mut best, |slot, seq| self.seq[slot as usize] == seq);
+        best
+    }
+
+    /// Brute-force K nearest neighbours (the reference for the k-d tree).
+    #[cfg(test)]
+    fn nearest_brute_force(&self, x: &[f64]) -> Vec<u32> {
+        let mut q = [0.0; MAX_DIM];
+        self.scale(x, &mut q);
+        let mut all: Vec<Candidate> = (0..self.len as u32)
+            .map(|slot| Candidate { d2: dist2(self.coords(slot), &q[..self.n], &self.period), seq: self.seq[slot as usize], slot })
+            .collect();
+        all.sort_by(|a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
+        all.iter().take(self.k).map(|c| c.slot).collect()
+    }
+
+    /// Neighbourhood of `x` and the affine model fitted to it.
+    fn local(&self, x: &[f64]) -> Local {
+        let (n, m) = (self.n, self.m);
+        let mut q = [0.0; MAX_DIM];
+        self.scale(x, &mut q);
+        let best = self.nearest(&q[..n]);
+        let mut out = Local { best, y: [0.0; MAX_OUT], jac: [0.0; MAX_OUT * MAX_DIM] };
+        let nb = out.best.as_slice();
+        if nb.is_empty() {
+            return out;
+        }
+        let kf = nb.len() as f64;
+        // Relative scaled inputs and their mean; output mean.
+        let mut d = [[0.0; MAX_DIM]; MAX_K];
+        let (mut dm, mut ym) = ([0.0; MAX_DIM], [0.0; MAX_OUT]);
+        for (i, c) in nb.iter().enumerate() {
+            let p = self.coords(c.slot);
+            for j in 0..n {
+                let mut v = p[j] - q[j];
+                let per = self.period[j];
+                if per > 0.0 {
+                    if v >= 0.5 * per {
+                        v -= per;
+                    } else if v < -0.5 * per {
+                        v += per;
+                    }
+                }
+                d[i][j] = v;
+                dm[j] += v / kf;
+            }
+            let y = &self.outputs[c.slot as usize * m..(c.slot as usize + 1) * m];
+            for o in 0..m {
+                ym[o] += y[o] / kf;
+            }
+        }
+        // Centred normal equations S B = C.
+        let mut s = [0.0; MAX_DIM * MAX_DIM];
+        let mut cxy = [0.0; MAX_DIM * MAX_OUT];
+        for (i, c) in nb.iter().enumerate() {
+            let y = &self.outputs[c.slot as usize * m..(c.slot as usize + 1) * m];
+            for a in 0..n {
+                let da = d[i][a] - dm[a];
+                for b in 0..=a {
+                    s[a * n + b] += da * (d[i][b] - dm[b]);
+                }
+                for o in 0..m {
+                    cxy[a * m + o] += da * (y[o] - ym[o]);
+                }
+            }
+        }
+        for a in 0..n {
+            for b in 0..a {
+                s[b * n + a] = s[a * n + b];
+            }
+            s[a * n + a] += RIDGE * kf;
+        }
+        if !cholesky_solve(&mut s, n, &mut cxy, m) {
+            cxy = [0.0; MAX_DIM * MAX_OUT]; // fall back to the neighbours' mean
+        }
+        for o in 0..m {
+            let mut y = ym[o];
+            for j in 0..n {
+                let slope = cxy[j * m + o];
+                y -= slope * dm[j];
+                out.jac[o * n + j] = slope * self.weights[j];
+            }
+            out.y[o] = self.clamp(o, y);
+        }
+        out
+    }
+
+    #[inline]
+    fn clamp(&self, o: usize, v: f64) -> f64 {
+        match &self.bounds {
+            Some((lo, hi)) => v.clamp(lo[o], hi[o]),
+            None => v,
+        }
+    }
+
+    /// Stores `[x | y]`, evicting per the memory-management rule; returns its slot.
+    fn insert(&mut self, x: &[f64], y: &[f64]) -> u32 {
+        let mut q = [0.0; MAX_DIM];
+        self.scale(x, &mut q);
+        let seq = self.next_seq;
+        self.next_seq += 1;
+        let replace = match self.eviction {
+            Eviction::Redundant(radius) if self.len > 0 => {
+                let mut best = Best::new(1);
+                self.nearest_into(&q[..self.n], &mut best);
+                best.as_slice().first().filter(|c| c.d2 < radius * radius).map(|c| c.slot)
+            }
+            _ => None,
+        };
+        let slot = match replace {
+            Some(slot) => slot,
+            None if self.len < self.cap => {
+                self.inputs.extend_from_slice(&q[..self.n]);
+                self.outputs.extend_from_slice(y);
+                self.seq.push(seq);
+                self.trace.push(0.0);
+                self.len += 1;
+                let slot = (self.len - 1) as u32;
+                self.register(slot, seq);
+                return slot;
+            }
+            None => self.oldest_slot(),
+        };
+        let s = slot as usize;
+        self.inputs[s * self.n..(s + 1) * self.n].copy_from_slice(&q[..self.n]);
+        self.outputs[s * self.m..(s + 1) * self.m].copy_from_slice(y);
+        self.seq[s] = seq;
+        self.trace[s] = 0.0;
+        self.register(slot, seq);
+        slot
+    }
+
+    fn nearest_into(&self, q: &[f64], best: &mut Best) {
+        for &(slot, seq) in &self.fresh {
+            if self.seq[slot as usize] == seq {
+                best.offer(Candidate { d2: dist2(self.coords(slot), q, &self.period), seq, slot });
+            }
+        }
+        self.tree.search(q, &self.period, best, |slot, seq| self.seq[slot as usize] == seq);
+    }
+
+    fn oldest_slot(&mut self) -> u32 {
+        while let Some((slot, seq)) = self.fifo.pop_front() {
+            if self.seq[slot as usize] == seq {
+                return slot;
+            }
+        }
+        unreachable!("a full memory always has a live oldest sample")
+    }
+
+    fn register(&mut self, slot: u32, seq: u64) {
+        for o in 0..self.m {
+            let v = self.outputs[slot as usize * self.m + o];
+            self.outputs[slot as usize * self.m + o] = self.clamp(o, v);
+        }
+        self.fifo.push_back((slot, seq));
+        self.fresh.push((slot, seq));
+        if self.fresh.len() >= self.rebuild_every {
+            let items: Vec<(u32, u64)> = (0..self.len as u32).map(|s| (s, self.seq[s as usize])).collect();
+            let n = self.n;
+            let inputs = &self.inputs;
+            self.tree = KdTree::build(n, items, |s| &inputs[s as usize * n..(s as usize + 1) * n]);
+            self.fresh.clear();
+        }
+    }
+
+    /// Inserts `[x | f(x)]` and returns the neighbourhood of `x` including the new sample.
+    fn insert_here(&mut self, x: &[f64]) -> Best {
+        let y = self.local(x).y;
+        let m = self.m;
+        self.insert(x, &y[..m]);
+        self.local(x).best
+    }
+}
+
+impl Approximator for Llr {
+    fn input_dim(&self) -> usize {
+        self.n
+    }
+    fn output_dim(&self) -> usize {
+        self.m
+    }
+    fn value(&self, x: &[f64], y: &mut [f64]) {
+        y.copy_from_slice(&self.local(x).y[..self.m]);
+    }
+    fn shift(&mut self, x: &[f64], step: &[f64]) {
+        let best = self.insert_here(x);
+        for c in best.as_slice() {
+            for o in 0..self.m {
+                let i = c.slot as usize * self.m + o;
+                self.outputs[i] = self.clamp(o, self.outputs[i] + step[o]);
+            }
+        }
+    }
+    fn fit(&mut self, x: &[f64], target: &[f64], rate: f64) {
+        if rate > 0.0 && !self.is_empty() {
+            let best = self.local(x).best;
+            for c in best.as_slice() {
+                for o in 0..self.m {
+                    let i = c.slot as usize * self.m + o;
+                    self.outputs[i] = self.clamp(o, self.outputs[i] + rate * (target[o] - self.outputs[i]));
+                }
+            }
+        }
+        self.insert(x, target);
+    }
+}
+
+impl Differentiable for Llr {
+    fn value_and_jacobian(&self, x: &[f64], y: &mut [f64], jac: &mut [f64]) {
+        let local = self.local(x);
+        y.copy_from_slice(&local.y[..self.m]);
+        jac.copy_from_slice(&local.jac[..self.m * self.n]);
+    }
+}
+
+impl Traced for Llr {
+    fn visit(&mut self, x: &[f64], decay: f64) {
+        let mut kept = 0;
+        for i in 0..self.traced.len() {
+            let (slot, seq) = self.traced[i];
+            let s = slot as usize;
+            if self.seq[s] != seq {
+                continue;
+            }
+            self.trace[s] *= decay;
+            if self.trace[s] < TRACE_CUTOFF {
+                self.trace[s] = 0.0;
+                continue;
+            }
+            self.traced[kept] = (slot, seq);
+            kept += 1;
+        }
+        self.traced.truncate(kept);
+        let best = self.insert_here(x);
+        for c in best.as_slice() {
+            if self.trace[c.slot as usize] == 0.0 {
+                self.traced.push((c.slot, c.seq));
+            }
+            self.trace[c.slot as usize] = 1.0;
+        }
+    }
+    fn apply_td(&mut self, step: f64) {
+        for &(slot, seq) in &self.traced {
+            let s = slot as usize;
+            if self.seq[s] == seq {
+                self.outputs[s] += step * self.trace[s];
+            }
+        }
+    }
+    fn clear_traces(&mut self) {
+        for &(slot, _) in &self.traced {
+            self.trace[slot as usize] = 0.0;
+        }
+        self.traced.clear();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn params(n: usize, m: usize, memory: usize, k: usize) -> LlrParams {
+        LlrParams {
+            memory,
+            neighbours: k,
+            weights: vec![1.0; n],
+            periodic: vec![false; n],
+            outputs: m,
+            bounds: None,
+            eviction: Eviction::Oldest,
+            rebuild_every: 16,
+        }
+    }
+
+    #[test]
+    fn reproduces_an_affine_function_exactly() {
+        let mut llr = Llr::new(&LlrParams { weights: vec![1.0, 0.1, 2.0], ..params(3, 2, 500, 12) });
+        let f = |x: &[f64]| [1.5 - 2.0 * x[0] + 0.3 * x[1] + 4.0 * x[2], -0.5 + x[0] - x[2]];
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        for _ in 0..400 {
+            let x = [rng.random_range(-3.0..3.0), rng.random_range(-20.0..20.0), rng.random_range(-1.0..1.0)];
+            llr.fit(&x, &f(&x), 0.0);
+        }
+        for _ in 0..50 {
+            let x = [rng.random_range(-3.0..3.0), rng.random_range(-20.0..20.0), rng.random_range(-1.0..1.0)];
+            let (mut y, mut jac) = ([0.0; 2], [0.0; 6]);
+            llr.value_and_jacobian(&x, &mut y, &mut jac);
+            let want = f(&x);
+            assert!((y[0] - want[0]).abs() < 1e-6 && (y[1] - want[1]).abs() < 1e-6, "{y:?} vs {want:?}");
+            let want_jac = [-2.0, 0.3, 4.0, 1.0, 0.0, -1.0];
+            for (a, b) in jac.iter().zip(&want_jac) {
+                assert!((a - b).abs() < 1e-6, "{jac:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn kd_tree_matches_brute_force() {
+        for (n, periodic) in [(2, vec![true, false]), (3, vec![true, false, false]), (6, vec![true, true, false, false, false, false])] {
+            let mut p = params(n, 1, 700, 25);
+            p.periodic = periodic;
+            p.weights = (0..n).map(|j| 1.0 / (j + 1) as f64).collect();
+            let mut llr = Llr::new(&p);
+            let mut rng = ChaCha8Rng::seed_from_u64(7);
+            for i in 0..1500 {
+                let x: Vec<f64> = (0..n).map(|_| rng.random_range(-4.0..4.0)).collect();
+                llr.fit(&x, &[i as f64], 0.0);
+                // Duplicates, as learning produces them.
+                if i % 5 == 0 {
+                    llr.fit(&[std::f64::consts::PI; 8][..n], &[0.0], 0.0);
+                }
+            }
+            for _ in 0..300 {
+                let x: Vec<f64> = (0..n).map(|_| rng.random_range(-4.0..4.0)).collect();
+                let mut q = [0.0; MAX_DIM];
+                llr.scale(&x, &mut q);
+                let tree: Vec<u32> = llr.nearest(&q[..n]).as_slice().iter().map(|c| c.slot).collect();
+                assert_eq!(tree, llr.nearest_brute_force(&x));
+            }
+            let tree: Vec<u32> = {
+                let mut q = [0.0; MAX_DIM];
+                llr.scale(&[std::f64::consts::PI; 8][..n], &mut q);
+                llr.nearest(&q[..n]).as_slice().iter().map(|c| c.slot).collect()
+            };
+            assert_eq!(tree, llr.nearest_brute_force(&[std::f64::consts::PI; 8][..n]));
+        }
+    }
+
+    #[test]
+    fn angles_wrap_in_the_distance() {
+        let mut p = params(1, 1, 10, 1);
+        p.periodic = vec![true];
+        let mut llr = Llr::new(&p);
+        llr.fit(&[3.1], &[1.0], 0.0);
+        llr.fit(&[0.0], &[2.0], 0.0);
+        assert_eq!(super::super::scalar(&llr, &[-3.1]), 1.0);
+    }
+
+    #[test]
+    fn repeated_samples_give_finite_predictions() {
+        let mut llr = Llr::new(&params(3, 2, 200, 10));
+        for i in 0..1000 {
+            llr.fit(&[std::f64::consts::PI, 0.0, 3.0], &[i as f64, 1.0], 0.0);
+        }
+        let (mut y, mut jac) = ([0.0; 2], [0.0; 6]);
+        llr.value_and_jacobian(&[std::f64::consts::PI, 0.0, 3.0], &mut y, &mut jac);
+        assert!(y.iter().chain(&jac).all(|v| v.is_finite()));
+        assert!(jac.iter().all(|v| *v == 0.0), "no slope from identical inputs");
+        // The mean of the 10 newest duplicates.
+        assert!((y[0] - (990..1000).map(|i| i as f64).sum::<f64>() / 10.0).abs() < 1e-9);
+        // Fewer samples than n + 1 (under-determined): finite, mean-like.
+        let mut small = Llr::new(&params(3, 1, 200, 10));
+        small.fit(&[0.0, 0.0, 0.0], &[1.0], 0.0);
+        small.fit(&[1.0, 0.0, 0.0], &[3.0], 0.0);
+        let v = super::super::scalar(&small, &[0.5, 0.0, 0.0]);
+        assert!((v - 2.0).abs() < 1e-6, "{v}");
+    }
+
+    #[test]
+    fn oldest_sample_is_purged() {
+        let mut llr = Llr::new(&params(1, 1, 3, 1));
+        for i in 0..5 {
+            llr.fit(&[i as f64], &[i as f64], 0.0);
+        }
+        assert_eq!(llr.len(), 3);
+        let mut xs: Vec<f64> = llr.samples().map(|(x, _)| x[0]).collect();
+        xs.sort_by(f64::total_cmp);
+        assert_eq!(xs, vec![2.0, 3.0, 4.0]);
+    }
+
+    #[test]
+    fn redundant_sample_replaces_its_twin() {
+        let mut p = params(1, 1, 3, 1);
+        p.eviction = Eviction::Redundant(0.01);
+        let mut llr = Llr::new(&p);
+        llr.fit(&[0.0], &[0.0], 0.0);
+        llr.fit(&[1.0], &[1.0], 0.0);
+        llr.fit(&[2.0], &[2.0], 0.0);
+        llr.fit(&[0.001], &[5.0], 0.0); // replaces the sample at 0, not the oldest
+        let mut xs: Vec<(f64, f64)> = llr.samples().map(|(x, y)| (x[0], y[0])).collect();
+        xs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        assert_eq!(xs, vec![(0.001, 5.0), (1.0, 1.0), (2.0, 2.0)]);
+    }
+
+    #[test]
+    fn output_bounds_saturate_the_memory() {
+        let mut p = params(1, 1, 10, 3);
+        p.bounds = Some((vec![-3.0], vec![3.0]));
+        let mut llr = Llr::new(&p);
+        llr.fit(&[0.0], &[1.0], 0.0);
+        for _ in 0..10 {
+            llr.shift(&[0.0], &[2.0]);
+        }
+        assert!(llr.samples().all(|(_, y)| y[0] <= 3.0));
+        assert_eq!(super::super::scalar(&llr, &[0.0]), 3.0);
+    }
+
+    #[test]
+    fn traces_follow_replacing_eligibility() {
+        let mut llr = Llr::new(&params(1, 1, 10, 1));
+        llr.visit(&[0.0], 0.5); // sample A, trace 1
+        llr.visit(&[10.0], 0.5); // A decays to 0.5, sample B trace 1
+        llr.apply_td(2.0);
+        let mut ys: Vec<(f64, f64)> = llr.samples().map(|(x, y)| (x[0], y[0])).collect();
+        ys.sort_by(|a, b| a.0.total_cmp(&b.0));
+        assert_eq!(ys, vec![(0.0, 1.0), (10.0, 2.0)]);
+        llr.clear_traces();
+        llr.apply_td(2.0);
+        assert!(llr.samples().all(|(_, y)| y[0] <= 2.0));
+    }
+}

@@ -1,0 +1,480 @@
+//! Experiment configuration: the fully resolved set of parameters of one experiment, its
+//! TOML form, and validation with messages that name the key and the allowed range.
+//!
+//! A configuration is resolved in layers: the preset for (system, algorithm,
+//! approximator) — the thesis's tuned values, see [`crate::preset`] — then a user's TOML
+//! file, then command-line overrides. A key in the user's file that the preset does not
+//! have is an error naming the key and the keys that are allowed there.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use plant::{SystemName, Task};
+use serde::{Deserialize, Serialize};
+
+/// The learning algorithm.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Algo {
+    /// Standard actor-critic (Algorithm 1).
+    Sac,
+    /// Model learning actor-critic (Algorithm 2).
+    Mlac,
+    /// Reference model actor-critic (Algorithm 3).
+    Rmac,
+}
+
+/// The function approximator used by every component.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ApproxKind {
+    /// Local linear regression (§3.5.2).
+    Llr,
+    /// Normalised radial basis functions (§3.5.1).
+    Rbf,
+    /// Tile coding (§3.5.3), SAC only.
+    Tiles,
+}
+
+macro_rules! names {
+    ($t:ty, $($v:ident => $s:literal),*) => {
+        impl $t {
+            /// The command-line / config spelling.
+            pub fn as_str(self) -> &'static str { match self { $(Self::$v => $s),* } }
+        }
+        impl fmt::Display for $t {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result { f.write_str(self.as_str()) }
+        }
+    };
+}
+names!(Algo, Sac => "sac", Mlac => "mlac", Rmac => "rmac");
+names!(ApproxKind, Llr => "llr", Rbf => "rbf", Tiles => "tiles");
+
+/// A complete experiment.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExperimentConfig {
+    /// The system learned on.
+    pub system: SystemName,
+    /// The algorithm.
+    pub algo: Algo,
+    /// The approximator of every component.
+    pub approx: ApproxKind,
+    /// Trials, runs, seed, evaluation.
+    pub run: RunConfig,
+    /// Parameters of Template 2.1 and the exploration.
+    pub learning: LearningConfig,
+    /// The actor (SAC, MLAC) or reference model (RMAC).
+    pub actor: Component,
+    /// The critic `V(x)`.
+    pub critic: Component,
+    /// The process model (MLAC, RMAC).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<Component>,
+}
+
+/// How many experiments, of how many trials, from which seed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunConfig {
+    /// Trials per run.
+    pub trials: u32,
+    /// Independent runs (learning experiments).
+    pub runs: u32,
+    /// Seed from which every random stream of every run is derived.
+    pub seed: u64,
+    /// A greedy evaluation trial after every this many trials (0: none).
+    pub eval_every: u32,
+}
+
+/// Learning parameters shared by the components.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LearningConfig {
+    /// Discount `γ`.
+    pub gamma: f64,
+    /// Eligibility-trace decay `λ` of the critic.
+    pub lambda: f64,
+    /// Exploration standard deviation `σ`.
+    pub sigma: f64,
+    /// Explore on every this-many-th step (1: every step, §3.6; 3: §6.4.1).
+    pub explore_every: u32,
+    /// MLAC: `∇_u f̂` is taken as zero within this distance of an action bound (§3.5.1).
+    pub saturation_margin: f64,
+}
+
+/// One approximator's parameters; which kind is given by [`ExperimentConfig::approx`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Component {
+    /// Local linear regression.
+    Llr(LlrConfig),
+    /// Normalised RBF grid.
+    Rbf(RbfConfig),
+    /// Tile coding.
+    Tiles(TilesConfig),
+}
+
+/// LLR memory parameters (Tables 3.2, 6.2).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LlrConfig {
+    /// Learning rate (`α_a`, `α_c`, `α_r`; 0 for a process model, which only stores).
+    pub alpha: f64,
+    /// Memory size `N`.
+    pub memory: usize,
+    /// Nearest neighbours `K`.
+    pub neighbours: usize,
+    /// Input scaling `diag(W)`.
+    pub weights: Vec<f64>,
+    /// Memory management: "oldest" or "redundant".
+    pub eviction: String,
+    /// With "redundant": a new sample replaces a stored one closer than this (scaled).
+    pub redundancy_radius: f64,
+}
+
+/// RBF grid parameters (Table 3.1).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RbfConfig {
+    /// Learning rate.
+    pub alpha: f64,
+    /// Centres along each input.
+    pub centres: Vec<usize>,
+    /// Intersection height of neighbouring basis functions.
+    pub intersection: f64,
+}
+
+/// Tile-coding parameters (§3.6.1).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TilesConfig {
+    /// Learning rate.
+    pub alpha: f64,
+    /// Number of tilings.
+    pub tilings: usize,
+    /// Tiles along each input.
+    pub tiles: Vec<usize>,
+}
+
+impl Component {
+    /// The learning rate.
+    pub fn alpha(&self) -> f64 {
+        match self {
+            Component::Llr(c) => c.alpha,
+            Component::Rbf(c) => c.alpha,
+            Component::Tiles(c) => c.alpha,
+        }
+    }
+}
+
+/// A configuration error: where, which key, what is wrong.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConfigError {
+    /// The file the value came from, if any.
+    pub file: Option<PathBuf>,
+    /// Dotted key, e.g. `critic.neighbours`.
+    pub key: String,
+    /// What is wrong and what is allowed.
+    pub message: String,
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.file {
+            Some(p) => write!(f, "{}: `{}`: {}", p.display(), self.key, self.message),
+            None => write!(f, "`{}`: {}", self.key, self.message),
+        }
+    }
+}
+
+impl std::error::Error for ConfigError {}
+
+fn err(key: &str, message: impl Into<String>) -> ConfigError {
+    ConfigError { file: None, key: key.to_string(), message: message.into() }
+}
+
+/// Checks `lo ≤ v ≤ hi` (and finiteness) for a float key.
+fn check_f(key: &str, v: f64, lo: f64, hi: f64, open: bool) -> Result<(), ConfigError> {
+    let ok = v.is_finite() && if open { v > lo && v < hi } else { v >= lo && v <= hi };
+    if ok {
+        Ok(())
+    } else {
+        let range = if open { format!("({lo}, {hi})") } else { format!("[{lo}, {hi}]") };
+        Err(err(key, format!("{v} is out of range: must be a finite number in {range}")))
+    }
+}
+
+fn check_i(key: &str, v: u64, lo: u64, hi: u64) -> Result<(), ConfigError> {
+    if v >= lo && v <= hi {
+        Ok(())
+    } else {
+        Err(err(key, format!("{v} is out of range: must be an integer in {lo}..={hi}")))
+    }
+}
+
+fn check_len(key: &str, len: usize, want: usize, what: &str) -> Result<(), ConfigError> {
+    if len == want {
+        Ok(())
+    } else {
+        Err(err(key, format!("has {len} entries; must have {want}, one per {what}")))
+    }
+}
+
+impl ExperimentConfig {
+    /// Checks every value against its allowed range and the system's dimensions.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let task = Task::new(self.system);
+        let (n, m) = (task.state_dim(), task.action_dim());
+        check_i("run.trials", self.run.trials.into(), 1, 10_000_000)?;
+        check_i("run.runs", self.run.runs.into(), 1, 100_000)?;
+        check_i("run.eval_every", self.run.eval_every.into(), 0, self.run.trials.into())?;
+        let l = &self.learning;
+        check_f("learning.gamma", l.gamma, 0.0, 1.0, true)?;
+        check_f("learning.lambda", l.lambda, 0.0, 1.0, false)?;
+        check_f("learning.sigma", l.sigma, 0.0, 1e3, false)?;
+        check_i("learning.explore_every", l.explore_every.into(), 1, 1_000_000)?;
+        check_f("learning.saturation_margin", l.saturation_margin, 0.0, 1e3, false)?;
+        if self.approx == ApproxKind::Tiles && self.algo != Algo::Sac {
+            return Err(err(
+                "approx",
+                format!("{} needs a differentiable approximator; tile coding has no gradient (§3.5): use llr or rbf", self.algo),
+            ));
+        }
+        self.check_component("actor", &self.actor, n, "state component")?;
+        self.check_component("critic", &self.critic, n, "state component")?;
+        match (&self.model, self.algo) {
+            (None, Algo::Mlac | Algo::Rmac) => Err(err("model", format!("{} learns a process model: a [model] section is required", self.algo))),
+            (Some(_), Algo::Sac) => Err(err("model", "sac learns no process model: remove the [model] section")),
+            (Some(c), _) => self.check_component("model", c, n + m, "state and action component"),
+            (None, Algo::Sac) => Ok(()),
+        }
+    }
+
+    fn check_component(&self, section: &str, c: &Component, dim: usize, what: &str) -> Result<(), ConfigError> {
+        let key = |k: &str| format!("{section}.{k}");
+        let kind_ok = matches!(
+            (c, self.approx),
+            (Component::Llr(_), ApproxKind::Llr) | (Component::Rbf(_), ApproxKind::Rbf) | (Component::Tiles(_), ApproxKind::Tiles)
+        );
+        if !kind_ok {
+            return Err(err(section, format!("does not hold {} parameters (approx = \"{}\")", self.approx, self.approx)));
+        }
+        check_f(&key("alpha"), c.alpha(), 0.0, 100.0, false)?;
+        match c {
+            Component::Llr(l) => {
+                check_i(&key("memory"), l.memory as u64, 1, 1_000_000)?;
+                let kmax = (crate::approx::kdtree::MAX_K as u64).min(l.memory as u64);
+                check_i(&key("neighbours"), l.neighbours as u64, 1, kmax)?;
+                check_len(&key("weights"), l.weights.len(), dim, what)?;
+                for (i, w) in l.weights.iter().enumerate() {
+                    check_f(&format!("{section}.weights[{i}]"), *w, 0.0, 1e6, true)?;
+                }
+                if l.eviction != "oldest" && l.eviction != "redundant" {
+                    return Err(err(&key("eviction"), format!("\"{}\" is not a memory-management rule: use \"oldest\" or \"redundant\"", l.eviction)));
+                }
+                check_f(&key("redundancy_radius"), l.redundancy_radius, 0.0, 1e6, false)?;
+            }
+            Component::Rbf(r) => {
+                check_len(&key("centres"), r.centres.len(), dim, what)?;
+                for (i, c) in r.centres.iter().enumerate() {
+                    check_i(&format!("{section}.centres[{i}]"), *c as u64, 1, 1000)?;
+                }
+                let total: u64 = r.centres.iter().map(|&c| c as u64).product();
+                if total > 2_000_000 {
+                    return Err(err(&key("centres"), format!("{total} basis functions in all: at most 2000000")));
+                }
+                check_f(&key("intersection"), r.intersection, 0.0, 1.0, true)?;
+            }
+            Component::Tiles(t) => {
+                check_i(&key("tilings"), t.tilings as u64, 1, 1024)?;
+                check_len(&key("tiles"), t.tiles.len(), dim, what)?;
+                for (i, c) in t.tiles.iter().enumerate() {
+                    check_i(&format!("{section}.tiles[{i}]"), *c as u64, 1, 1000)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The configuration as TOML.
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a configuration always serialises")
+    }
+}
+
+/// Command-line choices and overrides, applied over preset and file.
+#[derive(Clone, Debug, Default)]
+pub struct Overrides {
+    /// `--system`.
+    pub system: Option<SystemName>,
+    /// `--algo`.
+    pub algo: Option<Algo>,
+    /// `--approx`.
+    pub approx: Option<ApproxKind>,
+    /// `--trials`.
+    pub trials: Option<u32>,
+    /// `--runs`.
+    pub runs: Option<u32>,
+    /// `--seed`.
+    pub seed: Option<u64>,
+    /// `--eval-every`.
+    pub eval_every: Option<u32>,
+}
+
+/// Resolves preset ← file ← overrides into a validated configuration.
+pub fn resolve(file: Option<(&Path, &str)>, o: &Overrides) -> Result<ExperimentConfig, ConfigError> {
+    let path = file.map(|(p, _)| p.to_path_buf());
+    let with_file = |mut e: ConfigError| {
+        e.file = path.clone();
+        e
+    };
+    let user: toml::Table = match file {
+        Some((_, text)) => toml::from_str(text).map_err(|e| with_file(err("", format!("not valid TOML: {}", e.message()))))?,
+        None => toml::Table::new(),
+    };
+    let pick = |key: &str| -> Result<Option<String>, ConfigError> {
+        match user.get(key) {
+            None => Ok(None),
+            Some(toml::Value::String(s)) => Ok(Some(s.clone())),
+            Some(v) => Err(with_file(err(key, format!("{v} must be a string")))),
+        }
+    };
+    let parse = |key: &str, s: String, allowed: &str| -> Result<toml::Value, ConfigError> {
+        let v = toml::Value::String(s.clone());
+        if allowed.split(", ").any(|a| a == s) {
+            Ok(v)
+        } else {
+            Err(with_file(err(key, format!("\"{s}\" is not one of: {allowed}"))))
+        }
+    };
+    let systems = SystemName::ALL.map(|s| s.as_str()).join(", ");
+    let system: SystemName = match (o.system, pick("system")?) {
+        (Some(s), _) => s,
+        (None, Some(s)) => parse("system", s, &systems)?.try_into().expect("checked"),
+        (None, None) => SystemName::Pendulum,
+    };
+    let algo: Algo = match (o.algo, pick("algo")?) {
+        (Some(a), _) => a,
+        (None, Some(s)) => parse("algo", s, "sac, mlac, rmac")?.try_into().expect("checked"),
+        (None, None) => Algo::Mlac,
+    };
+    let approx: ApproxKind = match (o.approx, pick("approx")?) {
+        (Some(a), _) => a,
+        (None, Some(s)) => parse("approx", s, "llr, rbf, tiles")?.try_into().expect("checked"),
+        (None, None) => ApproxKind::Llr,
+    };
+    let preset = crate::preset::preset(system, algo, approx).map_err(with_file)?;
+    let mut merged = toml::Table::try_from(&preset).expect("a preset always serialises");
+    merge(&mut merged, user, "").map_err(with_file)?;
+    let mut cfg: ExperimentConfig = toml::Value::Table(merged)
+        .try_into()
+        .map_err(|e: toml::de::Error| with_file(err("", format!("{}", e.message()))))?;
+    cfg.system = system;
+    cfg.algo = algo;
+    cfg.approx = approx;
+    if let Some(v) = o.trials {
+        cfg.run.trials = v;
+    }
+    if let Some(v) = o.runs {
+        cfg.run.runs = v;
+    }
+    if let Some(v) = o.seed {
+        cfg.run.seed = v;
+    }
+    if let Some(v) = o.eval_every {
+        cfg.run.eval_every = v;
+    }
+    cfg.validate().map_err(with_file)?;
+    Ok(cfg)
+}
+
+/// Overlays `user` on `base`, rejecting keys `base` does not have.
+fn merge(base: &mut toml::Table, user: toml::Table, prefix: &str) -> Result<(), ConfigError> {
+    for (k, v) in user {
+        let key = if prefix.is_empty() { k.clone() } else { format!("{prefix}.{k}") };
+        let Some(slot) = base.get_mut(&k) else {
+            let mut known: Vec<&str> = base.keys().map(String::as_str).collect();
+            known.sort();
+            let place = if prefix.is_empty() { "at the top level".to_string() } else { format!("in [{prefix}]") };
+            return Err(err(&key, format!("unknown key; the keys allowed {place} are: {}", known.join(", "))));
+        };
+        match (slot, v) {
+            (toml::Value::Table(b), toml::Value::Table(u)) => merge(b, u, &key)?,
+            (toml::Value::Table(_), other) => return Err(err(&key, format!("must be a table, not {other}"))),
+            (slot, v) => {
+                if std::mem::discriminant(slot) != std::mem::discriminant(&v)
+                    && !matches!((&*slot, &v), (toml::Value::Float(_), toml::Value::Integer(_)))
+                {
+                    return Err(err(&key, format!("{v} has the wrong type: expected a {} like {slot}", slot.type_str())));
+                }
+                *slot = match (&*slot, v) {
+                    (toml::Value::Float(_), toml::Value::Integer(i)) => toml::Value::Float(i as f64),
+                    (_, v) => v,
+                };
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn resolve_str(text: &str) -> Result<ExperimentConfig, ConfigError> {
+        resolve(Some((Path::new("exp.toml"), text)), &Overrides::default())
+    }
+
+    #[test]
+    fn default_is_pendulum_mlac_llr_with_table_3_2() {
+        let c = resolve(None, &Overrides::default()).unwrap();
+        assert_eq!((c.system, c.algo, c.approx), (SystemName::Pendulum, Algo::Mlac, ApproxKind::Llr));
+        let Component::Llr(actor) = &c.actor else { panic!() };
+        assert_eq!((actor.alpha, actor.memory, actor.neighbours), (0.05, 2000, 25));
+    }
+
+    #[test]
+    fn file_overrides_and_round_trips() {
+        let c = resolve_str("algo = \"sac\"\n[critic]\nneighbours = 12\n[run]\nruns = 3\n").unwrap();
+        assert_eq!(c.algo, Algo::Sac);
+        assert_eq!(c.run.runs, 3);
+        let Component::Llr(critic) = &c.critic else { panic!() };
+        assert_eq!(critic.neighbours, 12);
+        let again: ExperimentConfig = toml::from_str(&c.to_toml()).unwrap();
+        assert_eq!(again, c);
+        // A resolved configuration fed back as a file resolves to itself.
+        assert_eq!(resolve_str(&c.to_toml()).unwrap(), c);
+    }
+
+    #[test]
+    fn unknown_key_is_named() {
+        let e = resolve_str("[actor]\nalpa = 0.1\n").unwrap_err();
+        assert_eq!(e.key, "actor.alpa");
+        assert!(e.to_string().starts_with("exp.toml: `actor.alpa`: unknown key"), "{e}");
+        assert!(e.message.contains("alpha, eviction, memory, neighbours"), "{e}");
+    }
+
+    #[test]
+    fn out_of_range_is_named_with_the_range() {
+        let e = resolve_str("[learning]\ngamma = 1.5\n").unwrap_err();
+        assert_eq!(e.key, "learning.gamma");
+        assert!(e.message.contains("(0, 1)"), "{e}");
+        let e = resolve_str("[critic]\nneighbours = 0\n").unwrap_err();
+        assert_eq!(e.key, "critic.neighbours");
+        assert!(e.message.contains("1..=128"), "{e}");
+        let e = resolve_str("[actor]\nweights = [1.0]\n").unwrap_err();
+        assert_eq!(e.key, "actor.weights");
+        let e = resolve_str("[actor]\nmemory = \"big\"\n").unwrap_err();
+        assert!(e.message.contains("wrong type"), "{e}");
+        let e = resolve_str("system = \"cartpole\"\n").unwrap_err();
+        assert!(e.message.contains("pendulum, arm-vertical"), "{e}");
+    }
+
+    #[test]
+    fn tile_coding_is_for_sac_only() {
+        let o = Overrides { algo: Some(Algo::Mlac), approx: Some(ApproxKind::Tiles), ..Default::default() };
+        let e = resolve(None, &o).unwrap_err();
+        assert_eq!(e.key, "approx");
+    }
+}

@@ -1,0 +1,147 @@
+//! The thesis's tuned parameters as presets, one per (system, algorithm, approximator).
+//!
+//! * Pendulum (§3.6): `γ = 0.97`, `λ = 0.65`, `σ = 1` every step, 400 trials, 30 runs;
+//!   RBF values from Table 3.1, LLR values from Table 3.2 with the input scaling of
+//!   Table 6.2 (`[1, 0.1]` for states, `[1, 0.1, 1]` for the process model); tile coding
+//!   with 16 tilings of 7 × 7 and `α_a = 0.005`, `α_c = 0.1` (§3.6.1).
+//!   Table 3.1 gives no grid size for the RBF process model: the actor's grid is used with
+//!   5 centres along the action.
+//! * Two-link arm (§5.3, §5.4): the learning rates, memory sizes and neighbours given in
+//!   the text for SAC/RBF, SAC/LLR and MLAC/LLR, 600 trials, 20 runs. The thesis gives no
+//!   LLR input scaling for the arm; `[1, 1, 0.1, 0.1]` (and `1` per torque) is used,
+//!   matching the pendulum's angle-to-velocity ratio.
+//! * Combinations the thesis did not tune (RMAC on the arm, anything on the double
+//!   integrator) start from the pendulum values of the same algorithm and approximator.
+
+use plant::{SystemName, Task};
+
+use crate::config::{
+    Algo, ApproxKind, Component, ConfigError, ExperimentConfig, LearningConfig, LlrConfig, RbfConfig, RunConfig,
+    TilesConfig,
+};
+
+fn llr(alpha: f64, memory: usize, neighbours: usize, weights: Vec<f64>) -> Component {
+    Component::Llr(LlrConfig {
+        alpha,
+        memory,
+        neighbours,
+        weights,
+        eviction: "oldest".into(),
+        redundancy_radius: 0.0,
+    })
+}
+
+fn rbf(alpha: f64, centres: Vec<usize>, intersection: f64) -> Component {
+    Component::Rbf(RbfConfig { alpha, centres, intersection })
+}
+
+/// The preset for `(system, algo, approx)`.
+pub fn preset(system: SystemName, algo: Algo, approx: ApproxKind) -> Result<ExperimentConfig, ConfigError> {
+    if approx == ApproxKind::Tiles && algo != Algo::Sac {
+        return Err(ConfigError {
+            file: None,
+            key: "approx".into(),
+            message: format!("{algo} needs a differentiable approximator; tile coding has no gradient (§3.5): use llr or rbf"),
+        });
+    }
+    let task = Task::new(system);
+    let (n, m) = (task.state_dim(), task.action_dim());
+    let arm = matches!(system, SystemName::ArmVertical | SystemName::ArmHorizontal);
+    // LLR input scaling: angles 1, velocities 0.1, actions 1 (Table 6.2).
+    let w_state: Vec<f64> = match system {
+        SystemName::Pendulum => vec![1.0, 0.1],
+        SystemName::ArmVertical | SystemName::ArmHorizontal => vec![1.0, 1.0, 0.1, 0.1],
+        SystemName::DoubleIntegrator => vec![1.0, 1.0],
+    };
+    let w_model: Vec<f64> = w_state.iter().copied().chain(std::iter::repeat_n(1.0, m)).collect();
+    let grid = |per_axis: [usize; 2]| -> Vec<usize> {
+        if arm { vec![9; n] } else { per_axis.to_vec() }
+    };
+    let model_grid = |per_axis: [usize; 2]| -> Vec<usize> {
+        let mut g = grid(per_axis);
+        g.extend(std::iter::repeat_n(5, m));
+        g
+    };
+    use Algo::*;
+    use ApproxKind::*;
+    use SystemName::*;
+    let (actor, critic, model) = match (algo, approx) {
+        (Sac, Tiles) => (
+            Component::Tiles(TilesConfig { alpha: 0.005, tilings: 16, tiles: vec![7; n] }),
+            Component::Tiles(TilesConfig { alpha: 0.1, tilings: 16, tiles: vec![7; n] }),
+            None,
+        ),
+        (Sac, Rbf) => match system {
+            ArmVertical => (rbf(0.25, grid([9, 9]), 0.9), rbf(0.4, grid([9, 9]), 0.9), None),
+            ArmHorizontal => (rbf(0.1, grid([9, 9]), 0.7), rbf(0.3, grid([9, 9]), 0.7), None),
+            _ => (rbf(0.05, grid([20, 10]), 0.9), rbf(0.4, grid([20, 10]), 0.5), None),
+        },
+        (Mlac, Rbf) => (
+            rbf(0.05, grid([15, 10]), 0.9),
+            rbf(0.1, grid([15, 10]), 0.7),
+            Some(rbf(0.5, model_grid([15, 10]), 0.9)),
+        ),
+        (Rmac, Rbf) => (
+            rbf(0.5, grid([10, 10]), 0.9),
+            rbf(0.15, grid([10, 10]), 0.7),
+            Some(rbf(0.7, model_grid([10, 10]), 0.7)),
+        ),
+        (Sac, Llr) => match system {
+            ArmVertical => (llr(0.05, 6000, 30, w_state.clone()), llr(0.4, 6000, 30, w_state.clone()), None),
+            ArmHorizontal => (llr(0.05, 5000, 30, w_state.clone()), llr(0.35, 5000, 30, w_state.clone()), None),
+            _ => (llr(0.05, 2000, 20, w_state.clone()), llr(0.3, 1000, 10, w_state.clone()), None),
+        },
+        (Mlac, Llr) => match system {
+            ArmVertical => (
+                llr(0.15, 6000, 30, w_state.clone()),
+                llr(0.35, 6000, 30, w_state.clone()),
+                Some(llr(0.0, 600, 25, w_model.clone())),
+            ),
+            ArmHorizontal => (
+                llr(0.1, 7000, 20, w_state.clone()),
+                llr(0.4, 7000, 20, w_state.clone()),
+                Some(llr(0.0, 500, 15, w_model.clone())),
+            ),
+            _ => (
+                llr(0.05, 2000, 25, w_state.clone()),
+                llr(0.3, 2000, 15, w_state.clone()),
+                Some(llr(0.0, 100, 10, w_model.clone())),
+            ),
+        },
+        (Rmac, Llr) => (
+            llr(0.04, 2000, 15, w_state.clone()),
+            llr(0.2, 2000, 15, w_state.clone()),
+            Some(llr(0.0, 100, 10, w_model.clone())),
+        ),
+        (Mlac | Rmac, Tiles) => unreachable!("rejected above"),
+    };
+    Ok(ExperimentConfig {
+        system,
+        algo,
+        approx,
+        run: RunConfig { trials: if arm { 600 } else { 400 }, runs: if arm { 20 } else { 30 }, seed: 1, eval_every: 10 },
+        learning: LearningConfig { gamma: 0.97, lambda: 0.65, sigma: 1.0, explore_every: 1, saturation_margin: if approx == Rbf { 0.1 } else { 0.0 } },
+        actor,
+        critic,
+        model,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_supported_preset_validates() {
+        for system in SystemName::ALL {
+            for algo in [Algo::Sac, Algo::Mlac, Algo::Rmac] {
+                for approx in [ApproxKind::Llr, ApproxKind::Rbf, ApproxKind::Tiles] {
+                    match preset(system, algo, approx) {
+                        Ok(c) => c.validate().unwrap_or_else(|e| panic!("{system}/{algo}/{approx}: {e}")),
+                        Err(e) => assert!(approx == ApproxKind::Tiles && algo != Algo::Sac, "{e}"),
+                    }
+                }
+            }
+        }
+    }
+}
