@@ -1,4 +1,7 @@
-//! The `rig` command's library: experiment configuration, the in-process experiment
-//! driver, and reports (learning curves, plots).
+//! The `rig` command's library: the in-process experiment driver ([`experiment`]),
+//! `rig learn` ([`learn`]), and reports — learning-curve statistics and plots
+//! ([`report`]).
 
+pub mod experiment;
+pub mod learn;
 pub mod report;

@@ -1,1 +1,176 @@
-fn main() {}
+//! `rig`: run the thesis's learning experiments.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use agent::config::{Algo, ApproxKind, Overrides, resolve};
+use clap::{Args, Parser, Subcommand};
+use plant::SystemName;
+use rig::learn::{LearnOptions, learn};
+
+/// Learning controllers of Grondman's thesis "Online Model Learning Algorithms for
+/// Actor-Critic Control": run experiments, write learning curves.
+#[derive(Parser)]
+#[command(name = "rig", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run independent learning experiments in one process, in parallel on all cores,
+    /// and write runs.csv, curve.csv, greedy_curve.csv, curve.png/svg and config.toml.
+    Learn(LearnArgs),
+    /// Print the resolved configuration (preset ← --config file ← flags) as TOML, to
+    /// start a configuration file from.
+    Config(Selection),
+}
+
+/// Which experiment: the preset for (system, algorithm, approximator), a TOML file
+/// overriding any of its keys, and flags overriding both.
+#[derive(Args)]
+struct Selection {
+    /// System to learn on [default: pendulum].
+    #[arg(long, value_parser = parse_system)]
+    system: Option<SystemName>,
+    /// Algorithm: sac (Algorithm 1), mlac (Algorithm 2) or rmac (Algorithm 3) [default: mlac].
+    #[arg(long, value_parser = parse_algo)]
+    algo: Option<Algo>,
+    /// Function approximator: llr, rbf or tiles (tiles: sac only) [default: llr].
+    #[arg(long, value_parser = parse_approx)]
+    approx: Option<ApproxKind>,
+    /// Trials per run [preset: 400 for the pendulum, 600 for the arm].
+    #[arg(long)]
+    trials: Option<u32>,
+    /// Independent runs [preset: 30 for the pendulum, 20 for the arm].
+    #[arg(long)]
+    runs: Option<u32>,
+    /// Seed of every random stream of every run [preset: 1].
+    #[arg(long)]
+    seed: Option<u64>,
+    /// A greedy evaluation trial (no exploration, no learning) after every N trials; 0
+    /// disables [preset: 10].
+    #[arg(long)]
+    eval_every: Option<u32>,
+    /// TOML file overriding preset values; see `rig config` for every key.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct LearnArgs {
+    #[command(flatten)]
+    selection: Selection,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "out/learn")]
+    out: PathBuf,
+    /// Worker threads [default: one per core].
+    #[arg(long)]
+    threads: Option<usize>,
+    /// No progress bar and no summary.
+    #[arg(long)]
+    quiet: bool,
+}
+
+fn parse_system(s: &str) -> Result<SystemName, String> {
+    SystemName::ALL
+        .into_iter()
+        .find(|n| n.as_str() == s)
+        .ok_or_else(|| format!("unknown system; one of: {}", SystemName::ALL.map(|n| n.as_str()).join(", ")))
+}
+
+fn parse_algo(s: &str) -> Result<Algo, String> {
+    [Algo::Sac, Algo::Mlac, Algo::Rmac].into_iter().find(|a| a.as_str() == s).ok_or_else(|| "one of: sac, mlac, rmac".into())
+}
+
+fn parse_approx(s: &str) -> Result<ApproxKind, String> {
+    [ApproxKind::Llr, ApproxKind::Rbf, ApproxKind::Tiles]
+        .into_iter()
+        .find(|a| a.as_str() == s)
+        .ok_or_else(|| "one of: llr, rbf, tiles".into())
+}
+
+fn resolve_selection(s: &Selection) -> Result<agent::config::ExperimentConfig, String> {
+    let text = match &s.config {
+        Some(p) => Some(std::fs::read_to_string(p).map_err(|e| format!("{}: cannot read: {e}", p.display()))?),
+        None => None,
+    };
+    let o = Overrides {
+        system: s.system,
+        algo: s.algo,
+        approx: s.approx,
+        trials: s.trials,
+        runs: s.runs,
+        seed: s.seed,
+        eval_every: s.eval_every,
+    };
+    resolve(s.config.as_deref().zip(text.as_deref()), &o).map_err(|e| match &e.file {
+        Some(_) => e.to_string(),
+        None => format!("{e} (from the command line or the preset)"),
+    })
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Config(sel) => match resolve_selection(&sel) {
+            Ok(cfg) => {
+                print!("{}", cfg.to_toml());
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
+        Command::Learn(args) => {
+            let cfg = match resolve_selection(&args.selection) {
+                Ok(c) => c,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            let opts = LearnOptions { out: args.out.clone(), threads: args.threads, progress: !args.quiet };
+            match learn(&cfg, &opts) {
+                Ok(s) => {
+                    if !args.quiet {
+                        print_summary(&cfg, &s, &args.out);
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
+    }
+}
+
+fn print_summary(cfg: &agent::config::ExperimentConfig, s: &rig::learn::LearnSummary, out: &std::path::Path) {
+    let steps = s.records.len() as f64 * Task::new(cfg.system).steps_per_trial() as f64;
+    println!(
+        "{} {}/{}: {} runs × {} trials in {:.1} s wall ({:.2} µs per learning step, all threads)",
+        cfg.system,
+        cfg.algo,
+        cfg.approx,
+        cfg.run.runs,
+        cfg.run.trials,
+        s.wall.as_secs_f64(),
+        s.wall.as_secs_f64() * 1e6 / steps
+    );
+    if let Some(last) = s.curve.last() {
+        println!("  last trial return: mean {:.1}  [95% CI {:.1} … {:.1}]  min {:.1}  max {:.1}", last.mean, last.ci_low, last.ci_high, last.min, last.max);
+    }
+    let g = &s.greedy_curve;
+    if g.len() >= 3 {
+        let tail = &g[g.len() - 3..];
+        let mean = tail.iter().map(|p| p.mean).sum::<f64>() / 3.0;
+        println!("  greedy return, mean of the last 3 evaluations (trials {}–{}): {:.1}", tail[0].trial, tail[2].trial, mean);
+    }
+    println!("  wrote {}/{{runs.csv, curve.csv, greedy_curve.csv, curve.png, curve.svg, config.toml}}", out.display());
+}
+
+use plant::Task;

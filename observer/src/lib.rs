@@ -1,1 +1,108 @@
-//! placeholder
+//! State observers: from what the plant's sensor measures to the state estimate `x̂_k`
+//! the agent acts on.
+//!
+//! * [`PassThrough`] — the sensor measures the full state (the thesis's simulations).
+//! * [`FiniteDifference`] — the sensor measures only the angles (the physical pendulum
+//!   of §6.4.1 has an encoder on the motor shaft); velocities are estimated by a
+//!   backward difference over one sample, wrapped, smoothed by a first-order low-pass.
+//!
+//! Observers are plain step functions; they know nothing about processes or transport.
+
+use plant::angle::wrap;
+
+/// A state estimator, updated once per sample.
+pub trait Observer: Send {
+    /// Restarts at a trial start, where the state is known to be `x0`.
+    fn reset(&mut self, x0: &[f64]);
+    /// Updates with the measurement `y_k` (and the action applied over the last
+    /// interval) and returns `x̂_k`.
+    fn update(&mut self, y: &[f64], u_applied: &[f64]) -> &[f64];
+}
+
+/// Full-state measurement: `x̂_k = y_k`.
+pub struct PassThrough {
+    x: Vec<f64>,
+}
+
+impl PassThrough {
+    /// For states of dimension `n`.
+    pub fn new(n: usize) -> Self {
+        Self { x: vec![0.0; n] }
+    }
+}
+
+impl Observer for PassThrough {
+    fn reset(&mut self, x0: &[f64]) {
+        self.x.copy_from_slice(x0);
+    }
+    fn update(&mut self, y: &[f64], _u: &[f64]) -> &[f64] {
+        self.x.copy_from_slice(y);
+        &self.x
+    }
+}
+
+/// Angle-only measurement with finite-difference velocities.
+///
+/// The state is `[angles…, velocities…]` or interleaved; `position_of[i]` names, for each
+/// velocity component `i`, the angle it is the derivative of. The velocity estimate is
+/// `v̂_k = a · v̂_{k−1} + (1 − a) · wrap(φ_k − φ_{k−1}) / Ts` with `a` the filter
+/// coefficient (0: raw difference).
+pub struct FiniteDifference {
+    ts: f64,
+    filter: f64,
+    /// `(velocity index, angle index)` pairs.
+    pairs: Vec<(usize, usize)>,
+    x: Vec<f64>,
+}
+
+impl FiniteDifference {
+    /// For sampling time `ts`, velocity/angle index pairs and filter coefficient in [0, 1).
+    pub fn new(n: usize, ts: f64, pairs: Vec<(usize, usize)>, filter: f64) -> Self {
+        assert!((0.0..1.0).contains(&filter) && ts > 0.0);
+        Self { ts, filter, pairs, x: vec![0.0; n] }
+    }
+}
+
+impl Observer for FiniteDifference {
+    fn reset(&mut self, x0: &[f64]) {
+        self.x.copy_from_slice(x0);
+    }
+    fn update(&mut self, y: &[f64], _u: &[f64]) -> &[f64] {
+        for &(v, a) in &self.pairs {
+            let raw = wrap(y[a] - self.x[a]) / self.ts;
+            self.x[v] = self.filter * self.x[v] + (1.0 - self.filter) * raw;
+        }
+        for &(_, a) in &self.pairs {
+            self.x[a] = y[a];
+        }
+        &self.x
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pass_through_returns_the_measurement() {
+        let mut o = PassThrough::new(2);
+        o.reset(&[1.0, 2.0]);
+        assert_eq!(o.update(&[3.0, 4.0], &[0.0]), &[3.0, 4.0]);
+    }
+
+    #[test]
+    fn finite_difference_recovers_a_constant_velocity_across_the_wrap() {
+        let ts = 0.03;
+        let mut o = FiniteDifference::new(2, ts, vec![(1, 0)], 0.0);
+        let w = 5.0;
+        let mut phi = 3.0;
+        o.reset(&[phi, w]);
+        for _ in 0..20 {
+            phi = wrap(phi + w * ts);
+            // The measurement's velocity entry is ignored (not measured).
+            let x = o.update(&[phi, f64::NAN], &[0.0]).to_vec();
+            assert!((x[1] - w).abs() < 1e-9, "{x:?}");
+            assert_eq!(x[0], phi);
+        }
+    }
+}

@@ -1,0 +1,138 @@
+//! The in-process driver: one learning experiment (a "run": `trials` consecutive trials,
+//! §3.6) with plant, observer and agent called directly, one sample at a time.
+//!
+//! Per trial: the plant is reset to the task's start state; the agent acts on the
+//! observer's estimate; the reward of each sample is `ρ(x_k, u_k)` of the true state and
+//! the applied action (Eq. 3.16), and the trial's return is their sum. Every
+//! `eval_every` trials one extra *greedy* trial is run from the same start state: no
+//! exploration, no learning, and it does not count as learning time.
+
+use std::sync::Arc;
+
+use agent::Agent;
+use agent::config::ExperimentConfig;
+use observer::{Observer, PassThrough};
+use plant::{Plant, Task};
+
+/// The outcome of one learning trial.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrialRecord {
+    /// Run index (0-based).
+    pub run: u32,
+    /// Trial number (1-based).
+    pub trial: u32,
+    /// Simulated learning time at the end of this trial [s].
+    pub sim_time_s: f64,
+    /// Sum of rewards of the trial, as learned (with exploration).
+    pub ret: f64,
+    /// Return of the greedy evaluation trial after this one, if one was run.
+    pub greedy: Option<f64>,
+}
+
+/// One experiment's moving parts.
+pub struct Experiment {
+    task: Arc<Task>,
+    plant: Plant,
+    observer: Box<dyn Observer>,
+    agent: Box<dyn Agent>,
+    run: u32,
+    trials: u32,
+    eval_every: u32,
+    trial: u32,
+}
+
+impl Experiment {
+    /// Run `run` of the experiment `cfg` describes (all random streams derived from
+    /// `cfg.run.seed` and `run`).
+    pub fn new(cfg: &ExperimentConfig, run: u32) -> Self {
+        let task = Arc::new(Task::new(cfg.system));
+        let agent = agent::build(&task, cfg, agent::seed::run_seed(cfg.run.seed, run));
+        Self {
+            plant: Plant::new(task.clone()),
+            observer: Box::new(PassThrough::new(task.state_dim())),
+            task,
+            agent,
+            run,
+            trials: cfg.run.trials,
+            eval_every: cfg.run.eval_every,
+            trial: 0,
+        }
+    }
+
+    /// The agent (for inspection after learning).
+    pub fn agent(&self) -> &dyn Agent {
+        self.agent.as_ref()
+    }
+
+    fn start_state(&self) -> Vec<f64> {
+        let s = &self.task.initial_states;
+        s[self.trial as usize % s.len()].clone()
+    }
+
+    /// Runs the next learning trial (and its greedy evaluation, if due); `None` when all
+    /// trials are done.
+    pub fn next_trial(&mut self) -> Option<TrialRecord> {
+        if self.trial >= self.trials {
+            return None;
+        }
+        let x0 = self.start_state();
+        let steps = self.task.steps_per_trial();
+        let mut u = vec![0.0; self.task.action_dim()];
+        self.plant.reset(&x0);
+        self.observer.reset(&x0);
+        self.agent.start_trial(&x0, &mut u);
+        let mut ret = 0.0;
+        for k in 0..steps {
+            let r = self.plant.step(&u);
+            ret += r;
+            let x = self.observer.update(self.plant.state(), self.plant.applied_action());
+            let last = k + 1 == steps;
+            self.agent.learn(r, x, if last { None } else { Some(&mut u) });
+        }
+        self.trial += 1;
+        let greedy = (self.eval_every > 0 && self.trial % self.eval_every == 0).then(|| self.greedy_return(&x0));
+        Some(TrialRecord {
+            run: self.run,
+            trial: self.trial,
+            sim_time_s: f64::from(self.trial) * self.task.trial_seconds,
+            ret,
+            greedy,
+        })
+    }
+
+    /// The return of one trial from `x0` under the greedy policy, without learning.
+    pub fn greedy_return(&mut self, x0: &[f64]) -> f64 {
+        self.greedy_trajectory(x0).iter().map(|s| s.reward).sum()
+    }
+
+    /// One greedy trial from `x0`: the time response of the current policy.
+    pub fn greedy_trajectory(&mut self, x0: &[f64]) -> Vec<Sample> {
+        let m = self.task.action_dim();
+        let (mut u, mut u_prev) = (vec![0.0; m], vec![0.0; m]);
+        self.plant.reset(x0);
+        self.observer.reset(x0);
+        let mut x = x0.to_vec();
+        let mut out = Vec::with_capacity(self.task.steps_per_trial());
+        for k in 0..self.task.steps_per_trial() {
+            self.agent.greedy(&x, &u_prev, &mut u);
+            let reward = self.plant.step(&u);
+            u_prev.copy_from_slice(self.plant.applied_action());
+            out.push(Sample { t: k as f64 * self.task.ts, x: x.clone(), u: u_prev.clone(), reward });
+            x.copy_from_slice(self.observer.update(self.plant.state(), &u_prev));
+        }
+        out
+    }
+}
+
+/// One sample of a time response.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sample {
+    /// Time since the trial start [s].
+    pub t: f64,
+    /// State estimate the action was computed from.
+    pub x: Vec<f64>,
+    /// Applied action.
+    pub u: Vec<f64>,
+    /// `ρ(x_k, u_k)`.
+    pub reward: f64,
+}

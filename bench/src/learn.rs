@@ -1,0 +1,174 @@
+//! `rig learn`: many independent learning experiments of one configuration, in parallel
+//! on all cores, written as they finish.
+//!
+//! Outputs in the output directory:
+//!
+//! * `config.toml` — the fully resolved configuration (feed it back with `--config` to
+//!   repeat the experiment), written first;
+//! * `runs.csv` — `run,trial,sim_time_s,return,greedy_return`, one row per learning
+//!   trial, streamed in run order as runs complete (a crash loses only unfinished runs);
+//!   `greedy_return` is blank except every `eval_every` trials;
+//! * `curve.csv` — `trial,sim_time_s,mean,min,max,ci_low,ci_high` of `return` across
+//!   runs (95 % confidence interval of the mean), `greedy_curve.csv` the same for the
+//!   greedy evaluations;
+//! * `curve.png`, `curve.svg` — the learning curve in the style of the thesis's figures.
+//!
+//! Every file is a pure function of the configuration: the same seed gives byte-identical
+//! files whatever the number of threads.
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+use agent::config::ExperimentConfig;
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+
+use crate::experiment::{Experiment, TrialRecord};
+use crate::report::{self, CurvePoint, Series, SeriesStyle};
+
+/// How to run and where to write.
+#[derive(Clone, Debug)]
+pub struct LearnOptions {
+    /// Output directory (created if missing).
+    pub out: PathBuf,
+    /// Worker threads (default: all cores).
+    pub threads: Option<usize>,
+    /// Show a progress bar on the terminal.
+    pub progress: bool,
+}
+
+/// What a `learn` call produced.
+#[derive(Clone, Debug)]
+pub struct LearnSummary {
+    /// Every learning trial of every run, in (run, trial) order.
+    pub records: Vec<TrialRecord>,
+    /// The learning curve (statistics of `return` across runs).
+    pub curve: Vec<CurvePoint>,
+    /// Statistics of the greedy evaluations across runs.
+    pub greedy_curve: Vec<CurvePoint>,
+    /// Wall-clock time of the experiments (excluding plots).
+    pub wall: Duration,
+}
+
+/// Writes finished runs to `runs.csv` in run order.
+struct OrderedWriter {
+    next: u32,
+    pending: BTreeMap<u32, Vec<TrialRecord>>,
+    out: BufWriter<File>,
+}
+
+impl OrderedWriter {
+    fn push(&mut self, run: u32, records: Vec<TrialRecord>) -> Result<()> {
+        self.pending.insert(run, records);
+        while let Some(records) = self.pending.remove(&self.next) {
+            for r in &records {
+                write_row(&mut self.out, r)?;
+            }
+            self.out.flush()?;
+            self.next += 1;
+        }
+        Ok(())
+    }
+}
+
+/// The header of `runs.csv`.
+pub const RUNS_HEADER: &str = "run,trial,sim_time_s,return,greedy_return";
+
+/// One `runs.csv` row (numbers in Rust's shortest round-trip form).
+pub fn write_row(out: &mut impl Write, r: &TrialRecord) -> std::io::Result<()> {
+    match r.greedy {
+        Some(g) => writeln!(out, "{},{},{},{},{}", r.run, r.trial, r.sim_time_s, r.ret, g),
+        None => writeln!(out, "{},{},{},{},", r.run, r.trial, r.sim_time_s, r.ret),
+    }
+}
+
+/// Writes `text` to `path` atomically (temporary file, then rename).
+pub fn write_atomic(path: &Path, text: &str) -> Result<()> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, text).with_context(|| format!("cannot write {}", tmp.display()))?;
+    std::fs::rename(&tmp, path).with_context(|| format!("cannot rename {} to {}", tmp.display(), path.display()))
+}
+
+/// Runs every run of `cfg` and writes the outputs.
+pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary> {
+    std::fs::create_dir_all(&opts.out).with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
+    write_atomic(&opts.out.join("config.toml"), &cfg.to_toml())?;
+    let runs_path = opts.out.join("runs.csv");
+    let mut out = BufWriter::new(File::create(&runs_path).with_context(|| format!("cannot create {}", runs_path.display()))?);
+    writeln!(out, "{RUNS_HEADER}")?;
+    let writer = Mutex::new(OrderedWriter { next: 0, pending: BTreeMap::new(), out });
+
+    let (runs, trials) = (cfg.run.runs, cfg.run.trials);
+    let bar = ProgressBar::with_draw_target(
+        Some(u64::from(runs) * u64::from(trials)),
+        if opts.progress { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() },
+    );
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} learning [{bar:40}] {pos}/{len} trials, {per_sec}, eta {eta} {msg}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(opts.threads.unwrap_or(0)).build()?;
+    let t0 = Instant::now();
+    let results: Result<Vec<Vec<TrialRecord>>> = pool.install(|| {
+        (0..runs)
+            .into_par_iter()
+            .map(|run| {
+                let mut exp = Experiment::new(cfg, run);
+                let mut records = Vec::with_capacity(trials as usize);
+                while let Some(r) = exp.next_trial() {
+                    bar.inc(1);
+                    records.push(r);
+                }
+                writer.lock().expect("writer poisoned").push(run, records.clone())?;
+                Ok(records)
+            })
+            .collect()
+    });
+    let records: Vec<TrialRecord> = results?.into_iter().flatten().collect();
+    let wall = t0.elapsed();
+    bar.finish_and_clear();
+    drop(writer);
+
+    let (curve, greedy_curve) = curves(&records, runs as usize, trials as usize)?;
+    report::write_curve_csv(&opts.out.join("curve.csv"), &curve)?;
+    let title = format!("{} {}/{} — {} runs", cfg.system, cfg.algo.as_str().to_uppercase(), cfg.approx.as_str().to_uppercase(), runs);
+    let mut series = vec![Series { label: "learning (with exploration)".into(), points: &curve, style: SeriesStyle::Band }];
+    if !greedy_curve.is_empty() {
+        report::write_curve_csv(&opts.out.join("greedy_curve.csv"), &greedy_curve)?;
+        series.push(Series { label: "greedy evaluation (mean)".into(), points: &greedy_curve, style: SeriesStyle::Line });
+    }
+    report::plot_curves(&opts.out.join("curve.png"), &opts.out.join("curve.svg"), &title, &series, None)?;
+    Ok(LearnSummary { records, curve, greedy_curve, wall })
+}
+
+/// Learning and greedy curves from the records of `runs` runs of `trials` trials.
+pub fn curves(records: &[TrialRecord], runs: usize, trials: usize) -> Result<(Vec<CurvePoint>, Vec<CurvePoint>)> {
+    let mut ret = vec![Vec::with_capacity(runs); trials];
+    let mut time = vec![0.0; trials];
+    let mut greedy: BTreeMap<u32, (f64, Vec<f64>)> = BTreeMap::new();
+    for r in records {
+        let i = r.trial as usize - 1;
+        ret[i].push(r.ret);
+        time[i] = r.sim_time_s;
+        if let Some(g) = r.greedy {
+            greedy.entry(r.trial).or_insert_with(|| (r.sim_time_s, Vec::new())).1.push(g);
+        }
+    }
+    let trial_numbers: Vec<u32> = (1..=trials as u32).collect();
+    let curve = report::curve(&trial_numbers, &time, &ret)?;
+    let greedy_curve = if greedy.is_empty() {
+        Vec::new()
+    } else {
+        let t: Vec<u32> = greedy.keys().copied().collect();
+        let s: Vec<f64> = greedy.values().map(|v| v.0).collect();
+        let v: Vec<Vec<f64>> = greedy.into_values().map(|v| v.1).collect();
+        report::curve(&t, &s, &v)?
+    };
+    Ok((curve, greedy_curve))
+}
