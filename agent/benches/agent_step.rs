@@ -1,1 +1,129 @@
-fn main() {}
+//! Speed of the learning core, on this machine, with criterion (medians in
+//! `target/criterion/*/new/estimates.json`; `cargo bench -p agent`).
+//!
+//! * `agent_step/mlac_llr_full` — one MLAC/LLR agent step (`Agent::learn` with the next
+//!   action) with the pendulum preset (Table 3.2) and actor and critic memories full
+//!   (2000 samples each; asserted before timing). The transitions replayed are recorded
+//!   from a learning run, so only the agent is timed, not the plant.
+//! * `llr_query/*` — one LLR query (value and Jacobian) plus one insertion, on a full
+//!   memory of 2000 samples, K = 25: the dynamic k-d tree against a partial-selection
+//!   scan of the whole memory.
+
+use std::hint::black_box;
+use std::sync::Arc;
+
+use agent::Agent;
+use agent::approx::llr::{Eviction, Llr, LlrParams, Search};
+use agent::approx::{Approximator, Differentiable};
+use agent::config::{Overrides, resolve};
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use plant::{Plant, Task};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Learns until every actor and critic memory is full; returns the agent and the
+/// transitions of the last ten trials (reward, next state, trial-start flag).
+fn trained_mlac_llr() -> (Box<dyn Agent>, Vec<(f64, Vec<f64>, bool)>) {
+    let cfg = resolve(None, &Overrides::default()).expect("default preset");
+    let task = Arc::new(Task::new(cfg.system));
+    let mut agent = agent::build(&task, &cfg, 1);
+    let mut plant = Plant::new(task.clone());
+    let steps = task.steps_per_trial();
+    let mut record = Vec::new();
+    for trial in 0..2000 {
+        let full = agent.memories().iter().filter(|m| m.0 != "model").all(|m| m.1 == m.2);
+        if full && trial % 10 == 0 && record.len() >= 10 * steps {
+            break;
+        }
+        if trial % 10 == 0 {
+            record.clear();
+        }
+        let x0 = task.initial_states[0].clone();
+        plant.reset(&x0);
+        let mut u = vec![0.0; 1];
+        agent.start_trial(&x0, &mut u);
+        for k in 0..steps {
+            let r = plant.step(&u);
+            record.push((r, plant.state().to_vec(), k == 0));
+            agent.learn(r, plant.state(), (k + 1 < steps).then_some(&mut u[..]));
+        }
+    }
+    let mems = agent.memories();
+    for (name, stored, cap) in &mems {
+        if *name != "model" {
+            assert_eq!(stored, cap, "{name} memory not full: {mems:?}");
+        }
+    }
+    eprintln!("memories: {mems:?}");
+    (agent, record)
+}
+
+fn agent_step(c: &mut Criterion) {
+    let (mut agent, record) = trained_mlac_llr();
+    let x0 = Task::pendulum().initial_states[0].clone();
+    let mut u = [0.0];
+    let mut i = 0;
+    let mut g = c.benchmark_group("agent_step");
+    g.bench_function("mlac_llr_full", |b| {
+        b.iter(|| {
+            let (r, x, start) = &record[i % record.len()];
+            if *start {
+                agent.start_trial(&x0, &mut u);
+            }
+            agent.learn(*r, black_box(x), Some(&mut u));
+            i += 1;
+        })
+    });
+    g.finish();
+}
+
+fn full_memory(search: Search, dim: usize, rng: &mut ChaCha8Rng) -> Llr {
+    let mut llr = Llr::new(&LlrParams {
+        memory: 2000,
+        neighbours: 25,
+        weights: [1.0, 0.1, 1.0][..dim].to_vec(),
+        periodic: [true, false, false][..dim].to_vec(),
+        outputs: dim,
+        bounds: None,
+        eviction: Eviction::Oldest,
+        search,
+    });
+    for _ in 0..2500 {
+        let x: Vec<f64> = (0..dim).map(|_| rng.random_range(-9.0..9.0)).collect();
+        llr.fit(&x, &vec![1.0; dim], 0.0);
+    }
+    llr
+}
+
+fn llr_query(c: &mut Criterion) {
+    let mut g = c.benchmark_group("llr_query");
+    for dim in [2usize, 3] {
+        for search in [Search::KdTree, Search::Scan] {
+            let mut rng = ChaCha8Rng::seed_from_u64(11);
+            let mut llr = full_memory(search, dim, &mut rng);
+            let name = match search {
+                Search::KdTree => "kdtree",
+                Search::Scan => "scan",
+            };
+            let (mut y, mut jac) = (vec![0.0; dim], vec![0.0; dim * dim]);
+            g.bench_with_input(BenchmarkId::new(name, format!("dim{dim}")), &dim, |b, &dim| {
+                b.iter(|| {
+                    let x: Vec<f64> = (0..dim).map(|_| rng.random_range(-9.0..9.0)).collect();
+                    llr.value_and_jacobian(black_box(&x), &mut y, &mut jac);
+                    llr.fit(&x, &y.clone(), 0.0);
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default()
+        .sample_size(50)
+        .measurement_time(std::time::Duration::from_secs(4))
+        .warm_up_time(std::time::Duration::from_secs(1));
+    targets = agent_step, llr_query
+}
+criterion_main!(benches);
