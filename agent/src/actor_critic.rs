@@ -92,6 +92,10 @@ pub trait Improver: Send {
     fn act(&self, x: &[f64], u_prev: &[f64], u: &mut [f64]);
     /// Improves the policy and learns any models from transition `t`.
     fn improve(&mut self, t: &Transition, critic: &dyn Critic);
+    /// `(name, stored, capacity)` of each memory-based approximator.
+    fn memories(&self) -> Vec<(&'static str, usize, usize)> {
+        Vec::new()
+    }
 }
 
 /// Learning parameters of Template 2.1.
@@ -175,8 +179,7 @@ impl Agent for ActorCritic {
 
     fn learn(&mut self, r: f64, x_next: &[f64], u: Option<&mut [f64]>) {
         let Learning { gamma, lambda, alpha_critic } = self.learning;
-        let v = scalar(self.critic.as_ref(), &self.x);
-        self.critic.visit(&self.x, lambda * gamma);
+        let v = self.critic.visit_value(&self.x, lambda * gamma);
         let v_next = scalar(self.critic.as_ref(), x_next);
         let td = r + gamma * v_next - v;
         let m = self.info.m();
@@ -205,5 +208,11 @@ impl Agent for ActorCritic {
     fn greedy(&self, x: &[f64], u_prev: &[f64], u: &mut [f64]) {
         self.improver.act(x, u_prev, u);
         self.info.saturate(u);
+    }
+
+    fn memories(&self) -> Vec<(&'static str, usize, usize)> {
+        let mut m: Vec<_> = self.critic.fill().map(|(s, c)| ("critic", s, c)).into_iter().collect();
+        m.extend(self.improver.memories());
+        m
     }
 }

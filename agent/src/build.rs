@@ -4,7 +4,7 @@ use plant::Task;
 
 use crate::Agent;
 use crate::actor_critic::{ActorCritic, Learning, TaskInfo};
-use crate::approx::llr::{Eviction, Llr, LlrParams};
+use crate::approx::llr::{Eviction, Llr, LlrParams, Search};
 use crate::approx::rbf::{Rbf, RbfParams};
 use crate::approx::tiles::{Tiles, TilesParams};
 use crate::approx::{Approximator, Critic, Differentiable};
@@ -14,10 +14,6 @@ use crate::mlac::Mlac;
 use crate::model::ProcessModel;
 use crate::rmac::Rmac;
 use crate::sac::Sac;
-
-/// Inserts between k-d tree rebuilds of an LLR memory (see `bench/` for the measurement
-/// behind the choice).
-pub const LLR_REBUILD_EVERY: usize = 64;
 
 /// Where an approximator lives: its input space and output size and bounds.
 struct Space {
@@ -43,7 +39,7 @@ fn make(c: &Component, s: &Space) -> Built {
             outputs: s.outputs,
             bounds: s.bounds.clone(),
             eviction: if l.eviction == "redundant" { Eviction::Redundant(l.redundancy_radius) } else { Eviction::Oldest },
-            rebuild_every: LLR_REBUILD_EVERY,
+            search: Search::KdTree,
         })),
         Component::Rbf(r) => Built::Rbf(Rbf::new(&RbfParams {
             centres: r.centres.clone(),
@@ -120,6 +116,9 @@ impl Differentiable for GradientFree {
 impl crate::approx::Traced for GradientFree {
     fn visit(&mut self, x: &[f64], decay: f64) {
         self.0.visit(x, decay)
+    }
+    fn visit_value(&mut self, x: &[f64], decay: f64) -> f64 {
+        self.0.visit_value(x, decay)
     }
     fn apply_td(&mut self, step: f64) {
         self.0.apply_td(step)

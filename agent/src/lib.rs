@@ -23,7 +23,7 @@ pub mod rmac;
 pub mod sac;
 pub mod seed;
 
-pub use build::{LLR_REBUILD_EVERY, build};
+pub use build::build;
 
 /// A learning controller, driven one sample at a time.
 ///
@@ -38,4 +38,6 @@ pub trait Agent: Send {
     /// The greedy action in `x` — no exploration, no learning. `u_prev` is the action
     /// applied in the previous sample (zero at a trial start).
     fn greedy(&self, x: &[f64], u_prev: &[f64], u: &mut [f64]);
+    /// `(name, stored, capacity)` of each memory-based (LLR) approximator.
+    fn memories(&self) -> Vec<(&'static str, usize, usize)>;
 }

@@ -7,7 +7,9 @@
 //! ũ_k = π(x_k),  x̃_{k+1} = f̂(x_k, ũ_k)
 //! ```
 //!
-//! — with LLR, the neighbours of `x_k` in the actor memory move by `α_a {…}` (Eq. 3.14),
+//! where `ũ_k` is the action line 9 chose for `x_k` in the previous sample (the `u_k` of
+//! line 10) — with LLR, the neighbours of `x_k` in the actor memory move by `α_a {…}`
+//! (Eq. 3.14),
 //! their outputs saturated to the action bounds. The process model learns from the
 //! observed transition (line 13). Input saturation (§3.5.1): where `ũ_k` lies within
 //! `saturation_margin` of a bound, `∇_u f̂` is taken as zero, since the real plant does not
@@ -55,10 +57,9 @@ impl Improver for Mlac {
 
     fn improve(&mut self, t: &Transition, critic: &dyn Critic) {
         let (n, m) = (self.info.n(), self.info.m());
-        // ũ_k = π(x_k), x̃_{k+1} = f̂(x_k, ũ_k)                         (Eq. 3.4–3.5)
+        // ũ_k = π(x_k): the action line 9 chose for x_k, x̃_{k+1} = f̂(x_k, ũ_k) (Eq. 3.4–3.5)
         let mut u_tilde = [0.0; MAX_ACTION];
-        self.actor.value(t.x, &mut u_tilde[..m]);
-        self.info.saturate(&mut u_tilde[..m]);
+        u_tilde[..m].copy_from_slice(t.u_policy);
         let mut p = self.model.predict(t.x, &u_tilde[..m]);
         if self.saturated(&u_tilde[..m]) {
             p.du = [0.0; MAX_STATE * MAX_ACTION];
@@ -77,5 +78,11 @@ impl Improver for Mlac {
         }
         self.actor.shift(t.x, &g[..m]); //                                (line 10)
         self.model.learn(t.x, t.u, t.x_next); //                          (line 13)
+    }
+
+    fn memories(&self) -> Vec<(&'static str, usize, usize)> {
+        let actor = self.actor.fill().map(|(s, c)| ("actor", s, c));
+        let model = self.model.fill().map(|(s, c)| ("model", s, c));
+        actor.into_iter().chain(model).collect()
     }
 }

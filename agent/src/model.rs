@@ -62,6 +62,11 @@ impl ProcessModel {
         p
     }
 
+    /// `(stored, capacity)` if the model is memory-based.
+    pub fn fill(&self) -> Option<(usize, usize)> {
+        self.f.fill()
+    }
+
     /// Learns from the observed transition `(x, u) → x'`.
     pub fn learn(&mut self, x: &[f64], u: &[f64], x_next: &[f64]) {
         let n = self.n();

@@ -44,8 +44,8 @@ impl Rmac {
         let m = self.info.m();
         (0..1u32 << m).map(move |bits| {
             let mut u = [0.0; MAX_ACTION];
-            for j in 0..m {
-                u[j] = if bits >> j & 1 == 1 { self.info.action_high[j] } else { self.info.action_low[j] };
+            for (j, u) in u[..m].iter_mut().enumerate() {
+                *u = if bits >> j & 1 == 1 { self.info.action_high[j] } else { self.info.action_low[j] };
             }
             u
         })

@@ -3,7 +3,9 @@
 //! The actor follows the exploration that turned out well:
 //! `ϑ ← ϑ + α_a δ_k Δu_k ∇_ϑ π(x_k)` (Eq. 3.1, line 10). With LLR (§3.5.2,
 //! "Application to SAC") the sample `[x_k | u_k]` is stored and its neighbours' actions
-//! are moved by `α_a δ_k Δu_k`, saturated to the action bounds.
+//! are moved by `α_a δ_k Δu_k`, saturated to the action bounds; the RBF and tile-coding
+//! actors likewise stop at the bounds (see [`crate::approx::rbf`]). `Δu_k` is the
+//! exploration actually applied, `sat(π(x_k) + Δu) − π(x_k)`.
 
 use crate::actor_critic::{Improver, Transition};
 use crate::approx::{Approximator, Critic};

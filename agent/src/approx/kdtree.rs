@@ -1,12 +1,14 @@
 //! A static k-d tree over the LLR memory, for the K-nearest-neighbour search of §3.5.2
 //! ("one can reduce the computational burden by using, for instance, k-d trees").
 //!
-//! The tree is rebuilt from scratch by [`super::llr::Llr`] every few dozen insertions;
-//! samples inserted since the last rebuild are scanned linearly, and samples overwritten
-//! since then are recognised by their sequence number and skipped. Splits are on index
-//! (median by `select_nth_unstable`), so any number of identical samples — every trial
-//! starts at `[π, 0]`, saturated actions repeat — only makes leaves share coordinates,
-//! never breaks the tree.
+//! The tree is dynamic: a new sample descends to a leaf, widening the bounding boxes on
+//! its way, and a leaf that grows past [`LEAF_SIZE`] splits at its median along its
+//! widest axis. A sample that the memory overwrites stays in the tree as a stale entry,
+//! recognised by its sequence number and skipped; when stale entries outnumber live ones
+//! the memory rebuilds the tree, balanced, from scratch — amortised O(log N) per
+//! insertion. Pruning uses the bounding boxes only, so correctness never depends on the
+//! split values, and any number of identical samples (every trial starts at `[π, 0]`,
+//! saturated actions repeat) only makes a leaf larger, never breaks the tree.
 //!
 //! Distances are squared Euclidean on pre-scaled coordinates, with periodic components
 //! (angles) compared by their wrapped difference. Ties are broken in favour of the newer
@@ -18,7 +20,8 @@
 pub const MAX_K: usize = 128;
 /// Maximum input dimension of an LLR memory.
 pub const MAX_DIM: usize = 8;
-const LEAF_SIZE: usize = 8;
+/// Entries per leaf before it splits.
+pub const LEAF_SIZE: usize = 12;
 const NO_CHILD: u32 = u32::MAX;
 
 /// Squared distance between two scaled points; `period[j] > 0` marks a periodic axis.
@@ -36,7 +39,7 @@ pub fn dist2(a: &[f64], b: &[f64], period: &[f64]) -> f64 {
 }
 
 /// A candidate neighbour: squared distance, sequence number (tie-break: newer first),
-/// memory slot.
+/// memory slot. Distinct samples have distinct sequence numbers, so the order is total.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Candidate {
     /// Squared scaled distance to the query.
@@ -48,142 +51,286 @@ pub struct Candidate {
 }
 
 impl Candidate {
+    /// Whether `self` ranks before `other`: nearer, or as near and newer.
     #[inline]
-    fn before(&self, other: &Candidate) -> bool {
+    pub fn before(&self, other: &Candidate) -> bool {
         self.d2 < other.d2 || (self.d2 == other.d2 && self.seq > other.seq)
     }
 }
 
-/// The K best candidates so far, nearest first, newer first among equals.
+/// The K best candidates so far: a bounded max-heap (worst candidate on top), sorted
+/// nearest-first once by [`Best::sorted`]. The order is total — distance, then newer
+/// first — so the result does not depend on the order candidates were offered in.
 pub struct Best {
-    items: [Candidate; MAX_K],
+    items: Vec<Candidate>,
     len: usize,
     k: usize,
+    sorted: bool,
 }
 
 impl Best {
-    /// An empty set that keeps at most `k ≤ MAX_K` candidates.
+    /// An empty set that keeps at most `k ≤ MAX_K + 2` candidates.
     pub fn new(k: usize) -> Self {
-        debug_assert!(k >= 1 && k <= MAX_K);
-        Self { items: [Candidate { d2: 0.0, seq: 0, slot: 0 }; MAX_K], len: 0, k }
+        debug_assert!(k >= 1 && k <= MAX_K + 2);
+        Self { items: vec![Candidate { d2: 0.0, seq: 0, slot: 0 }; k], len: 0, k, sorted: true }
     }
 
     /// Offers a candidate.
     #[inline]
     pub fn offer(&mut self, c: Candidate) {
-        if self.len == self.k {
-            if !c.before(&self.items[self.len - 1]) {
-                return;
+        if self.sorted {
+            // Nearest-first order reversed is worst-first: a valid max-heap again.
+            self.items[..self.len].reverse();
+        }
+        let h = &mut self.items;
+        if self.len < self.k {
+            // Push and sift up.
+            let mut i = self.len;
+            self.len += 1;
+            while i > 0 {
+                let parent = (i - 1) / 2;
+                if !h[parent].before(&c) {
+                    break;
+                }
+                h[i] = h[parent];
+                i = parent;
             }
-            self.len -= 1;
+            h[i] = c;
+        } else if c.before(&h[0]) {
+            // Replace the worst and sift down.
+            let mut i = 0;
+            loop {
+                let (l, r) = (2 * i + 1, 2 * i + 2);
+                let mut worst = i;
+                let mut w = c;
+                if l < self.len && w.before(&h[l]) {
+                    worst = l;
+                    w = h[l];
+                }
+                if r < self.len && w.before(&h[r]) {
+                    worst = r;
+                }
+                if worst == i {
+                    break;
+                }
+                h[i] = h[worst];
+                i = worst;
+            }
+            h[i] = c;
+        } else {
+            self.sorted = false;
+            return;
         }
-        let mut i = self.len;
-        while i > 0 && c.before(&self.items[i - 1]) {
-            self.items[i] = self.items[i - 1];
-            i -= 1;
-        }
-        self.items[i] = c;
-        self.len += 1;
+        self.sorted = false;
+    }
+
+    /// Whether a candidate at squared distance `d2` could enter the set.
+    #[inline]
+    fn admits(&self, d2: f64) -> bool {
+        self.len < self.k || d2 <= self.items[0].d2
     }
 
     /// Whether `lower_bound` cannot beat the current worst candidate.
     #[inline]
     fn prunes(&self, lower_bound: f64) -> bool {
-        self.len == self.k && lower_bound > self.items[self.len - 1].d2
+        self.len == self.k && lower_bound > self.items[0].d2
     }
 
-    /// The candidates, nearest first.
-    pub fn as_slice(&self) -> &[Candidate] {
+    /// How many candidates this set keeps.
+    pub fn capacity(&self) -> usize {
+        self.k
+    }
+
+    /// The candidates, nearest first (newer first among equals).
+    pub fn sorted(&mut self) -> &[Candidate] {
+        if !self.sorted {
+            self.items[..self.len].sort_unstable_by(|a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
+            self.sorted = true;
+        }
         &self.items[..self.len]
     }
 }
 
+/// A stored point: scaled coordinates, memory slot, sequence number.
 #[derive(Clone, Copy)]
-struct Node {
-    start: u32,
-    end: u32,
-    left: u32,
-    right: u32,
+struct Entry {
+    p: [f64; MAX_DIM],
+    slot: u32,
+    seq: u64,
 }
 
-/// A static k-d tree over a snapshot of scaled points.
-#[derive(Default)]
-pub struct KdTree {
-    dim: usize,
-    points: Vec<f64>,
+#[derive(Clone)]
+struct Node {
+    lo: [f64; MAX_DIM],
+    hi: [f64; MAX_DIM],
+    axis: usize,
+    split: f64,
+    left: u32,
+    right: u32,
+    /// Entries of a leaf (empty for an inner node): coordinates packed `dim` per entry,
+    /// then slots and sequence numbers.
+    coords: Vec<f64>,
     slots: Vec<u32>,
     seqs: Vec<u64>,
+}
+
+impl Node {
+    fn leaf(entries: Vec<Entry>, dim: usize) -> Self {
+        let (mut lo, mut hi) = ([f64::INFINITY; MAX_DIM], [f64::NEG_INFINITY; MAX_DIM]);
+        for e in &entries {
+            for j in 0..dim {
+                lo[j] = lo[j].min(e.p[j]);
+                hi[j] = hi[j].max(e.p[j]);
+            }
+        }
+        let mut node = Node {
+            lo,
+            hi,
+            axis: 0,
+            split: 0.0,
+            left: NO_CHILD,
+            right: NO_CHILD,
+            coords: Vec::with_capacity(entries.len() * dim),
+            slots: Vec::with_capacity(entries.len()),
+            seqs: Vec::with_capacity(entries.len()),
+        };
+        for e in &entries {
+            node.push(e, dim);
+        }
+        node
+    }
+
+    fn push(&mut self, e: &Entry, dim: usize) {
+        self.coords.extend_from_slice(&e.p[..dim]);
+        self.slots.push(e.slot);
+        self.seqs.push(e.seq);
+    }
+
+    fn len(&self) -> usize {
+        self.slots.len()
+    }
+
+    /// The leaf's entries, unpacked (for splitting).
+    fn take_entries(&mut self, dim: usize) -> Vec<Entry> {
+        let out = (0..self.len())
+            .map(|i| {
+                let mut p = [0.0; MAX_DIM];
+                p[..dim].copy_from_slice(&self.coords[i * dim..(i + 1) * dim]);
+                Entry { p, slot: self.slots[i], seq: self.seqs[i] }
+            })
+            .collect();
+        self.coords = Vec::new();
+        self.slots = Vec::new();
+        self.seqs = Vec::new();
+        out
+    }
+
+    fn is_leaf(&self) -> bool {
+        self.left == NO_CHILD
+    }
+
+    /// Widest axis of the bounding box, if it has any extent.
+    fn widest(&self, dim: usize) -> Option<usize> {
+        let axis = (0..dim).max_by(|&a, &b| (self.hi[a] - self.lo[a]).total_cmp(&(self.hi[b] - self.lo[b])))?;
+        (self.hi[axis] > self.lo[axis]).then_some(axis)
+    }
+}
+
+/// A dynamic k-d tree over scaled points.
+pub struct KdTree {
+    dim: usize,
     nodes: Vec<Node>,
-    bbox: Vec<f64>,
+    entries: usize,
 }
 
 impl KdTree {
-    /// Builds a tree over `items` = (slot, seq), whose scaled coordinates are
+    /// An empty tree for `dim`-dimensional points.
+    pub fn new(dim: usize) -> Self {
+        Self { dim, nodes: vec![Node::leaf(Vec::new(), dim)], entries: 0 }
+    }
+
+    /// A balanced tree over `items` = (slot, seq), whose scaled coordinates are
     /// `coords(slot)`.
-    pub fn build<'a>(dim: usize, mut items: Vec<(u32, u64)>, coords: impl Fn(u32) -> &'a [f64]) -> Self {
-        let mut tree = KdTree { dim, ..Default::default() };
-        if items.is_empty() {
-            return tree;
-        }
-        tree.nodes.reserve(2 * items.len() / LEAF_SIZE + 1);
-        tree.split(&mut items, 0, &coords);
-        tree.points.reserve(items.len() * dim);
-        for &(slot, seq) in &items {
-            tree.points.extend_from_slice(coords(slot));
-            tree.slots.push(slot);
-            tree.seqs.push(seq);
-        }
+    pub fn build<'a>(dim: usize, items: &[(u32, u64)], coords: impl Fn(u32) -> &'a [f64]) -> Self {
+        let entries: Vec<Entry> = items
+            .iter()
+            .map(|&(slot, seq)| {
+                let mut p = [0.0; MAX_DIM];
+                p[..dim].copy_from_slice(coords(slot));
+                Entry { p, slot, seq }
+            })
+            .collect();
+        let mut tree = Self { dim, nodes: Vec::with_capacity(2 * items.len() / LEAF_SIZE + 1), entries: entries.len() };
+        tree.grow(entries);
         tree
     }
 
-    fn split<'a>(&mut self, items: &mut [(u32, u64)], offset: usize, coords: &impl Fn(u32) -> &'a [f64]) -> u32 {
+    /// Adds node(s) holding `entries`, split recursively; returns the subtree's root.
+    fn grow(&mut self, mut all: Vec<Entry>) -> u32 {
         let id = self.nodes.len() as u32;
-        let (mut lo, mut hi) = ([f64::INFINITY; MAX_DIM], [f64::NEG_INFINITY; MAX_DIM]);
-        for &(slot, _) in items.iter() {
-            let p = coords(slot);
-            for j in 0..self.dim {
-                lo[j] = lo[j].min(p[j]);
-                hi[j] = hi[j].max(p[j]);
-            }
-        }
-        self.bbox.extend_from_slice(&lo[..self.dim]);
-        self.bbox.extend_from_slice(&hi[..self.dim]);
-        let (start, end) = (offset as u32, (offset + items.len()) as u32);
-        self.nodes.push(Node { start, end, left: NO_CHILD, right: NO_CHILD });
-        if items.len() <= LEAF_SIZE {
+        let leaf = Node::leaf(Vec::new(), self.dim);
+        self.nodes.push(leaf);
+        let probe = Node::leaf(all.clone(), self.dim);
+        let axis = if all.len() > LEAF_SIZE { probe.widest(self.dim) } else { None };
+        let Some(axis) = axis else {
+            self.nodes[id as usize] = probe;
             return id;
-        }
-        let axis = (0..self.dim)
-            .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
-            .unwrap_or(0);
-        if hi[axis] <= lo[axis] {
-            return id; // all points identical: one (large) leaf
-        }
-        let mid = items.len() / 2;
-        items.select_nth_unstable_by(mid, |a, b| {
-            coords(a.0)[axis].total_cmp(&coords(b.0)[axis]).then(a.1.cmp(&b.1))
-        });
-        let (left_items, right_items) = items.split_at_mut(mid);
-        let left = self.split(left_items, offset, coords);
-        let right = self.split(right_items, offset + mid, coords);
-        self.nodes[id as usize].left = left;
-        self.nodes[id as usize].right = right;
+        };
+        let (lo, hi) = (probe.lo, probe.hi);
+        let mid = all.len() / 2;
+        all.select_nth_unstable_by(mid, |a, b| a.p[axis].total_cmp(&b.p[axis]).then(a.seq.cmp(&b.seq)));
+        let split = all[mid].p[axis];
+        let right_entries = all.split_off(mid);
+        let left = self.grow(all);
+        let right = self.grow(right_entries);
+        self.nodes[id as usize] = Node { lo, hi, axis, split, left, right, ..Node::leaf(Vec::new(), self.dim) };
         id
+    }
+
+    /// Inserts a point.
+    pub fn insert(&mut self, p: &[f64], slot: u32, seq: u64) {
+        let mut e = Entry { p: [0.0; MAX_DIM], slot, seq };
+        e.p[..self.dim].copy_from_slice(p);
+        self.entries += 1;
+        let mut id = 0usize;
+        loop {
+            let node = &mut self.nodes[id];
+            for j in 0..self.dim {
+                node.lo[j] = node.lo[j].min(p[j]);
+                node.hi[j] = node.hi[j].max(p[j]);
+            }
+            if node.is_leaf() {
+                node.push(&e, self.dim);
+                if node.len() > 2 * LEAF_SIZE {
+                    self.split_leaf(id);
+                }
+                return;
+            }
+            id = if p[node.axis] < node.split { node.left } else { node.right } as usize;
+        }
+    }
+
+    /// Splits an overfull leaf in place (no-op if all its points coincide).
+    fn split_leaf(&mut self, id: usize) {
+        let Some(_) = self.nodes[id].widest(self.dim) else { return };
+        let entries = self.nodes[id].take_entries(self.dim);
+        let sub = self.grow(entries);
+        // The grown subtree's root replaces the leaf (its own slot is left unused).
+        self.nodes.swap(id, sub as usize);
+        self.nodes[sub as usize] = Node::leaf(Vec::new(), self.dim);
     }
 
     /// Lower bound of the squared distance from `q` to node `id`'s bounding box.
     #[inline]
     fn box_dist2(&self, id: usize, q: &[f64], period: &[f64]) -> f64 {
-        let d = self.dim;
-        let lo = &self.bbox[2 * d * id..2 * d * id + d];
-        let hi = &self.bbox[2 * d * id + d..2 * d * (id + 1)];
+        let node = &self.nodes[id];
         let mut s = 0.0;
-        for j in 0..d {
+        for j in 0..self.dim {
             let x = q[j];
-            if x >= lo[j] && x <= hi[j] {
+            if x >= node.lo[j] && x <= node.hi[j] {
                 continue;
             }
-            let (mut a, mut b) = ((x - lo[j]).abs(), (x - hi[j]).abs());
+            let (mut a, mut b) = ((x - node.lo[j]).abs(), (x - node.hi[j]).abs());
             if period[j] > 0.0 {
                 a = a.min(period[j] - a);
                 b = b.min(period[j] - b);
@@ -195,27 +342,20 @@ impl KdTree {
     }
 
     /// Offers every live point of the tree that can still improve `best`;
-    /// `live(slot, seq)` says whether the snapshot entry is still in the memory.
+    /// `live(slot, seq)` says whether an entry is still in the memory.
     pub fn search(&self, q: &[f64], period: &[f64], best: &mut Best, live: impl Fn(u32, u64) -> bool) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let mut stack: [(u32, f64); 64] = [(0, 0.0); 64];
-        let mut top = 1;
-        stack[0] = (0, 0.0);
-        while top > 0 {
-            top -= 1;
-            let (id, lb) = stack[top];
+        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
+        stack.push((0, self.box_dist2(0, q, period)));
+        while let Some((id, lb)) = stack.pop() {
             if best.prunes(lb) {
                 continue;
             }
-            let node = self.nodes[id as usize];
-            if node.left == NO_CHILD {
-                for i in node.start as usize..node.end as usize {
-                    let p = &self.points[i * self.dim..(i + 1) * self.dim];
-                    let d2 = dist2(p, q, period);
-                    let (slot, seq) = (self.slots[i], self.seqs[i]);
-                    if live(slot, seq) {
+            let node = &self.nodes[id as usize];
+            if node.is_leaf() {
+                let d = self.dim;
+                for (i, (&slot, &seq)) in node.slots.iter().zip(&node.seqs).enumerate() {
+                    let d2 = dist2(&node.coords[i * d..(i + 1) * d], q, period);
+                    if best.admits(d2) && live(slot, seq) {
                         best.offer(Candidate { d2, seq, slot });
                     }
                 }
@@ -225,14 +365,38 @@ impl KdTree {
             let dr = self.box_dist2(node.right as usize, q, period);
             // Push the farther child first so the nearer one is searched first.
             let (near, far) = if dl <= dr { ((node.left, dl), (node.right, dr)) } else { ((node.right, dr), (node.left, dl)) };
-            stack[top] = far;
-            stack[top + 1] = near;
-            top += 2;
+            stack.push(far);
+            stack.push(near);
         }
     }
 
-    /// Number of points in the snapshot.
-    pub fn len(&self) -> usize {
-        self.slots.len()
+    /// Entries in the tree, stale ones included.
+    pub fn entries(&self) -> usize {
+        self.entries
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn best_keeps_the_k_nearest_in_order_whatever_the_offer_order() {
+        let cands: Vec<Candidate> = (0..50u64)
+            .map(|i| Candidate { d2: ((i * 37) % 11) as f64, seq: i, slot: i as u32 })
+            .collect();
+        let mut want = cands.clone();
+        want.sort_by(|a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
+        for rot in [0, 7, 23] {
+            let mut best = Best::new(12);
+            for i in 0..cands.len() {
+                best.offer(cands[(i + rot) % cands.len()]);
+                if i == 20 {
+                    // Looking at the set midway must not disturb it.
+                    let _ = best.sorted();
+                }
+            }
+            assert_eq!(best.sorted(), &want[..12]);
+        }
     }
 }

@@ -26,9 +26,10 @@
 //!   actor's memory is saturated to the input bounds, so it never proposes an action
 //!   beyond them).
 
+use std::cell::RefCell;
 use std::collections::VecDeque;
 
-use super::kdtree::{Best, Candidate, KdTree, MAX_DIM, MAX_K, dist2};
+use super::kdtree::{Best, Candidate, KdTree, LEAF_SIZE, MAX_DIM, MAX_K, dist2};
 use super::solve::cholesky_solve;
 use super::{Approximator, Differentiable, MAX_OUT, Traced};
 
@@ -36,6 +37,17 @@ use super::{Approximator, Differentiable, MAX_OUT, Traced};
 const TRACE_CUTOFF: f64 = 1e-6;
 /// Ridge added to the scaled-input covariance of a fit, per neighbour.
 const RIDGE: f64 = 1e-9;
+
+/// How the K nearest neighbours are found. Both give exactly the same neighbours (ties
+/// broken by insertion order); they differ only in speed — see `agent/benches`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Search {
+    /// A dynamic [`KdTree`].
+    KdTree,
+    /// A scan of the whole memory with partial selection (`select_nth_unstable`) of the
+    /// K nearest — never a full sort.
+    Scan,
+}
 
 /// What to remove when a sample arrives.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -64,18 +76,30 @@ pub struct LlrParams {
     pub bounds: Option<(Vec<f64>, Vec<f64>)>,
     /// Memory management rule.
     pub eviction: Eviction,
-    /// Insertions between k-d tree rebuilds.
-    pub rebuild_every: usize,
+    /// Neighbour search strategy.
+    pub search: Search,
 }
 
-/// The neighbourhood of a query and the local affine model fitted to it.
-struct Local {
-    best: Best,
+/// The local affine model at a query.
+struct Fit {
     /// Prediction at the query.
     y: [f64; MAX_OUT],
     /// Slope `∂y/∂x` in unscaled input units, row-major `m × n`.
     jac: [f64; MAX_OUT * MAX_DIM],
 }
+
+/// A remembered neighbour search: the query (bit-exact), its scaled coordinates, and the
+/// true nearest samples of the memory as it is now — insertions keep the list exact
+/// (see `Llr::update_cache`), possibly shorter.
+struct Cached {
+    key: [u64; MAX_DIM],
+    q: [f64; MAX_DIM],
+    found: Vec<Candidate>,
+}
+
+/// How many neighbours beyond K + 1 a search keeps, so that a remembered search survives
+/// this many insertions (each can remove one of its samples).
+const CACHE_SLACK: usize = 1;
 
 /// An LLR memory.
 pub struct Llr {
@@ -88,7 +112,7 @@ pub struct Llr {
     period: Vec<f64>,
     bounds: Option<(Vec<f64>, Vec<f64>)>,
     eviction: Eviction,
-    rebuild_every: usize,
+    search: Search,
     // Sample storage, by slot.
     inputs: Vec<f64>,
     outputs: Vec<f64>,
@@ -101,7 +125,11 @@ pub struct Llr {
     fifo: VecDeque<(u32, u64)>,
     // Index.
     tree: KdTree,
-    fresh: Vec<(u32, u64)>,
+    /// The two most recent neighbour searches. The algorithms ask for the same point
+    /// repeatedly (e.g. `π(x_{k+1})`, then, one sample later, the actor update at
+    /// `x_{k+1}`). Neighbour sets depend on the stored inputs only, so output updates
+    /// leave them valid, and insertions update them exactly.
+    cache: RefCell<[Option<Cached>; 2]>,
     /// Slots with a non-zero trace.
     traced: Vec<(u32, u64)>,
 }
@@ -132,7 +160,7 @@ impl Llr {
             period,
             bounds: p.bounds.clone(),
             eviction: p.eviction,
-            rebuild_every: p.rebuild_every.max(1),
+            search: p.search,
             inputs: Vec::with_capacity(p.memory * n),
             outputs: Vec::with_capacity(p.memory * p.outputs),
             seq: Vec::with_capacity(p.memory),
@@ -140,8 +168,8 @@ impl Llr {
             len: 0,
             next_seq: 0,
             fifo: VecDeque::with_capacity(p.memory + 1),
-            tree: KdTree::default(),
-            fresh: Vec::new(),
+            tree: KdTree::new(n),
+            cache: RefCell::new([None, None]),
             traced: Vec::new(),
         }
     }
@@ -156,6 +184,11 @@ impl Llr {
         self.len == 0
     }
 
+    /// `(stored, capacity)`.
+    pub fn fill(&self) -> (usize, usize) {
+        (self.len, self.cap)
+    }
+
     /// The stored samples as `(x, y)` pairs in slot order (for plots and checkpoints).
     pub fn samples(&self) -> impl Iterator<Item = (Vec<f64>, &[f64])> + '_ {
         (0..self.len).map(move |s| {
@@ -164,61 +197,101 @@ impl Llr {
         })
     }
 
-    fn scale(&self, x: &[f64], out: &mut [f64; MAX_DIM]) {
+    /// Scaled query coordinates (angles wrapped, then weighted).
+    fn scale(&self, x: &[f64]) -> [f64; MAX_DIM] {
+        let mut q = [0.0; MAX_DIM];
         for j in 0..self.n {
-            let mut v = x[j];
-            if self.period[j] > 0.0 {
-                v = plant::angle::wrap(v);
-            }
-            out[j] = v * self.weights[j];
+            let v = if self.period[j] > 0.0 { plant::angle::wrap(x[j]) } else { x[j] };
+            q[j] = v * self.weights[j];
         }
+        q
     }
 
     fn coords(&self, slot: u32) -> &[f64] {
         &self.inputs[slot as usize * self.n..(slot as usize + 1) * self.n]
     }
 
-    /// The K nearest stored samples to the scaled query `q`.
-    fn nearest(&self, q: &[f64]) -> Best {
-        let mut best = Best::new(self.k);
-        for &(slot, seq) in &self.fresh {
-            if self.seq[slot as usize] == seq {
-                best.offer(Candidate { d2: dist2(self.coords(slot), q, &self.period), seq, slot });
+    fn output(&self, slot: u32) -> &[f64] {
+        &self.outputs[slot as usize * self.m..(slot as usize + 1) * self.m]
+    }
+
+    /// The `count ≤ K + 1` nearest stored samples to the scaled query `q`. A search keeps
+    /// K + 2 and is remembered, so a value query and a later insertion at the same point
+    /// share one search, even with one insertion elsewhere in between.
+    fn nearest(&self, q: &[f64; MAX_DIM], count: usize) -> Best {
+        let key = q.map(f64::to_bits);
+        let mut best = Best::new(count);
+        let mut cache = self.cache.borrow_mut();
+        if let Some(hit) = cache.iter().flatten().find(|c| c.key == key && c.found.len() >= count.min(self.len)) {
+            for c in &hit.found[..count.min(hit.found.len())] {
+                best.offer(*c);
             }
+            return best;
         }
-        self.tree.search(q, &self.period, &mut best, |slot, seq| self.seq[slot as usize] == seq);
+        let mut wide = Best::new(self.k + 1 + CACHE_SLACK);
+        self.search_into(&q[..self.n], &mut wide);
+        let found = wide.sorted().to_vec();
+        for c in &found[..count.min(found.len())] {
+            best.offer(*c);
+        }
+        cache.swap(0, 1);
+        cache[0] = Some(Cached { key, q: *q, found });
         best
     }
 
-    /// Brute-force K nearest neighbours (the reference for the k-d tree).
-    #[cfg(test)]
-    fn nearest_brute_force(&self, x: &[f64]) -> Vec<u32> {
-        let mut q = [0.0; MAX_DIM];
-        self.scale(x, &mut q);
-        let mut all: Vec<Candidate> = (0..self.len as u32)
-            .map(|slot| Candidate { d2: dist2(self.coords(slot), &q[..self.n], &self.period), seq: self.seq[slot as usize], slot })
-            .collect();
-        all.sort_by(|a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
-        all.iter().take(self.k).map(|c| c.slot).collect()
+    /// Keeps the remembered searches exact across the insertion of `new`, which removed
+    /// the previous sample of slot `removed`, if any.
+    ///
+    /// A remembered list holds the true nearest samples of the memory. Removing one of
+    /// them shortens it by one; the new sample joins it where it ranks if that is before
+    /// the list's end (or right at the end when the memory holds nothing beyond the list).
+    fn update_cache(&mut self, new: Candidate, removed: Option<u32>) {
+        let (n, len, period) = (self.n, self.len, &self.period);
+        let p = &self.inputs[new.slot as usize * n..(new.slot as usize + 1) * n];
+        for c in self.cache.get_mut().iter_mut().flatten() {
+            if let Some(pos) = removed.and_then(|r| c.found.iter().position(|f| f.slot == r)) {
+                c.found.remove(pos);
+            }
+            let cand = Candidate { d2: dist2(p, &c.q[..n], period), ..new };
+            let pos = c.found.partition_point(|f| f.before(&cand));
+            // `len - 1` samples besides the new one; all of them remembered?
+            if pos < c.found.len() || len - 1 <= c.found.len() {
+                c.found.insert(pos, cand);
+            }
+        }
     }
 
-    /// Neighbourhood of `x` and the affine model fitted to it.
-    fn local(&self, x: &[f64]) -> Local {
+    /// Offers the nearest stored samples to `best`.
+    fn search_into(&self, q: &[f64], best: &mut Best) {
+        match self.search {
+            Search::KdTree => self.tree.search(q, &self.period, best, |slot, seq| self.seq[slot as usize] == seq),
+            Search::Scan => {
+                let mut all: Vec<Candidate> = (0..self.len as u32)
+                    .map(|slot| Candidate { d2: dist2(self.coords(slot), q, &self.period), seq: self.seq[slot as usize], slot })
+                    .collect();
+                let k = best.capacity().min(all.len());
+                if k > 0 && k < all.len() {
+                    all.select_nth_unstable_by(k - 1, |a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
+                }
+                for c in &all[..k] {
+                    best.offer(*c);
+                }
+            }
+        }
+    }
+
+    /// The affine model fitted to the neighbours `nb` of the scaled query `q`.
+    fn fit_local(&self, q: &[f64; MAX_DIM], nb: &[Candidate]) -> Fit {
         let (n, m) = (self.n, self.m);
-        let mut q = [0.0; MAX_DIM];
-        self.scale(x, &mut q);
-        let best = self.nearest(&q[..n]);
-        let mut out = Local { best, y: [0.0; MAX_OUT], jac: [0.0; MAX_OUT * MAX_DIM] };
-        let nb = out.best.as_slice();
+        let mut out = Fit { y: [0.0; MAX_OUT], jac: [0.0; MAX_OUT * MAX_DIM] };
         if nb.is_empty() {
             return out;
         }
         let kf = nb.len() as f64;
-        // Relative scaled inputs and their mean; output mean.
-        let mut d = [[0.0; MAX_DIM]; MAX_K];
-        let (mut dm, mut ym) = ([0.0; MAX_DIM], [0.0; MAX_OUT]);
-        for (i, c) in nb.iter().enumerate() {
+        // Inputs relative to the query (angles wrapped).
+        let rel = |c: &Candidate| -> [f64; MAX_DIM] {
             let p = self.coords(c.slot);
+            let mut d = [0.0; MAX_DIM];
             for j in 0..n {
                 let mut v = p[j] - q[j];
                 let per = self.period[j];
@@ -229,23 +302,30 @@ impl Llr {
                         v += per;
                     }
                 }
-                d[i][j] = v;
-                dm[j] += v / kf;
+                d[j] = v;
             }
-            let y = &self.outputs[c.slot as usize * m..(c.slot as usize + 1) * m];
-            for o in 0..m {
-                ym[o] += y[o] / kf;
+            d
+        };
+        // Means, then the centred normal equations S B = C, ridge-regularised.
+        let (mut dm, mut ym) = ([0.0; MAX_DIM], [0.0; MAX_OUT]);
+        for c in nb {
+            let d = rel(c);
+            for j in 0..n {
+                dm[j] += d[j] / kf;
+            }
+            for (o, y) in self.output(c.slot).iter().enumerate() {
+                ym[o] += y / kf;
             }
         }
-        // Centred normal equations S B = C.
         let mut s = [0.0; MAX_DIM * MAX_DIM];
         let mut cxy = [0.0; MAX_DIM * MAX_OUT];
-        for (i, c) in nb.iter().enumerate() {
-            let y = &self.outputs[c.slot as usize * m..(c.slot as usize + 1) * m];
+        for c in nb {
+            let d = rel(c);
+            let y = self.output(c.slot);
             for a in 0..n {
-                let da = d[i][a] - dm[a];
+                let da = d[a] - dm[a];
                 for b in 0..=a {
-                    s[a * n + b] += da * (d[i][b] - dm[b]);
+                    s[a * n + b] += da * (d[b] - dm[b]);
                 }
                 for o in 0..m {
                     cxy[a * m + o] += da * (y[o] - ym[o]);
@@ -273,6 +353,13 @@ impl Llr {
         out
     }
 
+    /// Prediction and slope at `x`.
+    fn local(&self, x: &[f64]) -> Fit {
+        let q = self.scale(x);
+        let mut best = self.nearest(&q, self.k);
+        self.fit_local(&q, best.sorted())
+    }
+
     #[inline]
     fn clamp(&self, o: usize, v: f64) -> f64 {
         match &self.bounds {
@@ -281,50 +368,49 @@ impl Llr {
         }
     }
 
-    /// Stores `[x | y]`, evicting per the memory-management rule; returns its slot.
-    fn insert(&mut self, x: &[f64], y: &[f64]) -> u32 {
-        let mut q = [0.0; MAX_DIM];
-        self.scale(x, &mut q);
+    /// Stores `[x | y]` (`q` = scaled `x`, `nearest` = the nearest stored sample, if
+    /// known), evicting per the memory-management rule. Returns the new sample as a
+    /// candidate at distance 0 and the slot whose previous sample was removed, if any.
+    fn insert(&mut self, q: &[f64; MAX_DIM], y: &[f64], nearest: Option<Candidate>) -> (Candidate, Option<u32>) {
         let seq = self.next_seq;
         self.next_seq += 1;
         let replace = match self.eviction {
             Eviction::Redundant(radius) if self.len > 0 => {
-                let mut best = Best::new(1);
-                self.nearest_into(&q[..self.n], &mut best);
-                best.as_slice().first().filter(|c| c.d2 < radius * radius).map(|c| c.slot)
+                let nearest = nearest.or_else(|| self.nearest(q, 1).sorted().first().copied());
+                nearest.filter(|c| c.d2 < radius * radius).map(|c| c.slot)
             }
             _ => None,
         };
-        let slot = match replace {
-            Some(slot) => slot,
+        let (slot, removed) = match replace {
+            Some(slot) => (slot, Some(slot)),
             None if self.len < self.cap => {
                 self.inputs.extend_from_slice(&q[..self.n]);
                 self.outputs.extend_from_slice(y);
                 self.seq.push(seq);
                 self.trace.push(0.0);
                 self.len += 1;
-                let slot = (self.len - 1) as u32;
-                self.register(slot, seq);
-                return slot;
+                ((self.len - 1) as u32, None)
             }
-            None => self.oldest_slot(),
+            None => {
+                let slot = self.oldest_slot();
+                (slot, Some(slot))
+            }
         };
         let s = slot as usize;
-        self.inputs[s * self.n..(s + 1) * self.n].copy_from_slice(&q[..self.n]);
-        self.outputs[s * self.m..(s + 1) * self.m].copy_from_slice(y);
-        self.seq[s] = seq;
-        self.trace[s] = 0.0;
-        self.register(slot, seq);
-        slot
-    }
-
-    fn nearest_into(&self, q: &[f64], best: &mut Best) {
-        for &(slot, seq) in &self.fresh {
-            if self.seq[slot as usize] == seq {
-                best.offer(Candidate { d2: dist2(self.coords(slot), q, &self.period), seq, slot });
-            }
+        if removed.is_some() {
+            self.inputs[s * self.n..(s + 1) * self.n].copy_from_slice(&q[..self.n]);
+            self.outputs[s * self.m..(s + 1) * self.m].copy_from_slice(y);
+            self.seq[s] = seq;
+            self.trace[s] = 0.0;
         }
-        self.tree.search(q, &self.period, best, |slot, seq| self.seq[slot as usize] == seq);
+        for o in 0..self.m {
+            self.outputs[s * self.m + o] = self.clamp(o, self.outputs[s * self.m + o]);
+        }
+        self.fifo.push_back((slot, seq));
+        self.index(slot, seq);
+        let new = Candidate { d2: 0.0, seq, slot };
+        self.update_cache(new, removed);
+        (new, removed)
     }
 
     fn oldest_slot(&mut self) -> u32 {
@@ -336,28 +422,39 @@ impl Llr {
         unreachable!("a full memory always has a live oldest sample")
     }
 
-    fn register(&mut self, slot: u32, seq: u64) {
-        for o in 0..self.m {
-            let v = self.outputs[slot as usize * self.m + o];
-            self.outputs[slot as usize * self.m + o] = self.clamp(o, v);
+    /// Adds a new sample to the search index; rebuilds the tree, balanced, when its stale
+    /// entries (overwritten samples) outnumber the live ones.
+    fn index(&mut self, slot: u32, seq: u64) {
+        if self.search == Search::Scan {
+            return;
         }
-        self.fifo.push_back((slot, seq));
-        self.fresh.push((slot, seq));
-        if self.fresh.len() >= self.rebuild_every {
+        if self.tree.entries() >= 2 * self.len + 2 * LEAF_SIZE {
             let items: Vec<(u32, u64)> = (0..self.len as u32).map(|s| (s, self.seq[s as usize])).collect();
             let n = self.n;
             let inputs = &self.inputs;
-            self.tree = KdTree::build(n, items, |s| &inputs[s as usize * n..(s as usize + 1) * n]);
-            self.fresh.clear();
+            self.tree = KdTree::build(n, &items, |s| &inputs[s as usize * n..(s as usize + 1) * n]);
+        } else {
+            self.tree.insert(&self.inputs[slot as usize * self.n..(slot as usize + 1) * self.n], slot, seq);
         }
     }
 
-    /// Inserts `[x | f(x)]` and returns the neighbourhood of `x` including the new sample.
-    fn insert_here(&mut self, x: &[f64]) -> Best {
-        let y = self.local(x).y;
-        let m = self.m;
-        self.insert(x, &y[..m]);
-        self.local(x).best
+    /// Stores `[x | f(x)]`; returns `f(x)` (before the insertion) and the neighbourhood of
+    /// `x` after it. One search serves both: the K + 1 nearest before the insertion
+    /// contain the K − 1 that join the new sample, whatever the insertion removed.
+    fn insert_here(&mut self, x: &[f64]) -> (Fit, Best) {
+        let q = self.scale(x);
+        let mut pre = self.nearest(&q, self.k + 1);
+        let pre = pre.sorted();
+        let fit = self.fit_local(&q, &pre[..pre.len().min(self.k)]);
+        let (new, removed) = self.insert(&q, &fit.y[..self.m], pre.first().copied());
+        let mut after = Best::new(self.k);
+        after.offer(new);
+        for c in pre {
+            if Some(c.slot) != removed {
+                after.offer(*c);
+            }
+        }
+        (fit, after)
     }
 }
 
@@ -372,8 +469,8 @@ impl Approximator for Llr {
         y.copy_from_slice(&self.local(x).y[..self.m]);
     }
     fn shift(&mut self, x: &[f64], step: &[f64]) {
-        let best = self.insert_here(x);
-        for c in best.as_slice() {
+        let (_, mut after) = self.insert_here(x);
+        for c in after.sorted() {
             for o in 0..self.m {
                 let i = c.slot as usize * self.m + o;
                 self.outputs[i] = self.clamp(o, self.outputs[i] + step[o]);
@@ -381,16 +478,23 @@ impl Approximator for Llr {
         }
     }
     fn fit(&mut self, x: &[f64], target: &[f64], rate: f64) {
+        let q = self.scale(x);
+        let mut nearest = None;
         if rate > 0.0 && !self.is_empty() {
-            let best = self.local(x).best;
-            for c in best.as_slice() {
+            let mut best = self.nearest(&q, self.k);
+            let best = best.sorted();
+            nearest = best.first().copied();
+            for c in best {
                 for o in 0..self.m {
                     let i = c.slot as usize * self.m + o;
                     self.outputs[i] = self.clamp(o, self.outputs[i] + rate * (target[o] - self.outputs[i]));
                 }
             }
         }
-        self.insert(x, target);
+        self.insert(&q, target, nearest);
+    }
+    fn fill(&self) -> Option<(usize, usize)> {
+        Some(Llr::fill(self))
     }
 }
 
@@ -404,6 +508,9 @@ impl Differentiable for Llr {
 
 impl Traced for Llr {
     fn visit(&mut self, x: &[f64], decay: f64) {
+        self.visit_value(x, decay);
+    }
+    fn visit_value(&mut self, x: &[f64], decay: f64) -> f64 {
         let mut kept = 0;
         for i in 0..self.traced.len() {
             let (slot, seq) = self.traced[i];
@@ -420,13 +527,14 @@ impl Traced for Llr {
             kept += 1;
         }
         self.traced.truncate(kept);
-        let best = self.insert_here(x);
-        for c in best.as_slice() {
+        let (fit, mut after) = self.insert_here(x);
+        for c in after.sorted() {
             if self.trace[c.slot as usize] == 0.0 {
                 self.traced.push((c.slot, c.seq));
             }
             self.trace[c.slot as usize] = 1.0;
         }
+        fit.y[0]
     }
     fn apply_td(&mut self, step: f64) {
         for &(slot, seq) in &self.traced {
@@ -459,8 +567,22 @@ mod tests {
             outputs: m,
             bounds: None,
             eviction: Eviction::Oldest,
-            rebuild_every: 16,
+            search: Search::KdTree,
         }
+    }
+
+    fn neighbours(llr: &Llr, x: &[f64]) -> Vec<u32> {
+        llr.nearest(&llr.scale(x), llr.k).sorted().iter().map(|c| c.slot).collect()
+    }
+
+    /// The reference: every sample, fully sorted by (distance, newer first).
+    fn brute_force(llr: &Llr, x: &[f64]) -> Vec<u32> {
+        let q = llr.scale(x);
+        let mut all: Vec<Candidate> = (0..llr.len as u32)
+            .map(|slot| Candidate { d2: dist2(llr.coords(slot), &q[..llr.n], &llr.period), seq: llr.seq[slot as usize], slot })
+            .collect();
+        all.sort_by(|a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
+        all.iter().take(llr.k).map(|c| c.slot).collect()
     }
 
     #[test]
@@ -486,34 +608,73 @@ mod tests {
     }
 
     #[test]
-    fn kd_tree_matches_brute_force() {
+    fn kd_tree_and_scan_match_brute_force() {
         for (n, periodic) in [(2, vec![true, false]), (3, vec![true, false, false]), (6, vec![true, true, false, false, false, false])] {
             let mut p = params(n, 1, 700, 25);
             p.periodic = periodic;
             p.weights = (0..n).map(|j| 1.0 / (j + 1) as f64).collect();
-            let mut llr = Llr::new(&p);
+            let mut tree = Llr::new(&p);
+            let mut scan = Llr::new(&LlrParams { search: Search::Scan, ..p });
             let mut rng = ChaCha8Rng::seed_from_u64(7);
+            let pi = [std::f64::consts::PI; 8];
             for i in 0..1500 {
                 let x: Vec<f64> = (0..n).map(|_| rng.random_range(-4.0..4.0)).collect();
-                llr.fit(&x, &[i as f64], 0.0);
-                // Duplicates, as learning produces them.
+                tree.fit(&x, &[i as f64], 0.0);
+                scan.fit(&x, &[i as f64], 0.0);
+                // Exact duplicates, as learning produces them.
                 if i % 5 == 0 {
-                    llr.fit(&[std::f64::consts::PI; 8][..n], &[0.0], 0.0);
+                    tree.fit(&pi[..n], &[0.0], 0.0);
+                    scan.fit(&pi[..n], &[0.0], 0.0);
                 }
             }
-            for _ in 0..300 {
-                let x: Vec<f64> = (0..n).map(|_| rng.random_range(-4.0..4.0)).collect();
-                let mut q = [0.0; MAX_DIM];
-                llr.scale(&x, &mut q);
-                let tree: Vec<u32> = llr.nearest(&q[..n]).as_slice().iter().map(|c| c.slot).collect();
-                assert_eq!(tree, llr.nearest_brute_force(&x));
+            let queries = (0..300).map(|_| (0..n).map(|_| rng.random_range(-4.0..4.0)).collect::<Vec<f64>>());
+            for x in queries.chain([pi[..n].to_vec()]) {
+                let want = brute_force(&tree, &x);
+                assert_eq!(neighbours(&tree, &x), want);
+                assert_eq!(neighbours(&scan, &x), want);
             }
-            let tree: Vec<u32> = {
-                let mut q = [0.0; MAX_DIM];
-                llr.scale(&[std::f64::consts::PI; 8][..n], &mut q);
-                llr.nearest(&q[..n]).as_slice().iter().map(|c| c.slot).collect()
-            };
-            assert_eq!(tree, llr.nearest_brute_force(&[std::f64::consts::PI; 8][..n]));
+        }
+    }
+
+    #[test]
+    fn neighbourhood_after_insertion_equals_a_fresh_search() {
+        for eviction in [Eviction::Oldest, Eviction::Redundant(0.3)] {
+            let mut p = params(2, 1, 300, 15);
+            p.periodic = vec![true, false];
+            p.eviction = eviction;
+            let mut llr = Llr::new(&p);
+            let mut rng = ChaCha8Rng::seed_from_u64(3);
+            for i in 0..2000 {
+                // Coarse coordinates: many exact and near duplicates, full memory.
+                let x = [(rng.random_range(-6..6) as f64) * 0.5, (rng.random_range(-20..20) as f64) * 0.5];
+                let (_, mut after) = llr.insert_here(&x);
+                let after: Vec<u32> = after.sorted().iter().map(|c| c.slot).collect();
+                assert_eq!(after, brute_force(&llr, &x), "insertion {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn remembered_searches_stay_exact_across_insertions() {
+        for eviction in [Eviction::Oldest, Eviction::Redundant(0.3)] {
+            let mut p = params(2, 1, 200, 10);
+            p.periodic = vec![true, false];
+            p.eviction = eviction;
+            let mut llr = Llr::new(&p);
+            let mut rng = ChaCha8Rng::seed_from_u64(5);
+            let mut point = || [(rng.random_range(-6..6) as f64) * 0.5, (rng.random_range(-20..20) as f64) * 0.5];
+            let queries: Vec<[f64; 2]> = (0..4).map(|_| point()).collect();
+            for i in 0..1500 {
+                let q = queries[i % 4];
+                // Ask, insert elsewhere, ask again: the second answer comes from the cache.
+                let _ = neighbours(&llr, &q);
+                let x = point();
+                llr.fit(&x, &[0.0], 0.0);
+                assert_eq!(neighbours(&llr, &q), brute_force(&llr, &q), "step {i}");
+                let (_, mut after) = llr.insert_here(&q);
+                let after: Vec<u32> = after.sorted().iter().map(|c| c.slot).collect();
+                assert_eq!(after, brute_force(&llr, &q), "step {i}");
+            }
         }
     }
 

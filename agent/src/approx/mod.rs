@@ -40,6 +40,10 @@ pub trait Approximator: Send {
     /// Moves `f(x)` a fraction `rate` of the way towards `target`; an LLR memory also
     /// stores `[x | target]` as a new sample.
     fn fit(&mut self, x: &[f64], target: &[f64], rate: f64);
+    /// For a memory-based approximator, `(samples stored, capacity)`.
+    fn fill(&self) -> Option<(usize, usize)> {
+        None
+    }
 }
 
 /// An approximator with a gradient with respect to its input.
@@ -53,6 +57,12 @@ pub trait Traced: Approximator {
     /// Visits `x`: `z ← decay · z + ∇_θ V(x)` (Eq. 2.19b). An LLR critic also stores
     /// the sample `[x | V(x)]` with eligibility 1 (§3.5.2, "Application to SAC").
     fn visit(&mut self, x: &[f64], decay: f64);
+    /// [`Traced::visit`], returning `V(x)` as it was before the visit.
+    fn visit_value(&mut self, x: &[f64], decay: f64) -> f64 {
+        let v = scalar(self, x);
+        self.visit(x, decay);
+        v
+    }
     /// `θ ← θ + step · z` (Eq. 2.19c with `step = α_c δ`).
     fn apply_td(&mut self, step: f64);
     /// `z ← 0`, at the start of a trial.
@@ -64,7 +74,7 @@ pub trait Critic: Traced + Differentiable {}
 impl<T: Traced + Differentiable> Critic for T {}
 
 /// Evaluates a scalar approximator.
-pub fn scalar(f: &(impl Approximator + ?Sized), x: &[f64]) -> f64 {
+pub fn scalar<A: Approximator + ?Sized>(f: &A, x: &[f64]) -> f64 {
     let mut y = [0.0];
     f.value(x, &mut y);
     y[0]

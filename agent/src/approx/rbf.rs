@@ -12,6 +12,17 @@
 //! neighbouring Gaussians a spacing `Δ` apart intersect halfway, so
 //! `exp(−½ (Δ/2)² / b) = h`, i.e. `b = Δ² / (−8 ln h)` on the diagonal of `B`.
 //!
+//! **Bounded outputs** (an actor's action bounds): the value is saturated, and
+//! [`Approximator::shift`] first cuts its step so that the saturated value at `x` plus
+//! the step stays within the bounds — the counterpart of §3.5.2's saturating the actor memory's outputs
+//! "directly after the update". Without it, SAC (Eq. 3.1) drives the parameters of a
+//! saturated actor without limit: only exploration pointing *into* the action range
+//! survives saturation (`Δu = sat(π + Δu) − π`), and the mostly negative TD errors of an
+//! optimistically initialised critic then push `π` ever further out, leaving a policy
+//! stuck at ±3 V (`rig learn --algo sac --approx rbf`, 30 runs: last three greedy
+//! evaluations −3256 → −830). MLAC is unaffected (−861 → −857): its gradient pulls a
+//! saturated action back in through `∇_u ρ`.
+//!
 //! `B` is diagonal, so `φ̃` is a product of one-dimensional factors and `Σⱼ φ̃ⱼ` a
 //! product of one-dimensional sums: an evaluation costs one exponential per centre
 //! coordinate, not per centre.
@@ -33,7 +44,7 @@ pub struct RbfParams {
     pub outputs: usize,
     /// Initial value of every parameter.
     pub initial: f64,
-    /// Optional output bounds applied to the value (not to the parameters).
+    /// Optional output bounds: the value is saturated, and shifts stop at the bounds.
     pub bounds: Option<(Vec<f64>, Vec<f64>)>,
 }
 
@@ -67,7 +78,7 @@ impl Rbf {
     /// On inconsistent parameters (validated beforehand by the configuration).
     pub fn new(p: &RbfParams) -> Self {
         let n = p.centres.len();
-        assert!(n >= 1 && n <= MAX_IN && p.range.len() == n && p.periodic.len() == n);
+        assert!((1..=MAX_IN).contains(&n) && p.range.len() == n && p.periodic.len() == n);
         assert!(p.intersection > 0.0 && p.intersection < 1.0);
         let mut centres = Vec::new();
         let mut inv_b = Vec::new();
@@ -116,16 +127,15 @@ impl Rbf {
     fn axes(&self, x: &[f64]) -> Axes {
         let mut g = Vec::with_capacity(self.n);
         let mut r = Vec::with_capacity(self.n);
-        for j in 0..self.n {
-            let (gj, rj): (Vec<f64>, Vec<f64>) = self.centres[j]
+        for ((cs, &xj), (&p, &inv_b)) in self.centres.iter().zip(x).zip(self.period.iter().zip(&self.inv_b)) {
+            let (gj, rj): (Vec<f64>, Vec<f64>) = cs
                 .iter()
                 .map(|&c| {
-                    let mut d = x[j] - c;
-                    let p = self.period[j];
+                    let mut d = xj - c;
                     if p > 0.0 {
                         d -= p * (d / p).round();
                     }
-                    ((-0.5 * d * d * self.inv_b[j]).exp(), d * self.inv_b[j])
+                    ((-0.5 * d * d * inv_b).exp(), d * inv_b)
                 })
                 .unzip();
             g.push(gj);
@@ -143,8 +153,8 @@ impl Rbf {
         let mut idx = [0usize; MAX_IN];
         for i in 0..self.trace.len() {
             let mut v = 1.0;
-            for j in 0..self.n {
-                v *= axes.g[j][idx[j]];
+            for (g, &i) in axes.g.iter().zip(&idx[..self.n]) {
+                v *= g[i];
             }
             visit(i, v / norm, &idx[..self.n]);
             for j in (0..self.n).rev() {
@@ -156,6 +166,21 @@ impl Rbf {
             }
         }
         axes
+    }
+
+    /// `step`, cut so that the saturated value at `x` plus the step stays within the
+    /// output bounds.
+    fn saturated_step(&self, x: &[f64], step: &[f64]) -> [f64; MAX_OUT] {
+        let mut s = [0.0; MAX_OUT];
+        s[..self.m].copy_from_slice(&step[..self.m]);
+        if let Some((lo, hi)) = &self.bounds {
+            let mut y = [0.0; MAX_OUT];
+            self.value(x, &mut y[..self.m]);
+            for o in 0..self.m {
+                s[o] = (y[o] + step[o]).clamp(lo[o], hi[o]) - y[o];
+            }
+        }
+        s
     }
 
     fn clamp(&self, y: &mut [f64]) {
@@ -178,18 +203,19 @@ impl Approximator for Rbf {
         y.fill(0.0);
         let m = self.m;
         self.features(x, |i, phi, _| {
-            for o in 0..m {
-                y[o] += self.theta[i * m + o] * phi;
+            for (y, t) in y.iter_mut().zip(&self.theta[i * m..(i + 1) * m]) {
+                *y += t * phi;
             }
         });
         self.clamp(y);
     }
     fn shift(&mut self, x: &[f64], step: &[f64]) {
+        let step = &self.saturated_step(x, step);
         let mut phis = Vec::with_capacity(self.trace.len());
         self.features(x, |_, phi, _| phis.push(phi));
         for (i, phi) in phis.into_iter().enumerate() {
-            for o in 0..self.m {
-                self.theta[i * self.m + o] += step[o] * phi;
+            for (t, s) in self.theta[i * self.m..(i + 1) * self.m].iter_mut().zip(step) {
+                *t += s * phi;
             }
         }
     }
@@ -347,6 +373,35 @@ mod tests {
         // Midway between centres 1 and 2 the non-normalised Gaussians are both 0.5.
         let axes = rbf.axes(&[1.5]);
         assert!((axes.g[0][1] - 0.5).abs() < 1e-12 && (axes.g[0][2] - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn shift_stops_at_the_output_bounds() {
+        let mut rbf = Rbf::new(&RbfParams {
+            centres: vec![15, 10],
+            range: vec![(-PI, PI), (-8.0 * PI, 8.0 * PI)],
+            periodic: vec![true, false],
+            intersection: 0.9,
+            outputs: 1,
+            initial: 0.0,
+            bounds: Some((vec![-3.0], vec![3.0])),
+        });
+        let x = [0.5, 1.0];
+        let raw = |rbf: &mut Rbf| {
+            let bounds = rbf.bounds.take();
+            let v = super::super::scalar(&*rbf, &x);
+            rbf.bounds = bounds;
+            v
+        };
+        // Pushing outwards approaches the bound but never crosses it...
+        for _ in 0..2000 {
+            rbf.shift(&x, &[-2.0]);
+            assert!(raw(&mut rbf) >= -3.0 - 1e-12);
+        }
+        assert!(raw(&mut rbf) < -3.0 + 1e-6);
+        // ...so a step back in takes effect at once.
+        rbf.shift(&x, &[1.0]);
+        assert!(super::super::scalar(&rbf, &x) > -3.0 + 0.01);
     }
 
     #[test]
