@@ -21,9 +21,12 @@ use plant::{Plant, Task};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+/// A recorded transition: reward, next state, whether it is a trial's first.
+type Recorded = (f64, Vec<f64>, bool);
+
 /// Learns until every actor and critic memory is full; returns the agent and the
-/// transitions of the last ten trials (reward, next state, trial-start flag).
-fn trained_mlac_llr() -> (Box<dyn Agent>, Vec<(f64, Vec<f64>, bool)>) {
+/// transitions of the last ten trials.
+fn trained_mlac_llr() -> (Box<dyn Agent>, Vec<Recorded>) {
     let cfg = resolve(None, &Overrides::default()).expect("default preset");
     let task = Arc::new(Task::new(cfg.system));
     let mut agent = agent::build(&task, &cfg, 1);
@@ -31,7 +34,11 @@ fn trained_mlac_llr() -> (Box<dyn Agent>, Vec<(f64, Vec<f64>, bool)>) {
     let steps = task.steps_per_trial();
     let mut record = Vec::new();
     for trial in 0..2000 {
-        let full = agent.memories().iter().filter(|m| m.0 != "model").all(|m| m.1 == m.2);
+        let full = agent
+            .memories()
+            .iter()
+            .filter(|m| m.0 != "model")
+            .all(|m| m.1 == m.2);
         if full && trial % 10 == 0 && record.len() >= 10 * steps {
             break;
         }
@@ -106,13 +113,17 @@ fn llr_query(c: &mut Criterion) {
                 Search::Scan => "scan",
             };
             let (mut y, mut jac) = (vec![0.0; dim], vec![0.0; dim * dim]);
-            g.bench_with_input(BenchmarkId::new(name, format!("dim{dim}")), &dim, |b, &dim| {
-                b.iter(|| {
-                    let x: Vec<f64> = (0..dim).map(|_| rng.random_range(-9.0..9.0)).collect();
-                    llr.value_and_jacobian(black_box(&x), &mut y, &mut jac);
-                    llr.fit(&x, &y.clone(), 0.0);
-                })
-            });
+            g.bench_with_input(
+                BenchmarkId::new(name, format!("dim{dim}")),
+                &dim,
+                |b, &dim| {
+                    b.iter(|| {
+                        let x: Vec<f64> = (0..dim).map(|_| rng.random_range(-9.0..9.0)).collect();
+                        llr.value_and_jacobian(black_box(&x), &mut y, &mut jac);
+                        llr.fit(&x, &y.clone(), 0.0);
+                    })
+                },
+            );
         }
     }
     g.finish();

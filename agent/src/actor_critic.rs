@@ -178,7 +178,11 @@ impl Agent for ActorCritic {
     }
 
     fn learn(&mut self, r: f64, x_next: &[f64], u: Option<&mut [f64]>) {
-        let Learning { gamma, lambda, alpha_critic } = self.learning;
+        let Learning {
+            gamma,
+            lambda,
+            alpha_critic,
+        } = self.learning;
         let v = self.critic.visit_value(&self.x, lambda * gamma);
         let v_next = scalar(self.critic.as_ref(), x_next);
         let td = r + gamma * v_next - v;
@@ -211,7 +215,12 @@ impl Agent for ActorCritic {
     }
 
     fn memories(&self) -> Vec<(&'static str, usize, usize)> {
-        let mut m: Vec<_> = self.critic.fill().map(|(s, c)| ("critic", s, c)).into_iter().collect();
+        let mut m: Vec<_> = self
+            .critic
+            .fill()
+            .map(|(s, c)| ("critic", s, c))
+            .into_iter()
+            .collect();
         m.extend(self.improver.memories());
         m
     }

@@ -24,24 +24,28 @@ struct Space {
 }
 
 enum Built {
-    Llr(Llr),
-    Rbf(Rbf),
-    Tiles(Tiles),
+    Llr(Box<Llr>),
+    Rbf(Box<Rbf>),
+    Tiles(Box<Tiles>),
 }
 
 fn make(c: &Component, s: &Space) -> Built {
     match c {
-        Component::Llr(l) => Built::Llr(Llr::new(&LlrParams {
+        Component::Llr(l) => Built::Llr(Box::new(Llr::new(&LlrParams {
             memory: l.memory,
             neighbours: l.neighbours,
             weights: l.weights.clone(),
             periodic: s.periodic.clone(),
             outputs: s.outputs,
             bounds: s.bounds.clone(),
-            eviction: if l.eviction == "redundant" { Eviction::Redundant(l.redundancy_radius) } else { Eviction::Oldest },
+            eviction: if l.eviction == "redundant" {
+                Eviction::Redundant(l.redundancy_radius)
+            } else {
+                Eviction::Oldest
+            },
             search: Search::KdTree,
-        })),
-        Component::Rbf(r) => Built::Rbf(Rbf::new(&RbfParams {
+        }))),
+        Component::Rbf(r) => Built::Rbf(Box::new(Rbf::new(&RbfParams {
             centres: r.centres.clone(),
             range: s.range.clone(),
             periodic: s.periodic.clone(),
@@ -49,39 +53,41 @@ fn make(c: &Component, s: &Space) -> Built {
             outputs: s.outputs,
             initial: 0.0,
             bounds: s.bounds.clone(),
-        })),
-        Component::Tiles(t) => Built::Tiles(Tiles::new(&TilesParams {
+        }))),
+        Component::Tiles(t) => Built::Tiles(Box::new(Tiles::new(&TilesParams {
             tilings: t.tilings,
             tiles: t.tiles.clone(),
             range: s.range.clone(),
             periodic: s.periodic.clone(),
             outputs: s.outputs,
             bounds: s.bounds.clone(),
-        })),
+        }))),
     }
 }
 
 impl Built {
     fn any(self) -> Box<dyn Approximator> {
         match self {
-            Built::Llr(a) => Box::new(a),
-            Built::Rbf(a) => Box::new(a),
-            Built::Tiles(a) => Box::new(a),
+            Built::Llr(a) => a,
+            Built::Rbf(a) => a,
+            Built::Tiles(a) => a,
         }
     }
     fn differentiable(self) -> Box<dyn Differentiable> {
         match self {
-            Built::Llr(a) => Box::new(a),
-            Built::Rbf(a) => Box::new(a),
-            Built::Tiles(_) => unreachable!("validation rejects tile coding where a gradient is needed"),
+            Built::Llr(a) => a,
+            Built::Rbf(a) => a,
+            Built::Tiles(_) => {
+                unreachable!("validation rejects tile coding where a gradient is needed")
+            }
         }
     }
     fn critic(self) -> Box<dyn Critic> {
         match self {
-            Built::Llr(a) => Box::new(a),
-            Built::Rbf(a) => Box::new(a),
+            Built::Llr(a) => a,
+            Built::Rbf(a) => a,
             // A tile-coding critic is used by SAC only, which never asks for its gradient.
-            Built::Tiles(a) => Box::new(GradientFree(a)),
+            Built::Tiles(a) => Box::new(GradientFree(*a)),
         }
     }
 }
@@ -133,11 +139,28 @@ impl crate::approx::Traced for GradientFree {
 pub fn build(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Box<dyn Agent> {
     let info = TaskInfo::of(task);
     let (n, m) = (task.state_dim(), task.action_dim());
-    let state = |outputs, bounds| Space { range: task.state_range.clone(), periodic: task.angle_mask.clone(), outputs, bounds };
-    let action_range: Vec<(f64, f64)> = (0..m).map(|j| (task.action_low[j], task.action_high[j])).collect();
+    let state = |outputs, bounds| Space {
+        range: task.state_range.clone(),
+        periodic: task.angle_mask.clone(),
+        outputs,
+        bounds,
+    };
+    let action_range: Vec<(f64, f64)> = (0..m)
+        .map(|j| (task.action_low[j], task.action_high[j]))
+        .collect();
     let model_space = Space {
-        range: task.state_range.iter().copied().chain(action_range).collect(),
-        periodic: task.angle_mask.iter().copied().chain(std::iter::repeat_n(false, m)).collect(),
+        range: task
+            .state_range
+            .iter()
+            .copied()
+            .chain(action_range)
+            .collect(),
+        periodic: task
+            .angle_mask
+            .iter()
+            .copied()
+            .chain(std::iter::repeat_n(false, m))
+            .collect(),
         outputs: n,
         bounds: None,
     };
@@ -145,11 +168,21 @@ pub fn build(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Box<dyn Agen
     let l = &cfg.learning;
     let critic = make(&cfg.critic, &state(1, None)).critic();
     let model = || {
-        let c = cfg.model.as_ref().expect("validated: MLAC and RMAC have a model");
-        ProcessModel::new(make(c, &model_space).differentiable(), task.angle_mask.clone(), c.alpha())
+        let c = cfg
+            .model
+            .as_ref()
+            .expect("validated: MLAC and RMAC have a model");
+        ProcessModel::new(
+            make(c, &model_space).differentiable(),
+            task.angle_mask.clone(),
+            c.alpha(),
+        )
     };
     let improver: Box<dyn crate::actor_critic::Improver> = match cfg.algo {
-        Algo::Sac => Box::new(Sac::new(make(&cfg.actor, &state(m, action_bounds)).any(), cfg.actor.alpha())),
+        Algo::Sac => Box::new(Sac::new(
+            make(&cfg.actor, &state(m, action_bounds)).any(),
+            cfg.actor.alpha(),
+        )),
         Algo::Mlac => Box::new(Mlac::new(
             info.clone(),
             make(&cfg.actor, &state(m, action_bounds)).any(),
@@ -158,11 +191,20 @@ pub fn build(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Box<dyn Agen
             l.gamma,
             l.saturation_margin,
         )),
-        Algo::Rmac => Box::new(Rmac::new(info.clone(), make(&cfg.actor, &state(n, None)).any(), model(), cfg.actor.alpha())),
+        Algo::Rmac => Box::new(Rmac::new(
+            info.clone(),
+            make(&cfg.actor, &state(n, None)).any(),
+            model(),
+            cfg.actor.alpha(),
+        )),
     };
     Box::new(ActorCritic::new(
         info,
-        Learning { gamma: l.gamma, lambda: l.lambda, alpha_critic: cfg.critic.alpha() },
+        Learning {
+            gamma: l.gamma,
+            lambda: l.lambda,
+            alpha_critic: cfg.critic.alpha(),
+        },
         critic,
         improver,
         Exploration::new(l.sigma, l.explore_every, run_seed),

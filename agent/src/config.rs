@@ -191,17 +191,33 @@ impl fmt::Display for ConfigError {
 impl std::error::Error for ConfigError {}
 
 fn err(key: &str, message: impl Into<String>) -> ConfigError {
-    ConfigError { file: None, key: key.to_string(), message: message.into() }
+    ConfigError {
+        file: None,
+        key: key.to_string(),
+        message: message.into(),
+    }
 }
 
 /// Checks `lo ≤ v ≤ hi` (and finiteness) for a float key.
 fn check_f(key: &str, v: f64, lo: f64, hi: f64, open: bool) -> Result<(), ConfigError> {
-    let ok = v.is_finite() && if open { v > lo && v < hi } else { v >= lo && v <= hi };
+    let ok = v.is_finite()
+        && if open {
+            v > lo && v < hi
+        } else {
+            v >= lo && v <= hi
+        };
     if ok {
         Ok(())
     } else {
-        let range = if open { format!("({lo}, {hi})") } else { format!("[{lo}, {hi}]") };
-        Err(err(key, format!("{v} is out of range: must be a finite number in {range}")))
+        let range = if open {
+            format!("({lo}, {hi})")
+        } else {
+            format!("[{lo}, {hi}]")
+        };
+        Err(err(
+            key,
+            format!("{v} is out of range: must be a finite number in {range}"),
+        ))
     }
 }
 
@@ -209,7 +225,10 @@ fn check_i(key: &str, v: u64, lo: u64, hi: u64) -> Result<(), ConfigError> {
     if v >= lo && v <= hi {
         Ok(())
     } else {
-        Err(err(key, format!("{v} is out of range: must be an integer in {lo}..={hi}")))
+        Err(err(
+            key,
+            format!("{v} is out of range: must be an integer in {lo}..={hi}"),
+        ))
     }
 }
 
@@ -217,7 +236,10 @@ fn check_len(key: &str, len: usize, want: usize, what: &str) -> Result<(), Confi
     if len == want {
         Ok(())
     } else {
-        Err(err(key, format!("has {len} entries; must have {want}, one per {what}")))
+        Err(err(
+            key,
+            format!("has {len} entries; must have {want}, one per {what}"),
+        ))
     }
 }
 
@@ -228,37 +250,79 @@ impl ExperimentConfig {
         let (n, m) = (task.state_dim(), task.action_dim());
         check_i("run.trials", self.run.trials.into(), 1, 10_000_000)?;
         check_i("run.runs", self.run.runs.into(), 1, 100_000)?;
-        check_i("run.eval_every", self.run.eval_every.into(), 0, self.run.trials.into())?;
+        check_i(
+            "run.eval_every",
+            self.run.eval_every.into(),
+            0,
+            self.run.trials.into(),
+        )?;
         let l = &self.learning;
         check_f("learning.gamma", l.gamma, 0.0, 1.0, true)?;
         check_f("learning.lambda", l.lambda, 0.0, 1.0, false)?;
         check_f("learning.sigma", l.sigma, 0.0, 1e3, false)?;
-        check_i("learning.explore_every", l.explore_every.into(), 1, 1_000_000)?;
-        check_f("learning.saturation_margin", l.saturation_margin, 0.0, 1e3, false)?;
+        check_i(
+            "learning.explore_every",
+            l.explore_every.into(),
+            1,
+            1_000_000,
+        )?;
+        check_f(
+            "learning.saturation_margin",
+            l.saturation_margin,
+            0.0,
+            1e3,
+            false,
+        )?;
         if self.approx == ApproxKind::Tiles && self.algo != Algo::Sac {
             return Err(err(
                 "approx",
-                format!("{} needs a differentiable approximator; tile coding has no gradient (§3.5): use llr or rbf", self.algo),
+                format!(
+                    "{} needs a differentiable approximator; tile coding has no gradient (§3.5): use llr or rbf",
+                    self.algo
+                ),
             ));
         }
         self.check_component("actor", &self.actor, n, "state component")?;
         self.check_component("critic", &self.critic, n, "state component")?;
         match (&self.model, self.algo) {
-            (None, Algo::Mlac | Algo::Rmac) => Err(err("model", format!("{} learns a process model: a [model] section is required", self.algo))),
-            (Some(_), Algo::Sac) => Err(err("model", "sac learns no process model: remove the [model] section")),
+            (None, Algo::Mlac | Algo::Rmac) => Err(err(
+                "model",
+                format!(
+                    "{} learns a process model: a [model] section is required",
+                    self.algo
+                ),
+            )),
+            (Some(_), Algo::Sac) => Err(err(
+                "model",
+                "sac learns no process model: remove the [model] section",
+            )),
             (Some(c), _) => self.check_component("model", c, n + m, "state and action component"),
             (None, Algo::Sac) => Ok(()),
         }
     }
 
-    fn check_component(&self, section: &str, c: &Component, dim: usize, what: &str) -> Result<(), ConfigError> {
+    fn check_component(
+        &self,
+        section: &str,
+        c: &Component,
+        dim: usize,
+        what: &str,
+    ) -> Result<(), ConfigError> {
         let key = |k: &str| format!("{section}.{k}");
         let kind_ok = matches!(
             (c, self.approx),
-            (Component::Llr(_), ApproxKind::Llr) | (Component::Rbf(_), ApproxKind::Rbf) | (Component::Tiles(_), ApproxKind::Tiles)
+            (Component::Llr(_), ApproxKind::Llr)
+                | (Component::Rbf(_), ApproxKind::Rbf)
+                | (Component::Tiles(_), ApproxKind::Tiles)
         );
         if !kind_ok {
-            return Err(err(section, format!("does not hold {} parameters (approx = \"{}\")", self.approx, self.approx)));
+            return Err(err(
+                section,
+                format!(
+                    "does not hold {} parameters (approx = \"{}\")",
+                    self.approx, self.approx
+                ),
+            ));
         }
         check_f(&key("alpha"), c.alpha(), 0.0, 100.0, false)?;
         match c {
@@ -271,9 +335,21 @@ impl ExperimentConfig {
                     check_f(&format!("{section}.weights[{i}]"), *w, 0.0, 1e6, true)?;
                 }
                 if l.eviction != "oldest" && l.eviction != "redundant" {
-                    return Err(err(&key("eviction"), format!("\"{}\" is not a memory-management rule: use \"oldest\" or \"redundant\"", l.eviction)));
+                    return Err(err(
+                        &key("eviction"),
+                        format!(
+                            "\"{}\" is not a memory-management rule: use \"oldest\" or \"redundant\"",
+                            l.eviction
+                        ),
+                    ));
                 }
-                check_f(&key("redundancy_radius"), l.redundancy_radius, 0.0, 1e6, false)?;
+                check_f(
+                    &key("redundancy_radius"),
+                    l.redundancy_radius,
+                    0.0,
+                    1e6,
+                    false,
+                )?;
             }
             Component::Rbf(r) => {
                 check_len(&key("centres"), r.centres.len(), dim, what)?;
@@ -282,7 +358,10 @@ impl ExperimentConfig {
                 }
                 let total: u64 = r.centres.iter().map(|&c| c as u64).product();
                 if total > 2_000_000 {
-                    return Err(err(&key("centres"), format!("{total} basis functions in all: at most 2000000")));
+                    return Err(err(
+                        &key("centres"),
+                        format!("{total} basis functions in all: at most 2000000"),
+                    ));
                 }
                 check_f(&key("intersection"), r.intersection, 0.0, 1.0, true)?;
             }
@@ -323,14 +402,18 @@ pub struct Overrides {
 }
 
 /// Resolves preset ← file ← overrides into a validated configuration.
-pub fn resolve(file: Option<(&Path, &str)>, o: &Overrides) -> Result<ExperimentConfig, ConfigError> {
+pub fn resolve(
+    file: Option<(&Path, &str)>,
+    o: &Overrides,
+) -> Result<ExperimentConfig, ConfigError> {
     let path = file.map(|(p, _)| p.to_path_buf());
     let with_file = |mut e: ConfigError| {
         e.file = path.clone();
         e
     };
     let user: toml::Table = match file {
-        Some((_, text)) => toml::from_str(text).map_err(|e| with_file(err("", format!("not valid TOML: {}", e.message()))))?,
+        Some((_, text)) => toml::from_str(text)
+            .map_err(|e| with_file(err("", format!("not valid TOML: {}", e.message()))))?,
         None => toml::Table::new(),
     };
     let pick = |key: &str| -> Result<Option<String>, ConfigError> {
@@ -345,7 +428,10 @@ pub fn resolve(file: Option<(&Path, &str)>, o: &Overrides) -> Result<ExperimentC
         if allowed.split(", ").any(|a| a == s) {
             Ok(v)
         } else {
-            Err(with_file(err(key, format!("\"{s}\" is not one of: {allowed}"))))
+            Err(with_file(err(
+                key,
+                format!("\"{s}\" is not one of: {allowed}"),
+            )))
         }
     };
     let systems = SystemName::ALL.map(|s| s.as_str()).join(", ");
@@ -356,12 +442,16 @@ pub fn resolve(file: Option<(&Path, &str)>, o: &Overrides) -> Result<ExperimentC
     };
     let algo: Algo = match (o.algo, pick("algo")?) {
         (Some(a), _) => a,
-        (None, Some(s)) => parse("algo", s, "sac, mlac, rmac")?.try_into().expect("checked"),
+        (None, Some(s)) => parse("algo", s, "sac, mlac, rmac")?
+            .try_into()
+            .expect("checked"),
         (None, None) => Algo::Mlac,
     };
     let approx: ApproxKind = match (o.approx, pick("approx")?) {
         (Some(a), _) => a,
-        (None, Some(s)) => parse("approx", s, "llr, rbf, tiles")?.try_into().expect("checked"),
+        (None, Some(s)) => parse("approx", s, "llr, rbf, tiles")?
+            .try_into()
+            .expect("checked"),
         (None, None) => ApproxKind::Llr,
     };
     let preset = crate::preset::preset(system, algo, approx).map_err(with_file)?;
@@ -369,7 +459,7 @@ pub fn resolve(file: Option<(&Path, &str)>, o: &Overrides) -> Result<ExperimentC
     merge(&mut merged, user, "").map_err(with_file)?;
     let mut cfg: ExperimentConfig = toml::Value::Table(merged)
         .try_into()
-        .map_err(|e: toml::de::Error| with_file(err("", format!("{}", e.message()))))?;
+        .map_err(|e: toml::de::Error| with_file(err("", e.message())))?;
     cfg.system = system;
     cfg.algo = algo;
     cfg.approx = approx;
@@ -392,24 +482,51 @@ pub fn resolve(file: Option<(&Path, &str)>, o: &Overrides) -> Result<ExperimentC
 /// Overlays `user` on `base`, rejecting keys `base` does not have.
 fn merge(base: &mut toml::Table, user: toml::Table, prefix: &str) -> Result<(), ConfigError> {
     for (k, v) in user {
-        let key = if prefix.is_empty() { k.clone() } else { format!("{prefix}.{k}") };
+        let key = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
         let Some(slot) = base.get_mut(&k) else {
             let mut known: Vec<&str> = base.keys().map(String::as_str).collect();
             known.sort();
-            let place = if prefix.is_empty() { "at the top level".to_string() } else { format!("in [{prefix}]") };
-            return Err(err(&key, format!("unknown key; the keys allowed {place} are: {}", known.join(", "))));
+            let place = if prefix.is_empty() {
+                "at the top level".to_string()
+            } else {
+                format!("in [{prefix}]")
+            };
+            return Err(err(
+                &key,
+                format!(
+                    "unknown key; the keys allowed {place} are: {}",
+                    known.join(", ")
+                ),
+            ));
         };
         match (slot, v) {
             (toml::Value::Table(b), toml::Value::Table(u)) => merge(b, u, &key)?,
-            (toml::Value::Table(_), other) => return Err(err(&key, format!("must be a table, not {other}"))),
+            (toml::Value::Table(_), other) => {
+                return Err(err(&key, format!("must be a table, not {other}")));
+            }
             (slot, v) => {
                 if std::mem::discriminant(slot) != std::mem::discriminant(&v)
-                    && !matches!((&*slot, &v), (toml::Value::Float(_), toml::Value::Integer(_)))
+                    && !matches!(
+                        (&*slot, &v),
+                        (toml::Value::Float(_), toml::Value::Integer(_))
+                    )
                 {
-                    return Err(err(&key, format!("{v} has the wrong type: expected a {} like {slot}", slot.type_str())));
+                    return Err(err(
+                        &key,
+                        format!(
+                            "{v} has the wrong type: expected a {} like {slot}",
+                            slot.type_str()
+                        ),
+                    ));
                 }
                 *slot = match (&*slot, v) {
-                    (toml::Value::Float(_), toml::Value::Integer(i)) => toml::Value::Float(i as f64),
+                    (toml::Value::Float(_), toml::Value::Integer(i)) => {
+                        toml::Value::Float(i as f64)
+                    }
                     (_, v) => v,
                 };
             }
@@ -429,17 +546,28 @@ mod tests {
     #[test]
     fn default_is_pendulum_mlac_llr_with_table_3_2() {
         let c = resolve(None, &Overrides::default()).unwrap();
-        assert_eq!((c.system, c.algo, c.approx), (SystemName::Pendulum, Algo::Mlac, ApproxKind::Llr));
-        let Component::Llr(actor) = &c.actor else { panic!() };
-        assert_eq!((actor.alpha, actor.memory, actor.neighbours), (0.05, 2000, 25));
+        assert_eq!(
+            (c.system, c.algo, c.approx),
+            (SystemName::Pendulum, Algo::Mlac, ApproxKind::Llr)
+        );
+        let Component::Llr(actor) = &c.actor else {
+            panic!()
+        };
+        assert_eq!(
+            (actor.alpha, actor.memory, actor.neighbours),
+            (0.05, 2000, 25)
+        );
     }
 
     #[test]
     fn file_overrides_and_round_trips() {
-        let c = resolve_str("algo = \"sac\"\n[critic]\nneighbours = 12\n[run]\nruns = 3\n").unwrap();
+        let c =
+            resolve_str("algo = \"sac\"\n[critic]\nneighbours = 12\n[run]\nruns = 3\n").unwrap();
         assert_eq!(c.algo, Algo::Sac);
         assert_eq!(c.run.runs, 3);
-        let Component::Llr(critic) = &c.critic else { panic!() };
+        let Component::Llr(critic) = &c.critic else {
+            panic!()
+        };
         assert_eq!(critic.neighbours, 12);
         let again: ExperimentConfig = toml::from_str(&c.to_toml()).unwrap();
         assert_eq!(again, c);
@@ -451,8 +579,15 @@ mod tests {
     fn unknown_key_is_named() {
         let e = resolve_str("[actor]\nalpa = 0.1\n").unwrap_err();
         assert_eq!(e.key, "actor.alpa");
-        assert!(e.to_string().starts_with("exp.toml: `actor.alpa`: unknown key"), "{e}");
-        assert!(e.message.contains("alpha, eviction, memory, neighbours"), "{e}");
+        assert!(
+            e.to_string()
+                .starts_with("exp.toml: `actor.alpa`: unknown key"),
+            "{e}"
+        );
+        assert!(
+            e.message.contains("alpha, eviction, memory, neighbours"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -473,7 +608,11 @@ mod tests {
 
     #[test]
     fn tile_coding_is_for_sac_only() {
-        let o = Overrides { algo: Some(Algo::Mlac), approx: Some(ApproxKind::Tiles), ..Default::default() };
+        let o = Overrides {
+            algo: Some(Algo::Mlac),
+            approx: Some(ApproxKind::Tiles),
+            ..Default::default()
+        };
         let e = resolve(None, &o).unwrap_err();
         assert_eq!(e.key, "approx");
     }

@@ -28,7 +28,12 @@ impl Exploration {
     pub fn new(sigma: f64, every: u32, seed: u64) -> Self {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(stream::EXPLORATION);
-        Self { sigma, every: every.max(1), step: 0, rng }
+        Self {
+            sigma,
+            every: every.max(1),
+            step: 0,
+            rng,
+        }
     }
 
     /// Restarts the every-n-th-step count at a trial start.
@@ -38,7 +43,7 @@ impl Exploration {
 
     /// Writes the next `Δu` (zero on non-exploring steps) into `du`.
     pub fn draw(&mut self, du: &mut [f64]) {
-        if self.step % self.every == 0 && self.sigma > 0.0 {
+        if self.step.is_multiple_of(self.every) && self.sigma > 0.0 {
             for d in du.iter_mut() {
                 let z: f64 = StandardNormal.sample(&mut self.rng);
                 *d = self.sigma * z;

@@ -30,7 +30,11 @@ pub struct Prediction {
 impl ProcessModel {
     /// A model learning with rate `α_p` into `f` (inputs `[x, u]`, outputs `Δx`).
     pub fn new(f: Box<dyn Differentiable>, angle_mask: Vec<bool>, rate: f64) -> Self {
-        Self { f, angle_mask, rate }
+        Self {
+            f,
+            angle_mask,
+            rate,
+        }
     }
 
     fn n(&self) -> usize {
@@ -50,8 +54,12 @@ impl ProcessModel {
         let xu = self.input(x, u);
         let mut dx = [0.0; MAX_OUT];
         let mut jac = [0.0; MAX_OUT * MAX_IN];
-        self.f.value_and_jacobian(&xu[..n + m], &mut dx[..n], &mut jac[..n * (n + m)]);
-        let mut p = Prediction { x_next: [0.0; MAX_STATE], du: [0.0; MAX_STATE * MAX_ACTION] };
+        self.f
+            .value_and_jacobian(&xu[..n + m], &mut dx[..n], &mut jac[..n * (n + m)]);
+        let mut p = Prediction {
+            x_next: [0.0; MAX_STATE],
+            du: [0.0; MAX_STATE * MAX_ACTION],
+        };
         for i in 0..n {
             let v = x[i] + dx[i];
             p.x_next[i] = if self.angle_mask[i] { wrap(v) } else { v };

@@ -32,8 +32,8 @@
 use plant::{SystemName, Task};
 
 use crate::config::{
-    Algo, ApproxKind, Component, ConfigError, ExperimentConfig, LearningConfig, LlrConfig, RbfConfig, RunConfig,
-    TilesConfig,
+    Algo, ApproxKind, Component, ConfigError, ExperimentConfig, LearningConfig, LlrConfig,
+    RbfConfig, RunConfig, TilesConfig,
 };
 
 /// LLR memories of actors, critics and reference models replace a stored sample closer
@@ -66,16 +66,26 @@ fn llr_model(memory: usize, neighbours: usize, weights: Vec<f64>) -> Component {
 }
 
 fn rbf(alpha: f64, centres: Vec<usize>, intersection: f64) -> Component {
-    Component::Rbf(RbfConfig { alpha, centres, intersection })
+    Component::Rbf(RbfConfig {
+        alpha,
+        centres,
+        intersection,
+    })
 }
 
 /// The preset for `(system, algo, approx)`.
-pub fn preset(system: SystemName, algo: Algo, approx: ApproxKind) -> Result<ExperimentConfig, ConfigError> {
+pub fn preset(
+    system: SystemName,
+    algo: Algo,
+    approx: ApproxKind,
+) -> Result<ExperimentConfig, ConfigError> {
     if approx == ApproxKind::Tiles && algo != Algo::Sac {
         return Err(ConfigError {
             file: None,
             key: "approx".into(),
-            message: format!("{algo} needs a differentiable approximator; tile coding has no gradient (§3.5): use llr or rbf"),
+            message: format!(
+                "{algo} needs a differentiable approximator; tile coding has no gradient (§3.5): use llr or rbf"
+            ),
         });
     }
     let task = Task::new(system);
@@ -87,10 +97,13 @@ pub fn preset(system: SystemName, algo: Algo, approx: ApproxKind) -> Result<Expe
         SystemName::ArmVertical | SystemName::ArmHorizontal => vec![1.0, 1.0, 0.1, 0.1],
         SystemName::DoubleIntegrator => vec![1.0, 1.0],
     };
-    let w_model: Vec<f64> = w_state.iter().copied().chain(std::iter::repeat_n(1.0, m)).collect();
-    let grid = |per_axis: [usize; 2]| -> Vec<usize> {
-        if arm { vec![9; n] } else { per_axis.to_vec() }
-    };
+    let w_model: Vec<f64> = w_state
+        .iter()
+        .copied()
+        .chain(std::iter::repeat_n(1.0, m))
+        .collect();
+    let grid =
+        |per_axis: [usize; 2]| -> Vec<usize> { if arm { vec![9; n] } else { per_axis.to_vec() } };
     let model_grid = |per_axis: [usize; 2]| -> Vec<usize> {
         let mut g = grid(per_axis);
         g.extend(std::iter::repeat_n(5, m));
@@ -101,14 +114,34 @@ pub fn preset(system: SystemName, algo: Algo, approx: ApproxKind) -> Result<Expe
     use SystemName::*;
     let (actor, critic, model) = match (algo, approx) {
         (Sac, Tiles) => (
-            Component::Tiles(TilesConfig { alpha: 0.005, tilings: 16, tiles: vec![7; n] }),
-            Component::Tiles(TilesConfig { alpha: 0.1, tilings: 16, tiles: vec![7; n] }),
+            Component::Tiles(TilesConfig {
+                alpha: 0.005,
+                tilings: 16,
+                tiles: vec![7; n],
+            }),
+            Component::Tiles(TilesConfig {
+                alpha: 0.1,
+                tilings: 16,
+                tiles: vec![7; n],
+            }),
             None,
         ),
         (Sac, Rbf) => match system {
-            ArmVertical => (rbf(0.25, grid([9, 9]), 0.9), rbf(0.4, grid([9, 9]), 0.9), None),
-            ArmHorizontal => (rbf(0.1, grid([9, 9]), 0.7), rbf(0.3, grid([9, 9]), 0.7), None),
-            _ => (rbf(0.05, grid([20, 10]), 0.9), rbf(0.4, grid([20, 10]), 0.5), None),
+            ArmVertical => (
+                rbf(0.25, grid([9, 9]), 0.9),
+                rbf(0.4, grid([9, 9]), 0.9),
+                None,
+            ),
+            ArmHorizontal => (
+                rbf(0.1, grid([9, 9]), 0.7),
+                rbf(0.3, grid([9, 9]), 0.7),
+                None,
+            ),
+            _ => (
+                rbf(0.05, grid([20, 10]), 0.9),
+                rbf(0.4, grid([20, 10]), 0.5),
+                None,
+            ),
         },
         (Mlac, Rbf) => (
             rbf(0.05, grid([15, 10]), 0.9),
@@ -121,9 +154,21 @@ pub fn preset(system: SystemName, algo: Algo, approx: ApproxKind) -> Result<Expe
             Some(rbf(0.7, model_grid([10, 10]), 0.7)),
         ),
         (Sac, Llr) => match system {
-            ArmVertical => (llr(0.05, 6000, 30, w_state.clone()), llr(0.4, 6000, 30, w_state.clone()), None),
-            ArmHorizontal => (llr(0.05, 5000, 30, w_state.clone()), llr(0.35, 5000, 30, w_state.clone()), None),
-            _ => (llr(0.05, 2000, 20, w_state.clone()), llr(0.3, 1000, 10, w_state.clone()), None),
+            ArmVertical => (
+                llr(0.05, 6000, 30, w_state.clone()),
+                llr(0.4, 6000, 30, w_state.clone()),
+                None,
+            ),
+            ArmHorizontal => (
+                llr(0.05, 5000, 30, w_state.clone()),
+                llr(0.35, 5000, 30, w_state.clone()),
+                None,
+            ),
+            _ => (
+                llr(0.05, 2000, 20, w_state.clone()),
+                llr(0.3, 1000, 10, w_state.clone()),
+                None,
+            ),
         },
         (Mlac, Llr) => match system {
             ArmVertical => (
@@ -149,7 +194,11 @@ pub fn preset(system: SystemName, algo: Algo, approx: ApproxKind) -> Result<Expe
                 Pendulum => (vec![1.0, 0.04], vec![1.0, 0.1, 0.5]),
                 _ => (w_state.clone(), w_model.clone()),
             };
-            (llr(0.04, 2000, 15, w_ref), llr(0.2, 2000, 15, w_state.clone()), Some(llr_model(100, 10, w_ref_model)))
+            (
+                llr(0.04, 2000, 15, w_ref),
+                llr(0.2, 2000, 15, w_state.clone()),
+                Some(llr_model(100, 10, w_ref_model)),
+            )
         }
         (Mlac | Rmac, Tiles) => unreachable!("rejected above"),
     };
@@ -157,8 +206,19 @@ pub fn preset(system: SystemName, algo: Algo, approx: ApproxKind) -> Result<Expe
         system,
         algo,
         approx,
-        run: RunConfig { trials: if arm { 600 } else { 400 }, runs: if arm { 20 } else { 30 }, seed: 1, eval_every: 10 },
-        learning: LearningConfig { gamma: 0.97, lambda: 0.65, sigma: 1.0, explore_every: 1, saturation_margin: if approx == Rbf { 0.1 } else { 0.0 } },
+        run: RunConfig {
+            trials: if arm { 600 } else { 400 },
+            runs: if arm { 20 } else { 30 },
+            seed: 1,
+            eval_every: 10,
+        },
+        learning: LearningConfig {
+            gamma: 0.97,
+            lambda: 0.65,
+            sigma: 1.0,
+            explore_every: 1,
+            saturation_margin: if approx == Rbf { 0.1 } else { 0.0 },
+        },
         actor,
         critic,
         model,
@@ -175,7 +235,9 @@ mod tests {
             for algo in [Algo::Sac, Algo::Mlac, Algo::Rmac] {
                 for approx in [ApproxKind::Llr, ApproxKind::Rbf, ApproxKind::Tiles] {
                     match preset(system, algo, approx) {
-                        Ok(c) => c.validate().unwrap_or_else(|e| panic!("{system}/{algo}/{approx}: {e}")),
+                        Ok(c) => c
+                            .validate()
+                            .unwrap_or_else(|e| panic!("{system}/{algo}/{approx}: {e}")),
                         Err(e) => assert!(approx == ApproxKind::Tiles && algo != Algo::Sac, "{e}"),
                     }
                 }

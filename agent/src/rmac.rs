@@ -35,8 +35,18 @@ pub struct Rmac {
 
 impl Rmac {
     /// An RMAC policy with reference model `R` (rate `α_r`) and process model `f̂`.
-    pub fn new(info: TaskInfo, reference: Box<dyn Approximator>, model: ProcessModel, alpha: f64) -> Self {
-        Self { info, reference, model, alpha }
+    pub fn new(
+        info: TaskInfo,
+        reference: Box<dyn Approximator>,
+        model: ProcessModel,
+        alpha: f64,
+    ) -> Self {
+        Self {
+            info,
+            reference,
+            model,
+            alpha,
+        }
     }
 
     /// The corners of the action box, `U_e`.
@@ -45,7 +55,11 @@ impl Rmac {
         (0..1u32 << m).map(move |bits| {
             let mut u = [0.0; MAX_ACTION];
             for (j, u) in u[..m].iter_mut().enumerate() {
-                *u = if bits >> j & 1 == 1 { self.info.action_high[j] } else { self.info.action_low[j] };
+                *u = if bits >> j & 1 == 1 {
+                    self.info.action_high[j]
+                } else {
+                    self.info.action_low[j]
+                };
             }
             u
         })

@@ -17,7 +17,8 @@ pub fn run_seed(seed: u64, run: u32) -> u64 {
 mod tests {
     #[test]
     fn runs_get_distinct_seeds() {
-        let seeds: std::collections::HashSet<u64> = (0..1000).map(|r| super::run_seed(1, r)).collect();
+        let seeds: std::collections::HashSet<u64> =
+            (0..1000).map(|r| super::run_seed(1, r)).collect();
         assert_eq!(seeds.len(), 1000);
         assert_ne!(super::run_seed(1, 0), super::run_seed(2, 0));
     }

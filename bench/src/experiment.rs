@@ -85,12 +85,16 @@ impl Experiment {
         for k in 0..steps {
             let r = self.plant.step(&u);
             ret += r;
-            let x = self.observer.update(self.plant.state(), self.plant.applied_action());
+            let x = self
+                .observer
+                .update(self.plant.state(), self.plant.applied_action());
             let last = k + 1 == steps;
-            self.agent.learn(r, x, if last { None } else { Some(&mut u) });
+            self.agent
+                .learn(r, x, if last { None } else { Some(&mut u) });
         }
         self.trial += 1;
-        let greedy = (self.eval_every > 0 && self.trial % self.eval_every == 0).then(|| self.greedy_return(&x0));
+        let greedy = (self.eval_every > 0 && self.trial.is_multiple_of(self.eval_every))
+            .then(|| self.greedy_return(&x0));
         Some(TrialRecord {
             run: self.run,
             trial: self.trial,
@@ -117,7 +121,12 @@ impl Experiment {
             self.agent.greedy(&x, &u_prev, &mut u);
             let reward = self.plant.step(&u);
             u_prev.copy_from_slice(self.plant.applied_action());
-            out.push(Sample { t: k as f64 * self.task.ts, x: x.clone(), u: u_prev.clone(), reward });
+            out.push(Sample {
+                t: k as f64 * self.task.ts,
+                x: x.clone(),
+                u: u_prev.clone(),
+                reward,
+            });
             x.copy_from_slice(self.observer.update(self.plant.state(), &u_prev));
         }
         out

@@ -82,7 +82,11 @@ pub const RUNS_HEADER: &str = "run,trial,sim_time_s,return,greedy_return";
 /// One `runs.csv` row (numbers in Rust's shortest round-trip form).
 pub fn write_row(out: &mut impl Write, r: &TrialRecord) -> std::io::Result<()> {
     match r.greedy {
-        Some(g) => writeln!(out, "{},{},{},{},{}", r.run, r.trial, r.sim_time_s, r.ret, g),
+        Some(g) => writeln!(
+            out,
+            "{},{},{},{},{}",
+            r.run, r.trial, r.sim_time_s, r.ret, g
+        ),
         None => writeln!(out, "{},{},{},{},", r.run, r.trial, r.sim_time_s, r.ret),
     }
 }
@@ -91,29 +95,46 @@ pub fn write_row(out: &mut impl Write, r: &TrialRecord) -> std::io::Result<()> {
 pub fn write_atomic(path: &Path, text: &str) -> Result<()> {
     let tmp = path.with_extension("tmp");
     std::fs::write(&tmp, text).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("cannot rename {} to {}", tmp.display(), path.display()))
+    std::fs::rename(&tmp, path)
+        .with_context(|| format!("cannot rename {} to {}", tmp.display(), path.display()))
 }
 
 /// Runs every run of `cfg` and writes the outputs.
 pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary> {
-    std::fs::create_dir_all(&opts.out).with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
+    std::fs::create_dir_all(&opts.out)
+        .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
     write_atomic(&opts.out.join("config.toml"), &cfg.to_toml())?;
     let runs_path = opts.out.join("runs.csv");
-    let mut out = BufWriter::new(File::create(&runs_path).with_context(|| format!("cannot create {}", runs_path.display()))?);
+    let mut out = BufWriter::new(
+        File::create(&runs_path)
+            .with_context(|| format!("cannot create {}", runs_path.display()))?,
+    );
     writeln!(out, "{RUNS_HEADER}")?;
-    let writer = Mutex::new(OrderedWriter { next: 0, pending: BTreeMap::new(), out });
+    let writer = Mutex::new(OrderedWriter {
+        next: 0,
+        pending: BTreeMap::new(),
+        out,
+    });
 
     let (runs, trials) = (cfg.run.runs, cfg.run.trials);
     let bar = ProgressBar::with_draw_target(
         Some(u64::from(runs) * u64::from(trials)),
-        if opts.progress { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() },
+        if opts.progress {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        },
     );
     bar.set_style(
-        ProgressStyle::with_template("{spinner} learning [{bar:40}] {pos}/{len} trials, {per_sec}, eta {eta} {msg}")
-            .expect("valid template")
-            .progress_chars("=> "),
+        ProgressStyle::with_template(
+            "{spinner} learning [{bar:40}] {pos}/{len} trials, {per_sec}, eta {eta} {msg}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
     );
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(opts.threads.unwrap_or(0)).build()?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(opts.threads.unwrap_or(0))
+        .build()?;
     let t0 = Instant::now();
     let results: Result<Vec<Vec<TrialRecord>>> = pool.install(|| {
         (0..runs)
@@ -125,7 +146,10 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
                     bar.inc(1);
                     records.push(r);
                 }
-                writer.lock().expect("writer poisoned").push(run, records.clone())?;
+                writer
+                    .lock()
+                    .expect("writer poisoned")
+                    .push(run, records.clone())?;
                 Ok(records)
             })
             .collect()
@@ -137,18 +161,47 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
 
     let (curve, greedy_curve) = curves(&records, runs as usize, trials as usize)?;
     report::write_curve_csv(&opts.out.join("curve.csv"), &curve)?;
-    let title = format!("{} {}/{} — {} runs", cfg.system, cfg.algo.as_str().to_uppercase(), cfg.approx.as_str().to_uppercase(), runs);
-    let mut series = vec![Series { label: "learning (with exploration)".into(), points: &curve, style: SeriesStyle::Band }];
+    let title = format!(
+        "{} {}/{} — {} runs",
+        cfg.system,
+        cfg.algo.as_str().to_uppercase(),
+        cfg.approx.as_str().to_uppercase(),
+        runs
+    );
+    let mut series = vec![Series {
+        label: "learning (with exploration)".into(),
+        points: &curve,
+        style: SeriesStyle::Band,
+    }];
     if !greedy_curve.is_empty() {
         report::write_curve_csv(&opts.out.join("greedy_curve.csv"), &greedy_curve)?;
-        series.push(Series { label: "greedy evaluation (mean)".into(), points: &greedy_curve, style: SeriesStyle::Line });
+        series.push(Series {
+            label: "greedy evaluation (mean)".into(),
+            points: &greedy_curve,
+            style: SeriesStyle::Line,
+        });
     }
-    report::plot_curves(&opts.out.join("curve.png"), &opts.out.join("curve.svg"), &title, &series, None)?;
-    Ok(LearnSummary { records, curve, greedy_curve, wall })
+    report::plot_curves(
+        &opts.out.join("curve.png"),
+        &opts.out.join("curve.svg"),
+        &title,
+        &series,
+        None,
+    )?;
+    Ok(LearnSummary {
+        records,
+        curve,
+        greedy_curve,
+        wall,
+    })
 }
 
 /// Learning and greedy curves from the records of `runs` runs of `trials` trials.
-pub fn curves(records: &[TrialRecord], runs: usize, trials: usize) -> Result<(Vec<CurvePoint>, Vec<CurvePoint>)> {
+pub fn curves(
+    records: &[TrialRecord],
+    runs: usize,
+    trials: usize,
+) -> Result<(Vec<CurvePoint>, Vec<CurvePoint>)> {
     let mut ret = vec![Vec::with_capacity(runs); trials];
     let mut time = vec![0.0; trials];
     let mut greedy: BTreeMap<u32, (f64, Vec<f64>)> = BTreeMap::new();
@@ -157,7 +210,11 @@ pub fn curves(records: &[TrialRecord], runs: usize, trials: usize) -> Result<(Ve
         ret[i].push(r.ret);
         time[i] = r.sim_time_s;
         if let Some(g) = r.greedy {
-            greedy.entry(r.trial).or_insert_with(|| (r.sim_time_s, Vec::new())).1.push(g);
+            greedy
+                .entry(r.trial)
+                .or_insert_with(|| (r.sim_time_s, Vec::new()))
+                .1
+                .push(g);
         }
     }
     let trial_numbers: Vec<u32> = (1..=trials as u32).collect();

@@ -77,11 +77,19 @@ fn parse_system(s: &str) -> Result<SystemName, String> {
     SystemName::ALL
         .into_iter()
         .find(|n| n.as_str() == s)
-        .ok_or_else(|| format!("unknown system; one of: {}", SystemName::ALL.map(|n| n.as_str()).join(", ")))
+        .ok_or_else(|| {
+            format!(
+                "unknown system; one of: {}",
+                SystemName::ALL.map(|n| n.as_str()).join(", ")
+            )
+        })
 }
 
 fn parse_algo(s: &str) -> Result<Algo, String> {
-    [Algo::Sac, Algo::Mlac, Algo::Rmac].into_iter().find(|a| a.as_str() == s).ok_or_else(|| "one of: sac, mlac, rmac".into())
+    [Algo::Sac, Algo::Mlac, Algo::Rmac]
+        .into_iter()
+        .find(|a| a.as_str() == s)
+        .ok_or_else(|| "one of: sac, mlac, rmac".into())
 }
 
 fn parse_approx(s: &str) -> Result<ApproxKind, String> {
@@ -93,7 +101,9 @@ fn parse_approx(s: &str) -> Result<ApproxKind, String> {
 
 fn resolve_selection(s: &Selection) -> Result<agent::config::ExperimentConfig, String> {
     let text = match &s.config {
-        Some(p) => Some(std::fs::read_to_string(p).map_err(|e| format!("{}: cannot read: {e}", p.display()))?),
+        Some(p) => Some(
+            std::fs::read_to_string(p).map_err(|e| format!("{}: cannot read: {e}", p.display()))?,
+        ),
         None => None,
     };
     let o = Overrides {
@@ -132,7 +142,11 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
-            let opts = LearnOptions { out: args.out.clone(), threads: args.threads, progress: !args.quiet };
+            let opts = LearnOptions {
+                out: args.out.clone(),
+                threads: args.threads,
+                progress: !args.quiet,
+            };
             match learn(&cfg, &opts) {
                 Ok(s) => {
                     if !args.quiet {
@@ -149,7 +163,11 @@ fn main() -> ExitCode {
     }
 }
 
-fn print_summary(cfg: &agent::config::ExperimentConfig, s: &rig::learn::LearnSummary, out: &std::path::Path) {
+fn print_summary(
+    cfg: &agent::config::ExperimentConfig,
+    s: &rig::learn::LearnSummary,
+    out: &std::path::Path,
+) {
     let steps = s.records.len() as f64 * Task::new(cfg.system).steps_per_trial() as f64;
     println!(
         "{} {}/{}: {} runs × {} trials in {:.1} s wall ({:.2} µs per learning step, all threads)",
@@ -162,15 +180,24 @@ fn print_summary(cfg: &agent::config::ExperimentConfig, s: &rig::learn::LearnSum
         s.wall.as_secs_f64() * 1e6 / steps
     );
     if let Some(last) = s.curve.last() {
-        println!("  last trial return: mean {:.1}  [95% CI {:.1} … {:.1}]  min {:.1}  max {:.1}", last.mean, last.ci_low, last.ci_high, last.min, last.max);
+        println!(
+            "  last trial return: mean {:.1}  [95% CI {:.1} … {:.1}]  min {:.1}  max {:.1}",
+            last.mean, last.ci_low, last.ci_high, last.min, last.max
+        );
     }
     let g = &s.greedy_curve;
     if g.len() >= 3 {
         let tail = &g[g.len() - 3..];
         let mean = tail.iter().map(|p| p.mean).sum::<f64>() / 3.0;
-        println!("  greedy return, mean of the last 3 evaluations (trials {}–{}): {:.1}", tail[0].trial, tail[2].trial, mean);
+        println!(
+            "  greedy return, mean of the last 3 evaluations (trials {}–{}): {:.1}",
+            tail[0].trial, tail[2].trial, mean
+        );
     }
-    println!("  wrote {}/{{runs.csv, curve.csv, greedy_curve.csv, curve.png, curve.svg, config.toml}}", out.display());
+    println!(
+        "  wrote {}/{{runs.csv, curve.csv, greedy_curve.csv, curve.png, curve.svg, config.toml}}",
+        out.display()
+    );
 }
 
 use plant::Task;

@@ -59,7 +59,12 @@ impl FiniteDifference {
     /// For sampling time `ts`, velocity/angle index pairs and filter coefficient in [0, 1).
     pub fn new(n: usize, ts: f64, pairs: Vec<(usize, usize)>, filter: f64) -> Self {
         assert!((0.0..1.0).contains(&filter) && ts > 0.0);
-        Self { ts, filter, pairs, x: vec![0.0; n] }
+        Self {
+            ts,
+            filter,
+            pairs,
+            x: vec![0.0; n],
+        }
     }
 }
 

@@ -56,7 +56,12 @@ impl Plant {
     pub fn new(task: std::sync::Arc<Task>) -> Self {
         let x = task.initial_states[0].clone();
         let applied = vec![0.0; task.action_dim()];
-        Self { task, x, applied, rejected_actions: 0 }
+        Self {
+            task,
+            x,
+            applied,
+            rejected_actions: 0,
+        }
     }
 
     /// The task this plant simulates.

@@ -84,7 +84,13 @@ impl Task {
     pub fn new(name: SystemName) -> Self {
         match name {
             SystemName::Pendulum => Self::pendulum(),
-            SystemName::ArmVertical => Self::arm(name, TwoLink::vertical(), vec![-1.1, 1.0, 0.0, 0.0], vec![0.0; 4], 6.0),
+            SystemName::ArmVertical => Self::arm(
+                name,
+                TwoLink::vertical(),
+                vec![-1.1, 1.0, 0.0, 0.0],
+                vec![0.0; 4],
+                6.0,
+            ),
             SystemName::ArmHorizontal => Self::arm(
                 name,
                 TwoLink::horizontal(),
@@ -124,7 +130,13 @@ impl Task {
     /// Two-link arm of Chapter 5 (Table A.2), `Ts = 0.03 s`, reward Eq. 5.1/5.2 with
     /// `Q = diag(5, 5, 0.1, 0.1)`, `P = I`. The thesis gives no torque limit for this
     /// arm; ±1 N m is used here.
-    fn arm(name: SystemName, arm: TwoLink, x0: Vec<f64>, reference: Vec<f64>, trial_seconds: f64) -> Self {
+    fn arm(
+        name: SystemName,
+        arm: TwoLink,
+        x0: Vec<f64>,
+        reference: Vec<f64>,
+        trial_seconds: f64,
+    ) -> Self {
         let angle_mask = vec![true, true, false, false];
         Self {
             name,
@@ -134,10 +146,20 @@ impl Task {
             action_low: vec![-1.0, -1.0],
             action_high: vec![1.0, 1.0],
             angle_mask: angle_mask.clone(),
-            reward: QuadraticReward { q: vec![5.0, 5.0, 0.1, 0.1], p: vec![1.0, 1.0], reference, angle_mask },
+            reward: QuadraticReward {
+                q: vec![5.0, 5.0, 0.1, 0.1],
+                p: vec![1.0, 1.0],
+                reference,
+                angle_mask,
+            },
             initial_states: vec![x0],
             trial_seconds,
-            state_range: vec![(-PI, PI), (-PI, PI), (-2.0 * PI, 2.0 * PI), (-2.0 * PI, 2.0 * PI)],
+            state_range: vec![
+                (-PI, PI),
+                (-PI, PI),
+                (-2.0 * PI, 2.0 * PI),
+                (-2.0 * PI, 2.0 * PI),
+            ],
             state_names: vec!["phi1", "phi2", "phi1_dot", "phi2_dot"],
         }
     }
@@ -213,7 +235,13 @@ mod tests {
     #[test]
     fn halving_the_substep_changes_little() {
         // A 3 s swing with a sign-alternating input, so the trajectory is far from trivial.
-        let u = |k: usize| if (k / 20) % 2 == 0 { 3.0 } else { -3.0 };
+        let u = |k: usize| {
+            if (k / 20).is_multiple_of(2) {
+                3.0
+            } else {
+                -3.0
+            }
+        };
         let coarse = trajectory(Task::pendulum(), u);
         let mut fine_task = Task::pendulum();
         fine_task.substeps *= 2;
@@ -230,17 +258,31 @@ mod tests {
 
     #[test]
     fn undamped_pendulum_conserves_energy() {
-        let p = Pendulum { damping: 0.0, torque_constant: 0.0, ..Pendulum::default() };
+        let p = Pendulum {
+            damping: 0.0,
+            torque_constant: 0.0,
+            ..Pendulum::default()
+        };
         let mut task = Task::pendulum();
         task.dynamics = Box::new(p.clone());
         task.initial_states = vec![vec![PI - 0.5, 0.0]];
         let e0 = p.energy(&task.initial_states[0]);
         let traj = trajectory(task, |_| 0.0);
-        let max_err = traj.iter().map(|x| (p.energy(x) - e0).abs()).fold(0.0, f64::max);
+        let max_err = traj
+            .iter()
+            .map(|x| (p.energy(x) - e0).abs())
+            .fold(0.0, f64::max);
         // Relative to the potential-energy scale M g l.
         let scale = p.mass * p.gravity * p.length;
-        assert!(max_err / scale < 1e-6, "relative energy drift {}", max_err / scale);
-        assert!(traj.iter().any(|x| x[1].abs() > 1.0), "the pendulum must actually swing");
+        assert!(
+            max_err / scale < 1e-6,
+            "relative energy drift {}",
+            max_err / scale
+        );
+        assert!(
+            traj.iter().any(|x| x[1].abs() > 1.0),
+            "the pendulum must actually swing"
+        );
     }
 
     #[test]
@@ -274,7 +316,10 @@ mod tests {
         // of upright.
         let traj = trajectory(Task::pendulum(), |_| 3.0);
         assert!(traj.iter().all(|x| x[0].abs() > PI / 3.0));
-        assert!(traj.iter().any(|x| x[0].abs() < PI / 2.0), "but it does pass the horizontal");
+        assert!(
+            traj.iter().any(|x| x[0].abs() < PI / 2.0),
+            "but it does pass the horizontal"
+        );
     }
 
     #[test]

@@ -41,7 +41,10 @@ impl TwoLink {
 
     /// Table A.2, horizontal plane (Case II, §5.4): `G(φ) = 0`.
     pub fn horizontal() -> Self {
-        Self { gravity: 0.0, ..Self::vertical() }
+        Self {
+            gravity: 0.0,
+            ..Self::vertical()
+        }
     }
 
     fn p(&self) -> [f64; 3] {
@@ -49,7 +52,11 @@ impl TwoLink {
         let [m1, m2] = self.mass;
         let [c1, c2] = self.centre_of_mass;
         let [i1, i2] = self.inertia;
-        [m1 * c1 * c1 + m2 * l1 * l1 + i1, m2 * c2 * c2 + i2, m2 * l1 * c2]
+        [
+            m1 * c1 * c1 + m2 * l1 * l1 + i1,
+            m2 * c2 * c2 + i2,
+            m2 * l1 * c2,
+        ]
     }
 }
 

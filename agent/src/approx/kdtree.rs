@@ -71,8 +71,20 @@ pub struct Best {
 impl Best {
     /// An empty set that keeps at most `k ≤ MAX_K + 2` candidates.
     pub fn new(k: usize) -> Self {
-        debug_assert!(k >= 1 && k <= MAX_K + 2);
-        Self { items: vec![Candidate { d2: 0.0, seq: 0, slot: 0 }; k], len: 0, k, sorted: true }
+        debug_assert!((1..=MAX_K + 2).contains(&k));
+        Self {
+            items: vec![
+                Candidate {
+                    d2: 0.0,
+                    seq: 0,
+                    slot: 0
+                };
+                k
+            ],
+            len: 0,
+            k,
+            sorted: true,
+        }
     }
 
     /// Offers a candidate.
@@ -144,7 +156,8 @@ impl Best {
     /// The candidates, nearest first (newer first among equals).
     pub fn sorted(&mut self) -> &[Candidate] {
         if !self.sorted {
-            self.items[..self.len].sort_unstable_by(|a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
+            self.items[..self.len]
+                .sort_unstable_by(|a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
             self.sorted = true;
         }
         &self.items[..self.len]
@@ -216,7 +229,11 @@ impl Node {
             .map(|i| {
                 let mut p = [0.0; MAX_DIM];
                 p[..dim].copy_from_slice(&self.coords[i * dim..(i + 1) * dim]);
-                Entry { p, slot: self.slots[i], seq: self.seqs[i] }
+                Entry {
+                    p,
+                    slot: self.slots[i],
+                    seq: self.seqs[i],
+                }
             })
             .collect();
         self.coords = Vec::new();
@@ -231,7 +248,8 @@ impl Node {
 
     /// Widest axis of the bounding box, if it has any extent.
     fn widest(&self, dim: usize) -> Option<usize> {
-        let axis = (0..dim).max_by(|&a, &b| (self.hi[a] - self.lo[a]).total_cmp(&(self.hi[b] - self.lo[b])))?;
+        let axis = (0..dim)
+            .max_by(|&a, &b| (self.hi[a] - self.lo[a]).total_cmp(&(self.hi[b] - self.lo[b])))?;
         (self.hi[axis] > self.lo[axis]).then_some(axis)
     }
 }
@@ -246,7 +264,11 @@ pub struct KdTree {
 impl KdTree {
     /// An empty tree for `dim`-dimensional points.
     pub fn new(dim: usize) -> Self {
-        Self { dim, nodes: vec![Node::leaf(Vec::new(), dim)], entries: 0 }
+        Self {
+            dim,
+            nodes: vec![Node::leaf(Vec::new(), dim)],
+            entries: 0,
+        }
     }
 
     /// A balanced tree over `items` = (slot, seq), whose scaled coordinates are
@@ -260,7 +282,11 @@ impl KdTree {
                 Entry { p, slot, seq }
             })
             .collect();
-        let mut tree = Self { dim, nodes: Vec::with_capacity(2 * items.len() / LEAF_SIZE + 1), entries: entries.len() };
+        let mut tree = Self {
+            dim,
+            nodes: Vec::with_capacity(2 * items.len() / LEAF_SIZE + 1),
+            entries: entries.len(),
+        };
         tree.grow(entries);
         tree
     }
@@ -271,25 +297,43 @@ impl KdTree {
         let leaf = Node::leaf(Vec::new(), self.dim);
         self.nodes.push(leaf);
         let probe = Node::leaf(all.clone(), self.dim);
-        let axis = if all.len() > LEAF_SIZE { probe.widest(self.dim) } else { None };
+        let axis = if all.len() > LEAF_SIZE {
+            probe.widest(self.dim)
+        } else {
+            None
+        };
         let Some(axis) = axis else {
             self.nodes[id as usize] = probe;
             return id;
         };
         let (lo, hi) = (probe.lo, probe.hi);
         let mid = all.len() / 2;
-        all.select_nth_unstable_by(mid, |a, b| a.p[axis].total_cmp(&b.p[axis]).then(a.seq.cmp(&b.seq)));
+        all.select_nth_unstable_by(mid, |a, b| {
+            a.p[axis].total_cmp(&b.p[axis]).then(a.seq.cmp(&b.seq))
+        });
         let split = all[mid].p[axis];
         let right_entries = all.split_off(mid);
         let left = self.grow(all);
         let right = self.grow(right_entries);
-        self.nodes[id as usize] = Node { lo, hi, axis, split, left, right, ..Node::leaf(Vec::new(), self.dim) };
+        self.nodes[id as usize] = Node {
+            lo,
+            hi,
+            axis,
+            split,
+            left,
+            right,
+            ..Node::leaf(Vec::new(), self.dim)
+        };
         id
     }
 
     /// Inserts a point.
     pub fn insert(&mut self, p: &[f64], slot: u32, seq: u64) {
-        let mut e = Entry { p: [0.0; MAX_DIM], slot, seq };
+        let mut e = Entry {
+            p: [0.0; MAX_DIM],
+            slot,
+            seq,
+        };
         e.p[..self.dim].copy_from_slice(p);
         self.entries += 1;
         let mut id = 0usize;
@@ -306,13 +350,19 @@ impl KdTree {
                 }
                 return;
             }
-            id = if p[node.axis] < node.split { node.left } else { node.right } as usize;
+            id = if p[node.axis] < node.split {
+                node.left
+            } else {
+                node.right
+            } as usize;
         }
     }
 
     /// Splits an overfull leaf in place (no-op if all its points coincide).
     fn split_leaf(&mut self, id: usize) {
-        let Some(_) = self.nodes[id].widest(self.dim) else { return };
+        let Some(_) = self.nodes[id].widest(self.dim) else {
+            return;
+        };
         let entries = self.nodes[id].take_entries(self.dim);
         let sub = self.grow(entries);
         // The grown subtree's root replaces the leaf (its own slot is left unused).
@@ -343,7 +393,13 @@ impl KdTree {
 
     /// Offers every live point of the tree that can still improve `best`;
     /// `live(slot, seq)` says whether an entry is still in the memory.
-    pub fn search(&self, q: &[f64], period: &[f64], best: &mut Best, live: impl Fn(u32, u64) -> bool) {
+    pub fn search(
+        &self,
+        q: &[f64],
+        period: &[f64],
+        best: &mut Best,
+        live: impl Fn(u32, u64) -> bool,
+    ) {
         let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
         stack.push((0, self.box_dist2(0, q, period)));
         while let Some((id, lb)) = stack.pop() {
@@ -364,7 +420,11 @@ impl KdTree {
             let dl = self.box_dist2(node.left as usize, q, period);
             let dr = self.box_dist2(node.right as usize, q, period);
             // Push the farther child first so the nearer one is searched first.
-            let (near, far) = if dl <= dr { ((node.left, dl), (node.right, dr)) } else { ((node.right, dr), (node.left, dl)) };
+            let (near, far) = if dl <= dr {
+                ((node.left, dl), (node.right, dr))
+            } else {
+                ((node.right, dr), (node.left, dl))
+            };
             stack.push(far);
             stack.push(near);
         }
@@ -383,7 +443,11 @@ mod tests {
     #[test]
     fn best_keeps_the_k_nearest_in_order_whatever_the_offer_order() {
         let cands: Vec<Candidate> = (0..50u64)
-            .map(|i| Candidate { d2: ((i * 37) % 11) as f64, seq: i, slot: i as u32 })
+            .map(|i| Candidate {
+                d2: ((i * 37) % 11) as f64,
+                seq: i,
+                slot: i as u32,
+            })
             .collect();
         let mut want = cands.clone();
         want.sort_by(|a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));

@@ -141,7 +141,10 @@ impl Llr {
     /// If the parameters are inconsistent (validated beforehand by the configuration).
     pub fn new(p: &LlrParams) -> Self {
         let n = p.weights.len();
-        assert!(n >= 1 && n <= MAX_DIM, "LLR input dimension {n} not in 1..={MAX_DIM}");
+        assert!(
+            (1..=MAX_DIM).contains(&n),
+            "LLR input dimension {n} not in 1..={MAX_DIM}"
+        );
         assert!(p.outputs >= 1 && p.outputs <= MAX_OUT);
         assert!(p.neighbours >= 1 && p.neighbours <= MAX_K);
         assert!(p.memory >= 1 && p.periodic.len() == n);
@@ -149,7 +152,13 @@ impl Llr {
             .weights
             .iter()
             .zip(&p.periodic)
-            .map(|(w, &per)| if per { 2.0 * std::f64::consts::PI * w } else { 0.0 })
+            .map(|(w, &per)| {
+                if per {
+                    2.0 * std::f64::consts::PI * w
+                } else {
+                    0.0
+                }
+            })
             .collect();
         Self {
             n,
@@ -192,7 +201,11 @@ impl Llr {
     /// The stored samples as `(x, y)` pairs in slot order (for plots and checkpoints).
     pub fn samples(&self) -> impl Iterator<Item = (Vec<f64>, &[f64])> + '_ {
         (0..self.len).map(move |s| {
-            let x = self.inputs[s * self.n..(s + 1) * self.n].iter().zip(&self.weights).map(|(v, w)| v / w).collect();
+            let x = self.inputs[s * self.n..(s + 1) * self.n]
+                .iter()
+                .zip(&self.weights)
+                .map(|(v, w)| v / w)
+                .collect();
             (x, &self.outputs[s * self.m..(s + 1) * self.m])
         })
     }
@@ -201,7 +214,11 @@ impl Llr {
     fn scale(&self, x: &[f64]) -> [f64; MAX_DIM] {
         let mut q = [0.0; MAX_DIM];
         for j in 0..self.n {
-            let v = if self.period[j] > 0.0 { plant::angle::wrap(x[j]) } else { x[j] };
+            let v = if self.period[j] > 0.0 {
+                plant::angle::wrap(x[j])
+            } else {
+                x[j]
+            };
             q[j] = v * self.weights[j];
         }
         q
@@ -222,7 +239,11 @@ impl Llr {
         let key = q.map(f64::to_bits);
         let mut best = Best::new(count);
         let mut cache = self.cache.borrow_mut();
-        if let Some(hit) = cache.iter().flatten().find(|c| c.key == key && c.found.len() >= count.min(self.len)) {
+        if let Some(hit) = cache
+            .iter()
+            .flatten()
+            .find(|c| c.key == key && c.found.len() >= count.min(self.len))
+        {
             for c in &hit.found[..count.min(hit.found.len())] {
                 best.offer(*c);
             }
@@ -252,7 +273,10 @@ impl Llr {
             if let Some(pos) = removed.and_then(|r| c.found.iter().position(|f| f.slot == r)) {
                 c.found.remove(pos);
             }
-            let cand = Candidate { d2: dist2(p, &c.q[..n], period), ..new };
+            let cand = Candidate {
+                d2: dist2(p, &c.q[..n], period),
+                ..new
+            };
             let pos = c.found.partition_point(|f| f.before(&cand));
             // `len - 1` samples besides the new one; all of them remembered?
             if pos < c.found.len() || len - 1 <= c.found.len() {
@@ -264,14 +288,22 @@ impl Llr {
     /// Offers the nearest stored samples to `best`.
     fn search_into(&self, q: &[f64], best: &mut Best) {
         match self.search {
-            Search::KdTree => self.tree.search(q, &self.period, best, |slot, seq| self.seq[slot as usize] == seq),
+            Search::KdTree => self.tree.search(q, &self.period, best, |slot, seq| {
+                self.seq[slot as usize] == seq
+            }),
             Search::Scan => {
                 let mut all: Vec<Candidate> = (0..self.len as u32)
-                    .map(|slot| Candidate { d2: dist2(self.coords(slot), q, &self.period), seq: self.seq[slot as usize], slot })
+                    .map(|slot| Candidate {
+                        d2: dist2(self.coords(slot), q, &self.period),
+                        seq: self.seq[slot as usize],
+                        slot,
+                    })
                     .collect();
                 let k = best.capacity().min(all.len());
                 if k > 0 && k < all.len() {
-                    all.select_nth_unstable_by(k - 1, |a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
+                    all.select_nth_unstable_by(k - 1, |a, b| {
+                        a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq))
+                    });
                 }
                 for c in &all[..k] {
                     best.offer(*c);
@@ -283,7 +315,10 @@ impl Llr {
     /// The affine model fitted to the neighbours `nb` of the scaled query `q`.
     fn fit_local(&self, q: &[f64; MAX_DIM], nb: &[Candidate]) -> Fit {
         let (n, m) = (self.n, self.m);
-        let mut out = Fit { y: [0.0; MAX_OUT], jac: [0.0; MAX_OUT * MAX_DIM] };
+        let mut out = Fit {
+            y: [0.0; MAX_OUT],
+            jac: [0.0; MAX_OUT * MAX_DIM],
+        };
         if nb.is_empty() {
             return out;
         }
@@ -371,7 +406,12 @@ impl Llr {
     /// Stores `[x | y]` (`q` = scaled `x`, `nearest` = the nearest stored sample, if
     /// known), evicting per the memory-management rule. Returns the new sample as a
     /// candidate at distance 0 and the slot whose previous sample was removed, if any.
-    fn insert(&mut self, q: &[f64; MAX_DIM], y: &[f64], nearest: Option<Candidate>) -> (Candidate, Option<u32>) {
+    fn insert(
+        &mut self,
+        q: &[f64; MAX_DIM],
+        y: &[f64],
+        nearest: Option<Candidate>,
+    ) -> (Candidate, Option<u32>) {
         let seq = self.next_seq;
         self.next_seq += 1;
         let replace = match self.eviction {
@@ -429,12 +469,18 @@ impl Llr {
             return;
         }
         if self.tree.entries() >= 2 * self.len + 2 * LEAF_SIZE {
-            let items: Vec<(u32, u64)> = (0..self.len as u32).map(|s| (s, self.seq[s as usize])).collect();
+            let items: Vec<(u32, u64)> = (0..self.len as u32)
+                .map(|s| (s, self.seq[s as usize]))
+                .collect();
             let n = self.n;
             let inputs = &self.inputs;
             self.tree = KdTree::build(n, &items, |s| &inputs[s as usize * n..(s as usize + 1) * n]);
         } else {
-            self.tree.insert(&self.inputs[slot as usize * self.n..(slot as usize + 1) * self.n], slot, seq);
+            self.tree.insert(
+                &self.inputs[slot as usize * self.n..(slot as usize + 1) * self.n],
+                slot,
+                seq,
+            );
         }
     }
 
@@ -487,7 +533,8 @@ impl Approximator for Llr {
             for c in best {
                 for o in 0..self.m {
                     let i = c.slot as usize * self.m + o;
-                    self.outputs[i] = self.clamp(o, self.outputs[i] + rate * (target[o] - self.outputs[i]));
+                    self.outputs[i] =
+                        self.clamp(o, self.outputs[i] + rate * (target[o] - self.outputs[i]));
                 }
             }
         }
@@ -572,14 +619,22 @@ mod tests {
     }
 
     fn neighbours(llr: &Llr, x: &[f64]) -> Vec<u32> {
-        llr.nearest(&llr.scale(x), llr.k).sorted().iter().map(|c| c.slot).collect()
+        llr.nearest(&llr.scale(x), llr.k)
+            .sorted()
+            .iter()
+            .map(|c| c.slot)
+            .collect()
     }
 
     /// The reference: every sample, fully sorted by (distance, newer first).
     fn brute_force(llr: &Llr, x: &[f64]) -> Vec<u32> {
         let q = llr.scale(x);
         let mut all: Vec<Candidate> = (0..llr.len as u32)
-            .map(|slot| Candidate { d2: dist2(llr.coords(slot), &q[..llr.n], &llr.period), seq: llr.seq[slot as usize], slot })
+            .map(|slot| Candidate {
+                d2: dist2(llr.coords(slot), &q[..llr.n], &llr.period),
+                seq: llr.seq[slot as usize],
+                slot,
+            })
             .collect();
         all.sort_by(|a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
         all.iter().take(llr.k).map(|c| c.slot).collect()
@@ -587,19 +642,38 @@ mod tests {
 
     #[test]
     fn reproduces_an_affine_function_exactly() {
-        let mut llr = Llr::new(&LlrParams { weights: vec![1.0, 0.1, 2.0], ..params(3, 2, 500, 12) });
-        let f = |x: &[f64]| [1.5 - 2.0 * x[0] + 0.3 * x[1] + 4.0 * x[2], -0.5 + x[0] - x[2]];
+        let mut llr = Llr::new(&LlrParams {
+            weights: vec![1.0, 0.1, 2.0],
+            ..params(3, 2, 500, 12)
+        });
+        let f = |x: &[f64]| {
+            [
+                1.5 - 2.0 * x[0] + 0.3 * x[1] + 4.0 * x[2],
+                -0.5 + x[0] - x[2],
+            ]
+        };
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         for _ in 0..400 {
-            let x = [rng.random_range(-3.0..3.0), rng.random_range(-20.0..20.0), rng.random_range(-1.0..1.0)];
+            let x = [
+                rng.random_range(-3.0..3.0),
+                rng.random_range(-20.0..20.0),
+                rng.random_range(-1.0..1.0),
+            ];
             llr.fit(&x, &f(&x), 0.0);
         }
         for _ in 0..50 {
-            let x = [rng.random_range(-3.0..3.0), rng.random_range(-20.0..20.0), rng.random_range(-1.0..1.0)];
+            let x = [
+                rng.random_range(-3.0..3.0),
+                rng.random_range(-20.0..20.0),
+                rng.random_range(-1.0..1.0),
+            ];
             let (mut y, mut jac) = ([0.0; 2], [0.0; 6]);
             llr.value_and_jacobian(&x, &mut y, &mut jac);
             let want = f(&x);
-            assert!((y[0] - want[0]).abs() < 1e-6 && (y[1] - want[1]).abs() < 1e-6, "{y:?} vs {want:?}");
+            assert!(
+                (y[0] - want[0]).abs() < 1e-6 && (y[1] - want[1]).abs() < 1e-6,
+                "{y:?} vs {want:?}"
+            );
             let want_jac = [-2.0, 0.3, 4.0, 1.0, 0.0, -1.0];
             for (a, b) in jac.iter().zip(&want_jac) {
                 assert!((a - b).abs() < 1e-6, "{jac:?}");
@@ -609,12 +683,19 @@ mod tests {
 
     #[test]
     fn kd_tree_and_scan_match_brute_force() {
-        for (n, periodic) in [(2, vec![true, false]), (3, vec![true, false, false]), (6, vec![true, true, false, false, false, false])] {
+        for (n, periodic) in [
+            (2, vec![true, false]),
+            (3, vec![true, false, false]),
+            (6, vec![true, true, false, false, false, false]),
+        ] {
             let mut p = params(n, 1, 700, 25);
             p.periodic = periodic;
             p.weights = (0..n).map(|j| 1.0 / (j + 1) as f64).collect();
             let mut tree = Llr::new(&p);
-            let mut scan = Llr::new(&LlrParams { search: Search::Scan, ..p });
+            let mut scan = Llr::new(&LlrParams {
+                search: Search::Scan,
+                ..p
+            });
             let mut rng = ChaCha8Rng::seed_from_u64(7);
             let pi = [std::f64::consts::PI; 8];
             for i in 0..1500 {
@@ -627,7 +708,11 @@ mod tests {
                     scan.fit(&pi[..n], &[0.0], 0.0);
                 }
             }
-            let queries = (0..300).map(|_| (0..n).map(|_| rng.random_range(-4.0..4.0)).collect::<Vec<f64>>());
+            let queries = (0..300).map(|_| {
+                (0..n)
+                    .map(|_| rng.random_range(-4.0..4.0))
+                    .collect::<Vec<f64>>()
+            });
             for x in queries.chain([pi[..n].to_vec()]) {
                 let want = brute_force(&tree, &x);
                 assert_eq!(neighbours(&tree, &x), want);
@@ -646,7 +731,10 @@ mod tests {
             let mut rng = ChaCha8Rng::seed_from_u64(3);
             for i in 0..2000 {
                 // Coarse coordinates: many exact and near duplicates, full memory.
-                let x = [(rng.random_range(-6..6) as f64) * 0.5, (rng.random_range(-20..20) as f64) * 0.5];
+                let x = [
+                    (rng.random_range(-6..6) as f64) * 0.5,
+                    (rng.random_range(-20..20) as f64) * 0.5,
+                ];
                 let (_, mut after) = llr.insert_here(&x);
                 let after: Vec<u32> = after.sorted().iter().map(|c| c.slot).collect();
                 assert_eq!(after, brute_force(&llr, &x), "insertion {i}");
@@ -662,7 +750,12 @@ mod tests {
             p.eviction = eviction;
             let mut llr = Llr::new(&p);
             let mut rng = ChaCha8Rng::seed_from_u64(5);
-            let mut point = || [(rng.random_range(-6..6) as f64) * 0.5, (rng.random_range(-20..20) as f64) * 0.5];
+            let mut point = || {
+                [
+                    (rng.random_range(-6..6) as f64) * 0.5,
+                    (rng.random_range(-20..20) as f64) * 0.5,
+                ]
+            };
             let queries: Vec<[f64; 2]> = (0..4).map(|_| point()).collect();
             for i in 0..1500 {
                 let q = queries[i % 4];
@@ -697,7 +790,10 @@ mod tests {
         let (mut y, mut jac) = ([0.0; 2], [0.0; 6]);
         llr.value_and_jacobian(&[std::f64::consts::PI, 0.0, 3.0], &mut y, &mut jac);
         assert!(y.iter().chain(&jac).all(|v| v.is_finite()));
-        assert!(jac.iter().all(|v| *v == 0.0), "no slope from identical inputs");
+        assert!(
+            jac.iter().all(|v| *v == 0.0),
+            "no slope from identical inputs"
+        );
         // The mean of the 10 newest duplicates.
         assert!((y[0] - (990..1000).map(|i| i as f64).sum::<f64>() / 10.0).abs() < 1e-9);
         // Fewer samples than n + 1 (under-determined): finite, mean-like.

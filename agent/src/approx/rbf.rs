@@ -127,7 +127,12 @@ impl Rbf {
     fn axes(&self, x: &[f64]) -> Axes {
         let mut g = Vec::with_capacity(self.n);
         let mut r = Vec::with_capacity(self.n);
-        for ((cs, &xj), (&p, &inv_b)) in self.centres.iter().zip(x).zip(self.period.iter().zip(&self.inv_b)) {
+        for ((cs, &xj), (&p, &inv_b)) in self
+            .centres
+            .iter()
+            .zip(x)
+            .zip(self.period.iter().zip(&self.inv_b))
+        {
             let (gj, rj): (Vec<f64>, Vec<f64>) = cs
                 .iter()
                 .map(|&c| {
@@ -149,7 +154,11 @@ impl Rbf {
     fn features(&self, x: &[f64], mut visit: impl FnMut(usize, f64, &[usize])) -> Axes {
         let axes = self.axes(x);
         // Normalisation: Σ φ̃ = Π_j Σ_i g_j[i]; guard against underflow far outside.
-        let norm: f64 = axes.g.iter().map(|g| g.iter().sum::<f64>().max(f64::MIN_POSITIVE)).product();
+        let norm: f64 = axes
+            .g
+            .iter()
+            .map(|g| g.iter().sum::<f64>().max(f64::MIN_POSITIVE))
+            .product();
         let mut idx = [0usize; MAX_IN];
         for i in 0..self.trace.len() {
             let mut v = 1.0;
@@ -214,7 +223,10 @@ impl Approximator for Rbf {
         let mut phis = Vec::with_capacity(self.trace.len());
         self.features(x, |_, phi, _| phis.push(phi));
         for (i, phi) in phis.into_iter().enumerate() {
-            for (t, s) in self.theta[i * self.m..(i + 1) * self.m].iter_mut().zip(step) {
+            for (t, s) in self.theta[i * self.m..(i + 1) * self.m]
+                .iter_mut()
+                .zip(step)
+            {
                 *t += s * phi;
             }
         }
@@ -245,7 +257,12 @@ impl Differentiable for Rbf {
         let mean_r: Vec<f64> = (0..n)
             .map(|j| {
                 let s: f64 = axes.g[j].iter().sum::<f64>().max(f64::MIN_POSITIVE);
-                axes.g[j].iter().zip(&axes.r[j]).map(|(g, r)| g * r).sum::<f64>() / s
+                axes.g[j]
+                    .iter()
+                    .zip(&axes.r[j])
+                    .map(|(g, r)| g * r)
+                    .sum::<f64>()
+                    / s
             })
             .collect();
         self.features(x, |i, phi, idx| {
@@ -344,7 +361,10 @@ mod tests {
                 for o in 0..2 {
                     let fd = (ya[o] - yb[o]) / (2.0 * h);
                     let an = jac[o * 2 + j];
-                    assert!((fd - an).abs() < 1e-5 * (1.0 + an.abs()), "∂y{o}/∂x{j}: fd {fd} analytic {an}");
+                    assert!(
+                        (fd - an).abs() < 1e-5 * (1.0 + an.abs()),
+                        "∂y{o}/∂x{j}: fd {fd} analytic {an}"
+                    );
                 }
             }
         }

@@ -45,8 +45,15 @@ pub struct Tiles {
 impl Tiles {
     /// A tile coder with all parameters zero.
     pub fn new(p: &TilesParams) -> Self {
-        assert!(p.tilings >= 1 && p.tiles.len() == p.range.len() && p.periodic.len() == p.range.len());
-        let cells: Vec<usize> = p.tiles.iter().zip(&p.periodic).map(|(&t, &per)| if per { t } else { t + 1 }).collect();
+        assert!(
+            p.tilings >= 1 && p.tiles.len() == p.range.len() && p.periodic.len() == p.range.len()
+        );
+        let cells: Vec<usize> = p
+            .tiles
+            .iter()
+            .zip(&p.periodic)
+            .map(|(&t, &per)| if per { t } else { t + 1 })
+            .collect();
         let per_tiling = cells.iter().product();
         Self {
             p: p.clone(),
@@ -69,7 +76,11 @@ impl Tiles {
                 let offset = t as f64 / t_count * width;
                 let cell = ((xj - lo + offset) / width).floor() as i64;
                 let c = self.cells[j] as i64;
-                let cell = if self.p.periodic[j] { cell.rem_euclid(c) } else { cell.clamp(0, c - 1) };
+                let cell = if self.p.periodic[j] {
+                    cell.rem_euclid(c)
+                } else {
+                    cell.clamp(0, c - 1)
+                };
                 index = index * self.cells[j] + cell as usize;
             }
             out.push(t * self.per_tiling + index);
@@ -190,7 +201,10 @@ mod tests {
 
     #[test]
     fn shift_stops_at_the_output_bounds() {
-        let mut t = Tiles::new(&TilesParams { bounds: Some((vec![-3.0], vec![3.0])), ..tiles().p });
+        let mut t = Tiles::new(&TilesParams {
+            bounds: Some((vec![-3.0], vec![3.0])),
+            ..tiles().p
+        });
         let x = [0.1, 3.0];
         for _ in 0..10 {
             t.shift(&x, &[2.0]);

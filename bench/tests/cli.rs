@@ -1,0 +1,134 @@
+//! The `rig` binary as a user runs it.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn rig() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rig"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rig-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn learn_writes_its_outputs_and_the_config_repeats_the_run() {
+    let dir = tmp("learn");
+    let out = rig()
+        .args([
+            "learn",
+            "--runs",
+            "2",
+            "--trials",
+            "4",
+            "--eval-every",
+            "2",
+            "--quiet",
+            "--out",
+        ])
+        .arg(dir.join("a"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let again = rig()
+        .args(["learn", "--quiet", "--config"])
+        .arg(dir.join("a/config.toml"))
+        .arg("--out")
+        .arg(dir.join("b"))
+        .output()
+        .unwrap();
+    assert!(
+        again.status.success(),
+        "{}",
+        String::from_utf8_lossy(&again.stderr)
+    );
+    let a = std::fs::read(dir.join("a/runs.csv")).unwrap();
+    assert_eq!(a, std::fs::read(dir.join("b/runs.csv")).unwrap());
+    assert_eq!(String::from_utf8(a).unwrap().lines().count(), 1 + 2 * 4);
+}
+
+#[test]
+fn bad_config_is_a_one_line_error_naming_file_and_key() {
+    let dir = tmp("bad");
+    let file = dir.join("exp.toml");
+    for (text, key, fragment) in [
+        (
+            "[critic]\nneighbors = 10\n",
+            "critic.neighbors",
+            "unknown key",
+        ),
+        ("[learning]\ngamma = 1.2\n", "learning.gamma", "(0, 1)"),
+        ("[run]\nruns = 0\n", "run.runs", "1..=100000"),
+        ("algo = \"ppo\"\n", "algo", "sac, mlac, rmac"),
+        ("[actor\n", "", "not valid TOML"),
+    ] {
+        std::fs::write(&file, text).unwrap();
+        let out = rig()
+            .args(["learn", "--quiet", "--config"])
+            .arg(&file)
+            .arg("--out")
+            .arg(dir.join("o"))
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{text}");
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(err.lines().count(), 1, "one line: {err}");
+        assert!(
+            err.starts_with("error: ")
+                && err.contains("exp.toml")
+                && err.contains(key)
+                && err.contains(fragment),
+            "{err}"
+        );
+    }
+    let out = rig()
+        .args(["learn", "--algo", "mlac", "--approx", "tiles", "--out"])
+        .arg(dir.join("o"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("tile coding has no gradient"));
+    let missing = rig()
+        .args(["learn", "--config", "/nonexistent/x.toml"])
+        .output()
+        .unwrap();
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&missing.stderr).contains("/nonexistent/x.toml"));
+}
+
+#[test]
+fn config_prints_a_resolvable_preset_and_help_explains_every_flag() {
+    let out = rig()
+        .args(["config", "--algo", "sac", "--approx", "rbf"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("algo = \"sac\"") && text.contains("intersection = 0.5"),
+        "{text}"
+    );
+    let help = String::from_utf8(rig().args(["learn", "--help"]).output().unwrap().stdout).unwrap();
+    for flag in [
+        "--system",
+        "--algo",
+        "--approx",
+        "--trials",
+        "--runs",
+        "--seed",
+        "--eval-every",
+        "--config",
+        "--out",
+        "--threads",
+        "--quiet",
+    ] {
+        assert!(help.contains(flag), "--help lacks {flag}");
+    }
+}
