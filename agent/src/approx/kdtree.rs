@@ -88,7 +88,7 @@ impl Best {
     }
 
     /// Offers a candidate.
-    #[inline]
+    #[inline(always)]
     pub fn offer(&mut self, c: Candidate) {
         if self.sorted {
             // Nearest-first order reversed is worst-first: a valid max-heap again.
@@ -137,7 +137,7 @@ impl Best {
     }
 
     /// Whether a candidate at squared distance `d2` could enter the set.
-    #[inline]
+    #[inline(always)]
     fn admits(&self, d2: f64) -> bool {
         self.len < self.k || d2 <= self.items[0].d2
     }

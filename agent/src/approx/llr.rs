@@ -235,29 +235,23 @@ impl Llr {
     /// The `count ≤ K + 1` nearest stored samples to the scaled query `q`. A search keeps
     /// K + 2 and is remembered, so a value query and a later insertion at the same point
     /// share one search, even with one insertion elsewhere in between.
-    fn nearest(&self, q: &[f64; MAX_DIM], count: usize) -> Best {
+    fn nearest(&self, q: &[f64; MAX_DIM], count: usize) -> Vec<Candidate> {
         let key = q.map(f64::to_bits);
-        let mut best = Best::new(count);
         let mut cache = self.cache.borrow_mut();
         if let Some(hit) = cache
             .iter()
             .flatten()
             .find(|c| c.key == key && c.found.len() >= count.min(self.len))
         {
-            for c in &hit.found[..count.min(hit.found.len())] {
-                best.offer(*c);
-            }
-            return best;
+            return hit.found[..count.min(hit.found.len())].to_vec();
         }
         let mut wide = Best::new(self.k + 1 + CACHE_SLACK);
         self.search_into(&q[..self.n], &mut wide);
         let found = wide.sorted().to_vec();
-        for c in &found[..count.min(found.len())] {
-            best.offer(*c);
-        }
+        let out = found[..count.min(found.len())].to_vec();
         cache.swap(0, 1);
         cache[0] = Some(Cached { key, q: *q, found });
-        best
+        out
     }
 
     /// Keeps the remembered searches exact across the insertion of `new`, which removed
@@ -391,8 +385,8 @@ impl Llr {
     /// Prediction and slope at `x`.
     fn local(&self, x: &[f64]) -> Fit {
         let q = self.scale(x);
-        let mut best = self.nearest(&q, self.k);
-        self.fit_local(&q, best.sorted())
+        let nb = self.nearest(&q, self.k);
+        self.fit_local(&q, &nb)
     }
 
     #[inline]
@@ -416,7 +410,7 @@ impl Llr {
         self.next_seq += 1;
         let replace = match self.eviction {
             Eviction::Redundant(radius) if self.len > 0 => {
-                let nearest = nearest.or_else(|| self.nearest(q, 1).sorted().first().copied());
+                let nearest = nearest.or_else(|| self.nearest(q, 1).first().copied());
                 nearest.filter(|c| c.d2 < radius * radius).map(|c| c.slot)
             }
             _ => None,
@@ -489,13 +483,12 @@ impl Llr {
     /// contain the K − 1 that join the new sample, whatever the insertion removed.
     fn insert_here(&mut self, x: &[f64]) -> (Fit, Best) {
         let q = self.scale(x);
-        let mut pre = self.nearest(&q, self.k + 1);
-        let pre = pre.sorted();
+        let pre = self.nearest(&q, self.k + 1);
         let fit = self.fit_local(&q, &pre[..pre.len().min(self.k)]);
         let (new, removed) = self.insert(&q, &fit.y[..self.m], pre.first().copied());
         let mut after = Best::new(self.k);
         after.offer(new);
-        for c in pre {
+        for c in &pre {
             if Some(c.slot) != removed {
                 after.offer(*c);
             }
@@ -527,10 +520,9 @@ impl Approximator for Llr {
         let q = self.scale(x);
         let mut nearest = None;
         if rate > 0.0 && !self.is_empty() {
-            let mut best = self.nearest(&q, self.k);
-            let best = best.sorted();
+            let best = self.nearest(&q, self.k);
             nearest = best.first().copied();
-            for c in best {
+            for c in &best {
                 for o in 0..self.m {
                     let i = c.slot as usize * self.m + o;
                     self.outputs[i] =
@@ -620,7 +612,6 @@ mod tests {
 
     fn neighbours(llr: &Llr, x: &[f64]) -> Vec<u32> {
         llr.nearest(&llr.scale(x), llr.k)
-            .sorted()
             .iter()
             .map(|c| c.slot)
             .collect()
