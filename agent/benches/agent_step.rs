@@ -94,6 +94,7 @@ fn full_memory(search: Search, dim: usize, rng: &mut ChaCha8Rng) -> Llr {
         bounds: None,
         eviction: Eviction::Oldest,
         search,
+        clip_to_neighbours: false,
     });
     for _ in 0..2500 {
         let x: Vec<f64> = (0..dim).map(|_| rng.random_range(-9.0..9.0)).collect();

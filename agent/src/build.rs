@@ -44,6 +44,7 @@ fn make(c: &Component, s: &Space) -> Built {
                 Eviction::Oldest
             },
             search: Search::KdTree,
+            clip_to_neighbours: l.clip_to_neighbours,
         }))),
         Component::Rbf(r) => Built::Rbf(Box::new(Rbf::new(&RbfParams {
             centres: r.centres.clone(),

@@ -131,6 +131,8 @@ pub struct LlrConfig {
     pub eviction: String,
     /// With "redundant": a new sample replaces a stored one closer than this (scaled).
     pub redundancy_radius: f64,
+    /// Limit predictions to the range of the neighbours' outputs (no extrapolation).
+    pub clip_to_neighbours: bool,
 }
 
 /// RBF grid parameters (Table 3.1).

@@ -14,6 +14,10 @@
 //!   neighbours are fewer than `n + 1` or coincide (repeated samples): the slope then
 //!   shrinks to zero and the prediction to the neighbours' mean — the "smallest-norm
 //!   solution" the thesis prescribes for an under-determined set.
+//! * **Clipping** ([`LlrParams::clip_to_neighbours`]): a prediction can be limited to the
+//!   range of the neighbours' outputs. Far from its samples an affine fit extrapolates;
+//!   for a critic that means values better than any observed nearby, which a model-based
+//!   actor then climbs towards (see [`crate::preset`]).
 //! * **Memory management** ([`Eviction`]): when full, purge the oldest sample; or, with
 //!   [`Eviction::Redundant`], first let a new sample replace a stored one closer than a
 //!   given (scaled) distance — a repeated sample then refreshes its twin instead of
@@ -78,6 +82,9 @@ pub struct LlrParams {
     pub eviction: Eviction,
     /// Neighbour search strategy.
     pub search: Search,
+    /// Limit a prediction to the range of its neighbours' outputs (no extrapolation
+    /// beyond the values observed nearby; the slope is unaffected).
+    pub clip_to_neighbours: bool,
 }
 
 /// The local affine model at a query.
@@ -113,6 +120,7 @@ pub struct Llr {
     bounds: Option<(Vec<f64>, Vec<f64>)>,
     eviction: Eviction,
     search: Search,
+    clip_to_neighbours: bool,
     // Sample storage, by slot.
     inputs: Vec<f64>,
     outputs: Vec<f64>,
@@ -170,6 +178,7 @@ impl Llr {
             bounds: p.bounds.clone(),
             eviction: p.eviction,
             search: p.search,
+            clip_to_neighbours: p.clip_to_neighbours,
             inputs: Vec::with_capacity(p.memory * n),
             outputs: Vec::with_capacity(p.memory * p.outputs),
             seq: Vec::with_capacity(p.memory),
@@ -376,6 +385,15 @@ impl Llr {
                 let slope = cxy[j * m + o];
                 y -= slope * dm[j];
                 out.jac[o * n + j] = slope * self.weights[j];
+            }
+            if self.clip_to_neighbours {
+                let (lo, hi) = nb
+                    .iter()
+                    .map(|c| self.output(c.slot)[o])
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                        (a.min(v), b.max(v))
+                    });
+                y = y.clamp(lo, hi);
             }
             out.y[o] = self.clamp(o, y);
         }
@@ -607,6 +625,7 @@ mod tests {
             bounds: None,
             eviction: Eviction::Oldest,
             search: Search::KdTree,
+            clip_to_neighbours: false,
         }
     }
 
@@ -760,6 +779,27 @@ mod tests {
                 assert_eq!(after, brute_force(&llr, &q), "step {i}");
             }
         }
+    }
+
+    #[test]
+    fn clipping_stops_extrapolation_but_keeps_the_slope() {
+        let mut p = params(1, 1, 10, 3);
+        let mut plain = Llr::new(&p);
+        p.clip_to_neighbours = true;
+        let mut clipped = Llr::new(&p);
+        for x in [0.0, 1.0, 2.0] {
+            plain.fit(&[x], &[2.0 * x], 0.0);
+            clipped.fit(&[x], &[2.0 * x], 0.0);
+        }
+        assert!((super::super::scalar(&plain, &[5.0]) - 10.0).abs() < 1e-6);
+        assert!((super::super::scalar(&clipped, &[5.0]) - 4.0).abs() < 1e-12);
+        assert!(
+            (super::super::scalar(&clipped, &[1.5]) - 3.0).abs() < 1e-6,
+            "interpolation unchanged"
+        );
+        let (mut y, mut jac) = ([0.0], [0.0]);
+        clipped.value_and_jacobian(&[5.0], &mut y, &mut jac);
+        assert!((jac[0] - 2.0).abs() < 1e-6);
     }
 
     #[test]
