@@ -587,7 +587,8 @@ mod tests {
             "{e}"
         );
         assert!(
-            e.message.contains("alpha, eviction, memory, neighbours"),
+            e.message
+                .contains("alpha, clip_to_neighbours, eviction, memory, neighbours"),
             "{e}"
         );
     }
