@@ -103,6 +103,43 @@ fn every_supported_combination_runs_and_stays_finite() {
 }
 
 #[test]
+fn the_arm_and_the_linear_system_run_with_their_presets() {
+    use plant::SystemName;
+    for (system, algo, approx) in [
+        (SystemName::ArmVertical, Algo::Sac, ApproxKind::Llr),
+        (SystemName::ArmVertical, Algo::Mlac, ApproxKind::Llr),
+        (SystemName::ArmHorizontal, Algo::Sac, ApproxKind::Rbf),
+        (SystemName::ArmHorizontal, Algo::Rmac, ApproxKind::Llr),
+        (SystemName::DoubleIntegrator, Algo::Mlac, ApproxKind::Llr),
+    ] {
+        let o = Overrides {
+            system: Some(system),
+            algo: Some(algo),
+            approx: Some(approx),
+            runs: Some(1),
+            trials: Some(2),
+            eval_every: Some(1),
+            ..Default::default()
+        };
+        let cfg = resolve(None, &o).expect("preset resolves");
+        let (_, csv) = run(&cfg, &format!("{system}-{algo}-{approx}"), 1);
+        let rows: Vec<&str> = csv.lines().skip(1).collect();
+        assert_eq!(rows.len(), 2);
+        for line in rows {
+            let f: Vec<f64> = line
+                .split(',')
+                .skip(2)
+                .map(|v| v.parse().unwrap())
+                .collect();
+            assert!(
+                f.iter().all(|v| v.is_finite()) && f[1] < 0.0,
+                "{system}: {line}"
+            );
+        }
+    }
+}
+
+#[test]
 fn mlac_llr_learns_the_swing_up() {
     // A policy that never swings up earns about −4900 per 3 s trial; a swing-up about
     // −750 to −900. After 50 trials (2.5 simulated minutes) MLAC/LLR swings up.
