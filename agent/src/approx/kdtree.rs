@@ -4,12 +4,12 @@
 //! The tree is dynamic: a new sample descends to a leaf, widening the bounding boxes on
 //! its way, and a leaf that grows past [`LEAF_SIZE`] splits at its median along its
 //! widest axis. A sample that the memory overwrites stays in the tree as a stale entry,
-//! recognised by its sequence number and skipped; when stale entries outnumber live ones
-//! the memory rebuilds the tree, balanced, from scratch — amortised O(log N) per
-//! insertion. A search can be warm-started by offering candidates to [`Best`] first
-//! (`Llr` offers the remembered neighbours of a nearby query): the bound is then tight
-//! from the first node. Pruning uses the bounding boxes only, so correctness never depends on the
-//! split values, and any number of identical samples (every trial starts at `[π, 0]`,
+//! recognised by its sequence number and skipped; when stale entries reach a quarter of
+//! the live ones the memory rebuilds the tree, balanced, from scratch — amortised
+//! O(log N) per insertion. A search can be warm-started by offering candidates to
+//! [`Best`] first (`Llr` offers the remembered neighbours of a nearby query): the bound is
+//! then tight from the first node. Pruning uses the bounding boxes only, so correctness
+//! never depends on the split values, and any number of identical samples (every trial starts at `[π, 0]`,
 //! saturated actions repeat) only makes a leaf larger, never breaks the tree.
 //!
 //! Distances are squared Euclidean on pre-scaled coordinates, with periodic components
