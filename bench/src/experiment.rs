@@ -21,7 +21,7 @@ pub struct TrialRecord {
     pub run: u32,
     /// Trial number (1-based).
     pub trial: u32,
-    /// Simulated learning time at the end of this trial [s].
+    /// Simulated learning time at the end of this trial \[s\].
     pub sim_time_s: f64,
     /// Sum of rewards of the trial, as learned (with exploration).
     pub ret: f64,
@@ -136,7 +136,7 @@ impl Experiment {
 /// One sample of a time response.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sample {
-    /// Time since the trial start [s].
+    /// Time since the trial start \[s\].
     pub t: f64,
     /// State estimate the action was computed from.
     pub x: Vec<f64>,

@@ -6,7 +6,7 @@ use crate::Dynamics;
 /// `ṗ = v`, `v̇ = u / mass`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DoubleIntegrator {
-    /// Mass [kg] (the input is a force in N).
+    /// Mass \[kg\] (the input is a force in N).
     pub mass: f64,
 }
 

@@ -8,19 +8,19 @@ use crate::Dynamics;
 /// Physical parameters of Table A.1.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Pendulum {
-    /// Pendulum inertia `J` [kg m²].
+    /// Pendulum inertia `J` \[kg m²\].
     pub inertia: f64,
-    /// Pendulum mass `M` [kg].
+    /// Pendulum mass `M` \[kg\].
     pub mass: f64,
-    /// Gravity `g` [m/s²].
+    /// Gravity `g` \[m/s²\].
     pub gravity: f64,
-    /// Pendulum length `l` [m].
+    /// Pendulum length `l` \[m\].
     pub length: f64,
-    /// Viscous damping `b` [N m s/rad].
+    /// Viscous damping `b` \[N m s/rad\].
     pub damping: f64,
-    /// Torque constant `K` [N m/A].
+    /// Torque constant `K` \[N m/A\].
     pub torque_constant: f64,
-    /// Rotor resistance `R` [Ω].
+    /// Rotor resistance `R` \[Ω\].
     pub resistance: f64,
 }
 

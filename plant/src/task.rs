@@ -56,7 +56,7 @@ pub struct Task {
     pub name: SystemName,
     /// `ẋ = f(x, u)`.
     pub dynamics: Box<dyn Dynamics>,
-    /// Sampling time `Ts` [s].
+    /// Sampling time `Ts` \[s\].
     pub ts: f64,
     /// RK4 sub-steps per sample period (see [`crate::rk4`]).
     pub substeps: usize,
@@ -70,7 +70,7 @@ pub struct Task {
     pub reward: QuadraticReward,
     /// Start states; trial `i` starts in `initial_states[i % len]`.
     pub initial_states: Vec<Vec<f64>>,
-    /// Trial length [s].
+    /// Trial length \[s\].
     pub trial_seconds: f64,
     /// The region of the state space that parametric approximators cover (RBF grids,
     /// tilings): `(low, high)` per state component.

@@ -12,17 +12,17 @@ use crate::Dynamics;
 /// Parameters of Table A.2 and whether gravity acts (vertical plane, Case I).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TwoLink {
-    /// Link lengths `l₁, l₂` [m].
+    /// Link lengths `l₁, l₂` \[m\].
     pub length: [f64; 2],
-    /// Link masses `m₁, m₂` [kg].
+    /// Link masses `m₁, m₂` \[kg\].
     pub mass: [f64; 2],
-    /// Centres of mass `c₁, c₂` [m].
+    /// Centres of mass `c₁, c₂` \[m\].
     pub centre_of_mass: [f64; 2],
-    /// Link inertias `I₁, I₂` [kg m²].
+    /// Link inertias `I₁, I₂` \[kg m²\].
     pub inertia: [f64; 2],
-    /// Gravity [m/s²]; zero in the horizontal plane.
+    /// Gravity \[m/s²\]; zero in the horizontal plane.
     pub gravity: f64,
-    /// Viscous joint friction [N m s/rad] (zero in Chapter 5: "no internal damping").
+    /// Viscous joint friction \[N m s/rad\] (zero in Chapter 5: "no internal damping").
     pub friction: [f64; 2],
 }
 

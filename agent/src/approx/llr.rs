@@ -4,9 +4,10 @@
 //! * **Distance**: weighted Euclidean, the input scaling `diag(W)` of Table 6.2
 //!   (coordinates are stored pre-multiplied by `W`); angle inputs are compared by their
 //!   wrapped difference, so `φ = −π + ε` and `φ = π − ε` are neighbours.
-//! * **Neighbour search**: a [`KdTree`] over the memory, rebuilt every
-//!   [`LlrParams::rebuild_every`] insertions; newer samples are scanned linearly. Never a
-//!   sort of the whole memory.
+//! * **Neighbour search**: a dynamic [`KdTree`] over the memory (or, with
+//!   [`Search::Scan`], a partial selection over it) — never a sort of the whole memory.
+//!   The two most recent searches are remembered and kept exact across insertions, and a
+//!   new search is warm-started from the nearest remembered one.
 //! * **Fit**: `β = Y Xᵀ (X Xᵀ)⁻¹` solved as a centred ridge regression in coordinates
 //!   relative to the query: with `dᵢ = W (xᵢ − x_q)` (angles wrapped), the slope is
 //!   `B = (Σ d̃ d̃ᵀ + εI)⁻¹ Σ d̃ ỹᵀ` (tilde: minus the mean) and the prediction
