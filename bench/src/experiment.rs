@@ -78,9 +78,11 @@ impl Experiment {
         let x0 = self.start_state();
         let steps = self.task.steps_per_trial();
         let mut u = vec![0.0; self.task.action_dim()];
+        // The agent starts from the plant's state as measured (angles wrapped), exactly as
+        // it does over the wire.
         self.plant.reset(&x0);
-        self.observer.reset(&x0);
-        self.agent.start_trial(&x0, &mut u);
+        self.observer.reset(self.plant.state());
+        self.agent.start_trial(self.plant.state(), &mut u);
         let mut ret = 0.0;
         for k in 0..steps {
             let r = self.plant.step(&u);
@@ -114,8 +116,8 @@ impl Experiment {
         let m = self.task.action_dim();
         let (mut u, mut u_prev) = (vec![0.0; m], vec![0.0; m]);
         self.plant.reset(x0);
-        self.observer.reset(x0);
-        let mut x = x0.to_vec();
+        self.observer.reset(self.plant.state());
+        let mut x = self.plant.state().to_vec();
         let mut out = Vec::with_capacity(self.task.steps_per_trial());
         for k in 0..self.task.steps_per_trial() {
             self.agent.greedy(&x, &u_prev, &mut u);

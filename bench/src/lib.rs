@@ -4,4 +4,7 @@
 
 pub mod experiment;
 pub mod learn;
+pub mod process;
+pub mod record;
 pub mod report;
+pub mod run;

@@ -7,6 +7,8 @@ use agent::config::{Algo, ApproxKind, Overrides, resolve};
 use clap::{Args, Parser, Subcommand};
 use plant::SystemName;
 use rig::learn::{LearnOptions, learn};
+use rig::process::ProcessArgs;
+use rig::run::{RunOptions, run};
 
 /// Learning controllers of Grondman's thesis "Online Model Learning Algorithms for
 /// Actor-Critic Control": run experiments, write learning curves.
@@ -22,9 +24,34 @@ enum Command {
     /// Run independent learning experiments in one process, in parallel on all cores,
     /// and write runs.csv, curve.csv, greedy_curve.csv, curve.png/svg and config.toml.
     Learn(LearnArgs),
+    /// Run one experiment as three processes — plant, observer, agent — exchanging
+    /// measurements, estimates and actions over iceoryx2 shared memory in lockstep;
+    /// writes returns.csv, config.toml and one log per process.
+    Run(RunArgs),
     /// Print the resolved configuration (preset ← --config file ← flags) as TOML, to
     /// start a configuration file from.
     Config(Selection),
+    /// The plant process of a run (started by `rig run`, or by hand).
+    Plant(ProcessArgs),
+    /// The observer process of a run (started by `rig run`, or by hand).
+    Observer(ProcessArgs),
+    /// The agent process of a run (started by `rig run`, or by hand).
+    Agent(ProcessArgs),
+}
+
+#[derive(Args)]
+struct RunArgs {
+    #[command(flatten)]
+    selection: Selection,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "out/run")]
+    out: PathBuf,
+    /// Run id shared by the three processes [default: unique per invocation].
+    #[arg(long)]
+    run_id: Option<String>,
+    /// No progress bar and no summary.
+    #[arg(long)]
+    quiet: bool,
 }
 
 /// Which experiment: the preset for (system, algorithm, approximator), a TOML file
@@ -123,7 +150,60 @@ fn resolve_selection(s: &Selection) -> Result<agent::config::ExperimentConfig, S
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let process = |f: fn(&ProcessArgs) -> anyhow::Result<()>, args: &ProcessArgs| match f(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    };
     match cli.command {
+        Command::Plant(args) => process(rig::process::plant::run, &args),
+        Command::Observer(args) => process(rig::process::observer::run, &args),
+        Command::Agent(args) => process(rig::process::agent::run, &args),
+        Command::Run(args) => {
+            let mut cfg = match resolve_selection(&args.selection) {
+                Ok(c) => c,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            cfg.run.runs = 1;
+            let opts = RunOptions {
+                out: args.out.clone(),
+                run_id: args.run_id.clone(),
+                progress: !args.quiet,
+            };
+            match run(&cfg, &opts) {
+                Ok(s) => {
+                    if !args.quiet {
+                        let steps = s.messages as f64 / 3.0;
+                        println!(
+                            "{} {}/{} over three processes: {} trials in {:.1} s wall ({:.1} µs per lockstep sample)",
+                            cfg.system,
+                            cfg.algo,
+                            cfg.approx,
+                            s.records.len(),
+                            s.wall.as_secs_f64(),
+                            s.wall.as_secs_f64() * 1e6 / steps
+                        );
+                        if let Some(g) = s.records.iter().rev().find_map(|r| r.greedy) {
+                            println!("  last greedy return: {g:.1}");
+                        }
+                        println!(
+                            "  wrote {}/{{returns.csv, config.toml, plant.log, observer.log, agent.log}}",
+                            args.out.display()
+                        );
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
         Command::Config(sel) => match resolve_selection(&sel) {
             Ok(cfg) => {
                 print!("{}", cfg.to_toml());

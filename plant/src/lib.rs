@@ -69,10 +69,11 @@ impl Plant {
         &self.task
     }
 
-    /// Puts the plant at state `x0` (angles wrapped).
+    /// Puts the plant at state `x0` (angles wrapped), with no action applied yet.
     pub fn reset(&mut self, x0: &[f64]) {
         self.x.copy_from_slice(x0);
         self.task.wrap_state(&mut self.x);
+        self.applied.fill(0.0);
     }
 
     /// The current state `x_k`.

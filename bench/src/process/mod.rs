@@ -1,0 +1,75 @@
+//! The plant, observer and agent as processes: each joins a run over iceoryx2
+//! ([`wire`]), waits for its peers, and runs its component one sample at a time in
+//! lockstep — simulated time advances only when the action for the sample has arrived.
+//!
+//! The step order is exactly that of the in-process driver
+//! ([`crate::experiment::Experiment`]), so a run over three processes gives the same
+//! numbers, bit for bit:
+//!
+//! ```text
+//! plant:    reset x_0 ─► Measurement{START}            ... u_k ─► r, x_{k+1} ─► Measurement{k+1 (END)}
+//! observer: Measurement ─► x̂ (reset at START)          ─► Estimate
+//! agent:    Estimate ─► start_trial / learn / greedy    ─► Action (an acknowledgement at END)
+//! ```
+//!
+//! Trials, greedy evaluation trials and the end of the run are the plant's to decide and
+//! announce ([`wire::flags`]).
+
+pub mod agent;
+pub mod observer;
+pub mod plant;
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use ::agent::config::{ExperimentConfig, Overrides, resolve};
+use anyhow::{Context, Result};
+use clap::Args;
+
+/// How long a process waits for a message before deciding a peer has died.
+pub const SILENCE: Duration = Duration::from_secs(10);
+/// How long a process waits for its peers to connect at start.
+pub const STARTUP: Duration = Duration::from_secs(30);
+
+/// Command-line arguments every process takes.
+#[derive(Args, Debug, Clone)]
+pub struct ProcessArgs {
+    /// Run id: the processes of one run share it; runs with different ids never see
+    /// each other (letters, digits, '-', '_').
+    #[arg(long)]
+    pub run_id: String,
+    /// The run's configuration (a `config.toml` written by `rig run`/`rig learn`, or any
+    /// file `rig config` describes).
+    #[arg(long, value_name = "FILE")]
+    pub config: PathBuf,
+    /// Receivers to wait for before publishing: the next process, plus the recorder of
+    /// `rig run` if one is listening.
+    #[arg(long, default_value_t = 1)]
+    pub receivers: usize,
+    /// Which run of the experiment this is (seeds the random streams as run `N` of
+    /// `rig learn` would be).
+    #[arg(long, default_value_t = 0)]
+    pub run_index: u32,
+}
+
+impl ProcessArgs {
+    /// Reads and validates the configuration.
+    pub fn config(&self) -> Result<ExperimentConfig> {
+        let text = std::fs::read_to_string(&self.config)
+            .with_context(|| format!("{}: cannot read", self.config.display()))?;
+        resolve(Some((&self.config, &text)), &Overrides::default())
+            .map_err(|e| anyhow::anyhow!("{e}"))
+    }
+}
+
+/// Copies `v` into a fixed-size wire array (the rest zero).
+pub fn pack<const N: usize>(v: &[f64]) -> [f64; N] {
+    let mut a = [0.0; N];
+    a[..v.len()].copy_from_slice(v);
+    a
+}
+
+/// Converts a transport error.
+pub fn wire_err(e: wire::Error) -> anyhow::Error {
+    anyhow::anyhow!("{e}")
+}

@@ -1,0 +1,545 @@
+//! `rig run`: one experiment as three processes — plant, observer, agent — over iceoryx2,
+//! launched, supervised and recorded by this process.
+//!
+//! * The supervisor joins the run and subscribes to every topic *before* starting the
+//!   processes, which wait for it (`--receivers 2`), so it sees every message.
+//! * It records every message to `run.mcap` ([`crate::record`]), streams `returns.csv`
+//!   (the format of `rig learn`'s `runs.csv`, one run), shows progress, and checks that no
+//!   message was lost (sequence numbers).
+//! * A process that exits early or fails, Ctrl-C, or a lost message stops the run: the
+//!   other processes are killed, the reason is reported, the recording is finished (so
+//!   `run.mcap` stays readable), and the call fails. Each process's output goes to
+//!   `DIR/<process>.log`.
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use ::agent::config::ExperimentConfig;
+use anyhow::{Context, Result, anyhow, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use wire::{Action, Bus, Estimate, Header, Measurement, flags, topic};
+
+use crate::experiment::TrialRecord;
+use crate::learn::{RUNS_HEADER, write_atomic, write_row};
+use crate::process::wire_err;
+use crate::record::{ChannelId, Field, FieldKind, Recorder, Value};
+
+/// Where and how to run.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    /// Output directory (created if missing).
+    pub out: PathBuf,
+    /// Run id (default: unique per invocation).
+    pub run_id: Option<String>,
+    /// Show a progress bar.
+    pub progress: bool,
+}
+
+/// What a run produced.
+#[derive(Clone, Debug)]
+pub struct RunSummary {
+    /// The learning trials, as written to `returns.csv`.
+    pub records: Vec<TrialRecord>,
+    /// Messages received by the supervisor (all topics).
+    pub messages: u64,
+    /// Wall-clock time of the run.
+    pub wall: Duration,
+}
+
+/// Builds `returns.csv` rows from the plant's measurements.
+struct Returns {
+    out: BufWriter<File>,
+    trial_seconds: f64,
+    pending: Option<TrialRecord>,
+    greedy: f64,
+    records: Vec<TrialRecord>,
+}
+
+impl Returns {
+    fn measurement(&mut self, m: &Measurement) -> Result<()> {
+        let f = m.header.flags;
+        let greedy = f & flags::GREEDY != 0;
+        if f & flags::SHUTDOWN != 0 || (f & flags::START != 0 && !greedy) {
+            self.flush()?;
+        }
+        if f & flags::SHUTDOWN != 0 {
+            return Ok(());
+        }
+        if f & flags::START != 0 {
+            if greedy {
+                self.greedy = 0.0;
+            } else {
+                let trial = m.header.trial as u32;
+                let sim_time_s = f64::from(trial) * self.trial_seconds;
+                self.pending = Some(TrialRecord {
+                    run: 0,
+                    trial,
+                    sim_time_s,
+                    ret: 0.0,
+                    greedy: None,
+                });
+            }
+            return Ok(());
+        }
+        let pending = self
+            .pending
+            .as_mut()
+            .ok_or_else(|| anyhow!("a sample arrived before any trial started"))?;
+        if greedy {
+            self.greedy += m.reward;
+            if f & flags::END != 0 {
+                pending.greedy = Some(self.greedy);
+            }
+        } else {
+            pending.ret += m.reward;
+        }
+        Ok(())
+    }
+
+    fn flush(&mut self) -> Result<()> {
+        if let Some(r) = self.pending.take() {
+            write_row(&mut self.out, &r)?;
+            self.out.flush()?;
+            self.records.push(r);
+        }
+        Ok(())
+    }
+}
+
+/// The MCAP recording: one channel per topic, and one `/timing/...` channel per topic
+/// for the wall-clock timestamps, which differ from run to run by nature. Log time is
+/// simulated time.
+struct Recording {
+    rec: Recorder,
+    measurement: ChannelId,
+    estimate: ChannelId,
+    action: ChannelId,
+    t_measurement: ChannelId,
+    t_estimate: ChannelId,
+    t_action: ChannelId,
+    n: usize,
+    m: usize,
+    values: Vec<Value>,
+}
+
+fn header_fields(extra: Vec<Vec<Field>>) -> Vec<Field> {
+    let mut f: Vec<Field> = ["seq", "trial", "step", "flags"]
+        .iter()
+        .map(|n| Field::integer(n))
+        .collect();
+    f.push(Field::number("t_sim"));
+    f.extend(extra.into_iter().flatten());
+    f
+}
+
+fn timing_fields(names: &[&str]) -> Vec<Field> {
+    std::iter::once(Field::integer("seq"))
+        .chain(names.iter().map(|n| Field::integer(n)))
+        .collect()
+}
+
+impl Recording {
+    fn create(path: &Path, n: usize, m: usize) -> Result<Self> {
+        let mut rec = Recorder::create(path)?;
+        let state = |name| {
+            vec![
+                vec![Field::number("reward")],
+                Field::array(name, n, FieldKind::Number),
+                Field::array("u_applied", m, FieldKind::Number),
+            ]
+        };
+        let measurement = rec.channel(
+            "/plant/measurement",
+            "rig.Measurement",
+            &header_fields(state("y")),
+        )?;
+        let estimate = rec.channel(
+            "/observer/estimate",
+            "rig.Estimate",
+            &header_fields(state("x")),
+        )?;
+        let action = rec.channel(
+            "/agent/action",
+            "rig.Action",
+            &header_fields(vec![Field::array("u", m, FieldKind::Number)]),
+        )?;
+        let stamps = ["t_sample_ns", "t_received_ns", "t_publish_ns"];
+        let t_measurement = rec.channel(
+            "/timing/plant/measurement",
+            "rig.Timing.Measurement",
+            &timing_fields(&["t_sample_ns", "t_publish_ns"]),
+        )?;
+        let t_estimate = rec.channel(
+            "/timing/observer/estimate",
+            "rig.Timing.Estimate",
+            &timing_fields(&stamps),
+        )?;
+        let t_action = rec.channel(
+            "/timing/agent/action",
+            "rig.Timing.Action",
+            &timing_fields(&stamps),
+        )?;
+        Ok(Self {
+            rec,
+            measurement,
+            estimate,
+            action,
+            t_measurement,
+            t_estimate,
+            t_action,
+            n,
+            m,
+            values: Vec::new(),
+        })
+    }
+
+    /// Starts a message with the header fields; returns its log time (simulated, ns).
+    fn header(&mut self, h: &Header) -> u64 {
+        self.values.clear();
+        self.values.extend([
+            Value::Int(h.seq),
+            Value::Int(h.trial),
+            Value::Int(h.step),
+            Value::Int(h.flags),
+            Value::Num(h.t_sim),
+        ]);
+        (h.t_sim * 1e9).round() as u64
+    }
+
+    fn write(
+        &mut self,
+        ch: ChannelId,
+        t: u64,
+        timing: ChannelId,
+        seq: u64,
+        stamps: &[u64],
+    ) -> Result<()> {
+        self.rec.write(ch, t, t, &self.values)?;
+        self.values.clear();
+        self.values.push(Value::Int(seq));
+        self.values.extend(stamps.iter().map(|&s| Value::Int(s)));
+        self.rec.write(timing, t, t, &self.values)
+    }
+
+    fn nums(&mut self, v: &[f64]) {
+        self.values.extend(v.iter().map(|&x| Value::Num(x)));
+    }
+
+    fn measurement(&mut self, msg: &Measurement) -> Result<()> {
+        let t = self.header(&msg.header);
+        self.nums(&[msg.reward]);
+        self.nums(&msg.y[..self.n]);
+        self.nums(&msg.u_applied[..self.m]);
+        self.write(
+            self.measurement,
+            t,
+            self.t_measurement,
+            msg.header.seq,
+            &[msg.t_sample_ns, msg.t_publish_ns],
+        )
+    }
+
+    fn estimate(&mut self, msg: &Estimate) -> Result<()> {
+        let t = self.header(&msg.header);
+        self.nums(&[msg.reward]);
+        self.nums(&msg.x[..self.n]);
+        self.nums(&msg.u_applied[..self.m]);
+        self.write(
+            self.estimate,
+            t,
+            self.t_estimate,
+            msg.header.seq,
+            &[msg.t_sample_ns, msg.t_received_ns, msg.t_publish_ns],
+        )
+    }
+
+    fn action(&mut self, msg: &Action) -> Result<()> {
+        let t = self.header(&msg.header);
+        self.nums(&msg.u[..self.m]);
+        self.write(
+            self.action,
+            t,
+            self.t_action,
+            msg.header.seq,
+            &[msg.t_sample_ns, msg.t_received_ns, msg.t_publish_ns],
+        )
+    }
+}
+
+/// Checks that a topic's sequence numbers arrive without gaps.
+#[derive(Default)]
+struct Continuity {
+    next: u64,
+}
+
+impl Continuity {
+    fn check(&mut self, topic: &str, seq: u64) -> Result<()> {
+        if seq != self.next {
+            bail!(
+                "the recorder lost messages on {topic}: expected sample {}, got {seq}",
+                self.next
+            );
+        }
+        self.next = seq + 1;
+        Ok(())
+    }
+}
+
+/// The child processes; killed when dropped.
+struct Children(Vec<(&'static str, Child)>);
+
+impl Drop for Children {
+    fn drop(&mut self) {
+        for (_, c) in &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+fn log_tail(path: &Path) -> String {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let lines: Vec<&str> = text.lines().collect();
+    lines[lines.len().saturating_sub(5)..].join("\n")
+}
+
+/// Everything the supervision loop works on.
+struct Supervisor {
+    bus: Bus,
+    measurements: wire::Rx<Measurement>,
+    estimates: wire::Rx<Estimate>,
+    actions: wire::Rx<Action>,
+    recording: Recording,
+    returns: Returns,
+    children: Children,
+    out: PathBuf,
+    messages: u64,
+    continuity: [Continuity; 3],
+}
+
+impl Supervisor {
+    /// Records everything waiting; returns whether the run's end came by.
+    fn drain(&mut self, bar: &ProgressBar) -> Result<bool> {
+        let mut done = false;
+        if let Some(a) = self
+            .actions
+            .recv_timeout(Duration::from_millis(2))
+            .map_err(wire_err)?
+        {
+            done |= self.action(a)?;
+        }
+        while let Some(a) = self.actions.try_recv().map_err(wire_err)? {
+            done |= self.action(a)?;
+        }
+        while let Some(m) = self.measurements.try_recv().map_err(wire_err)? {
+            self.continuity[0].check(topic::MEASUREMENT, m.header.seq)?;
+            self.recording.measurement(&m)?;
+            self.messages += 1;
+            if m.header.flags & flags::END != 0 {
+                bar.inc(1);
+            }
+            self.returns.measurement(&m)?;
+        }
+        while let Some(e) = self.estimates.try_recv().map_err(wire_err)? {
+            self.continuity[1].check(topic::ESTIMATE, e.header.seq)?;
+            self.recording.estimate(&e)?;
+            self.messages += 1;
+        }
+        Ok(done)
+    }
+
+    fn action(&mut self, a: Action) -> Result<bool> {
+        self.continuity[2].check(topic::ACTION, a.header.seq)?;
+        self.recording.action(&a)?;
+        self.messages += 1;
+        Ok(a.header.flags & flags::SHUTDOWN != 0)
+    }
+
+    /// Fails if a process has exited (before the end of the run).
+    fn check_children(&mut self) -> Result<()> {
+        for (role, child) in &mut self.children.0 {
+            if let Some(status) = child.try_wait()? {
+                let log = self.out.join(format!("{role}.log"));
+                bail!(
+                    "the {role} process exited ({status}) before the run finished; last lines of {}:\n{}",
+                    log.display(),
+                    log_tail(&log)
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// Waits for every process to exit after the end of the run.
+    fn reap(&mut self) -> Result<()> {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        for (role, child) in &mut self.children.0 {
+            loop {
+                if let Some(status) = child.try_wait()? {
+                    if !status.success() {
+                        let log = self.out.join(format!("{role}.log"));
+                        bail!(
+                            "the {role} process failed ({status}); last lines of {}:\n{}",
+                            log.display(),
+                            log_tail(&log)
+                        );
+                    }
+                    break;
+                }
+                if Instant::now() > deadline {
+                    bail!("the {role} process did not exit after the end of the run");
+                }
+                std::thread::sleep(Duration::from_millis(5));
+            }
+        }
+        self.children.0.clear();
+        Ok(())
+    }
+
+    fn supervise(&mut self, bar: &ProgressBar) -> Result<()> {
+        while !self.drain(bar)? {
+            if self.bus.interrupted() {
+                bail!(
+                    "interrupted: stopped the plant, observer and agent processes; {} completed trials are in returns.csv",
+                    self.returns.records.len()
+                );
+            }
+            self.check_children()?;
+        }
+        self.reap()?;
+        self.returns.flush()
+    }
+}
+
+/// Runs experiment `cfg` (one run) as three processes and writes the outputs.
+pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
+    let mut cfg = cfg.clone();
+    cfg.run.runs = 1;
+    std::fs::create_dir_all(&opts.out)
+        .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
+    let config_path = opts.out.join("config.toml");
+    write_atomic(&config_path, &cfg.to_toml())?;
+    let run_id = opts
+        .run_id
+        .clone()
+        .unwrap_or_else(|| format!("{}-{}", std::process::id(), wire::now_ns() % 1_000_000_000));
+    let bus = Bus::join(&run_id, "rig").map_err(wire_err)?;
+    let measurements = bus
+        .rx::<Measurement>(topic::MEASUREMENT)
+        .map_err(wire_err)?;
+    let estimates = bus.rx::<Estimate>(topic::ESTIMATE).map_err(wire_err)?;
+    let actions = bus.rx::<Action>(topic::ACTION).map_err(wire_err)?;
+
+    let task = plant::Task::new(cfg.system);
+    let mut recording = Recording::create(
+        &opts.out.join("run.mcap"),
+        task.state_dim(),
+        task.action_dim(),
+    )?;
+    recording
+        .rec
+        .attach("config.toml", "application/toml", cfg.to_toml().as_bytes())?;
+    let meta: BTreeMap<String, String> = [
+        ("run_id", run_id.clone()),
+        ("seed", cfg.run.seed.to_string()),
+        ("system", cfg.system.to_string()),
+        ("algo", cfg.algo.to_string()),
+        ("approx", cfg.approx.to_string()),
+        ("timing", "lockstep".to_string()),
+        ("rig_version", env!("CARGO_PKG_VERSION").to_string()),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    recording.rec.metadata("run", &meta)?;
+
+    let returns_path = opts.out.join("returns.csv");
+    let mut out = BufWriter::new(
+        File::create(&returns_path)
+            .with_context(|| format!("cannot create {}", returns_path.display()))?,
+    );
+    writeln!(out, "{RUNS_HEADER}")?;
+    let returns = Returns {
+        out,
+        trial_seconds: task.trial_seconds,
+        pending: None,
+        greedy: 0.0,
+        records: Vec::new(),
+    };
+
+    let exe = std::env::current_exe().context("cannot find the rig executable")?;
+    let mut children = Children(Vec::new());
+    for role in ["agent", "observer", "plant"] {
+        let log = opts.out.join(format!("{role}.log"));
+        let log_file =
+            File::create(&log).with_context(|| format!("cannot create {}", log.display()))?;
+        let child = Command::new(&exe)
+            .arg(role)
+            .args(["--run-id", &run_id, "--receivers", "2", "--config"])
+            .arg(&config_path)
+            .stdin(Stdio::null())
+            .stdout(log_file.try_clone()?)
+            .stderr(log_file)
+            .spawn()
+            .with_context(|| format!("cannot start the {role} process"))?;
+        children.0.push((role, child));
+    }
+
+    let evals = if cfg.run.eval_every > 0 {
+        cfg.run.trials / cfg.run.eval_every
+    } else {
+        0
+    };
+    let bar = ProgressBar::with_draw_target(
+        Some(u64::from(cfg.run.trials + evals)),
+        if opts.progress {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        },
+    );
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} rig run [{bar:40}] {pos}/{len} trials, {per_sec}, eta {eta}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    let t0 = Instant::now();
+    let mut sup = Supervisor {
+        bus,
+        measurements,
+        estimates,
+        actions,
+        recording,
+        returns,
+        children,
+        out: opts.out.clone(),
+        messages: 0,
+        continuity: Default::default(),
+    };
+    let outcome = sup.supervise(&bar);
+    bar.finish_and_clear();
+    // Stop the processes first (on failure), then finish the recording either way, so
+    // that run.mcap is readable after any outcome.
+    drop(std::mem::replace(&mut sup.children, Children(Vec::new())));
+    let _ = sup.returns.flush();
+    let Supervisor {
+        recording,
+        returns,
+        messages,
+        ..
+    } = sup;
+    let finished = recording.rec.finish();
+    outcome?;
+    finished?;
+    Ok(RunSummary {
+        records: returns.records,
+        messages,
+        wall: t0.elapsed(),
+    })
+}

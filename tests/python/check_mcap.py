@@ -1,0 +1,433 @@
+#!/usr/bin/env python3
+"""Checks the recording of a `rig run`: python3 tests/python/check_mcap.py DIR
+
+Opens DIR/run.mcap with the official Python `mcap` package and checks that
+  1. the file is complete and intact: summary section present, every chunk CRC, the
+     data-section CRC, the summary CRC and every attachment CRC computed and valid;
+  2. every channel has message encoding `json` and a `jsonschema` schema that is a flat
+     object of `number`/`integer` properties with no `$ref` (so Foxglove plots it);
+  3. the attachment `config.toml` is present;
+  4. the per-trial returns recomputed from the `/plant/measurement` messages equal
+     DIR/returns.csv (`run,trial,sim_time_s,return,greedy_return`) exactly.
+
+Returns (check 4): a measurement message has fields `trial` (learning trial, from 1),
+`step` (0 = the trial's start state; the `reward` of step k >= 1 is r_k = rho(x_{k-1},
+u_{k-1})) and `flags` (bit 0 trial start, bit 1 trial end, bit 2 greedy evaluation trial,
+bit 3 shutdown). A trial's return is r_1 + r_2 + ... + r_N summed left to right from 0.0
+in Python floats, as the rig sums the same f64 values in the same order, so they are
+compared with `==` (NaN equals NaN; a `null` reward, the recorder's encoding of NaN/inf,
+reads as NaN). Messages without the greedy bit make the learning trial T's `return`;
+messages with it make the `greedy_return` of row T. Messages with the shutdown bit carry no
+step and are left out.
+
+Exit status 0 when every check passes, 1 with a message naming the first failure
+otherwise (2 for a usage error). The functions below can be imported and called one by
+one; each raises CheckError.
+
+Needs `pip install mcap` (written against mcap 1.6.0).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import struct
+import sys
+import zlib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from mcap.exceptions import McapError
+from mcap.reader import NonSeekingReader, make_reader
+from mcap.records import Chunk, DataEnd, Footer
+from mcap.stream_reader import CRCValidationError, StreamReader
+
+MEASUREMENT_TOPIC = "/plant/measurement"
+CONFIG_ATTACHMENT = "config.toml"
+RETURNS_HEADER = ["run", "trial", "sim_time_s", "return", "greedy_return"]
+
+FLAG_TRIAL_START = 1 << 0
+FLAG_TRIAL_END = 1 << 1
+FLAG_GREEDY = 1 << 2
+FLAG_SHUTDOWN = 1 << 3
+
+MAGIC_SIZE = 8
+# opcode (1) + record length (8) + summary_start (8) + summary_offset_start (8) + crc (4)
+FOOTER_RECORD_SIZE = 1 + 8 + 8 + 8 + 4
+
+
+class CheckError(Exception):
+    """A check failed; the message says which and why."""
+
+
+@dataclass
+class Recording:
+    """What the checks need from one MCAP file."""
+
+    channels: list = field(default_factory=list)  # mcap.records.Channel
+    schemas: dict = field(default_factory=dict)  # schema id -> mcap.records.Schema
+    attachment_names: list = field(default_factory=list)
+    metadata_names: list = field(default_factory=list)
+    message_count: int = 0
+    # Decoded JSON of every /plant/measurement message, in file order.
+    measurements: list = field(default_factory=list)
+
+
+# ---------------------------------------------------------------------------------------
+# 1. container integrity
+
+
+def count_streamable_messages(path: Path) -> tuple[int, str | None]:
+    """Messages a streaming reader gets out of `path` before it stops, and why it stopped
+    (None when it reached the end). Used to describe a truncated file."""
+    count = 0
+    try:
+        with open(path, "rb") as f:
+            for _ in NonSeekingReader(f).iter_messages(log_time_order=False):
+                count += 1
+    except Exception as e:  # noqa: BLE001 - any failure ends the stream
+        return count, f"{type(e).__name__}: {e}" if str(e) else type(e).__name__
+    return count, None
+
+
+def check_container(path: Path) -> None:
+    """Check 1, except the chunk CRCs that `read_recording` checks: a summary and footer
+    are present, the data-section CRC, the summary CRC and the attachment CRCs are
+    computed (non-zero) and match, and every chunk has a CRC."""
+    data = path.read_bytes()
+    if len(data) < 2 * MAGIC_SIZE + FOOTER_RECORD_SIZE:
+        raise CheckError(f"{path}: {len(data)} bytes is too short for an MCAP file")
+    # The footer, read by hand: the Python reader does not check the summary CRC.
+    footer_at = len(data) - MAGIC_SIZE - FOOTER_RECORD_SIZE
+    opcode, length, summary_start, summary_offset_start, summary_crc = struct.unpack_from(
+        "<BQQQI", data, footer_at
+    )
+    magic_ok = data[-MAGIC_SIZE:] == data[:MAGIC_SIZE] == b"\x89MCAP0\r\n"
+    if opcode != 0x02 or length != FOOTER_RECORD_SIZE - 9 or not magic_ok:
+        n, why = count_streamable_messages(path)
+        raise CheckError(
+            f"{path}: no footer at the end of the file (a run that did not finish?); "
+            f"a streaming reader gets {n} messages out of it"
+            + (f", then stops with {why}" if why else "")
+        )
+    if summary_start == 0:
+        raise CheckError(f"{path}: the file has no summary section")
+    if summary_crc == 0:
+        raise CheckError(f"{path}: the summary CRC was not computed")
+    actual = zlib.crc32(data[summary_start : len(data) - MAGIC_SIZE - 4])
+    if actual != summary_crc:
+        raise CheckError(f"{path}: summary CRC {actual:#010x}, footer says {summary_crc:#010x}")
+
+    # The whole data section, in order: the reader checks the data-section CRC at the
+    # DataEnd record (chunks are kept whole here; their CRCs are checked while reading
+    # the messages).
+    chunks = 0
+    data_end = None
+    footer = None
+    try:
+        with open(path, "rb") as f:
+            for record in StreamReader(f, emit_chunks=True, validate_crcs=True).records:
+                if isinstance(record, Chunk):
+                    chunks += 1
+                    if record.uncompressed_crc == 0:
+                        raise CheckError(f"{path}: chunk {chunks} has no CRC")
+                elif isinstance(record, DataEnd):
+                    data_end = record
+                elif isinstance(record, Footer):
+                    footer = record
+    except CRCValidationError as e:
+        raise CheckError(f"{path}: {e}") from e
+    except McapError as e:
+        raise CheckError(f"{path}: unreadable: {type(e).__name__}: {e}") from e
+    if data_end is None or footer is None:
+        raise CheckError(f"{path}: no DataEnd or Footer record")
+    if data_end.data_section_crc == 0:
+        raise CheckError(f"{path}: the data-section CRC was not computed")
+    if chunks == 0:
+        raise CheckError(f"{path}: no chunks")
+
+    # Attachment CRCs (the Python reader skips them): CRC32 of the record body from
+    # log_time through the data, stored in its last 4 bytes.
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    for index in summary.attachment_indexes:
+        record = data[index.offset : index.offset + index.length]
+        body = record[9:]
+        if len(body) < 4 or record[0] != 0x09:
+            raise CheckError(f"{path}: attachment index of {index.name!r} points at no attachment")
+        (stored,) = struct.unpack_from("<I", body, len(body) - 4)
+        if stored == 0:
+            raise CheckError(f"{path}: attachment {index.name!r} has no CRC")
+        if zlib.crc32(body[:-4]) != stored:
+            raise CheckError(f"{path}: attachment {index.name!r} fails its CRC")
+
+
+def read_recording(path: Path) -> Recording:
+    """Reads the summary, attachments, metadata and every message of `path` with chunk
+    CRC validation (check 1); decodes the measurement messages."""
+    rec = Recording()
+    try:
+        with open(path, "rb") as f:
+            reader = make_reader(f, validate_crcs=True)
+            summary = reader.get_summary()
+            if summary is None:
+                raise CheckError(f"{path}: the file has no summary section")
+            rec.channels = [summary.channels[k] for k in sorted(summary.channels)]
+            rec.schemas = dict(summary.schemas)
+            rec.attachment_names = [a.name for a in reader.iter_attachments()]
+            rec.metadata_names = [m.name for m in reader.iter_metadata()]
+            for _schema, channel, message in reader.iter_messages(log_time_order=False):
+                rec.message_count += 1
+                if channel.topic == MEASUREMENT_TOPIC:
+                    try:
+                        rec.measurements.append(json.loads(message.data))
+                    except ValueError as e:
+                        raise CheckError(
+                            f"{path}: {MEASUREMENT_TOPIC} message {message.sequence} "
+                            f"is not JSON: {e}"
+                        ) from e
+    except CRCValidationError as e:
+        raise CheckError(f"{path}: {e}") from e
+    except McapError as e:
+        raise CheckError(f"{path}: unreadable: {type(e).__name__}: {e}") from e
+    stats = summary.statistics
+    if stats is not None and stats.message_count != rec.message_count:
+        raise CheckError(
+            f"{path}: read {rec.message_count} messages, "
+            f"the statistics record says {stats.message_count}"
+        )
+    return rec
+
+
+# ---------------------------------------------------------------------------------------
+# 2. schemas and encodings
+
+
+def find_refs(node, where="") -> list[str]:
+    """JSON paths of every `$ref` key inside `node`."""
+    found = []
+    if isinstance(node, dict):
+        for k, v in node.items():
+            if k == "$ref":
+                found.append(where or "/")
+            found.extend(find_refs(v, f"{where}/{k}"))
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            found.extend(find_refs(v, f"{where}/{i}"))
+    return found
+
+
+def check_schema_data(name: str, data: bytes) -> None:
+    """A channel schema is a JSON object schema of flat `number`/`integer` properties,
+    with no `$ref`."""
+    try:
+        schema = json.loads(data)
+    except ValueError as e:
+        raise CheckError(f"schema {name!r} is not JSON: {e}") from e
+    refs = find_refs(schema)
+    if refs:
+        raise CheckError(f"schema {name!r} uses $ref at {', '.join(refs)}")
+    if not isinstance(schema, dict) or schema.get("type") != "object":
+        raise CheckError(f"schema {name!r} is not an object schema")
+    props = schema.get("properties")
+    if not isinstance(props, dict) or not props:
+        raise CheckError(f"schema {name!r} has no properties")
+    for prop, spec in props.items():
+        kind = spec.get("type") if isinstance(spec, dict) else None
+        if kind not in ("number", "integer"):
+            raise CheckError(
+                f"schema {name!r}: property {prop!r} has type {kind!r}, "
+                "not number or integer"
+            )
+        nested = {"properties", "items", "oneOf", "anyOf", "allOf"} & set(spec)
+        if nested:
+            raise CheckError(f"schema {name!r}: property {prop!r} is not flat ({sorted(nested)})")
+
+
+def check_channels(rec: Recording) -> None:
+    """Check 2 for every channel; the measurement topic must be among them."""
+    if not rec.channels:
+        raise CheckError("the recording has no channels")
+    for ch in rec.channels:
+        if ch.message_encoding != "json":
+            raise CheckError(
+                f"channel {ch.topic}: message encoding {ch.message_encoding!r}, not 'json'"
+            )
+        schema = rec.schemas.get(ch.schema_id)
+        if schema is None:
+            raise CheckError(f"channel {ch.topic}: no schema")
+        if schema.encoding != "jsonschema":
+            raise CheckError(
+                f"channel {ch.topic}: schema encoding {schema.encoding!r}, not 'jsonschema'"
+            )
+        check_schema_data(schema.name, schema.data)
+    if MEASUREMENT_TOPIC not in {ch.topic for ch in rec.channels}:
+        raise CheckError(f"no channel {MEASUREMENT_TOPIC}")
+
+
+# ---------------------------------------------------------------------------------------
+# 3. attachment
+
+
+def check_attachment(rec: Recording) -> None:
+    """Check 3: the resolved configuration is attached."""
+    if CONFIG_ATTACHMENT not in rec.attachment_names:
+        raise CheckError(
+            f"no attachment {CONFIG_ATTACHMENT!r} (attachments: {rec.attachment_names})"
+        )
+
+
+# ---------------------------------------------------------------------------------------
+# 4. returns
+
+
+def as_float(v) -> float:
+    """A JSON number as a float; `null` (the recorder's NaN/inf) as NaN."""
+    return math.nan if v is None else float(v)
+
+
+def same(a: float, b: float) -> bool:
+    """Exact equality, NaN equal to NaN."""
+    return a == b or (math.isnan(a) and math.isnan(b))
+
+
+def trial_returns(measurements: list) -> tuple[dict[int, float], dict[int, float]]:
+    """(learning returns, greedy returns) by trial number, from decoded measurement
+    messages: r_1 + ... + r_N of each trial, summed in step order from 0.0."""
+    trials: dict[tuple[int, bool], dict[int, float]] = {}
+    for m in measurements:
+        try:
+            trial, step, flags = int(m["trial"]), int(m["step"]), int(m["flags"])
+            reward = as_float(m["reward"])
+        except (KeyError, TypeError, ValueError) as e:
+            raise CheckError(f"{MEASUREMENT_TOPIC} message {m}: bad or missing field: {e}") from e
+        if flags & FLAG_SHUTDOWN:
+            continue
+        steps = trials.setdefault((trial, bool(flags & FLAG_GREEDY)), {})
+        if step in steps:
+            raise CheckError(f"{MEASUREMENT_TOPIC}: trial {trial} has step {step} twice")
+        steps[step] = reward
+    learning: dict[int, float] = {}
+    greedy: dict[int, float] = {}
+    for (trial, is_greedy), steps in sorted(trials.items()):
+        kind = "greedy trial" if is_greedy else "trial"
+        n = max(steps)
+        if sorted(steps) != list(range(n + 1)) or n < 1:
+            raise CheckError(
+                f"{MEASUREMENT_TOPIC}: {kind} {trial} has steps {sorted(steps)}, not 0..N"
+            )
+        total = 0.0
+        for k in range(1, n + 1):
+            total += steps[k]
+        (greedy if is_greedy else learning)[trial] = total
+    return learning, greedy
+
+
+def read_returns_csv(path: Path) -> dict[int, tuple[float, float | None]]:
+    """returns.csv as trial -> (return, greedy_return or None when blank)."""
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.reader(f))
+    except OSError as e:
+        raise CheckError(f"cannot read {path}: {e}") from e
+    if not rows or rows[0] != RETURNS_HEADER:
+        raise CheckError(f"{path}: header {rows[:1]}, expected {RETURNS_HEADER}")
+    out: dict[int, tuple[float, float | None]] = {}
+    runs = set()
+    for line, row in enumerate(rows[1:], start=2):
+        if len(row) != len(RETURNS_HEADER):
+            raise CheckError(f"{path}:{line}: {len(row)} columns, expected {len(RETURNS_HEADER)}")
+        run, trial, _t, ret, greedy = row
+        runs.add(run)
+        try:
+            trial_no = int(trial)
+            value = (float(ret), float(greedy) if greedy != "" else None)
+        except ValueError as e:
+            raise CheckError(f"{path}:{line}: {e}") from e
+        if trial_no in out:
+            raise CheckError(f"{path}:{line}: trial {trial_no} appears twice")
+        out[trial_no] = value
+    if len(runs) > 1:
+        raise CheckError(f"{path}: rows of several runs {sorted(runs)}; one rig run has one")
+    return out
+
+
+def compare_returns(
+    learning: dict[int, float], greedy: dict[int, float], csv_rows: dict, csv_name="returns.csv"
+) -> None:
+    """Check 4: the same trials on both sides and exactly equal returns; the message
+    names the first mismatch in trial order."""
+    if not learning:
+        raise CheckError(f"no learning trials in {MEASUREMENT_TOPIC}")
+    for trial in sorted(set(learning) | set(csv_rows) | set(greedy)):
+        if trial not in csv_rows:
+            raise CheckError(f"trial {trial} is in {MEASUREMENT_TOPIC} but not in {csv_name}")
+        ret, greedy_ret = csv_rows[trial]
+        if trial not in learning:
+            raise CheckError(f"trial {trial} is in {csv_name} but not in {MEASUREMENT_TOPIC}")
+        if not same(learning[trial], ret):
+            raise CheckError(
+                f"trial {trial}: return from {MEASUREMENT_TOPIC} is {learning[trial]!r}, "
+                f"{csv_name} says {ret!r}"
+            )
+        if (trial in greedy) != (greedy_ret is not None):
+            have = "has" if trial in greedy else "has no"
+            blank = "a" if greedy_ret is not None else "a blank"
+            raise CheckError(
+                f"trial {trial}: {MEASUREMENT_TOPIC} {have} greedy trial but {csv_name} "
+                f"has {blank} greedy_return"
+            )
+        if greedy_ret is not None and not same(greedy[trial], greedy_ret):
+            raise CheckError(
+                f"trial {trial}: greedy return from {MEASUREMENT_TOPIC} is "
+                f"{greedy[trial]!r}, {csv_name} says {greedy_ret!r}"
+            )
+
+
+# ---------------------------------------------------------------------------------------
+
+
+def check_run(run_dir: Path, log=print) -> None:
+    """Every check on the run directory `run_dir`; raises CheckError at the first failure
+    and calls `log` with a line per check passed."""
+    path = run_dir / "run.mcap"
+    if not path.is_file():
+        part = path.with_name(path.name + ".part")
+        hint = f" ({part.name} exists: the run did not finish)" if part.exists() else ""
+        raise CheckError(f"{path} does not exist{hint}")
+    check_container(path)
+    rec = read_recording(path)
+    log(
+        f"ok: {path}: summary present, chunk/data/summary/attachment CRCs valid, "
+        f"{rec.message_count} messages on {len(rec.channels)} channels"
+    )
+    check_channels(rec)
+    log("ok: every channel is json with a flat numeric jsonschema schema, no $ref")
+    check_attachment(rec)
+    log(f"ok: attachment {CONFIG_ATTACHMENT} present")
+    learning, greedy = trial_returns(rec.measurements)
+    csv_path = run_dir / "returns.csv"
+    compare_returns(learning, greedy, read_returns_csv(csv_path), csv_path.name)
+    log(
+        f"ok: returns of {len(learning)} trials and {len(greedy)} greedy trials "
+        f"from {MEASUREMENT_TOPIC} equal {csv_path.name} exactly"
+    )
+
+
+def main(argv: list[str]) -> int:
+    if len(argv) != 2:
+        print(f"usage: {argv[0]} DIR  (a rig run directory with run.mcap and returns.csv)",
+              file=sys.stderr)
+        return 2
+    try:
+        check_run(Path(argv[1]))
+    except CheckError as e:
+        print(f"check_mcap: FAIL: {e}", file=sys.stderr)
+        return 1
+    print("check_mcap: all checks passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

@@ -1,0 +1,398 @@
+//! The wire contract between plant, observer and agent processes, and the transport
+//! over iceoryx2 0.10 zero-copy shared memory.
+//!
+//! ```text
+//! plant ──Measurement──► observer ──Estimate──► agent ──Action──► plant
+//!           (rig/<run>/measurement)   (rig/<run>/estimate)   (rig/<run>/action)
+//! ```
+//!
+//! Every payload is `#[repr(C)]`, made of `u64`, `f64` and fixed-size arrays of them,
+//! sized for the largest system ([`MAX_X`] state and [`MAX_U`] action components), with a
+//! versioned `#[type_name]` — iceoryx2 checks only name, size and alignment, so a layout
+//! change must change the name. Each publish-subscribe service has an event service of
+//! the same name: receivers block on it instead of spinning. Service names live under
+//! `rig/<run id>/`, so runs on one host never see each other.
+//!
+//! Timestamps are `CLOCK_MONOTONIC` nanoseconds ([`now_ns`]), shared by all processes on
+//! one host.
+
+use std::time::Duration;
+
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+
+/// State components a message can carry.
+pub const MAX_X: usize = 8;
+/// Action components a message can carry.
+pub const MAX_U: usize = 4;
+
+/// Bits of the `flags` field.
+pub mod flags {
+    /// The sample is a trial's start state `x_0` (no reward yet).
+    pub const START: u64 = 1;
+    /// The sample is a trial's last; the agent learns but its action is not applied.
+    pub const END: u64 = 2;
+    /// The trial is a greedy evaluation: no exploration, no learning.
+    pub const GREEDY: u64 = 4;
+    /// The run is over: forward and exit.
+    pub const SHUTDOWN: u64 = 8;
+}
+
+/// Header fields shared by all messages.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("rig.Header.v1")]
+pub struct Header {
+    /// Sample counter over the whole run (one per plant sample).
+    pub seq: u64,
+    /// Learning trial number, 1-based; a greedy trial carries the number of the learning
+    /// trial after which it runs.
+    pub trial: u64,
+    /// Sample index within the trial; 0 is the start state.
+    pub step: u64,
+    /// [`flags`] bits.
+    pub flags: u64,
+    /// Simulated time since the start of the run \[s\] (learning trials only advance it).
+    pub t_sim: f64,
+}
+
+/// Plant → observer: what the sensor measured at sample `step`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("rig.Measurement.v1")]
+pub struct Measurement {
+    /// Sample identification.
+    pub header: Header,
+    /// Used components of `y` and `u_applied`.
+    pub n_x: u64,
+    /// Used components of `u_applied`.
+    pub n_u: u64,
+    /// `r_k = ρ(x_{k−1}, u_{k−1})`, the reward of the transition into this sample (0 at a
+    /// trial start).
+    pub reward: f64,
+    /// The measurement `y_k` (the full state with full-state sensing).
+    pub y: [f64; MAX_X],
+    /// The action the plant applied over the interval before this sample.
+    pub u_applied: [f64; MAX_U],
+    /// Monotonic time at which the plant sampled \[ns\].
+    pub t_sample_ns: u64,
+    /// Monotonic time at which the plant published \[ns\].
+    pub t_publish_ns: u64,
+}
+
+/// Observer → agent: the state estimate `x̂_k`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("rig.Estimate.v1")]
+pub struct Estimate {
+    /// Copied from the measurement.
+    pub header: Header,
+    /// Used components of `x` and `u_applied`.
+    pub n_x: u64,
+    /// Used components of `u_applied`.
+    pub n_u: u64,
+    /// Copied from the measurement.
+    pub reward: f64,
+    /// The estimate `x̂_k`.
+    pub x: [f64; MAX_X],
+    /// Copied from the measurement.
+    pub u_applied: [f64; MAX_U],
+    /// The plant's sample time \[ns\].
+    pub t_sample_ns: u64,
+    /// Monotonic time at which the observer received the measurement \[ns\].
+    pub t_received_ns: u64,
+    /// Monotonic time at which the observer published \[ns\].
+    pub t_publish_ns: u64,
+}
+
+/// Agent → plant: the action for the next interval.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("rig.Action.v1")]
+pub struct Action {
+    /// Copied from the estimate it answers.
+    pub header: Header,
+    /// Used components of `u`.
+    pub n_u: u64,
+    /// The action `u_k` (the plant saturates it).
+    pub u: [f64; MAX_U],
+    /// The plant's sample time \[ns\].
+    pub t_sample_ns: u64,
+    /// Monotonic time at which the agent received the estimate \[ns\].
+    pub t_received_ns: u64,
+    /// Monotonic time at which the agent published \[ns\].
+    pub t_publish_ns: u64,
+}
+
+/// Topics, relative to a run.
+pub mod topic {
+    /// Plant → observer.
+    pub const MEASUREMENT: &str = "measurement";
+    /// Observer → agent.
+    pub const ESTIMATE: &str = "estimate";
+    /// Agent → plant.
+    pub const ACTION: &str = "action";
+}
+
+/// Subscriber buffer of every service: the recorder may lag this many samples behind.
+pub const BUFFER: usize = 4096;
+
+/// `CLOCK_MONOTONIC` now, in nanoseconds.
+pub fn now_ns() -> u64 {
+    let mut ts = libc_timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime writes a timespec; CLOCK_MONOTONIC = 1 on Linux.
+    unsafe { clock_gettime(1, &mut ts) };
+    ts.tv_sec as u64 * 1_000_000_000 + ts.tv_nsec as u64
+}
+
+#[repr(C)]
+struct libc_timespec {
+    tv_sec: i64,
+    tv_nsec: i64,
+}
+
+unsafe extern "C" {
+    fn clock_gettime(clock: i32, ts: *mut libc_timespec) -> i32;
+}
+
+/// Errors of the transport.
+pub type Error = Box<dyn std::error::Error + Send + Sync>;
+
+/// One process's connection to a run.
+pub struct Bus {
+    node: Node<ipc::Service>,
+    run_id: String,
+}
+
+/// Sends messages of type `T` on a topic and wakes its receivers.
+pub struct Tx<T: std::fmt::Debug + ZeroCopySend + 'static> {
+    publisher: Publisher<ipc::Service, T, ()>,
+    notifier: Notifier<ipc::Service>,
+    service: iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>,
+}
+
+/// Receives messages of type `T` from a topic.
+pub struct Rx<T: std::fmt::Debug + ZeroCopySend + 'static> {
+    subscriber: Subscriber<ipc::Service, T, ()>,
+    listener: Listener<ipc::Service>,
+}
+
+impl Bus {
+    /// Joins run `run_id` as process `name`. Stale resources of dead processes are
+    /// cleaned up on the way (iceoryx2's default configuration).
+    pub fn join(run_id: &str, name: &str) -> Result<Self, Error> {
+        if run_id.is_empty()
+            || !run_id
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+        {
+            return Err(format!("run id {run_id:?}: use letters, digits, '-' and '_' only").into());
+        }
+        set_log_level_from_env_or(LogLevel::Error);
+        let config = iceoryx2::config::Config::default();
+        let node = NodeBuilder::new()
+            .name(&NodeName::new(&format!("rig-{run_id}-{name}"))?)
+            .config(&config)
+            .create::<ipc::Service>()?;
+        Ok(Self {
+            node,
+            run_id: run_id.to_string(),
+        })
+    }
+
+    fn service_name(&self, topic: &str) -> Result<ServiceName, Error> {
+        Ok(ServiceName::new(&format!("rig/{}/{topic}", self.run_id))?)
+    }
+
+    fn pubsub<T: std::fmt::Debug + ZeroCopySend + 'static>(
+        &self,
+        topic: &str,
+    ) -> Result<
+        iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>,
+        Error,
+    > {
+        Ok(self
+            .node
+            .service_builder(&self.service_name(topic)?)
+            .publish_subscribe::<T>()
+            .max_publishers(1)
+            .max_subscribers(4)
+            .subscriber_max_buffer_size(BUFFER)
+            .enable_safe_overflow(true)
+            .open_or_create()
+            .map_err(|e| {
+                format!(
+                    "service rig/{}/{topic}: {e:?} (a peer with an incompatible message layout?)",
+                    self.run_id
+                )
+            })?)
+    }
+
+    fn event(
+        &self,
+        topic: &str,
+    ) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, Error> {
+        Ok(self
+            .node
+            .service_builder(&self.service_name(topic)?)
+            .event()
+            .open_or_create()?)
+    }
+
+    /// A sender on `topic`.
+    pub fn tx<T: std::fmt::Debug + ZeroCopySend + 'static>(
+        &self,
+        topic: &str,
+    ) -> Result<Tx<T>, Error> {
+        let service = self.pubsub::<T>(topic)?;
+        let publisher = service.publisher_builder().max_loaned_samples(2).create().map_err(|e| {
+            format!("publisher on rig/{}/{topic}: {e:?} (is another process of the same run id publishing?)", self.run_id)
+        })?;
+        let notifier = self.event(topic)?.notifier_builder().create()?;
+        Ok(Tx {
+            publisher,
+            notifier,
+            service,
+        })
+    }
+
+    /// A receiver on `topic`.
+    pub fn rx<T: std::fmt::Debug + ZeroCopySend + 'static>(
+        &self,
+        topic: &str,
+    ) -> Result<Rx<T>, Error> {
+        let service = self.pubsub::<T>(topic)?;
+        let subscriber = service.subscriber_builder().create()?;
+        let listener = self.event(topic)?.listener_builder().create()?;
+        Ok(Rx {
+            subscriber,
+            listener,
+        })
+    }
+
+    /// Whether Ctrl-C or a termination request arrived.
+    pub fn interrupted(&self) -> bool {
+        self.node.wait(Duration::ZERO).is_err()
+    }
+}
+
+impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Tx<T> {
+    /// Publishes `msg` and wakes the receivers.
+    pub fn send(&self, msg: T) -> Result<(), Error> {
+        self.publisher.loan_uninit()?.write_payload(msg).send()?;
+        self.notifier.notify()?;
+        Ok(())
+    }
+
+    /// Receivers currently connected.
+    pub fn receivers(&self) -> usize {
+        self.service.dynamic_config().number_of_subscribers()
+    }
+
+    /// Waits until at least `n` receivers are connected (all peers started), for at most
+    /// `timeout`.
+    pub fn wait_for_receivers(&self, n: usize, timeout: Duration, bus: &Bus) -> Result<(), Error> {
+        let t0 = std::time::Instant::now();
+        while self.receivers() < n {
+            if bus.interrupted() {
+                return Err("interrupted".into());
+            }
+            if t0.elapsed() > timeout {
+                return Err(format!(
+                    "only {} of {n} receivers connected after {timeout:?}",
+                    self.receivers()
+                )
+                .into());
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        Ok(())
+    }
+}
+
+impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
+    /// The next message, if one is waiting.
+    pub fn try_recv(&self) -> Result<Option<T>, Error> {
+        Ok(self.subscriber.receive()?.map(|s| *s))
+    }
+
+    /// The next message, waiting for at most `timeout` (`None` if none came).
+    pub fn recv_timeout(&self, timeout: Duration) -> Result<Option<T>, Error> {
+        if let Some(m) = self.try_recv()? {
+            return Ok(Some(m));
+        }
+        self.listener.timed_wait(|_| {}, timeout)?;
+        self.try_recv()
+    }
+
+    /// The next message, waiting as long as it takes; errors on Ctrl-C, or when no
+    /// message arrives for `silence` (a peer died).
+    pub fn recv(&self, bus: &Bus, silence: Duration) -> Result<T, Error> {
+        let t0 = std::time::Instant::now();
+        loop {
+            if let Some(m) = self.recv_timeout(Duration::from_millis(100))? {
+                return Ok(m);
+            }
+            if bus.interrupted() {
+                return Err("interrupted".into());
+            }
+            if t0.elapsed() > silence {
+                return Err(format!("no message for {silence:?}: a peer process stopped").into());
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layouts_are_fixed() {
+        // Changing a layout must change the type name's version: these sizes pin them.
+        assert_eq!(std::mem::size_of::<Header>(), 40);
+        assert_eq!(
+            std::mem::size_of::<Measurement>(),
+            40 + 3 * 8 + 8 * 8 + 4 * 8 + 16
+        );
+        assert_eq!(
+            std::mem::size_of::<Estimate>(),
+            40 + 3 * 8 + 8 * 8 + 4 * 8 + 24
+        );
+        assert_eq!(std::mem::size_of::<Action>(), 40 + 8 + 4 * 8 + 24);
+        assert_eq!(std::mem::align_of::<Measurement>(), 8);
+    }
+
+    #[test]
+    fn monotonic_clock_advances() {
+        let a = now_ns();
+        std::thread::sleep(Duration::from_millis(2));
+        assert!(now_ns() >= a + 1_000_000);
+    }
+
+    #[test]
+    fn round_trip_in_one_process() {
+        let run = format!("wiretest{}", std::process::id());
+        let bus = Bus::join(&run, "test").unwrap();
+        let rx = bus.rx::<Measurement>(topic::MEASUREMENT).unwrap();
+        let tx = bus.tx::<Measurement>(topic::MEASUREMENT).unwrap();
+        assert_eq!(tx.receivers(), 1);
+        let mut m = Measurement {
+            n_x: 2,
+            reward: -1.5,
+            ..Default::default()
+        };
+        m.header.seq = 7;
+        m.y[1] = 3.25;
+        tx.send(m).unwrap();
+        assert_eq!(rx.recv(&bus, Duration::from_secs(2)).unwrap(), m);
+        assert!(rx.try_recv().unwrap().is_none());
+        assert!(Bus::join("bad id/..", "x").is_err());
+    }
+}
