@@ -83,7 +83,8 @@ pub struct RunConfig {
     pub runs: u32,
     /// Seed from which every random stream of every run is derived.
     pub seed: u64,
-    /// A greedy evaluation trial after every this many trials (0: none).
+    /// A greedy evaluation trial after every this many trials (0, or more than `trials`:
+    /// none).
     pub eval_every: u32,
 }
 
@@ -252,12 +253,7 @@ impl ExperimentConfig {
         let (n, m) = (task.state_dim(), task.action_dim());
         check_i("run.trials", self.run.trials.into(), 1, 10_000_000)?;
         check_i("run.runs", self.run.runs.into(), 1, 100_000)?;
-        check_i(
-            "run.eval_every",
-            self.run.eval_every.into(),
-            0,
-            self.run.trials.into(),
-        )?;
+        check_i("run.eval_every", self.run.eval_every.into(), 0, 10_000_000)?;
         let l = &self.learning;
         check_f("learning.gamma", l.gamma, 0.0, 1.0, true)?;
         check_f("learning.lambda", l.lambda, 0.0, 1.0, false)?;

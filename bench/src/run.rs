@@ -489,11 +489,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         children.0.push((role, child));
     }
 
-    let evals = if cfg.run.eval_every > 0 {
-        cfg.run.trials / cfg.run.eval_every
-    } else {
-        0
-    };
+    let evals = cfg.run.trials.checked_div(cfg.run.eval_every).unwrap_or(0);
     let bar = ProgressBar::with_draw_target(
         Some(u64::from(cfg.run.trials + evals)),
         if opts.progress {

@@ -1,0 +1,231 @@
+//! `rig run` with real processes: plant, observer and agent over iceoryx2.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+fn rig() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rig"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rig-run-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn ok(out: Output) -> Output {
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Messages per topic: (log time, data) in order.
+fn messages(mcap_path: &Path) -> BTreeMap<String, Vec<(u64, Vec<u8>)>> {
+    let bytes = std::fs::read(mcap_path).unwrap();
+    let mut out: BTreeMap<String, Vec<(u64, Vec<u8>)>> = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        out.entry(m.channel.topic.clone())
+            .or_default()
+            .push((m.log_time, m.data.to_vec()));
+    }
+    out
+}
+
+#[test]
+fn three_processes_reproduce_the_in_process_run_byte_for_byte() {
+    let dir = tmp("ident");
+    for (algo, approx) in [("mlac", "llr"), ("sac", "rbf")] {
+        let args = [
+            "--algo",
+            algo,
+            "--approx",
+            approx,
+            "--trials",
+            "25",
+            "--eval-every",
+            "5",
+            "--seed",
+            "3",
+            "--quiet",
+            "--out",
+        ];
+        ok(rig()
+            .args(["learn", "--runs", "1"])
+            .args(args)
+            .arg(dir.join(format!("learn-{algo}")))
+            .output()
+            .unwrap());
+        ok(rig()
+            .arg("run")
+            .args(args)
+            .arg(dir.join(format!("run-{algo}")))
+            .output()
+            .unwrap());
+        let learned = std::fs::read_to_string(dir.join(format!("learn-{algo}/runs.csv"))).unwrap();
+        let ran = std::fs::read_to_string(dir.join(format!("run-{algo}/returns.csv"))).unwrap();
+        assert_eq!(learned, ran, "{algo}/{approx}");
+        assert_eq!(ran.lines().count(), 26);
+    }
+}
+
+#[test]
+fn a_second_run_records_the_same_messages_except_timing() {
+    let dir = tmp("rerun");
+    let args = ["--trials", "6", "--eval-every", "3", "--quiet", "--out"];
+    ok(rig()
+        .arg("run")
+        .args(args)
+        .arg(dir.join("a"))
+        .output()
+        .unwrap());
+    ok(rig()
+        .arg("run")
+        .args(args)
+        .arg(dir.join("b"))
+        .output()
+        .unwrap());
+    let (a, b) = (
+        messages(&dir.join("a/run.mcap")),
+        messages(&dir.join("b/run.mcap")),
+    );
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+    let mut compared = 0;
+    for (topic, msgs) in &a {
+        if topic.starts_with("/timing") {
+            assert_eq!(msgs.len(), b[topic].len(), "{topic}");
+            continue;
+        }
+        assert_eq!(
+            msgs, &b[topic],
+            "{topic} differs between two identical runs"
+        );
+        compared += msgs.len();
+    }
+    // 6 learning + 2 greedy trials of 101 samples, plus the shutdown, on three topics.
+    assert_eq!(compared, 3 * (8 * 101 + 1));
+    assert_ne!(
+        a["/timing/plant/measurement"], b["/timing/plant/measurement"],
+        "wall-clock stamps differ"
+    );
+}
+
+#[test]
+fn two_runs_at_once_do_not_see_each_other() {
+    let dir = tmp("parallel");
+    let spawn = |seed: &str, name: &str| {
+        rig()
+            .args([
+                "run",
+                "--trials",
+                "20",
+                "--eval-every",
+                "10",
+                "--quiet",
+                "--seed",
+                seed,
+                "--out",
+            ])
+            .arg(dir.join(name))
+            .spawn()
+            .unwrap()
+    };
+    let (mut a, mut b) = (spawn("1", "a"), spawn("2", "b"));
+    assert!(a.wait().unwrap().success() && b.wait().unwrap().success());
+    for (seed, name) in [("1", "a"), ("2", "b")] {
+        ok(rig()
+            .args([
+                "learn",
+                "--runs",
+                "1",
+                "--trials",
+                "20",
+                "--eval-every",
+                "10",
+                "--quiet",
+                "--seed",
+                seed,
+                "--out",
+            ])
+            .arg(dir.join(format!("learn-{name}")))
+            .output()
+            .unwrap());
+        let want = std::fs::read_to_string(dir.join(format!("learn-{name}/runs.csv"))).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(dir.join(format!("{name}/returns.csv"))).unwrap(),
+            want,
+            "run {name}"
+        );
+    }
+}
+
+fn children_of(pid: u32) -> Vec<u32> {
+    let out = Command::new("pgrep")
+        .args(["-P", &pid.to_string()])
+        .output()
+        .unwrap();
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| l.trim().parse().ok())
+        .collect()
+}
+
+#[test]
+fn after_kill_9_of_all_three_processes_the_next_run_just_works() {
+    let dir = tmp("kill");
+    let mut sup = rig()
+        .args(["run", "--trials", "400", "--quiet", "--out"])
+        .arg(dir.join("killed"))
+        .spawn()
+        .unwrap();
+    // Wait until learning is under way.
+    let t0 = Instant::now();
+    loop {
+        let rows = std::fs::read_to_string(dir.join("killed/returns.csv"))
+            .unwrap_or_default()
+            .lines()
+            .count();
+        if rows > 3 {
+            break;
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(30),
+            "the run did not start"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let kids = children_of(sup.id());
+    assert_eq!(kids.len(), 3, "plant, observer and agent");
+    for pid in &kids {
+        Command::new("kill")
+            .args(["-9", &pid.to_string()])
+            .status()
+            .unwrap();
+    }
+    let status = sup.wait().unwrap();
+    assert!(
+        !status.success(),
+        "rig run must fail when its processes die"
+    );
+    // The recording was finished: the official reader's crate reads it.
+    assert!(!messages(&dir.join("killed/run.mcap")).is_empty());
+    // And the next run starts and finishes without manual cleanup.
+    ok(rig()
+        .args(["run", "--trials", "5", "--quiet", "--out"])
+        .arg(dir.join("next"))
+        .output()
+        .unwrap());
+    assert_eq!(
+        std::fs::read_to_string(dir.join("next/returns.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        6
+    );
+}
