@@ -4,6 +4,7 @@
 
 pub mod experiment;
 pub mod learn;
+pub mod loop_bench;
 pub mod process;
 pub mod record;
 pub mod report;

@@ -31,12 +31,32 @@ enum Command {
     /// Print the resolved configuration (preset ← --config file ← flags) as TOML, to
     /// start a configuration file from.
     Config(Selection),
+    /// Measure the three-process lockstep loop (trivial agent, no recorder) next to a
+    /// raw iceoryx2 ping-pong between two processes, in the same run; writes loop.csv.
+    BenchLoop(BenchLoopArgs),
+    /// The echo side of `rig bench-loop`'s raw ping-pong.
+    #[command(hide = true)]
+    Pong {
+        /// Run id of the ping-pong.
+        #[arg(long)]
+        run_id: String,
+    },
     /// The plant process of a run (started by `rig run`, or by hand).
     Plant(ProcessArgs),
     /// The observer process of a run (started by `rig run`, or by hand).
     Observer(ProcessArgs),
     /// The agent process of a run (started by `rig run`, or by hand).
     Agent(ProcessArgs),
+}
+
+#[derive(Args)]
+struct BenchLoopArgs {
+    /// Samples to time in each measurement (after 1000 / one trial of warm-up).
+    #[arg(long, default_value_t = 20_000)]
+    samples: usize,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "out/bench-loop")]
+    out: PathBuf,
 }
 
 #[derive(Args)]
@@ -158,6 +178,37 @@ fn main() -> ExitCode {
         }
     };
     match cli.command {
+        Command::Pong { run_id } => match rig::loop_bench::pong(&run_id) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::FAILURE
+            }
+        },
+        Command::BenchLoop(args) => match rig::loop_bench::bench_loop(&args.out, args.samples) {
+            Ok(r) => {
+                let (s, w) = (&r.step, &r.raw_rtt);
+                println!(
+                    "raw iceoryx2 round trip (2 hops): p50 {:.1} µs  p90 {:.1}  p99 {:.1}  p99.9 {:.1}  max {:.1}  (n = {})",
+                    w.p50, w.p90, w.p99, w.p999, w.max, w.n
+                );
+                println!(
+                    "lockstep step (3 hops + work):   p50 {:.1} µs  p90 {:.1}  p99 {:.1}  p99.9 {:.1}  max {:.1}  (n = {})",
+                    s.p50, s.p90, s.p99, s.p999, s.max, s.n
+                );
+                println!(
+                    "step / three raw one-way hops (medians): {:.2} (target ≤ 1.5); {:.0} lockstep steps/s",
+                    r.ratio(),
+                    1e6 / s.p50
+                );
+                println!("wrote {}/loop.csv", args.out.display());
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::FAILURE
+            }
+        },
         Command::Plant(args) => process(rig::process::plant::run, &args),
         Command::Observer(args) => process(rig::process::observer::run, &args),
         Command::Agent(args) => process(rig::process::agent::run, &args),

@@ -229,3 +229,27 @@ fn after_kill_9_of_all_three_processes_the_next_run_just_works() {
         6
     );
 }
+
+#[test]
+fn bench_loop_measures_both_loops() {
+    let dir = tmp("bench-loop");
+    let out = ok(rig()
+        .args(["bench-loop", "--samples", "1500", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("raw iceoryx2 round trip") && text.contains("lockstep step"),
+        "{text}"
+    );
+    let csv = std::fs::read_to_string(dir.join("loop.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert_eq!(rows[0], "measurement,n,p50_us,p90_us,p99_us,p999_us,max_us");
+    assert!(
+        rows[1].starts_with("raw_round_trip,1500,") && rows[2].starts_with("lockstep_step,"),
+        "{csv}"
+    );
+    let p50: f64 = rows[2].split(',').nth(2).unwrap().parse().unwrap();
+    assert!(p50 > 0.0 && p50.is_finite());
+}

@@ -29,7 +29,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         let f = e.header.flags;
         let x = &e.x[..e.n_x as usize];
         let mut u = vec![0.0; m];
-        if f & flags::SHUTDOWN == 0 {
+        if f & flags::SHUTDOWN == 0 && !args.trivial {
             if f & flags::GREEDY != 0 {
                 if f & flags::END == 0 {
                     agent.greedy(x, &e.u_applied[..m], &mut u);

@@ -50,6 +50,14 @@ pub struct ProcessArgs {
     /// `rig learn` would be).
     #[arg(long, default_value_t = 0)]
     pub run_index: u32,
+    /// Agent only: answer every estimate with a zero action, without learning (for loop
+    /// benchmarks).
+    #[arg(long)]
+    pub trivial: bool,
+    /// Plant only: write the time from publishing each measurement to receiving its
+    /// action (ns, one per line) to this file.
+    #[arg(long, value_name = "FILE")]
+    pub latency_out: Option<PathBuf>,
 }
 
 impl ProcessArgs {

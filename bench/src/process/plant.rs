@@ -27,6 +27,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         out,
         actions,
         seq: 0,
+        latencies: Vec::new(),
     };
     let eval_every = cfg.run.eval_every;
     for trial in 1..=u64::from(cfg.run.trials) {
@@ -53,6 +54,10 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
             ..Measurement::default()
         })
         .map_err(wire_err)?;
+    if let Some(path) = &args.latency_out {
+        let text: String = p.latencies.iter().map(|ns| format!("{ns}\n")).collect();
+        std::fs::write(path, text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    }
     Ok(())
 }
 
@@ -63,6 +68,8 @@ struct PlantLoop {
     out: wire::Tx<Measurement>,
     actions: wire::Rx<Action>,
     seq: u64,
+    /// Publish-to-action time of every sample \[ns\].
+    latencies: Vec<u64>,
 }
 
 impl PlantLoop {
@@ -86,6 +93,7 @@ impl PlantLoop {
         };
         self.out.send(m).map_err(wire_err)?;
         let a = self.actions.recv(&self.bus, SILENCE).map_err(wire_err)?;
+        self.latencies.push(now_ns() - m.t_publish_ns);
         if a.header.seq != header.seq {
             bail!(
                 "action for sample {} arrived while waiting for sample {}",
