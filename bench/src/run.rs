@@ -37,6 +37,8 @@ pub struct RunOptions {
     pub run_id: Option<String>,
     /// Show a progress bar.
     pub progress: bool,
+    /// `None`: lockstep; `Some(speed)`: realtime at `speed` × real time.
+    pub realtime: Option<f64>,
 }
 
 /// What a run produced.
@@ -48,6 +50,8 @@ pub struct RunSummary {
     pub messages: u64,
     /// Wall-clock time of the run.
     pub wall: Duration,
+    /// Deadlines the plant missed (realtime only).
+    pub deadline_misses: u64,
 }
 
 /// Builds `returns.csv` rows from the plant's measurements.
@@ -124,6 +128,10 @@ struct Recording {
     n: usize,
     m: usize,
     values: Vec<Value>,
+    /// Log time: simulated time (lockstep) or the plant's sample time (realtime).
+    realtime: bool,
+    /// The current sample's plant sample time (monotonic ns).
+    t_sample_ns: u64,
 }
 
 fn header_fields(extra: Vec<Vec<Field>>) -> Vec<Field> {
@@ -194,6 +202,8 @@ impl Recording {
             n,
             m,
             values: Vec::new(),
+            realtime: false,
+            t_sample_ns: 0,
         })
     }
 
@@ -207,7 +217,11 @@ impl Recording {
             Value::Int(h.flags),
             Value::Num(h.t_sim),
         ]);
-        (h.t_sim * 1e9).round() as u64
+        if self.realtime {
+            self.t_sample_ns
+        } else {
+            (h.t_sim * 1e9).round() as u64
+        }
     }
 
     fn write(
@@ -230,6 +244,7 @@ impl Recording {
     }
 
     fn measurement(&mut self, msg: &Measurement) -> Result<()> {
+        self.t_sample_ns = msg.t_sample_ns;
         let t = self.header(&msg.header);
         self.nums(&[msg.reward]);
         self.nums(&msg.y[..self.n]);
@@ -244,6 +259,7 @@ impl Recording {
     }
 
     fn estimate(&mut self, msg: &Estimate) -> Result<()> {
+        self.t_sample_ns = msg.t_sample_ns;
         let t = self.header(&msg.header);
         self.nums(&[msg.reward]);
         self.nums(&msg.x[..self.n]);
@@ -258,6 +274,7 @@ impl Recording {
     }
 
     fn action(&mut self, msg: &Action) -> Result<()> {
+        self.t_sample_ns = msg.t_sample_ns;
         let t = self.header(&msg.header);
         self.nums(&msg.u[..self.m]);
         self.write(
@@ -319,6 +336,7 @@ struct Supervisor {
     out: PathBuf,
     messages: u64,
     continuity: [Continuity; 3],
+    deadline_misses: u64,
 }
 
 impl Supervisor {
@@ -337,6 +355,7 @@ impl Supervisor {
         }
         while let Some(m) = self.measurements.try_recv().map_err(wire_err)? {
             self.continuity[0].check(topic::MEASUREMENT, m.header.seq)?;
+            self.deadline_misses = self.deadline_misses.max(m.deadline_misses);
             self.recording.measurement(&m)?;
             self.messages += 1;
             if m.header.flags & flags::END != 0 {
@@ -359,19 +378,14 @@ impl Supervisor {
         Ok(a.header.flags & flags::SHUTDOWN != 0)
     }
 
-    /// Fails if a process has exited (before the end of the run).
-    fn check_children(&mut self) -> Result<()> {
+    /// A process that has exited, if any: its role, exit status and log file.
+    fn exited(&mut self) -> Result<Option<(&'static str, std::process::ExitStatus, PathBuf)>> {
         for (role, child) in &mut self.children.0 {
             if let Some(status) = child.try_wait()? {
-                let log = self.out.join(format!("{role}.log"));
-                bail!(
-                    "the {role} process exited ({status}) before the run finished; last lines of {}:\n{}",
-                    log.display(),
-                    log_tail(&log)
-                );
+                return Ok(Some((*role, status, self.out.join(format!("{role}.log")))));
             }
         }
-        Ok(())
+        Ok(None)
     }
 
     /// Waits for every process to exit after the end of the run.
@@ -401,14 +415,28 @@ impl Supervisor {
     }
 
     fn supervise(&mut self, bar: &ProgressBar) -> Result<()> {
-        while !self.drain(bar)? {
+        loop {
+            if self.drain(bar)? {
+                break;
+            }
             if self.bus.interrupted() {
                 bail!(
                     "interrupted: stopped the plant, observer and agent processes; {} completed trials are in returns.csv",
                     self.returns.records.len()
                 );
             }
-            self.check_children()?;
+            if let Some((role, status, log)) = self.exited()? {
+                // A process that ends cleanly after its last message can be seen to exit
+                // before that message is read: look once more.
+                if status.success() && self.drain(bar)? {
+                    break;
+                }
+                bail!(
+                    "the {role} process exited ({status}) before the run finished; last lines of {}:\n{}",
+                    log.display(),
+                    log_tail(&log)
+                );
+            }
         }
         self.reap()?;
         self.returns.flush()
@@ -440,6 +468,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         task.state_dim(),
         task.action_dim(),
     )?;
+    recording.realtime = opts.realtime.is_some();
     recording
         .rec
         .attach("config.toml", "application/toml", cfg.to_toml().as_bytes())?;
@@ -449,7 +478,13 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         ("system", cfg.system.to_string()),
         ("algo", cfg.algo.to_string()),
         ("approx", cfg.approx.to_string()),
-        ("timing", "lockstep".to_string()),
+        (
+            "timing",
+            match opts.realtime {
+                None => "lockstep".to_string(),
+                Some(speed) => format!("realtime, speed {speed}"),
+            },
+        ),
         ("rig_version", env!("CARGO_PKG_VERSION").to_string()),
     ]
     .into_iter()
@@ -473,6 +508,15 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
 
     let exe = std::env::current_exe().context("cannot find the rig executable")?;
     let mut children = Children(Vec::new());
+    let plant_timing: Vec<String> = match opts.realtime {
+        None => Vec::new(),
+        Some(speed) => vec![
+            "--timing".into(),
+            "realtime".into(),
+            "--speed".into(),
+            speed.to_string(),
+        ],
+    };
     for role in ["agent", "observer", "plant"] {
         let log = opts.out.join(format!("{role}.log"));
         let log_file =
@@ -481,6 +525,11 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
             .arg(role)
             .args(["--run-id", &run_id, "--receivers", "2", "--config"])
             .arg(&config_path)
+            .args(if role == "plant" {
+                &plant_timing[..]
+            } else {
+                &[]
+            })
             .stdin(Stdio::null())
             .stdout(log_file.try_clone()?)
             .stderr(log_file)
@@ -517,6 +566,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         out: opts.out.clone(),
         messages: 0,
         continuity: Default::default(),
+        deadline_misses: 0,
     };
     let outcome = sup.supervise(&bar);
     bar.finish_and_clear();
@@ -528,6 +578,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         recording,
         returns,
         messages,
+        deadline_misses,
         ..
     } = sup;
     let finished = recording.rec.finish();
@@ -537,5 +588,6 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         records: returns.records,
         messages,
         wall: t0.elapsed(),
+        deadline_misses,
     })
 }

@@ -253,3 +253,54 @@ fn bench_loop_measures_both_loops() {
     let p50: f64 = rows[2].split(',').nth(2).unwrap().parse().unwrap();
     assert!(p50 > 0.0 && p50.is_finite());
 }
+
+#[test]
+fn realtime_runs_on_the_plants_clock_and_counts_misses() {
+    let dir = tmp("realtime");
+    // 3 trials of 101 samples at 20 × real time: 1.5 ms periods, ≈ 0.45 s.
+    let t0 = Instant::now();
+    let out = ok(rig()
+        .args([
+            "run",
+            "--timing",
+            "realtime",
+            "--speed",
+            "20",
+            "--trials",
+            "3",
+            "--eval-every",
+            "0",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap());
+    let wall = t0.elapsed();
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("deadline misses:"), "{text}");
+    assert!(
+        wall >= Duration::from_millis(3 * 101 * 3 / 2),
+        "the plant keeps real time: {wall:?}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("returns.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        4
+    );
+    let msgs = messages(&dir.join("run.mcap"));
+    // Log time is the plant's monotonic sample time: increasing by about a period.
+    let t: Vec<u64> = msgs["/plant/measurement"].iter().map(|m| m.0).collect();
+    assert!(t.windows(2).all(|w| w[1] >= w[0]));
+    let mean_gap = (t[t.len() - 2] - t[0]) as f64 / (t.len() - 2) as f64;
+    assert!(
+        (mean_gap - 1.5e6).abs() < 0.2e6,
+        "mean sample period {mean_gap} ns"
+    );
+    let bad = rig()
+        .args(["run", "--timing", "realtime", "--speed", "0"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+}

@@ -120,4 +120,21 @@ impl Plant {
         self.task.wrap_state(&mut self.x);
         r
     }
+
+    /// Applies `u` (saturated) for `duration` seconds — part of a sample period, when an
+    /// action arrives late in real time — with RK4 steps no longer than those of
+    /// [`Plant::step`].
+    pub fn advance(&mut self, u: &[f64], duration: f64) {
+        self.rejected_actions += Self::saturate(&self.task, u, &mut self.applied);
+        if duration <= 0.0 {
+            return;
+        }
+        let h_max = self.task.ts / self.task.substeps as f64;
+        let n = (duration / h_max).ceil().max(1.0) as usize;
+        let h = duration / n as f64;
+        for _ in 0..n {
+            rk4::step(self.task.dynamics.as_ref(), &mut self.x, &self.applied, h);
+        }
+        self.task.wrap_state(&mut self.x);
+    }
 }

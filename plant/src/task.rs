@@ -301,6 +301,24 @@ mod tests {
     }
 
     #[test]
+    fn advancing_in_pieces_matches_a_whole_step() {
+        let task = Arc::new(Task::pendulum());
+        let (mut whole, mut pieces) = (Plant::new(task.clone()), Plant::new(task));
+        whole.reset(&[2.0, 1.0]);
+        pieces.reset(&[2.0, 1.0]);
+        whole.step(&[1.5]);
+        pieces.advance(&[1.5], 0.0123);
+        pieces.advance(&[1.5], 0.03 - 0.0123);
+        for (a, b) in whole.state().iter().zip(pieces.state()) {
+            assert!((a - b).abs() < 1e-9, "{a} vs {b}");
+        }
+        // A late action: the first part of the interval with the old one.
+        pieces.advance(&[-3.0], 0.01);
+        pieces.advance(&[9.0], 0.02);
+        assert_eq!(pieces.applied_action(), &[3.0]);
+    }
+
+    #[test]
     fn reward_uses_state_before_transition_and_applied_action() {
         let mut plant = Plant::new(Arc::new(Task::pendulum()));
         plant.reset(&[PI, 0.0]);

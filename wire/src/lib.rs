@@ -62,7 +62,7 @@ pub struct Header {
 /// Plant → observer: what the sensor measured at sample `step`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("rig.Measurement.v1")]
+#[type_name("rig.Measurement.v2")]
 pub struct Measurement {
     /// Sample identification.
     pub header: Header,
@@ -81,6 +81,9 @@ pub struct Measurement {
     pub t_sample_ns: u64,
     /// Monotonic time at which the plant published \[ns\].
     pub t_publish_ns: u64,
+    /// Deadlines missed so far in the run (realtime timing: no action arrived within a
+    /// sample interval; always 0 in lockstep).
+    pub deadline_misses: u64,
 }
 
 /// Observer → agent: the state estimate `x̂_k`.
@@ -359,7 +362,7 @@ mod tests {
         assert_eq!(std::mem::size_of::<Header>(), 40);
         assert_eq!(
             std::mem::size_of::<Measurement>(),
-            40 + 3 * 8 + 8 * 8 + 4 * 8 + 16
+            40 + 3 * 8 + 8 * 8 + 4 * 8 + 24
         );
         assert_eq!(
             std::mem::size_of::<Estimate>(),

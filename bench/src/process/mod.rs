@@ -50,6 +50,14 @@ pub struct ProcessArgs {
     /// `rig learn` would be).
     #[arg(long, default_value_t = 0)]
     pub run_index: u32,
+    /// Plant only: `lockstep` (simulated time advances when the action has arrived) or
+    /// `realtime` (the plant samples at absolute deadlines of Ts / speed; a late action is
+    /// applied from the moment it arrives, the previous one held until then).
+    #[arg(long, default_value = "lockstep", value_parser = ["lockstep", "realtime"])]
+    pub timing: String,
+    /// Plant only, realtime: how many times faster than real time (Ts / speed per sample).
+    #[arg(long, default_value_t = 1.0)]
+    pub speed: f64,
     /// Agent only: answer every estimate with a zero action, without learning (for loop
     /// benchmarks).
     #[arg(long)]

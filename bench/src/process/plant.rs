@@ -20,6 +20,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         .map_err(wire_err)?;
     out.wait_for_receivers(args.receivers, STARTUP, &bus)
         .map_err(wire_err)?;
+    let task_ts = task.ts;
     let mut p = PlantLoop {
         plant: Plant::new(task.clone()),
         task,
@@ -28,6 +29,15 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         actions,
         seq: 0,
         latencies: Vec::new(),
+        misses: 0,
+        realtime: (args.timing == "realtime").then(|| {
+            let period_ns = (task_ts * 1e9 / args.speed).round() as u64;
+            Clock {
+                period_ns,
+                next_ns: now_ns() + period_ns,
+                speed: args.speed,
+            }
+        }),
     };
     let eval_every = cfg.run.eval_every;
     for trial in 1..=u64::from(cfg.run.trials) {
@@ -43,14 +53,20 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
             )?;
         }
     }
+    // The end of the run, stamped with the run's final simulated and monotonic time.
     let header = Header {
         seq: p.seq,
         flags: flags::SHUTDOWN,
+        t_sim: f64::from(cfg.run.trials) * p.task.trial_seconds,
         ..Header::default()
     };
+    let now = now_ns();
     p.out
         .send(Measurement {
             header,
+            t_sample_ns: now,
+            t_publish_ns: now,
+            deadline_misses: p.misses,
             ..Measurement::default()
         })
         .map_err(wire_err)?;
@@ -70,6 +86,33 @@ struct PlantLoop {
     seq: u64,
     /// Publish-to-action time of every sample \[ns\].
     latencies: Vec<u64>,
+    /// Sample intervals in which no action arrived (realtime).
+    misses: u64,
+    /// The sampling clock, in realtime timing.
+    realtime: Option<Clock>,
+}
+
+/// Absolute sampling deadlines on the monotonic clock.
+struct Clock {
+    period_ns: u64,
+    next_ns: u64,
+    speed: f64,
+}
+
+/// Sleeps (then spins the last 100 µs) until monotonic time `t_ns`.
+fn sleep_until(t_ns: u64) {
+    loop {
+        let now = now_ns();
+        if now >= t_ns {
+            return;
+        }
+        let left = t_ns - now;
+        if left > 200_000 {
+            std::thread::sleep(std::time::Duration::from_nanos(left - 100_000));
+        } else {
+            std::hint::spin_loop();
+        }
+    }
 }
 
 impl PlantLoop {
@@ -90,6 +133,7 @@ impl PlantLoop {
             u_applied: pack(self.plant.applied_action()),
             t_sample_ns,
             t_publish_ns: now_ns(),
+            deadline_misses: self.misses,
         };
         self.out.send(m).map_err(wire_err)?;
         let a = self.actions.recv(&self.bus, SILENCE).map_err(wire_err)?;
@@ -107,6 +151,9 @@ impl PlantLoop {
 
     /// One trial from `x0`; `mode` is 0 (learning) or [`flags::GREEDY`].
     fn trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<()> {
+        if self.realtime.is_some() {
+            return self.realtime_trial(trial, x0, mode, t0);
+        }
         let steps = self.task.steps_per_trial();
         self.plant.reset(x0);
         let ts = self.task.ts;
@@ -123,6 +170,107 @@ impl PlantLoop {
             let last = if k + 1 == steps { flags::END } else { 0 };
             u = self.exchange(header(self.seq, k + 1, last), r)?;
         }
+        Ok(())
+    }
+
+    /// Publishes the current sample without waiting for an answer.
+    fn publish(&mut self, header: Header, reward: f64, t_sample_ns: u64) -> Result<()> {
+        let m = Measurement {
+            header,
+            n_x: self.task.state_dim() as u64,
+            n_u: self.task.action_dim() as u64,
+            reward,
+            y: pack(self.plant.state()),
+            u_applied: pack(self.plant.applied_action()),
+            t_sample_ns,
+            t_publish_ns: now_ns(),
+            deadline_misses: self.misses,
+        };
+        self.out.send(m).map_err(wire_err)?;
+        self.seq += 1;
+        Ok(())
+    }
+
+    /// One trial in real time: the plant samples at absolute deadlines; every action that
+    /// arrives within an interval is applied from its arrival on (the previous one held
+    /// until then); an interval in which the action for its sample did not arrive is a
+    /// missed deadline. The reward of an interval is `ρ(x_k, u)` with the action in effect
+    /// at its end.
+    fn realtime_trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<()> {
+        let steps = self.task.steps_per_trial();
+        let (period_ns, speed) = {
+            let c = self.realtime.as_ref().expect("realtime");
+            (c.period_ns, c.speed)
+        };
+        self.plant.reset(x0);
+        let mut u_hold = vec![0.0; self.task.action_dim()];
+        let ts = self.task.ts;
+        let header = |seq, step: usize, f| Header {
+            seq,
+            trial,
+            step: step as u64,
+            flags: f | mode,
+            t_sim: t0 + step as f64 * ts,
+        };
+        let mut t_k = self.realtime.as_ref().expect("realtime").next_ns;
+        sleep_until(t_k);
+        self.publish(header(self.seq, 0, flags::START), 0.0, t_k)?;
+        for k in 0..=steps {
+            let waiting_for = self.seq - 1;
+            let deadline = t_k + period_ns;
+            // Collect the actions arriving in [t_k, deadline). The plant owns the clock and
+            // polls (every 20 µs) rather than blocking on the event service: blocking waits
+            // shorter than a period were seen not to wake on arrival in this mode.
+            let mut arrivals: Vec<(u64, Vec<f64>)> = Vec::new();
+            let mut answered = false;
+            loop {
+                let now = now_ns();
+                if now >= deadline {
+                    break;
+                }
+                let Some(a) = self.actions.try_recv().map_err(wire_err)? else {
+                    std::thread::sleep(
+                        std::time::Duration::from_micros(20)
+                            .min(std::time::Duration::from_nanos(deadline - now)),
+                    );
+                    continue;
+                };
+                {
+                    let t_a = now_ns().min(deadline);
+                    arrivals.push((t_a, a.u[..self.task.action_dim()].to_vec()));
+                    if a.header.seq == waiting_for {
+                        self.latencies.push(t_a.saturating_sub(t_k));
+                        answered = true;
+                    }
+                }
+            }
+            if !answered {
+                self.misses += 1;
+            }
+            if k == steps {
+                // The END sample's answer only acknowledges learning; the trial is over.
+                break;
+            }
+            // Integrate the interval piecewise, in simulated seconds.
+            let sim = |dt_ns: u64| dt_ns as f64 * 1e-9 * speed;
+            let mut t = t_k;
+            let x_k_reward_state = self.plant.state().to_vec();
+            for (t_a, u) in &arrivals {
+                self.plant.advance(&u_hold, sim(t_a - t));
+                u_hold.clone_from(u);
+                t = *t_a;
+            }
+            self.plant.advance(&u_hold, sim(deadline - t));
+            let r = self
+                .task
+                .reward
+                .reward(&x_k_reward_state, self.plant.applied_action());
+            sleep_until(deadline);
+            t_k = deadline;
+            let last = if k + 1 == steps { flags::END } else { 0 };
+            self.publish(header(self.seq, k + 1, last), r, t_k)?;
+        }
+        self.realtime.as_mut().expect("realtime").next_ns = t_k + period_ns;
         Ok(())
     }
 }
