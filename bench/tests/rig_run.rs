@@ -304,3 +304,90 @@ fn realtime_runs_on_the_plants_clock_and_counts_misses() {
         .unwrap();
     assert_eq!(bad.status.code(), Some(2));
 }
+
+#[test]
+fn processes_notice_a_dead_peer_and_say_which() {
+    let dir = tmp("dead-peer");
+    let config = dir.join("config.toml");
+    ok(rig()
+        .args(["config", "--trials", "400"])
+        .output()
+        .map(|o| {
+            std::fs::write(&config, &o.stdout).unwrap();
+            o
+        })
+        .unwrap());
+    let run_id = format!("deadpeer{}", std::process::id());
+    let start = |exe: &str| {
+        let log = std::fs::File::create(dir.join(format!("{exe}.log"))).unwrap();
+        Command::new(env!("CARGO_BIN_EXE_rig").replace("/rig", &format!("/{exe}")))
+            .args(["--run-id", &run_id, "--config"])
+            .arg(&config)
+            .stderr(log)
+            .spawn()
+            .unwrap()
+    };
+    let (mut agent, mut observer, mut plant) = (start("agent"), start("observer"), start("plant"));
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(plant.try_wait().unwrap().is_none(), "learning is under way");
+    agent.kill().unwrap();
+    agent.wait().unwrap();
+    let t0 = Instant::now();
+    for (name, child) in [("plant", &mut plant), ("observer", &mut observer)] {
+        let status = child.wait().unwrap();
+        assert!(!status.success(), "{name} must fail");
+        let log = std::fs::read_to_string(dir.join(format!("{name}.log"))).unwrap();
+        // The plant sees the agent die; the observer sees the agent or the plant stop.
+        let who = if name == "plant" {
+            "the agent process"
+        } else {
+            "process of this run stopped"
+        };
+        assert!(
+            log.contains(who) && log.contains("stopped"),
+            "{name}: {log}"
+        );
+    }
+    assert!(
+        t0.elapsed() < Duration::from_secs(5),
+        "noticed in {:?}",
+        t0.elapsed()
+    );
+}
+
+#[test]
+fn sigterm_stops_the_run_and_keeps_the_recording() {
+    let dir = tmp("sigterm");
+    let sup = rig()
+        .args(["run", "--trials", "400", "--quiet", "--out"])
+        .arg(&dir)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while std::fs::read_to_string(dir.join("returns.csv"))
+        .unwrap_or_default()
+        .lines()
+        .count()
+        < 4
+    {
+        assert!(
+            t0.elapsed() < Duration::from_secs(30),
+            "the run did not start"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    Command::new("kill")
+        .args(["-TERM", &sup.id().to_string()])
+        .status()
+        .unwrap();
+    let out = sup.wait_with_output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("interrupted"), "{err}");
+    assert!(
+        !messages(&dir.join("run.mcap")).is_empty(),
+        "the recording was finished"
+    );
+    assert!(children_of(std::process::id()).iter().all(|&p| p != 0));
+}

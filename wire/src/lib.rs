@@ -171,6 +171,8 @@ pub type Error = Box<dyn std::error::Error + Send + Sync>;
 pub struct Bus {
     node: Node<ipc::Service>,
     run_id: String,
+    /// Processes of the run seen alive so far.
+    seen: std::cell::RefCell<std::collections::BTreeSet<String>>,
 }
 
 /// Sends messages of type `T` on a topic and wakes its receivers.
@@ -206,6 +208,7 @@ impl Bus {
         Ok(Self {
             node,
             run_id: run_id.to_string(),
+            seen: Default::default(),
         })
     }
 
@@ -283,6 +286,40 @@ impl Bus {
     pub fn interrupted(&self) -> bool {
         self.node.wait(Duration::ZERO).is_err()
     }
+
+    /// This run's processes that are gone: seen alive by an earlier call and now dead
+    /// (killed without cleaning up) or no longer there, e.g. `["agent"]`.
+    pub fn lost_peers(&self) -> Vec<String> {
+        use iceoryx2::node::NodeView;
+        let prefix = format!("rig-{}-", self.run_id);
+        let (mut alive, mut dead) = (Vec::new(), Vec::new());
+        let _ = Node::<ipc::Service>::list(self.node.config(), |state| {
+            let (view_name, is_alive) = match &state {
+                NodeState::Alive(v) => (v.details().as_ref().map(|d| d.name().to_string()), true),
+                NodeState::Dead(v) => (v.details().as_ref().map(|d| d.name().to_string()), false),
+                _ => (None, false),
+            };
+            if let Some(role) = view_name.as_deref().and_then(|n| n.strip_prefix(&prefix)) {
+                if is_alive {
+                    alive.push(role.to_string())
+                } else {
+                    dead.push(role.to_string())
+                }
+            }
+            CallbackProgression::Continue
+        });
+        let mut seen = self.seen.borrow_mut();
+        seen.extend(alive.iter().cloned());
+        let mut lost: Vec<String> = seen
+            .iter()
+            .filter(|r| !alive.contains(r))
+            .cloned()
+            .collect();
+        lost.extend(dead);
+        lost.sort();
+        lost.dedup();
+        lost
+    }
 }
 
 impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Tx<T> {
@@ -330,12 +367,18 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
         if let Some(m) = self.try_recv()? {
             return Ok(Some(m));
         }
-        self.listener.timed_wait(|_| {}, timeout)?;
-        self.try_recv()
+        match self.listener.timed_wait(|_| {}, timeout) {
+            Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => {
+                Err("interrupted".into())
+            }
+            Err(e) => Err(e.into()),
+            Ok(_) => self.try_recv(),
+        }
     }
 
-    /// The next message, waiting as long as it takes; errors on Ctrl-C, or when no
-    /// message arrives for `silence` (a peer died).
+    /// The next message, waiting as long as it takes; errors on Ctrl-C, when a process
+    /// of the run has stopped or died (checked every 100 ms of waiting), or when no
+    /// message arrives for `silence`.
     pub fn recv(&self, bus: &Bus, silence: Duration) -> Result<T, Error> {
         let t0 = std::time::Instant::now();
         loop {
@@ -344,6 +387,10 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
             }
             if bus.interrupted() {
                 return Err("interrupted".into());
+            }
+            let lost = bus.lost_peers();
+            if !lost.is_empty() {
+                return Err(format!("the {} process of this run stopped", lost.join(", ")).into());
             }
             if t0.elapsed() > silence {
                 return Err(format!("no message for {silence:?}: a peer process stopped").into());
