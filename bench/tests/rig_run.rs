@@ -309,14 +309,8 @@ fn realtime_runs_on_the_plants_clock_and_counts_misses() {
 fn processes_notice_a_dead_peer_and_say_which() {
     let dir = tmp("dead-peer");
     let config = dir.join("config.toml");
-    ok(rig()
-        .args(["config", "--trials", "400"])
-        .output()
-        .map(|o| {
-            std::fs::write(&config, &o.stdout).unwrap();
-            o
-        })
-        .unwrap());
+    let preset = ok(rig().args(["config", "--trials", "400"]).output().unwrap());
+    std::fs::write(&config, &preset.stdout).unwrap();
     let run_id = format!("deadpeer{}", std::process::id());
     let start = |exe: &str| {
         let log = std::fs::File::create(dir.join(format!("{exe}.log"))).unwrap();
