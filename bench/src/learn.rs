@@ -76,6 +76,26 @@ impl OrderedWriter {
     }
 }
 
+/// A progress bar of `len` trials on stderr (hidden when `enabled` is false, or when
+/// stderr is not a terminal).
+pub fn progress_bar(len: u64, enabled: bool, label: &str) -> ProgressBar {
+    let target = if enabled {
+        ProgressDrawTarget::stderr()
+    } else {
+        ProgressDrawTarget::hidden()
+    };
+    let bar = ProgressBar::with_draw_target(Some(len), target);
+    let template = format!(
+        "{{spinner}} {label} [{{bar:40}}] {{pos}}/{{len}} trials, {{per_sec}}, eta {{eta}}"
+    );
+    bar.set_style(
+        ProgressStyle::with_template(&template)
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar
+}
+
 /// The header of `runs.csv`.
 pub const RUNS_HEADER: &str = "run,trial,sim_time_s,return,greedy_return";
 
@@ -117,20 +137,10 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
     });
 
     let (runs, trials) = (cfg.run.runs, cfg.run.trials);
-    let bar = ProgressBar::with_draw_target(
-        Some(u64::from(runs) * u64::from(trials)),
-        if opts.progress {
-            ProgressDrawTarget::stderr()
-        } else {
-            ProgressDrawTarget::hidden()
-        },
-    );
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} learning [{bar:40}] {pos}/{len} trials, {per_sec}, eta {eta} {msg}",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
+    let bar = progress_bar(
+        u64::from(runs) * u64::from(trials),
+        opts.progress,
+        "learning",
     );
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads.unwrap_or(0))

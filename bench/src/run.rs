@@ -20,11 +20,11 @@ use std::time::{Duration, Instant};
 
 use ::agent::config::ExperimentConfig;
 use anyhow::{Context, Result, anyhow, bail};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::ProgressBar;
 use wire::{Action, Bus, Estimate, Header, Measurement, flags, topic};
 
 use crate::experiment::TrialRecord;
-use crate::learn::{RUNS_HEADER, write_atomic, write_row};
+use crate::learn::{RUNS_HEADER, progress_bar, write_atomic, write_row};
 use crate::process::wire_err;
 use crate::record::{ChannelId, Field, FieldKind, Recorder, Value};
 
@@ -539,21 +539,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     }
 
     let evals = cfg.run.trials.checked_div(cfg.run.eval_every).unwrap_or(0);
-    let bar = ProgressBar::with_draw_target(
-        Some(u64::from(cfg.run.trials + evals)),
-        if opts.progress {
-            ProgressDrawTarget::stderr()
-        } else {
-            ProgressDrawTarget::hidden()
-        },
-    );
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} rig run [{bar:40}] {pos}/{len} trials, {per_sec}, eta {eta}",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
-    );
+    let bar = progress_bar(u64::from(cfg.run.trials + evals), opts.progress, "rig run");
     let t0 = Instant::now();
     let mut sup = Supervisor {
         bus,

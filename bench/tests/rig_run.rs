@@ -333,9 +333,9 @@ fn processes_notice_a_dead_peer_and_say_which() {
         let log = std::fs::read_to_string(dir.join(format!("{name}.log"))).unwrap();
         // The plant sees the agent die; the observer sees the agent or the plant stop.
         let who = if name == "plant" {
-            "the agent process"
+            "agent"
         } else {
-            "process of this run stopped"
+            "of this run stopped"
         };
         assert!(
             log.contains(who) && log.contains("stopped"),

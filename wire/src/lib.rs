@@ -173,6 +173,7 @@ pub struct Bus {
     run_id: String,
     /// Processes of the run seen alive so far.
     seen: std::cell::RefCell<std::collections::BTreeSet<String>>,
+    primed: std::cell::Cell<bool>,
 }
 
 /// Sends messages of type `T` on a topic and wakes its receivers.
@@ -209,6 +210,7 @@ impl Bus {
             node,
             run_id: run_id.to_string(),
             seen: Default::default(),
+            primed: Default::default(),
         })
     }
 
@@ -285,6 +287,15 @@ impl Bus {
     /// Whether Ctrl-C or a termination request arrived.
     pub fn interrupted(&self) -> bool {
         self.node.wait(Duration::ZERO).is_err()
+    }
+
+    /// Records, once, which processes of the run are alive (called when the first message
+    /// arrives: all of them are running by then), so that [`Bus::lost_peers`] can tell
+    /// when one goes.
+    pub fn prime(&self) {
+        if !self.primed.replace(true) {
+            let _ = self.lost_peers();
+        }
     }
 
     /// This run's processes that are gone: seen alive by an earlier call and now dead
@@ -383,6 +394,7 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
         let t0 = std::time::Instant::now();
         loop {
             if let Some(m) = self.recv_timeout(Duration::from_millis(100))? {
+                bus.prime();
                 return Ok(m);
             }
             if bus.interrupted() {
@@ -390,7 +402,16 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
             }
             let lost = bus.lost_peers();
             if !lost.is_empty() {
-                return Err(format!("the {} process of this run stopped", lost.join(", ")).into());
+                // A message sent before its sender left is in the queue by now.
+                if let Some(m) = self.try_recv()? {
+                    return Ok(m);
+                }
+                let who = match lost.as_slice() {
+                    [one] => format!("the {one} process"),
+                    [init @ .., last] => format!("the {} and {last} processes", init.join(", ")),
+                    [] => unreachable!(),
+                };
+                return Err(format!("{who} of this run stopped").into());
             }
             if t0.elapsed() > silence {
                 return Err(format!("no message for {silence:?}: a peer process stopped").into());

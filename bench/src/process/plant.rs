@@ -123,21 +123,9 @@ impl PlantLoop {
 
     /// Publishes the current sample and waits for the action that answers it.
     fn exchange(&mut self, header: Header, reward: f64) -> Result<Vec<f64>> {
-        let t_sample_ns = now_ns();
-        let m = Measurement {
-            header,
-            n_x: self.task.state_dim() as u64,
-            n_u: self.task.action_dim() as u64,
-            reward,
-            y: pack(self.plant.state()),
-            u_applied: pack(self.plant.applied_action()),
-            t_sample_ns,
-            t_publish_ns: now_ns(),
-            deadline_misses: self.misses,
-        };
-        self.out.send(m).map_err(wire_err)?;
+        let t_publish_ns = self.publish(header, reward, now_ns())?;
         let a = self.actions.recv(&self.bus, SILENCE).map_err(wire_err)?;
-        self.latencies.push(now_ns() - m.t_publish_ns);
+        self.latencies.push(now_ns() - t_publish_ns);
         if a.header.seq != header.seq {
             bail!(
                 "action for sample {} arrived while waiting for sample {}",
@@ -145,7 +133,6 @@ impl PlantLoop {
                 header.seq
             );
         }
-        self.seq += 1;
         Ok(a.u[..self.task.action_dim()].to_vec())
     }
 
@@ -173,8 +160,8 @@ impl PlantLoop {
         Ok(())
     }
 
-    /// Publishes the current sample without waiting for an answer.
-    fn publish(&mut self, header: Header, reward: f64, t_sample_ns: u64) -> Result<()> {
+    /// Publishes the current sample; returns when it was published (monotonic ns).
+    fn publish(&mut self, header: Header, reward: f64, t_sample_ns: u64) -> Result<u64> {
         let m = Measurement {
             header,
             n_x: self.task.state_dim() as u64,
@@ -188,7 +175,7 @@ impl PlantLoop {
         };
         self.out.send(m).map_err(wire_err)?;
         self.seq += 1;
-        Ok(())
+        Ok(m.t_publish_ns)
     }
 
     /// One trial in real time: the plant samples at absolute deadlines; every action that
