@@ -92,6 +92,28 @@ struct PlantLoop {
     realtime: Option<Clock>,
 }
 
+/// Headers of one trial's samples.
+struct TrialHeader {
+    trial: u64,
+    /// 0 (learning) or [`flags::GREEDY`].
+    mode: u64,
+    /// Simulated time at the trial's start \[s\].
+    t0: f64,
+    ts: f64,
+}
+
+impl TrialHeader {
+    fn at(&self, seq: u64, step: usize, flags: u64) -> Header {
+        Header {
+            seq,
+            trial: self.trial,
+            step: step as u64,
+            flags: flags | self.mode,
+            t_sim: self.t0 + step as f64 * self.ts,
+        }
+    }
+}
+
 /// Absolute sampling deadlines on the monotonic clock.
 struct Clock {
     period_ns: u64,
@@ -143,19 +165,17 @@ impl PlantLoop {
         }
         let steps = self.task.steps_per_trial();
         self.plant.reset(x0);
-        let ts = self.task.ts;
-        let header = |seq, step: usize, f| Header {
-            seq,
+        let header = TrialHeader {
             trial,
-            step: step as u64,
-            flags: f | mode,
-            t_sim: t0 + step as f64 * ts,
+            mode,
+            t0,
+            ts: self.task.ts,
         };
-        let mut u = self.exchange(header(self.seq, 0, flags::START), 0.0)?;
+        let mut u = self.exchange(header.at(self.seq, 0, flags::START), 0.0)?;
         for k in 0..steps {
             let r = self.plant.step(&u);
             let last = if k + 1 == steps { flags::END } else { 0 };
-            u = self.exchange(header(self.seq, k + 1, last), r)?;
+            u = self.exchange(header.at(self.seq, k + 1, last), r)?;
         }
         Ok(())
     }
@@ -191,17 +211,15 @@ impl PlantLoop {
         };
         self.plant.reset(x0);
         let mut u_hold = vec![0.0; self.task.action_dim()];
-        let ts = self.task.ts;
-        let header = |seq, step: usize, f| Header {
-            seq,
+        let header = TrialHeader {
             trial,
-            step: step as u64,
-            flags: f | mode,
-            t_sim: t0 + step as f64 * ts,
+            mode,
+            t0,
+            ts: self.task.ts,
         };
         let mut t_k = self.realtime.as_ref().expect("realtime").next_ns;
         sleep_until(t_k);
-        self.publish(header(self.seq, 0, flags::START), 0.0, t_k)?;
+        self.publish(header.at(self.seq, 0, flags::START), 0.0, t_k)?;
         for k in 0..=steps {
             let waiting_for = self.seq - 1;
             let deadline = t_k + period_ns;
@@ -255,7 +273,7 @@ impl PlantLoop {
             sleep_until(deadline);
             t_k = deadline;
             let last = if k + 1 == steps { flags::END } else { 0 };
-            self.publish(header(self.seq, k + 1, last), r, t_k)?;
+            self.publish(header.at(self.seq, k + 1, last), r, t_k)?;
         }
         self.realtime.as_mut().expect("realtime").next_ns = t_k + period_ns;
         Ok(())
