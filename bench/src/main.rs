@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use agent::config::{Algo, ApproxKind, Overrides, resolve};
 use clap::{Args, Parser, Subcommand};
-use plant::SystemName;
+use plant::{SystemName, Task};
 use rig::learn::{LearnOptions, learn};
 use rig::process::ProcessArgs;
 use rig::run::{RunOptions, run};
@@ -356,5 +356,3 @@ fn print_summary(
         out.display()
     );
 }
-
-use plant::Task;
