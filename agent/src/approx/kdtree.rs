@@ -372,27 +372,6 @@ impl KdTree {
         self.nodes[sub as usize] = Node::leaf(Vec::new(), self.dim);
     }
 
-    /// Lower bound of the squared distance from `q` to node `id`'s bounding box.
-    #[inline]
-    fn box_dist2(&self, id: usize, q: &[f64], period: &[f64]) -> f64 {
-        let node = &self.nodes[id];
-        let mut s = 0.0;
-        for j in 0..self.dim {
-            let x = q[j];
-            if x >= node.lo[j] && x <= node.hi[j] {
-                continue;
-            }
-            let (mut a, mut b) = ((x - node.lo[j]).abs(), (x - node.hi[j]).abs());
-            if period[j] > 0.0 {
-                a = a.min(period[j] - a);
-                b = b.min(period[j] - b);
-            }
-            let m = a.min(b);
-            s += m * m;
-        }
-        s
-    }
-
     /// Offers every live point of the tree that can still improve `best`;
     /// `live(slot, seq)` says whether an entry is still in the memory.
     pub fn search(
@@ -402,25 +381,66 @@ impl KdTree {
         best: &mut Best,
         live: impl Fn(u32, u64) -> bool,
     ) {
+        // Monomorphised per dimension, so that the distance loops unroll.
+        match self.dim {
+            1 => self.search_in::<1>(q, period, best, live),
+            2 => self.search_in::<2>(q, period, best, live),
+            3 => self.search_in::<3>(q, period, best, live),
+            4 => self.search_in::<4>(q, period, best, live),
+            5 => self.search_in::<5>(q, period, best, live),
+            6 => self.search_in::<6>(q, period, best, live),
+            7 => self.search_in::<7>(q, period, best, live),
+            _ => self.search_in::<MAX_DIM>(q, period, best, live),
+        }
+    }
+
+    fn search_in<const D: usize>(
+        &self,
+        q: &[f64],
+        period: &[f64],
+        best: &mut Best,
+        live: impl Fn(u32, u64) -> bool,
+    ) {
+        let q: &[f64; D] = q.try_into().expect("query of the tree's dimension");
+        let period: &[f64; D] = period.try_into().expect("periods of the tree's dimension");
+        let box_dist2 = |node: &Node| -> f64 {
+            let mut s = 0.0;
+            for j in 0..D {
+                let x = q[j];
+                if x >= node.lo[j] && x <= node.hi[j] {
+                    continue;
+                }
+                let (mut a, mut b) = ((x - node.lo[j]).abs(), (x - node.hi[j]).abs());
+                if period[j] > 0.0 {
+                    a = a.min(period[j] - a);
+                    b = b.min(period[j] - b);
+                }
+                let m = a.min(b);
+                s += m * m;
+            }
+            s
+        };
         let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
-        stack.push((0, self.box_dist2(0, q, period)));
+        stack.push((0, box_dist2(&self.nodes[0])));
         while let Some((id, lb)) = stack.pop() {
             if best.prunes(lb) {
                 continue;
             }
             let node = &self.nodes[id as usize];
             if node.is_leaf() {
-                let d = self.dim;
-                for (i, (&slot, &seq)) in node.slots.iter().zip(&node.seqs).enumerate() {
-                    let d2 = dist2(&node.coords[i * d..(i + 1) * d], q, period);
+                for ((p, &slot), &seq) in
+                    node.coords.chunks_exact(D).zip(&node.slots).zip(&node.seqs)
+                {
+                    let p: &[f64; D] = p.try_into().expect("chunks of D");
+                    let d2 = dist2(p, q, period);
                     if best.admits(d2) && live(slot, seq) {
                         best.offer(Candidate { d2, seq, slot });
                     }
                 }
                 continue;
             }
-            let dl = self.box_dist2(node.left as usize, q, period);
-            let dr = self.box_dist2(node.right as usize, q, period);
+            let dl = box_dist2(&self.nodes[node.left as usize]);
+            let dr = box_dist2(&self.nodes[node.right as usize]);
             // Push the farther child first so the nearer one is searched first.
             let (near, far) = if dl <= dr {
                 ((node.left, dl), (node.right, dr))
