@@ -73,6 +73,19 @@ pub trait Traced: Approximator {
 pub trait Critic: Traced + Differentiable {}
 impl<T: Traced + Differentiable> Critic for T {}
 
+/// `θ ← θ + step · z` (Eq. 2.19c) for a scalar approximator that is linear in its
+/// parameters, one parameter and one trace per feature (RBF and tile-coding critics).
+pub(crate) fn linear_td_step(theta: &mut [f64], trace: &[f64], step: f64) {
+    debug_assert_eq!(
+        theta.len(),
+        trace.len(),
+        "a critic has one parameter per feature"
+    );
+    for (t, z) in theta.iter_mut().zip(trace) {
+        *t += step * z;
+    }
+}
+
 /// Evaluates a scalar approximator.
 pub fn scalar<A: Approximator + ?Sized>(f: &A, x: &[f64]) -> f64 {
     let mut y = [0.0];

@@ -298,9 +298,7 @@ impl Traced for Rbf {
         }
     }
     fn apply_td(&mut self, step: f64) {
-        for (t, z) in self.theta.iter_mut().zip(&self.trace) {
-            *t += step * z;
-        }
+        super::linear_td_step(&mut self.theta, &self.trace, step);
     }
     fn clear_traces(&mut self) {
         self.trace.fill(0.0);
