@@ -1,5 +1,5 @@
-//! The actor-critic loop shared by SAC, MLAC and RMAC: Template 2.1 (Eq. 2.19) with the
-//! step order of Algorithms 1–3.
+//! The loop shared by SAC, MLAC, RMAC and VGBP: Template 2.1 (Eq. 2.19) with the step
+//! order of Algorithms 1–3 and 7.
 //!
 //! Per sample, after measuring `x_{k+1}` and `r_{k+1}` (lines 6–19):
 //!
@@ -14,14 +14,22 @@
 //!
 //! The critic's visit of `x_k` happens before `V(x_{k+1})` is evaluated, as §3.5.2
 //! describes for LLR (the sample `[x_k | V(x_k)]` is stored first); for a parametric
-//! critic the order is immaterial because the visit changes only the traces.
+//! critic the order is immaterial because the visit changes only the traces. The critic
+//! and its learning rule (TD(λ) or LSTD(λ)) are a [`Critic`].
+//!
+//! VGBP (Algorithm 7) has no actor: its action is computed from the critic and the
+//! process model, and it is chosen *after* the critic and model updates (lines 12–14
+//! follow lines 6–10), where Algorithms 1–3 choose it before (line 9) —
+//! [`Improver::acts_after_update`].
+//!
 //! What differs between the algorithms is the [`Improver`]: [`crate::sac`],
-//! [`crate::mlac`], [`crate::rmac`].
+//! [`crate::mlac`], [`crate::rmac`], [`crate::vgbp`].
 
 use plant::QuadraticReward;
 
 use crate::Agent;
-use crate::approx::{Critic, scalar};
+use crate::approx::{Differentiable, scalar};
+use crate::critic::Critic;
 use crate::explore::Exploration;
 
 /// One experienced transition, as the policy improvement sees it.
@@ -85,13 +93,18 @@ impl TaskInfo {
 }
 
 /// The algorithm-specific half of an actor-critic learner: how actions are chosen and
-/// how the policy improves given the critic.
+/// how the policy improves given the critic `V`.
 pub trait Improver: Send {
     /// The policy's action `π(x)` (without exploration) into `u`; `u_prev` is the action
-    /// applied in the previous sample (RMAC linearises its model around it).
-    fn act(&self, x: &[f64], u_prev: &[f64], u: &mut [f64]);
+    /// applied in the previous sample (RMAC and VGBP linearise their model around it).
+    fn act(&self, x: &[f64], u_prev: &[f64], critic: &dyn Differentiable, u: &mut [f64]);
     /// Improves the policy and learns any models from transition `t`.
-    fn improve(&mut self, t: &Transition, critic: &dyn Critic);
+    fn improve(&mut self, t: &Transition, critic: &dyn Differentiable);
+    /// Whether the next action is chosen after the critic and model updates of this
+    /// sample (Algorithm 7) rather than before them (Algorithms 1–3, line 9).
+    fn acts_after_update(&self) -> bool {
+        false
+    }
     /// `(name, stored, capacity)` of each memory-based approximator.
     fn memories(&self) -> Vec<(&'static str, usize, usize)> {
         Vec::new()
@@ -105,8 +118,6 @@ pub struct Learning {
     pub gamma: f64,
     /// Trace decay `λ`.
     pub lambda: f64,
-    /// Critic learning rate `α_c`.
-    pub alpha_critic: f64,
 }
 
 /// An actor-critic agent: critic + improver + exploration.
@@ -147,7 +158,15 @@ impl ActorCritic {
 
     /// The critic's value `V(x)`.
     pub fn value(&self, x: &[f64]) -> f64 {
-        scalar(self.critic.as_ref(), x)
+        scalar(self.critic.function(), x)
+    }
+
+    /// Line 9 (Algorithm 7: lines 12–14): `π(x)`, saturated.
+    fn policy(&self, x: &[f64], u_prev: &[f64]) -> Vec<f64> {
+        let mut u = vec![0.0; self.info.m()];
+        self.improver.act(x, u_prev, self.critic.function(), &mut u);
+        self.info.saturate(&mut u);
+        u
     }
 
     /// Lines 14–15: `u ← sat(π(x) + Δu)`; remembers `π(x)` and the applied exploration.
@@ -167,31 +186,18 @@ impl ActorCritic {
 
 impl Agent for ActorCritic {
     fn start_trial(&mut self, x0: &[f64], u: &mut [f64]) {
-        self.critic.clear_traces();
+        self.critic.start_trial();
         self.exploration.start_trial();
         self.x.copy_from_slice(x0);
-        let m = self.info.m();
-        let mut u_policy = vec![0.0; m];
-        self.improver.act(x0, &vec![0.0; m], &mut u_policy);
-        self.info.saturate(&mut u_policy);
+        let u_policy = self.policy(x0, &vec![0.0; self.info.m()]);
         self.explore(&u_policy, u);
     }
 
     fn learn(&mut self, r: f64, x_next: &[f64], u: Option<&mut [f64]>) {
-        let Learning {
-            gamma,
-            lambda,
-            alpha_critic,
-        } = self.learning;
-        let v = self.critic.visit_value(&self.x, lambda * gamma);
-        let v_next = scalar(self.critic.as_ref(), x_next);
-        let td = r + gamma * v_next - v;
-        let m = self.info.m();
-        let mut u_next = vec![0.0; m];
-        if u.is_some() {
-            self.improver.act(x_next, &self.u, &mut u_next);
-            self.info.saturate(&mut u_next);
-        }
+        let Learning { gamma, lambda } = self.learning;
+        let td = self.critic.observe(&self.x, r, x_next, gamma, lambda);
+        let after = self.improver.acts_after_update();
+        let u_next = (u.is_some() && !after).then(|| self.policy(x_next, &self.u));
         let t = Transition {
             x: &self.x,
             u: &self.u,
@@ -201,17 +207,19 @@ impl Agent for ActorCritic {
             x_next,
             td,
         };
-        self.improver.improve(&t, self.critic.as_ref());
-        self.critic.apply_td(alpha_critic * td);
+        self.improver.improve(&t, self.critic.function());
+        self.critic.update(td);
+        let u_next =
+            u_next.or_else(|| (u.is_some() && after).then(|| self.policy(x_next, &self.u)));
         self.x.copy_from_slice(x_next);
-        if let Some(u) = u {
-            self.explore(&u_next, u);
+        match (u, u_next) {
+            (Some(u), Some(u_next)) => self.explore(&u_next, u),
+            _ => self.critic.end_trial(),
         }
     }
 
     fn greedy(&self, x: &[f64], u_prev: &[f64], u: &mut [f64]) {
-        self.improver.act(x, u_prev, u);
-        self.info.saturate(u);
+        u.copy_from_slice(&self.policy(x, u_prev));
     }
 
     fn memories(&self) -> Vec<(&'static str, usize, usize)> {

@@ -3,17 +3,21 @@
 use plant::Task;
 
 use crate::Agent;
-use crate::actor_critic::{ActorCritic, Learning, TaskInfo};
+use crate::actor_critic::{ActorCritic, Improver, Learning, TaskInfo};
 use crate::approx::llr::{Eviction, Llr, LlrParams, Search};
 use crate::approx::rbf::{Rbf, RbfParams};
 use crate::approx::tiles::{Tiles, TilesParams};
-use crate::approx::{Approximator, Critic, Differentiable};
+use crate::approx::{Approximator, Differentiable, ValueFunction};
 use crate::config::{Algo, Component, ExperimentConfig};
+use crate::critic::{Critic, TdLambda};
 use crate::explore::Exploration;
+use crate::lstd::Lstd;
 use crate::mlac::Mlac;
 use crate::model::ProcessModel;
 use crate::rmac::Rmac;
 use crate::sac::Sac;
+use crate::sarsa::{Epsilon, Sarsa};
+use crate::vgbp::Vgbp;
 
 /// Where an approximator lives: its input space and output size and bounds.
 struct Space {
@@ -46,15 +50,8 @@ fn make(c: &Component, s: &Space) -> Built {
             search: Search::KdTree,
             clip_to_neighbours: l.clip_to_neighbours,
         }))),
-        Component::Rbf(r) => Built::Rbf(Box::new(Rbf::new(&RbfParams {
-            centres: r.centres.clone(),
-            range: s.range.clone(),
-            periodic: s.periodic.clone(),
-            intersection: r.intersection,
-            outputs: s.outputs,
-            initial: 0.0,
-            bounds: s.bounds.clone(),
-        }))),
+        Component::Rbf(r) => Built::Rbf(Box::new(rbf(&r.centres, r.intersection, s))),
+        Component::Lstd(l) => Built::Rbf(Box::new(rbf(&l.centres, l.intersection, s))),
         Component::Tiles(t) => Built::Tiles(Box::new(Tiles::new(&TilesParams {
             tilings: t.tilings,
             tiles: t.tiles.clone(),
@@ -64,6 +61,18 @@ fn make(c: &Component, s: &Space) -> Built {
             bounds: s.bounds.clone(),
         }))),
     }
+}
+
+fn rbf(centres: &[usize], intersection: f64, s: &Space) -> Rbf {
+    Rbf::new(&RbfParams {
+        centres: centres.to_vec(),
+        range: s.range.clone(),
+        periodic: s.periodic.clone(),
+        intersection,
+        outputs: s.outputs,
+        initial: 0.0,
+        bounds: s.bounds.clone(),
+    })
 }
 
 impl Built {
@@ -83,7 +92,7 @@ impl Built {
             }
         }
     }
-    fn critic(self) -> Box<dyn Critic> {
+    fn value_function(self) -> Box<dyn ValueFunction> {
         match self {
             Built::Llr(a) => a,
             Built::Rbf(a) => a,
@@ -146,6 +155,25 @@ pub fn build(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Box<dyn Agen
         outputs,
         bounds,
     };
+    let l = &cfg.learning;
+    if let Some(s) = &cfg.sarsa {
+        let actions = Sarsa::action_set(&s.actions, m);
+        let Built::Rbf(q) = make(&cfg.critic, &state(actions.len(), None)) else {
+            unreachable!("validated: SARSA's Q-function is an RBF grid")
+        };
+        return Box::new(Sarsa::new(
+            *q,
+            actions,
+            cfg.critic.alpha(),
+            l.gamma,
+            l.lambda,
+            Epsilon {
+                decay: s.epsilon_decay,
+                min: s.epsilon_min,
+            },
+            run_seed,
+        ));
+    }
     let action_range: Vec<(f64, f64)> = (0..m)
         .map(|j| (task.action_low[j], task.action_high[j]))
         .collect();
@@ -166,45 +194,61 @@ pub fn build(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Box<dyn Agen
         bounds: None,
     };
     let action_bounds = Some((task.action_low.clone(), task.action_high.clone()));
-    let l = &cfg.learning;
-    let critic = make(&cfg.critic, &state(1, None)).critic();
+    let critic: Box<dyn Critic> = match (&cfg.critic, make(&cfg.critic, &state(1, None))) {
+        (Component::Lstd(c), Built::Rbf(v)) => Box::new(Lstd::new(*v, c.initial_a)),
+        (c, built) => Box::new(TdLambda::new(built.value_function(), c.alpha())),
+    };
     let model = || {
         let c = cfg
             .model
             .as_ref()
-            .expect("validated: MLAC and RMAC have a model");
+            .expect("validated: MLAC, RMAC and VGBP have a model");
         ProcessModel::new(
             make(c, &model_space).differentiable(),
             task.angle_mask.clone(),
             c.alpha(),
         )
     };
-    let improver: Box<dyn crate::actor_critic::Improver> = match cfg.algo {
-        Algo::Sac => Box::new(Sac::new(
-            make(&cfg.actor, &state(m, action_bounds)).any(),
-            cfg.actor.alpha(),
-        )),
-        Algo::Mlac => Box::new(Mlac::new(
+    let actor = |outputs, bounds| {
+        let c = cfg
+            .actor
+            .as_ref()
+            .expect("validated: SAC, MLAC and RMAC have an actor");
+        (make(c, &state(outputs, bounds)).any(), c.alpha())
+    };
+    let improver: Box<dyn Improver> = match cfg.algo {
+        Algo::Sac => {
+            let (a, alpha) = actor(m, action_bounds);
+            Box::new(Sac::new(a, alpha))
+        }
+        Algo::Mlac => {
+            let (a, alpha) = actor(m, action_bounds);
+            Box::new(Mlac::new(
+                info.clone(),
+                a,
+                model(),
+                alpha,
+                l.gamma,
+                l.saturation_margin,
+            ))
+        }
+        Algo::Rmac => {
+            let (a, alpha) = actor(n, None);
+            Box::new(Rmac::new(info.clone(), a, model(), alpha))
+        }
+        Algo::Vgbp => Box::new(Vgbp::new(
             info.clone(),
-            make(&cfg.actor, &state(m, action_bounds)).any(),
             model(),
-            cfg.actor.alpha(),
             l.gamma,
-            l.saturation_margin,
+            cfg.vgbp.as_ref().map_or(0, |v| v.lookahead),
         )),
-        Algo::Rmac => Box::new(Rmac::new(
-            info.clone(),
-            make(&cfg.actor, &state(n, None)).any(),
-            model(),
-            cfg.actor.alpha(),
-        )),
+        Algo::Sarsa => unreachable!("built above"),
     };
     Box::new(ActorCritic::new(
         info,
         Learning {
             gamma: l.gamma,
             lambda: l.lambda,
-            alpha_critic: cfg.critic.alpha(),
         },
         critic,
         improver,

@@ -22,6 +22,36 @@ pub enum Algo {
     Mlac,
     /// Reference model actor-critic (Algorithm 3).
     Rmac,
+    /// Value-gradient based policy (Algorithm 7), critic-only.
+    Vgbp,
+    /// SARSA(λ) with ε-greedy discrete actions (§6.2), critic-only.
+    Sarsa,
+}
+
+impl Algo {
+    /// The approximators this algorithm can use.
+    pub fn approximators(self) -> &'static [ApproxKind] {
+        use ApproxKind::*;
+        match self {
+            Algo::Sac => &[Llr, Rbf, Tiles],
+            Algo::Mlac | Algo::Rmac => &[Llr, Rbf],
+            Algo::Vgbp => &[Lstd, Rbf, Llr],
+            Algo::Sarsa => &[Rbf],
+        }
+    }
+
+    /// Every algorithm, for help texts and validation messages.
+    pub const ALL: [Algo; 5] = [Algo::Sac, Algo::Mlac, Algo::Rmac, Algo::Vgbp, Algo::Sarsa];
+
+    /// Whether the algorithm has an actor (or reference model) component.
+    pub fn has_actor(self) -> bool {
+        matches!(self, Algo::Sac | Algo::Mlac | Algo::Rmac)
+    }
+
+    /// Whether the algorithm learns a process model.
+    pub fn has_model(self) -> bool {
+        matches!(self, Algo::Mlac | Algo::Rmac | Algo::Vgbp)
+    }
 }
 
 /// The function approximator used by every component.
@@ -34,6 +64,19 @@ pub enum ApproxKind {
     Rbf,
     /// Tile coding (§3.5.3), SAC only.
     Tiles,
+    /// LSTD(λ) on normalised RBFs (Eq. 6.16–6.19), a VGBP critic; the process model is
+    /// LLR.
+    Lstd,
+}
+
+impl ApproxKind {
+    /// Every approximator, for help texts and validation messages.
+    pub const ALL: [ApproxKind; 4] = [
+        ApproxKind::Llr,
+        ApproxKind::Rbf,
+        ApproxKind::Tiles,
+        ApproxKind::Lstd,
+    ];
 }
 
 macro_rules! names {
@@ -47,8 +90,8 @@ macro_rules! names {
         }
     };
 }
-names!(Algo, Sac => "sac", Mlac => "mlac", Rmac => "rmac");
-names!(ApproxKind, Llr => "llr", Rbf => "rbf", Tiles => "tiles");
+names!(Algo, Sac => "sac", Mlac => "mlac", Rmac => "rmac", Vgbp => "vgbp", Sarsa => "sarsa");
+names!(ApproxKind, Llr => "llr", Rbf => "rbf", Tiles => "tiles", Lstd => "lstd");
 
 /// A complete experiment.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -64,13 +107,41 @@ pub struct ExperimentConfig {
     pub run: RunConfig,
     /// Parameters of Template 2.1 and the exploration.
     pub learning: LearningConfig,
-    /// The actor (SAC, MLAC) or reference model (RMAC).
-    pub actor: Component,
-    /// The critic `V(x)`.
+    /// The actor (SAC, MLAC) or reference model (RMAC); none for VGBP and SARSA.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub actor: Option<Component>,
+    /// The critic `V(x)` (SARSA: `Q(x, ·)`, one output per action).
     pub critic: Component,
-    /// The process model (MLAC, RMAC).
+    /// The process model (MLAC, RMAC, VGBP).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model: Option<Component>,
+    /// VGBP's action selection.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vgbp: Option<VgbpConfig>,
+    /// SARSA's action set and ε-greedy schedule.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sarsa: Option<SarsaConfig>,
+}
+
+/// VGBP's action selection (§6.3, [`crate::vgbp`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VgbpConfig {
+    /// Re-evaluations of the value gradient at the predicted next state (0: Eq. 6.21 as
+    /// the thesis has it).
+    pub lookahead: u32,
+}
+
+/// SARSA's discrete actions and exploration (§6.4.1, Eq. 6.22).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SarsaConfig {
+    /// The action values (per action dimension; the set is their product).
+    pub actions: Vec<f64>,
+    /// ε decays by this factor per trial.
+    pub epsilon_decay: f64,
+    /// ε never falls below this.
+    pub epsilon_min: f64,
 }
 
 /// How many experiments, of how many trials, from which seed.
@@ -114,6 +185,8 @@ pub enum Component {
     Rbf(RbfConfig),
     /// Tile coding.
     Tiles(TilesConfig),
+    /// LSTD(λ) on an RBF grid.
+    Lstd(LstdConfig),
 }
 
 /// LLR memory parameters (Tables 3.2, 6.2).
@@ -160,13 +233,35 @@ pub struct TilesConfig {
     pub tiles: Vec<usize>,
 }
 
+/// LSTD critic parameters (§6.4.1, Table 6.4).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LstdConfig {
+    /// Centres along each input.
+    pub centres: Vec<usize>,
+    /// Intersection height of neighbouring basis functions.
+    pub intersection: f64,
+    /// `A_0 = initial_a · I` (Eq. 6.17).
+    pub initial_a: f64,
+}
+
 impl Component {
-    /// The learning rate.
+    /// The learning rate (0 for LSTD, which has none).
     pub fn alpha(&self) -> f64 {
         match self {
             Component::Llr(c) => c.alpha,
             Component::Rbf(c) => c.alpha,
             Component::Tiles(c) => c.alpha,
+            Component::Lstd(_) => 0.0,
+        }
+    }
+
+    fn kind(&self) -> ApproxKind {
+        match self {
+            Component::Llr(_) => ApproxKind::Llr,
+            Component::Rbf(_) => ApproxKind::Rbf,
+            Component::Tiles(_) => ApproxKind::Tiles,
+            Component::Lstd(_) => ApproxKind::Lstd,
         }
     }
 }
@@ -271,31 +366,125 @@ impl ExperimentConfig {
             1e3,
             false,
         )?;
-        if self.approx == ApproxKind::Tiles && self.algo != Algo::Sac {
+        let allowed = self.algo.approximators();
+        if !allowed.contains(&self.approx) {
+            let names: Vec<&str> = allowed.iter().map(|a| a.as_str()).collect();
             return Err(err(
                 "approx",
                 format!(
-                    "{} needs a differentiable approximator; tile coding has no gradient (§3.5): use llr or rbf",
-                    self.algo
+                    "{} works with {}, not {}{}",
+                    self.algo,
+                    names.join(", "),
+                    self.approx,
+                    if self.approx == ApproxKind::Tiles {
+                        " (tile coding has no gradient, §3.5)"
+                    } else {
+                        ""
+                    }
                 ),
             ));
         }
-        self.check_component("actor", &self.actor, n, "state component")?;
-        self.check_component("critic", &self.critic, n, "state component")?;
-        match (&self.model, self.algo) {
-            (None, Algo::Mlac | Algo::Rmac) => Err(err(
-                "model",
+        let own = [self.approx];
+        match (&self.actor, self.algo.has_actor()) {
+            (None, true) => {
+                return Err(err(
+                    "actor",
+                    format!("{} has an actor: an [actor] section is required", self.algo),
+                ));
+            }
+            (Some(_), false) => {
+                return Err(err(
+                    "actor",
+                    format!("{} has no actor: remove the [actor] section", self.algo),
+                ));
+            }
+            (Some(c), true) => self.check_component("actor", c, &own, n, "state component")?,
+            (None, false) => {}
+        }
+        self.check_component("critic", &self.critic, &own, n, "state component")?;
+        // VGBP's process model is LLR whatever its critic (§6.3.1); the others learn every
+        // component with the same approximator.
+        let model_kinds: &[ApproxKind] = if self.algo == Algo::Vgbp {
+            &[ApproxKind::Llr, ApproxKind::Rbf]
+        } else {
+            &own
+        };
+        match (&self.model, self.algo.has_model()) {
+            (None, true) => {
+                return Err(err(
+                    "model",
+                    format!(
+                        "{} learns a process model: a [model] section is required",
+                        self.algo
+                    ),
+                ));
+            }
+            (Some(_), false) => {
+                return Err(err(
+                    "model",
+                    format!(
+                        "{} learns no process model: remove the [model] section",
+                        self.algo
+                    ),
+                ));
+            }
+            (Some(c), true) => {
+                self.check_component("model", c, model_kinds, n + m, "state and action component")?
+            }
+            (None, false) => {}
+        }
+        match (&self.vgbp, self.algo) {
+            (None, Algo::Vgbp) => return Err(err("vgbp", "vgbp needs a [vgbp] section")),
+            (Some(_), a) if a != Algo::Vgbp => {
+                return Err(err(
+                    "vgbp",
+                    format!("{a} is not vgbp: remove the [vgbp] section"),
+                ));
+            }
+            (Some(v), _) => check_i("vgbp.lookahead", v.lookahead.into(), 0, 100)?,
+            (None, _) => {}
+        }
+        if self.algo == Algo::Vgbp && task.reward.p.iter().any(|&p| p <= 0.0) {
+            return Err(err(
+                "algo",
                 format!(
-                    "{} learns a process model: a [model] section is required",
-                    self.algo
+                    "vgbp needs a reward strictly concave in the action (P > 0); {} has P = {:?}",
+                    self.system, task.reward.p
                 ),
+            ));
+        }
+        match (&self.sarsa, self.algo) {
+            (None, Algo::Sarsa) => Err(err("sarsa", "sarsa needs a [sarsa] section")),
+            (Some(_), a) if a != Algo::Sarsa => Err(err(
+                "sarsa",
+                format!("{a} is not sarsa: remove the [sarsa] section"),
             )),
-            (Some(_), Algo::Sac) => Err(err(
-                "model",
-                "sac learns no process model: remove the [model] section",
-            )),
-            (Some(c), _) => self.check_component("model", c, n + m, "state and action component"),
-            (None, Algo::Sac) => Ok(()),
+            (Some(c), _) => {
+                let count = c.actions.len() as u64;
+                check_i("sarsa.actions", count, 1, 64)?;
+                if count.pow(m as u32) > 4096 {
+                    return Err(err(
+                        "sarsa.actions",
+                        format!("{count}^{m} discrete actions: at most 4096"),
+                    ));
+                }
+                for (i, &a) in c.actions.iter().enumerate() {
+                    let (lo, hi) = (
+                        task.action_low
+                            .iter()
+                            .copied()
+                            .fold(f64::INFINITY, f64::min),
+                        task.action_high
+                            .iter()
+                            .copied()
+                            .fold(f64::NEG_INFINITY, f64::max),
+                    );
+                    check_f(&format!("sarsa.actions[{i}]"), a, lo, hi, false)?;
+                }
+                check_f("sarsa.epsilon_decay", c.epsilon_decay, 0.0, 1.0, false)?;
+                check_f("sarsa.epsilon_min", c.epsilon_min, 0.0, 1.0, false)
+            }
+            (None, _) => Ok(()),
         }
     }
 
@@ -303,22 +492,21 @@ impl ExperimentConfig {
         &self,
         section: &str,
         c: &Component,
+        kinds: &[ApproxKind],
         dim: usize,
         what: &str,
     ) -> Result<(), ConfigError> {
         let key = |k: &str| format!("{section}.{k}");
-        let kind_ok = matches!(
-            (c, self.approx),
-            (Component::Llr(_), ApproxKind::Llr)
-                | (Component::Rbf(_), ApproxKind::Rbf)
-                | (Component::Tiles(_), ApproxKind::Tiles)
-        );
-        if !kind_ok {
+        if !kinds.contains(&c.kind()) {
+            let names: Vec<&str> = kinds.iter().map(|k| k.as_str()).collect();
             return Err(err(
                 section,
                 format!(
-                    "does not hold {} parameters (approx = \"{}\")",
-                    self.approx, self.approx
+                    "holds {} parameters; {} expects {} parameters here (approx = \"{}\")",
+                    c.kind(),
+                    self.algo,
+                    names.join(" or "),
+                    self.approx
                 ),
             ));
         }
@@ -362,6 +550,23 @@ impl ExperimentConfig {
                     ));
                 }
                 check_f(&key("intersection"), r.intersection, 0.0, 1.0, true)?;
+            }
+            Component::Lstd(l) => {
+                check_len(&key("centres"), l.centres.len(), dim, what)?;
+                for (i, c) in l.centres.iter().enumerate() {
+                    check_i(&format!("{section}.centres[{i}]"), *c as u64, 1, 1000)?;
+                }
+                let total: u64 = l.centres.iter().map(|&c| c as u64).product();
+                if total > 5000 {
+                    return Err(err(
+                        &key("centres"),
+                        format!(
+                            "{total} basis functions in all: LSTD solves a dense {total}×{total} system, at most 5000"
+                        ),
+                    ));
+                }
+                check_f(&key("intersection"), l.intersection, 0.0, 1.0, true)?;
+                check_f(&key("initial_a"), l.initial_a, 0.0, 1e12, true)?;
             }
             Component::Tiles(t) => {
                 check_i(&key("tilings"), t.tilings as u64, 1, 1024)?;
@@ -440,16 +645,20 @@ pub fn resolve(
     };
     let algo: Algo = match (o.algo, pick("algo")?) {
         (Some(a), _) => a,
-        (None, Some(s)) => parse("algo", s, "sac, mlac, rmac")?
+        (None, Some(s)) => parse("algo", s, &Algo::ALL.map(Algo::as_str).join(", "))?
             .try_into()
             .expect("checked"),
         (None, None) => Algo::Mlac,
     };
     let approx: ApproxKind = match (o.approx, pick("approx")?) {
         (Some(a), _) => a,
-        (None, Some(s)) => parse("approx", s, "llr, rbf, tiles")?
-            .try_into()
-            .expect("checked"),
+        (None, Some(s)) => parse(
+            "approx",
+            s,
+            &ApproxKind::ALL.map(ApproxKind::as_str).join(", "),
+        )?
+        .try_into()
+        .expect("checked"),
         (None, None) => ApproxKind::Llr,
     };
     let preset = crate::preset::preset(system, algo, approx).map_err(with_file)?;
@@ -548,7 +757,7 @@ mod tests {
             (c.system, c.algo, c.approx),
             (SystemName::Pendulum, Algo::Mlac, ApproxKind::Llr)
         );
-        let Component::Llr(actor) = &c.actor else {
+        let Some(Component::Llr(actor)) = &c.actor else {
             panic!()
         };
         assert_eq!(

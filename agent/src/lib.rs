@@ -1,11 +1,14 @@
-//! Learning agents of Grondman's thesis: function approximators (§3.5) and the
-//! actor-critic algorithms SAC, MLAC and RMAC (Chapter 3, Algorithms 1–3).
+//! Learning agents of Grondman's thesis: function approximators (§3.5), the
+//! actor-critic algorithms SAC, MLAC and RMAC (Chapter 3, Algorithms 1–3) and the
+//! critic-only VGBP (Chapter 6, Algorithm 7) and SARSA (§6.2).
 //!
 //! * [`approx`] — RBF ([`approx::rbf`]), LLR ([`approx::llr`]) and tile coding
 //!   ([`approx::tiles`]) behind the [`approx::Approximator`] traits.
 //! * [`actor_critic`] — Template 2.1, the loop every algorithm shares; [`sac`],
-//!   [`mlac`], [`rmac`] — what each algorithm does differently; [`model`] — the learned
-//!   process model; [`explore`] — Gaussian exploration.
+//!   [`mlac`], [`rmac`], [`vgbp`] — what each algorithm does differently; [`critic`] —
+//!   the critic and its learning rule, TD(λ) or [`lstd`]; [`model`] — the learned
+//!   process model; [`explore`] — Gaussian exploration; [`sarsa`] — the discrete-action
+//!   baseline.
 //! * [`config`], [`preset`], [`build()`] — from a configuration to a running agent.
 //!
 //! An [`Agent`] is a plain step function; it knows nothing about processes or
@@ -15,13 +18,17 @@ pub mod actor_critic;
 pub mod approx;
 mod build;
 pub mod config;
+pub mod critic;
 pub mod explore;
+pub mod lstd;
 pub mod mlac;
 pub mod model;
 pub mod preset;
 pub mod rmac;
 pub mod sac;
+pub mod sarsa;
 pub mod seed;
+pub mod vgbp;
 
 pub use build::build;
 

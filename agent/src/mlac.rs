@@ -16,7 +16,7 @@
 //! respond to pushing further.
 
 use crate::actor_critic::{Improver, TaskInfo, Transition};
-use crate::approx::{Approximator, Critic};
+use crate::approx::{Approximator, Differentiable};
 use crate::model::ProcessModel;
 use plant::{MAX_ACTION, MAX_STATE};
 
@@ -60,11 +60,11 @@ impl Mlac {
 }
 
 impl Improver for Mlac {
-    fn act(&self, x: &[f64], _u_prev: &[f64], u: &mut [f64]) {
+    fn act(&self, x: &[f64], _u_prev: &[f64], _critic: &dyn Differentiable, u: &mut [f64]) {
         self.actor.value(x, u);
     }
 
-    fn improve(&mut self, t: &Transition, critic: &dyn Critic) {
+    fn improve(&mut self, t: &Transition, critic: &dyn Differentiable) {
         let (n, m) = (self.info.n(), self.info.m());
         // ũ_k = π_ϑk(x_k), x̃_{k+1} = f̂(x_k, ũ_k)                      (Eq. 3.4–3.5)
         let mut u_tilde = [0.0; MAX_ACTION];

@@ -91,23 +91,25 @@ struct Selection {
     /// System to learn on [default: pendulum].
     #[arg(long, value_parser = parse_system)]
     system: Option<SystemName>,
-    /// Algorithm: sac (Algorithm 1), mlac (Algorithm 2) or rmac (Algorithm 3) [default: mlac].
+    /// Algorithm: sac (Algorithm 1), mlac (Algorithm 2), rmac (Algorithm 3), vgbp
+    /// (Algorithm 7) or sarsa (§6.2) [default: mlac].
     #[arg(long, value_parser = parse_algo)]
     algo: Option<Algo>,
-    /// Function approximator: llr, rbf or tiles (tiles: sac only) [default: llr].
+    /// Function approximator: llr, rbf, tiles (sac only) or lstd (vgbp only: an LSTD
+    /// critic on RBFs with an LLR process model); sarsa uses rbf [default: llr].
     #[arg(long, value_parser = parse_approx)]
     approx: Option<ApproxKind>,
-    /// Trials per run [preset: 400 for the pendulum, 600 for the arm].
+    /// Trials per run [preset: 400 for the pendulum (vgbp, sarsa: 200), 600 for the arm].
     #[arg(long)]
     trials: Option<u32>,
-    /// Independent runs [preset: 30 for the pendulum, 20 for the arm].
+    /// Independent runs [preset: 30 for the pendulum (vgbp, sarsa: 20), 20 for the arm].
     #[arg(long)]
     runs: Option<u32>,
     /// Seed of every random stream of every run [preset: 1].
     #[arg(long)]
     seed: Option<u64>,
     /// A greedy evaluation trial (no exploration, no learning) after every N trials; 0
-    /// disables [preset: 10].
+    /// disables [preset: 10; vgbp, sarsa: 5].
     #[arg(long)]
     eval_every: Option<u32>,
     /// TOML file overriding preset values; see `rig config` for every key.
@@ -143,17 +145,22 @@ fn parse_system(s: &str) -> Result<SystemName, String> {
 }
 
 fn parse_algo(s: &str) -> Result<Algo, String> {
-    [Algo::Sac, Algo::Mlac, Algo::Rmac]
+    Algo::ALL
         .into_iter()
         .find(|a| a.as_str() == s)
-        .ok_or_else(|| "one of: sac, mlac, rmac".into())
+        .ok_or_else(|| format!("one of: {}", Algo::ALL.map(Algo::as_str).join(", ")))
 }
 
 fn parse_approx(s: &str) -> Result<ApproxKind, String> {
-    [ApproxKind::Llr, ApproxKind::Rbf, ApproxKind::Tiles]
+    ApproxKind::ALL
         .into_iter()
         .find(|a| a.as_str() == s)
-        .ok_or_else(|| "one of: llr, rbf, tiles".into())
+        .ok_or_else(|| {
+            format!(
+                "one of: {}",
+                ApproxKind::ALL.map(ApproxKind::as_str).join(", ")
+            )
+        })
 }
 
 fn resolve_selection(s: &Selection) -> Result<agent::config::ExperimentConfig, String> {

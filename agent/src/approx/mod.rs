@@ -69,9 +69,10 @@ pub trait Traced: Approximator {
     fn clear_traces(&mut self);
 }
 
-/// A critic usable by every actor-critic algorithm here.
-pub trait Critic: Traced + Differentiable {}
-impl<T: Traced + Differentiable> Critic for T {}
+/// A scalar approximator with traces and a gradient: what a TD(λ) critic needs
+/// ([`crate::critic::TdLambda`]).
+pub trait ValueFunction: Traced + Differentiable {}
+impl<T: Traced + Differentiable> ValueFunction for T {}
 
 /// `θ ← θ + step · z` (Eq. 2.19c) for a scalar approximator that is linear in its
 /// parameters, one parameter and one trace per feature (RBF and tile-coding critics).

@@ -124,6 +124,23 @@ impl Rbf {
         self.trace.is_empty()
     }
 
+    /// Writes the normalised basis functions `φ(x)` (Eq. 3.12) into `phi`, one entry per
+    /// basis function — the feature vector of LSTD (Eq. 6.16) and SARSA (Eq. 6.4).
+    pub fn basis(&self, x: &[f64], phi: &mut [f64]) {
+        self.features(x, |i, v, _| phi[i] = v);
+    }
+
+    /// The parameters `θ`, `m` per basis function (`θ[i·m + o]` weighs `φᵢ` in output `o`).
+    pub fn parameters(&self) -> &[f64] {
+        &self.theta
+    }
+
+    /// The parameters, for learners that set them directly (LSTD, Eq. 6.19; SARSA,
+    /// Eq. 6.5).
+    pub fn parameters_mut(&mut self) -> &mut [f64] {
+        &mut self.theta
+    }
+
     fn axes(&self, x: &[f64]) -> Axes {
         let mut g = Vec::with_capacity(self.n);
         let mut r = Vec::with_capacity(self.n);

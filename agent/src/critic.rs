@@ -1,0 +1,75 @@
+//! The critic `V(x)`: a differentiable value function together with the rule by which it
+//! learns — TD(λ) with eligibility traces (Template 2.1, Eq. 2.19; [`TdLambda`]) or
+//! least-squares TD(λ) (Eq. 6.16–6.19; [`crate::lstd::Lstd`]).
+//!
+//! The learners read the critic through [`Critic::function`] (`V` and `∂V/∂x`, which
+//! MLAC's gradient, RMAC's reachable-set choice and VGBP's action need) and drive it per
+//! sample:
+//!
+//! ```text
+//! δ_k ← observe(x_k, r_{k+1}, x_{k+1})   visit x_k (trace), TD error     Eq. 2.19a–b
+//! …   the policy improvement reads V (before the critic changes)
+//! update(δ_k)                             θ ← θ + α_c δ_k z_k             Eq. 2.19c
+//! end_trial()                             LSTD: θ ← A⁻¹ b                  Eq. 6.19
+//! ```
+
+use crate::approx::{Differentiable, ValueFunction, scalar};
+
+/// A critic and its learning rule.
+pub trait Critic: Send {
+    /// The value function `V(x)` with its gradient.
+    fn function(&self) -> &dyn Differentiable;
+    /// Clears the eligibility traces at the start of a trial.
+    fn start_trial(&mut self);
+    /// Visits `x_k` (traces, Eq. 2.19b / 6.16) and returns the temporal difference
+    /// `δ_k = r_{k+1} + γ V(x_{k+1}) − V(x_k)` (Eq. 2.19a).
+    fn observe(&mut self, x: &[f64], r: f64, x_next: &[f64], gamma: f64, lambda: f64) -> f64;
+    /// Updates the parameters with `δ_k` (Eq. 2.19c); called after the policy
+    /// improvement has read the critic.
+    fn update(&mut self, td: f64);
+    /// The trial has ended (after its last [`Critic::update`]).
+    fn end_trial(&mut self) {}
+    /// For a memory-based critic, `(samples stored, capacity)`.
+    fn fill(&self) -> Option<(usize, usize)> {
+        None
+    }
+}
+
+/// TD(λ) with accumulating eligibility traces, Template 2.1: any traced approximator
+/// (RBF, LLR, tile coding) with learning rate `α_c`.
+pub struct TdLambda {
+    f: Box<dyn ValueFunction>,
+    alpha: f64,
+}
+
+impl TdLambda {
+    /// A TD(λ) critic learning `f` with rate `α_c`.
+    pub fn new(f: Box<dyn ValueFunction>, alpha: f64) -> Self {
+        Self { f, alpha }
+    }
+}
+
+impl Critic for TdLambda {
+    fn function(&self) -> &dyn Differentiable {
+        self.f.as_ref()
+    }
+
+    fn start_trial(&mut self) {
+        self.f.clear_traces();
+    }
+
+    fn observe(&mut self, x: &[f64], r: f64, x_next: &[f64], gamma: f64, lambda: f64) -> f64 {
+        // z ← λγ z + ∇_θ V(x_k) (an LLR critic stores [x_k | V(x_k)] first, §3.5.2), then
+        // δ_k with V(x_{k+1}) as the critic stands after the visit.
+        let v = self.f.visit_value(x, lambda * gamma);
+        r + gamma * scalar(self.f.as_ref(), x_next) - v
+    }
+
+    fn update(&mut self, td: f64) {
+        self.f.apply_td(self.alpha * td);
+    }
+
+    fn fill(&self) -> Option<(usize, usize)> {
+        self.f.fill()
+    }
+}
