@@ -23,12 +23,15 @@
 //! **Look-ahead** (an option; 0 is the thesis's Eq. 6.21): with `lookahead = n > 0` the
 //! gradient is re-evaluated `n` times at the predicted next state,
 //! `u ← ½ γ P⁻¹ β_uᵀ ∂V(f̂(x, u))/∂xᵀ` (the model re-linearised at the new `u`) — Eq. 6.10
-//! without the Taylor step of Eq. 6.8. For a linear system and a quadratic critic the
-//! fixed point is exactly the discrete-time LQR action, where Eq. 6.21 is off by a term
-//! of order `γ BᵀSB / P` (11 % for the double integrator at `Ts = 0.05`; see the tests).
+//! without the Taylor step of Eq. 6.8 — and of the iterates the one with the highest
+//! right-hand side of Eq. 6.6, `ρ(x, u) + γ V(f̂(x, u))`, is taken (near a bound the plain
+//! iteration can flip between the two extreme actions). For a linear system and a
+//! quadratic critic the fixed point is exactly the discrete-time LQR action, where
+//! Eq. 6.21 is off by a term of order `γ BᵀSB / P` (11 % for the double integrator at
+//! `Ts = 0.05`; `tests/tests/lqr.rs`).
 
 use crate::actor_critic::{Improver, TaskInfo, Transition};
-use crate::approx::Differentiable;
+use crate::approx::{Differentiable, scalar};
 use crate::model::ProcessModel;
 use plant::{MAX_ACTION, MAX_STATE};
 
@@ -60,6 +63,13 @@ impl Vgbp {
         }
     }
 
+    /// `ρ(x, u) + γ V(f̂(x, u))`, the right-hand side of Eq. 6.6.
+    fn bellman_rhs(&self, x: &[f64], u: &[f64], critic: &dyn Differentiable) -> f64 {
+        let n = self.info.n();
+        let p = self.model.predict(x, u);
+        self.info.reward.reward(x, u) + self.gamma * scalar(critic, &p.x_next[..n])
+    }
+
     /// `u = ½ γ P⁻¹ β_uᵀ ∇V(at)`, with `β_u = ∂f̂/∂u` linearised at `(x, u_lin)`.
     fn greedy_step(
         &self,
@@ -87,11 +97,25 @@ impl Improver for Vgbp {
         let m = self.info.m();
         // Lines 12–14: β^P from the model's neighbours of (x_{k+1}, 0); Eq. 6.21.
         self.greedy_step(x, &[0.0; MAX_ACTION][..m], false, critic, u);
+        if self.lookahead == 0 {
+            return;
+        }
+        // Look-ahead: iterate Eq. 6.10 at the predicted next state and keep the iterate
+        // with the highest right-hand side of Eq. 6.6.
+        let mut best = [0.0; MAX_ACTION];
+        best[..m].copy_from_slice(u);
+        let mut best_q = self.bellman_rhs(x, &best[..m], critic);
         let mut u_lin = [0.0; MAX_ACTION];
         for _ in 0..self.lookahead {
             u_lin[..m].copy_from_slice(u);
             self.greedy_step(x, &u_lin[..m], true, critic, u);
+            let q = self.bellman_rhs(x, u, critic);
+            if q > best_q {
+                best_q = q;
+                best[..m].copy_from_slice(u);
+            }
         }
+        u.copy_from_slice(&best[..m]);
     }
 
     fn improve(&mut self, t: &Transition, _critic: &dyn Differentiable) {
