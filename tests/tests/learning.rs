@@ -199,3 +199,19 @@ fn vgbp_lstd_learns_the_swing_up_fast() {
         greedy.min
     );
 }
+
+#[test]
+fn shipped_configuration_files_resolve() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../bench/configs");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&dir).expect("bench/configs exists") {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let text = std::fs::read_to_string(&path).unwrap();
+            resolve(Some((&path, &text)), &Overrides::default())
+                .unwrap_or_else(|e| panic!("{e}"));
+            seen += 1;
+        }
+    }
+    assert!(seen > 0, "no configuration files in {}", dir.display());
+}
