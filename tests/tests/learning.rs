@@ -208,8 +208,7 @@ fn shipped_configuration_files_resolve() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "toml") {
             let text = std::fs::read_to_string(&path).unwrap();
-            resolve(Some((&path, &text)), &Overrides::default())
-                .unwrap_or_else(|e| panic!("{e}"));
+            resolve(Some((&path, &text)), &Overrides::default()).unwrap_or_else(|e| panic!("{e}"));
             seen += 1;
         }
     }
