@@ -6,9 +6,9 @@
 //! widest axis. A sample that the memory overwrites stays in the tree as a stale entry,
 //! recognised by its sequence number and skipped; when stale entries reach a quarter of
 //! the live ones the memory rebuilds the tree, balanced, from scratch — amortised
-//! O(log N) per insertion. A search can be warm-started by offering candidates to
-//! [`Best`] first (`Llr` offers the remembered neighbours of a nearby query): the bound is
-//! then tight from the first node. Pruning uses the bounding boxes only, so correctness
+//! O(log N) per insertion. A search can be warm-started with a ceiling on [`Best`] (`Llr`
+//! takes the farthest of the remembered neighbours of a nearby query): the bound is then
+//! tight from the first node. Pruning uses the bounding boxes only, so correctness
 //! never depends on the split values, and any number of identical samples (every trial starts at `[π, 0]`,
 //! saturated actions repeat) only makes a leaf larger, never breaks the tree.
 //!
@@ -60,14 +60,15 @@ impl Candidate {
     }
 }
 
-/// The K best candidates so far: a bounded max-heap (worst candidate on top), sorted
-/// nearest-first once by [`Best::sorted`]. The order is total — distance, then newer
-/// first — so the result does not depend on the order candidates were offered in.
+/// The K best candidates so far, kept sorted nearest-first (newer first among equals):
+/// an offer is inserted at its rank, so reading the set needs no sort. The order is
+/// total — distance, then newer first — so the result does not depend on the order
+/// candidates were offered in.
 pub struct Best {
     items: Vec<Candidate>,
-    len: usize,
     k: usize,
-    sorted: bool,
+    /// Candidates farther than this are not wanted (see [`Best::set_ceiling`]).
+    ceiling: f64,
 }
 
 impl Best {
@@ -75,79 +76,61 @@ impl Best {
     pub fn new(k: usize) -> Self {
         debug_assert!((1..=MAX_K + 2).contains(&k));
         Self {
-            items: vec![
-                Candidate {
-                    d2: 0.0,
-                    seq: 0,
-                    slot: 0
-                };
-                k
-            ],
-            len: 0,
+            items: Vec::with_capacity(k),
             k,
-            sorted: true,
+            ceiling: f64::INFINITY,
+        }
+    }
+
+    /// Declares that at least `k` candidates lie within squared distance `d2`, so that
+    /// no farther one can enter the set: the search prunes with this bound until the set
+    /// is full (a warm start). Candidates at exactly `d2` are still admitted.
+    pub fn set_ceiling(&mut self, d2: f64) {
+        self.ceiling = d2;
+    }
+
+    /// The squared distance a candidate must not exceed to enter the set.
+    #[inline(always)]
+    fn bound(&self) -> f64 {
+        if self.items.len() == self.k {
+            self.items[self.k - 1].d2
+        } else {
+            self.ceiling
         }
     }
 
     /// Offers a candidate.
     #[inline(always)]
     pub fn offer(&mut self, c: Candidate) {
-        if self.sorted {
-            // Nearest-first order reversed is worst-first: a valid max-heap again.
-            self.items[..self.len].reverse();
-        }
-        let h = &mut self.items;
-        if self.len < self.k {
-            // Push and sift up.
-            let mut i = self.len;
-            self.len += 1;
-            while i > 0 {
-                let parent = (i - 1) / 2;
-                if !h[parent].before(&c) {
-                    break;
-                }
-                h[i] = h[parent];
-                i = parent;
+        let len = self.items.len();
+        if len == self.k {
+            if !c.before(&self.items[len - 1]) {
+                return;
             }
-            h[i] = c;
-        } else if c.before(&h[0]) {
-            // Replace the worst and sift down.
-            let mut i = 0;
-            loop {
-                let (l, r) = (2 * i + 1, 2 * i + 2);
-                let mut worst = i;
-                let mut w = c;
-                if l < self.len && w.before(&h[l]) {
-                    worst = l;
-                    w = h[l];
-                }
-                if r < self.len && w.before(&h[r]) {
-                    worst = r;
-                }
-                if worst == i {
-                    break;
-                }
-                h[i] = h[worst];
-                i = worst;
-            }
-            h[i] = c;
-        } else {
-            self.sorted = false;
-            return;
+            self.items.pop();
         }
-        self.sorted = false;
+        // Insertion from the end: offers arrive roughly nearest-first (the warm start is
+        // sorted, the tree visits near boxes first), so few items move.
+        self.items.push(c);
+        let h = &mut self.items[..];
+        let mut i = h.len() - 1;
+        while i > 0 && c.before(&h[i - 1]) {
+            h[i] = h[i - 1];
+            i -= 1;
+        }
+        h[i] = c;
     }
 
     /// Whether a candidate at squared distance `d2` could enter the set.
     #[inline(always)]
     fn admits(&self, d2: f64) -> bool {
-        self.len < self.k || d2 <= self.items[0].d2
+        d2 <= self.bound()
     }
 
     /// Whether `lower_bound` cannot beat the current worst candidate.
-    #[inline]
+    #[inline(always)]
     fn prunes(&self, lower_bound: f64) -> bool {
-        self.len == self.k && lower_bound > self.items[0].d2
+        lower_bound > self.bound()
     }
 
     /// How many candidates this set keeps.
@@ -156,13 +139,8 @@ impl Best {
     }
 
     /// The candidates, nearest first (newer first among equals).
-    pub fn sorted(&mut self) -> &[Candidate] {
-        if !self.sorted {
-            self.items[..self.len]
-                .sort_unstable_by(|a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
-            self.sorted = true;
-        }
-        &self.items[..self.len]
+    pub fn sorted(&self) -> &[Candidate] {
+        &self.items
     }
 }
 
@@ -174,47 +152,34 @@ struct Entry {
     seq: u64,
 }
 
-#[derive(Clone)]
+/// A node's links; its bounding box lives in [`KdTree::boxes`].
+#[derive(Clone, Copy)]
 struct Node {
-    lo: [f64; MAX_DIM],
-    hi: [f64; MAX_DIM],
-    axis: usize,
+    /// Split value along `axis` (inner nodes; insertion goes left below it).
     split: f64,
+    axis: u32,
+    /// Left child, or [`NO_CHILD`] for a leaf.
     left: u32,
+    /// Right child, or, for a leaf, its index in [`KdTree::leaves`].
     right: u32,
-    /// Entries of a leaf (empty for an inner node): coordinates packed `dim` per entry,
-    /// then slots and sequence numbers.
+}
+
+impl Node {
+    fn is_leaf(&self) -> bool {
+        self.left == NO_CHILD
+    }
+}
+
+/// The entries of a leaf: coordinates packed `dim` per entry, then slots and sequence
+/// numbers.
+#[derive(Clone, Default)]
+struct Leaf {
     coords: Vec<f64>,
     slots: Vec<u32>,
     seqs: Vec<u64>,
 }
 
-impl Node {
-    fn leaf(entries: Vec<Entry>, dim: usize) -> Self {
-        let (mut lo, mut hi) = ([f64::INFINITY; MAX_DIM], [f64::NEG_INFINITY; MAX_DIM]);
-        for e in &entries {
-            for j in 0..dim {
-                lo[j] = lo[j].min(e.p[j]);
-                hi[j] = hi[j].max(e.p[j]);
-            }
-        }
-        let mut node = Node {
-            lo,
-            hi,
-            axis: 0,
-            split: 0.0,
-            left: NO_CHILD,
-            right: NO_CHILD,
-            coords: Vec::with_capacity(entries.len() * dim),
-            slots: Vec::with_capacity(entries.len()),
-            seqs: Vec::with_capacity(entries.len()),
-        };
-        for e in &entries {
-            node.push(e, dim);
-        }
-        node
-    }
-
+impl Leaf {
     fn push(&mut self, e: &Entry, dim: usize) {
         self.coords.extend_from_slice(&e.p[..dim]);
         self.slots.push(e.slot);
@@ -224,59 +189,50 @@ impl Node {
     fn len(&self) -> usize {
         self.slots.len()
     }
-
-    /// The leaf's entries, unpacked (for splitting).
-    fn take_entries(&mut self, dim: usize) -> Vec<Entry> {
-        let out = (0..self.len())
-            .map(|i| {
-                let mut p = [0.0; MAX_DIM];
-                p[..dim].copy_from_slice(&self.coords[i * dim..(i + 1) * dim]);
-                Entry {
-                    p,
-                    slot: self.slots[i],
-                    seq: self.seqs[i],
-                }
-            })
-            .collect();
-        self.coords = Vec::new();
-        self.slots = Vec::new();
-        self.seqs = Vec::new();
-        out
-    }
-
-    fn is_leaf(&self) -> bool {
-        self.left == NO_CHILD
-    }
-
-    /// Widest axis of the bounding box, if it has any extent.
-    fn widest(&self, dim: usize) -> Option<usize> {
-        let axis = (0..dim)
-            .max_by(|&a, &b| (self.hi[a] - self.lo[a]).total_cmp(&(self.hi[b] - self.lo[b])))?;
-        (self.hi[axis] > self.lo[axis]).then_some(axis)
-    }
 }
 
 /// A dynamic k-d tree over scaled points.
+///
+/// Layout (for the search's memory traffic): node links, bounding boxes (`2·dim` floats
+/// per node, lower corner then upper) and leaf entries live in separate vectors, so a
+/// search touches 16 bytes of links and `16·dim` bytes of box per node.
 pub struct KdTree {
     dim: usize,
     nodes: Vec<Node>,
+    /// Bounding boxes, `2 * dim` per node: `lo[..dim]`, then `hi[..dim]`.
+    boxes: Vec<f64>,
+    leaves: Vec<Leaf>,
+    /// Leaves emptied by a split, for reuse.
+    free_leaves: Vec<u32>,
     entries: usize,
+    /// The search's stack, kept between searches to avoid an allocation per search.
+    stack: std::cell::RefCell<Vec<(u32, f64)>>,
 }
 
 impl KdTree {
     /// An empty tree for `dim`-dimensional points.
     pub fn new(dim: usize) -> Self {
+        let mut tree = Self::empty(dim, 1);
+        tree.add_leaf(&[]);
+        tree
+    }
+
+    fn empty(dim: usize, nodes: usize) -> Self {
         Self {
             dim,
-            nodes: vec![Node::leaf(Vec::new(), dim)],
+            nodes: Vec::with_capacity(nodes),
+            boxes: Vec::with_capacity(nodes * 2 * dim),
+            leaves: Vec::with_capacity(nodes / 2 + 1),
+            free_leaves: Vec::new(),
             entries: 0,
+            stack: std::cell::RefCell::new(Vec::with_capacity(64)),
         }
     }
 
     /// A balanced tree over `items` = (slot, seq), whose scaled coordinates are
     /// `coords(slot)`.
     pub fn build<'a>(dim: usize, items: &[(u32, u64)], coords: impl Fn(u32) -> &'a [f64]) -> Self {
-        let entries: Vec<Entry> = items
+        let mut entries: Vec<Entry> = items
             .iter()
             .map(|&(slot, seq)| {
                 let mut p = [0.0; MAX_DIM];
@@ -284,75 +240,128 @@ impl KdTree {
                 Entry { p, slot, seq }
             })
             .collect();
-        let mut tree = Self {
-            dim,
-            nodes: Vec::with_capacity(2 * items.len() / LEAF_SIZE + 1),
-            entries: entries.len(),
-        };
-        tree.grow(entries);
+        let mut tree = Self::empty(dim, 2 * items.len() / LEAF_SIZE + 1);
+        tree.entries = entries.len();
+        tree.grow(&mut entries);
         tree
     }
 
-    /// Adds node(s) holding `entries`, split recursively; returns the subtree's root.
-    fn grow(&mut self, mut all: Vec<Entry>) -> u32 {
+    /// Bounding box of `entries` (empty: `+∞` below `−∞`).
+    fn bbox(&self, entries: &[Entry]) -> ([f64; MAX_DIM], [f64; MAX_DIM]) {
+        let (mut lo, mut hi) = ([f64::INFINITY; MAX_DIM], [f64::NEG_INFINITY; MAX_DIM]);
+        for e in entries {
+            for j in 0..self.dim {
+                lo[j] = lo[j].min(e.p[j]);
+                hi[j] = hi[j].max(e.p[j]);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Widest axis of a bounding box, if it has any extent.
+    fn widest(&self, lo: &[f64], hi: &[f64]) -> Option<usize> {
+        let axis = (0..self.dim).max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))?;
+        (hi[axis] > lo[axis]).then_some(axis)
+    }
+
+    /// Appends a node with the given box; returns its id.
+    fn add_node(&mut self, node: Node, lo: &[f64], hi: &[f64]) -> u32 {
         let id = self.nodes.len() as u32;
-        let leaf = Node::leaf(Vec::new(), self.dim);
-        self.nodes.push(leaf);
-        let probe = Node::leaf(all.clone(), self.dim);
+        self.nodes.push(node);
+        self.boxes.extend_from_slice(&lo[..self.dim]);
+        self.boxes.extend_from_slice(&hi[..self.dim]);
+        id
+    }
+
+    /// Appends a leaf node holding `entries`; returns its id.
+    fn add_leaf(&mut self, entries: &[Entry]) -> u32 {
+        let dim = self.dim;
+        let leaf = match self.free_leaves.pop() {
+            Some(l) => l,
+            None => {
+                self.leaves.push(Leaf::default());
+                (self.leaves.len() - 1) as u32
+            }
+        };
+        let store = &mut self.leaves[leaf as usize];
+        store.coords.reserve(entries.len() * dim);
+        store.slots.reserve(entries.len());
+        store.seqs.reserve(entries.len());
+        for e in entries {
+            store.push(e, dim);
+        }
+        let (lo, hi) = self.bbox(entries);
+        let node = Node {
+            split: 0.0,
+            axis: 0,
+            left: NO_CHILD,
+            right: leaf,
+        };
+        self.add_node(node, &lo, &hi)
+    }
+
+    /// Adds node(s) holding `all`, split recursively at the median of the widest axis;
+    /// returns the subtree's root.
+    fn grow(&mut self, all: &mut [Entry]) -> u32 {
+        let (lo, hi) = self.bbox(all);
         let axis = if all.len() > LEAF_SIZE {
-            probe.widest(self.dim)
+            self.widest(&lo, &hi)
         } else {
             None
         };
         let Some(axis) = axis else {
-            self.nodes[id as usize] = probe;
-            return id;
+            return self.add_leaf(all);
         };
-        let (lo, hi) = (probe.lo, probe.hi);
         let mid = all.len() / 2;
         all.select_nth_unstable_by(mid, |a, b| {
             a.p[axis].total_cmp(&b.p[axis]).then(a.seq.cmp(&b.seq))
         });
         let split = all[mid].p[axis];
-        let right_entries = all.split_off(mid);
-        let left = self.grow(all);
-        let right = self.grow(right_entries);
-        self.nodes[id as usize] = Node {
-            lo,
-            hi,
-            axis,
-            split,
-            left,
-            right,
-            ..Node::leaf(Vec::new(), self.dim)
-        };
+        let id = self.add_node(
+            Node {
+                split,
+                axis: axis as u32,
+                left: NO_CHILD,
+                right: NO_CHILD,
+            },
+            &lo,
+            &hi,
+        );
+        let (left, right) = all.split_at_mut(mid);
+        let left = self.grow(left);
+        let right = self.grow(right);
+        self.nodes[id as usize].left = left;
+        self.nodes[id as usize].right = right;
         id
     }
 
     /// Inserts a point.
     pub fn insert(&mut self, p: &[f64], slot: u32, seq: u64) {
+        let dim = self.dim;
         let mut e = Entry {
             p: [0.0; MAX_DIM],
             slot,
             seq,
         };
-        e.p[..self.dim].copy_from_slice(p);
+        e.p[..dim].copy_from_slice(p);
         self.entries += 1;
         let mut id = 0usize;
         loop {
-            let node = &mut self.nodes[id];
-            for j in 0..self.dim {
-                node.lo[j] = node.lo[j].min(p[j]);
-                node.hi[j] = node.hi[j].max(p[j]);
+            let b = &mut self.boxes[2 * dim * id..2 * dim * (id + 1)];
+            for j in 0..dim {
+                b[j] = b[j].min(p[j]);
+                b[dim + j] = b[dim + j].max(p[j]);
             }
+            let node = self.nodes[id];
             if node.is_leaf() {
-                node.push(&e, self.dim);
-                if node.len() > 2 * LEAF_SIZE {
+                let leaf = &mut self.leaves[node.right as usize];
+                leaf.push(&e, dim);
+                if leaf.len() > 2 * LEAF_SIZE {
                     self.split_leaf(id);
                 }
                 return;
             }
-            id = if p[node.axis] < node.split {
+            id = if p[node.axis as usize] < node.split {
                 node.left
             } else {
                 node.right
@@ -362,14 +371,30 @@ impl KdTree {
 
     /// Splits an overfull leaf in place (no-op if all its points coincide).
     fn split_leaf(&mut self, id: usize) {
-        let Some(_) = self.nodes[id].widest(self.dim) else {
+        let dim = self.dim;
+        let b = &self.boxes[2 * dim * id..2 * dim * (id + 1)];
+        if self.widest(&b[..dim], &b[dim..]).is_none() {
             return;
-        };
-        let entries = self.nodes[id].take_entries(self.dim);
-        let sub = self.grow(entries);
-        // The grown subtree's root replaces the leaf (its own slot is left unused).
-        self.nodes.swap(id, sub as usize);
-        self.nodes[sub as usize] = Node::leaf(Vec::new(), self.dim);
+        }
+        let leaf = self.nodes[id].right;
+        let store = std::mem::take(&mut self.leaves[leaf as usize]);
+        let mut entries: Vec<Entry> = (0..store.len())
+            .map(|i| {
+                let mut p = [0.0; MAX_DIM];
+                p[..dim].copy_from_slice(&store.coords[i * dim..(i + 1) * dim]);
+                Entry {
+                    p,
+                    slot: store.slots[i],
+                    seq: store.seqs[i],
+                }
+            })
+            .collect();
+        self.free_leaves.push(leaf);
+        let sub = self.grow(&mut entries) as usize;
+        // The grown subtree's root replaces the leaf (its own node is left unused).
+        self.nodes[id] = self.nodes[sub];
+        self.boxes
+            .copy_within(2 * dim * sub..2 * dim * (sub + 1), 2 * dim * id);
     }
 
     /// Offers every live point of the tree that can still improve `best`;
@@ -403,14 +428,19 @@ impl KdTree {
     ) {
         let q: &[f64; D] = q.try_into().expect("query of the tree's dimension");
         let period: &[f64; D] = period.try_into().expect("periods of the tree's dimension");
-        let box_dist2 = |node: &Node| -> f64 {
+        let box_dist2 = |id: u32| -> f64 {
+            let b = &self.boxes[2 * D * id as usize..2 * D * (id as usize + 1)];
+            let (lo, hi): (&[f64; D], &[f64; D]) = (
+                b[..D].try_into().expect("box of D"),
+                b[D..].try_into().expect("box of D"),
+            );
             let mut s = 0.0;
             for j in 0..D {
                 let x = q[j];
-                if x >= node.lo[j] && x <= node.hi[j] {
+                if x >= lo[j] && x <= hi[j] {
                     continue;
                 }
-                let (mut a, mut b) = ((x - node.lo[j]).abs(), (x - node.hi[j]).abs());
+                let (mut a, mut b) = ((x - lo[j]).abs(), (x - hi[j]).abs());
                 if period[j] > 0.0 {
                     a = a.min(period[j] - a);
                     b = b.min(period[j] - b);
@@ -420,16 +450,27 @@ impl KdTree {
             }
             s
         };
-        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
-        stack.push((0, box_dist2(&self.nodes[0])));
-        while let Some((id, lb)) = stack.pop() {
+        let mut stack = self.stack.borrow_mut();
+        stack.clear();
+        // The node to visit next: the nearer child is descended into directly, the
+        // farther one pushed — each only if its box can still hold a better candidate.
+        let mut next = Some((0u32, box_dist2(0)));
+        loop {
+            let (id, lb) = match next.take() {
+                Some(n) => n,
+                None => match stack.pop() {
+                    Some(n) => n,
+                    None => break,
+                },
+            };
             if best.prunes(lb) {
                 continue;
             }
-            let node = &self.nodes[id as usize];
+            let node = self.nodes[id as usize];
             if node.is_leaf() {
+                let leaf = &self.leaves[node.right as usize];
                 for ((p, &slot), &seq) in
-                    node.coords.chunks_exact(D).zip(&node.slots).zip(&node.seqs)
+                    leaf.coords.chunks_exact(D).zip(&leaf.slots).zip(&leaf.seqs)
                 {
                     let p: &[f64; D] = p.try_into().expect("chunks of D");
                     let d2 = dist2(p, q, period);
@@ -439,16 +480,19 @@ impl KdTree {
                 }
                 continue;
             }
-            let dl = box_dist2(&self.nodes[node.left as usize]);
-            let dr = box_dist2(&self.nodes[node.right as usize]);
-            // Push the farther child first so the nearer one is searched first.
+            let dl = box_dist2(node.left);
+            let dr = box_dist2(node.right);
             let (near, far) = if dl <= dr {
                 ((node.left, dl), (node.right, dr))
             } else {
                 ((node.right, dr), (node.left, dl))
             };
-            stack.push(far);
-            stack.push(near);
+            if !best.prunes(far.1) {
+                stack.push(far);
+            }
+            if !best.prunes(near.1) {
+                next = Some(near);
+            }
         }
     }
 

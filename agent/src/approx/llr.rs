@@ -89,6 +89,7 @@ pub struct LlrParams {
 }
 
 /// The local affine model at a query.
+#[derive(Clone, Copy)]
 struct Fit {
     /// Prediction at the query.
     y: [f64; MAX_OUT],
@@ -139,12 +140,13 @@ pub struct Llr {
     /// `x_{k+1}`). Neighbour sets depend on the stored inputs only, so output updates
     /// leave them valid, and insertions update them exactly.
     cache: RefCell<[Option<Cached>; 2]>,
-    /// Per slot, the number of the search that last seeded it (see `Llr::nearest`).
-    seeded: Vec<Cell<u64>>,
-    /// Searches so far.
-    searches: Cell<u64>,
     /// Slots with a non-zero trace.
     traced: Vec<(u32, u64)>,
+    /// Changes to the stored inputs or outputs so far: a fit depends on nothing else.
+    version: u64,
+    /// The last fit from [`Llr::local`]: scaled query (bits), memory version, result.
+    /// MLAC asks for `π(x_k)` and then shifts the actor at `x_k`, which fits there again.
+    last_fit: Cell<Option<([u64; MAX_DIM], u64, Fit)>>,
 }
 
 impl Llr {
@@ -193,9 +195,9 @@ impl Llr {
             fifo: VecDeque::with_capacity(p.memory + 1),
             tree: KdTree::new(n),
             cache: RefCell::new([None, None]),
-            seeded: Vec::with_capacity(p.memory),
-            searches: Cell::new(0),
             traced: Vec::new(),
+            version: 0,
+            last_fit: Cell::new(None),
         }
     }
 
@@ -262,11 +264,9 @@ impl Llr {
             return hit.found[..count.min(hit.found.len())].to_vec();
         }
         let mut wide = Best::new(self.k + 1 + CACHE_SLACK);
-        // Warm start: the remembered neighbours of the nearest remembered query, offered
-        // first, give the tree search a tight bound from its first node. Seeded samples
-        // are stamped so the tree does not offer them twice.
-        let stamp = self.searches.get() + 1;
-        self.searches.set(stamp);
+        // Warm start: the remembered neighbours of the nearest remembered query are as
+        // many live samples as the search keeps, so the farthest of them from `q` bounds
+        // the search from its first node (a ceiling: every sample within it is offered).
         let seed = cache.iter().flatten().min_by(|a, b| {
             dist2(&a.q[..self.n], &q[..self.n], &self.period).total_cmp(&dist2(
                 &b.q[..self.n],
@@ -274,16 +274,21 @@ impl Llr {
                 &self.period,
             ))
         });
-        if let Some(seed) = seed {
-            for c in &seed.found {
-                self.seeded[c.slot as usize].set(stamp);
-                wide.offer(Candidate {
-                    d2: dist2(self.coords(c.slot), &q[..self.n], &self.period),
-                    ..*c
-                });
-            }
+        if let Some(seed) = seed.filter(|s| s.found.len() >= wide.capacity()) {
+            let ceiling = seed
+                .found
+                .iter()
+                .map(|c| dist2(self.coords(c.slot), &q[..self.n], &self.period))
+                // A NaN (a corrupt query or sample) leaves the search unbounded.
+                .fold(0.0, |a: f64, d| if d > a || d.is_nan() { d } else { a });
+            let ceiling = if ceiling.is_nan() {
+                f64::INFINITY
+            } else {
+                ceiling
+            };
+            wide.set_ceiling(ceiling);
         }
-        self.search_into(&q[..self.n], &mut wide, stamp);
+        self.search_into(&q[..self.n], &mut wide);
         let found = wide.sorted().to_vec();
         let out = found[..count.min(found.len())].to_vec();
         cache.swap(0, 1);
@@ -316,11 +321,9 @@ impl Llr {
         }
     }
 
-    /// Offers the nearest stored samples to `best`, except those seeded by search `stamp`.
-    fn search_into(&self, q: &[f64], best: &mut Best, stamp: u64) {
-        let live = |slot: u32, seq: u64| {
-            self.seq[slot as usize] == seq && self.seeded[slot as usize].get() != stamp
-        };
+    /// Offers the nearest stored samples to `best`.
+    fn search_into(&self, q: &[f64], best: &mut Best) {
+        let live = |slot: u32, seq: u64| self.seq[slot as usize] == seq;
         match self.search {
             Search::KdTree => self.tree.search(q, &self.period, best, live),
             Search::Scan => {
@@ -347,7 +350,22 @@ impl Llr {
 
     /// The affine model fitted to the neighbours `nb` of the scaled query `q`.
     fn fit_local(&self, q: &[f64; MAX_DIM], nb: &[Candidate]) -> Fit {
-        let (n, m) = (self.n, self.m);
+        // Monomorphised per input dimension, so that the small loops unroll.
+        match self.n {
+            1 => self.fit_in::<1>(q, nb),
+            2 => self.fit_in::<2>(q, nb),
+            3 => self.fit_in::<3>(q, nb),
+            4 => self.fit_in::<4>(q, nb),
+            5 => self.fit_in::<5>(q, nb),
+            6 => self.fit_in::<6>(q, nb),
+            7 => self.fit_in::<7>(q, nb),
+            _ => self.fit_in::<MAX_DIM>(q, nb),
+        }
+    }
+
+    fn fit_in<const N: usize>(&self, q: &[f64; MAX_DIM], nb: &[Candidate]) -> Fit {
+        let (n, m) = (N, self.m);
+        debug_assert_eq!(n, self.n);
         let mut out = Fit {
             y: [0.0; MAX_OUT],
             jac: [0.0; MAX_OUT * MAX_DIM],
@@ -356,13 +374,17 @@ impl Llr {
             return out;
         }
         let kf = nb.len() as f64;
+        let period: &[f64; N] = self.period[..N].try_into().expect("n periods");
         // Inputs relative to the query (angles wrapped).
-        let rel = |c: &Candidate| -> [f64; MAX_DIM] {
-            let p = self.coords(c.slot);
-            let mut d = [0.0; MAX_DIM];
-            for j in 0..n {
+        let rel = |c: &Candidate| -> [f64; N] {
+            let s = c.slot as usize;
+            let p: &[f64; N] = self.inputs[s * N..(s + 1) * N]
+                .try_into()
+                .expect("n inputs");
+            let mut d = [0.0; N];
+            for j in 0..N {
                 let mut v = p[j] - q[j];
-                let per = self.period[j];
+                let per = period[j];
                 if per > 0.0 {
                     if v >= 0.5 * per {
                         v -= per;
@@ -375,10 +397,10 @@ impl Llr {
             d
         };
         // Means, then the centred normal equations S B = C, ridge-regularised.
-        let (mut dm, mut ym) = ([0.0; MAX_DIM], [0.0; MAX_OUT]);
+        let (mut dm, mut ym) = ([0.0; N], [0.0; MAX_OUT]);
         for c in nb {
             let d = rel(c);
-            for j in 0..n {
+            for j in 0..N {
                 dm[j] += d[j] / kf;
             }
             for (o, y) in self.output(c.slot).iter().enumerate() {
@@ -390,7 +412,7 @@ impl Llr {
         for c in nb {
             let d = rel(c);
             let y = self.output(c.slot);
-            for a in 0..n {
+            for a in 0..N {
                 let da = d[a] - dm[a];
                 for b in 0..=a {
                     s[a * n + b] += da * (d[b] - dm[b]);
@@ -400,7 +422,7 @@ impl Llr {
                 }
             }
         }
-        for a in 0..n {
+        for a in 0..N {
             for b in 0..a {
                 s[b * n + a] = s[a * n + b];
             }
@@ -411,7 +433,7 @@ impl Llr {
         }
         for o in 0..m {
             let mut y = ym[o];
-            for j in 0..n {
+            for j in 0..N {
                 let slope = cxy[j * m + o];
                 y -= slope * dm[j];
                 out.jac[o * n + j] = slope * self.weights[j];
@@ -433,8 +455,22 @@ impl Llr {
     /// Prediction and slope at `x`.
     fn local(&self, x: &[f64]) -> Fit {
         let q = self.scale(x);
+        if let Some(fit) = self.remembered_fit(&q) {
+            return fit;
+        }
         let nb = self.nearest(&q, self.k);
-        self.fit_local(&q, &nb)
+        let fit = self.fit_local(&q, &nb);
+        self.last_fit
+            .set(Some((q.map(f64::to_bits), self.version, fit)));
+        fit
+    }
+
+    /// The last fit, if it was at `q` and the memory has not changed since.
+    fn remembered_fit(&self, q: &[f64; MAX_DIM]) -> Option<Fit> {
+        self.last_fit
+            .get()
+            .filter(|(key, version, _)| *version == self.version && *key == q.map(f64::to_bits))
+            .map(|(_, _, fit)| fit)
     }
 
     #[inline]
@@ -456,6 +492,7 @@ impl Llr {
     ) -> (Candidate, Option<u32>) {
         let seq = self.next_seq;
         self.next_seq += 1;
+        self.version += 1;
         let replace = match self.eviction {
             Eviction::Redundant(radius) if self.len > 0 => {
                 let nearest = nearest.or_else(|| self.nearest(q, 1).first().copied());
@@ -470,7 +507,6 @@ impl Llr {
                 self.outputs.extend_from_slice(y);
                 self.seq.push(seq);
                 self.trace.push(0.0);
-                self.seeded.push(Cell::new(0));
                 self.len += 1;
                 ((self.len - 1) as u32, None)
             }
@@ -535,7 +571,10 @@ impl Llr {
     fn insert_here(&mut self, x: &[f64]) -> (Fit, Best) {
         let q = self.scale(x);
         let pre = self.nearest(&q, self.k + 1);
-        let fit = self.fit_local(&q, &pre[..pre.len().min(self.k)]);
+        let fit = match self.remembered_fit(&q) {
+            Some(fit) => fit,
+            None => self.fit_local(&q, &pre[..pre.len().min(self.k)]),
+        };
         let (new, removed) = self.insert(&q, &fit.y[..self.m], pre.first().copied());
         let mut after = Best::new(self.k);
         after.offer(new);
@@ -559,7 +598,8 @@ impl Approximator for Llr {
         y.copy_from_slice(&self.local(x).y[..self.m]);
     }
     fn shift(&mut self, x: &[f64], step: &[f64]) {
-        let (_, mut after) = self.insert_here(x);
+        let (_, after) = self.insert_here(x);
+        self.version += 1;
         for c in after.sorted() {
             for o in 0..self.m {
                 let i = c.slot as usize * self.m + o;
@@ -573,6 +613,7 @@ impl Approximator for Llr {
         if rate > 0.0 && !self.is_empty() {
             let best = self.nearest(&q, self.k);
             nearest = best.first().copied();
+            self.version += 1;
             for c in &best {
                 for o in 0..self.m {
                     let i = c.slot as usize * self.m + o;
@@ -617,7 +658,7 @@ impl Traced for Llr {
             kept += 1;
         }
         self.traced.truncate(kept);
-        let (fit, mut after) = self.insert_here(x);
+        let (fit, after) = self.insert_here(x);
         for c in after.sorted() {
             if self.trace[c.slot as usize] == 0.0 {
                 self.traced.push((c.slot, c.seq));
@@ -627,6 +668,7 @@ impl Traced for Llr {
         fit.y[0]
     }
     fn apply_td(&mut self, step: f64) {
+        self.version += 1;
         for &(slot, seq) in &self.traced {
             let s = slot as usize;
             if self.seq[s] == seq {
@@ -778,7 +820,7 @@ mod tests {
                     (rng.random_range(-6..6) as f64) * 0.5,
                     (rng.random_range(-20..20) as f64) * 0.5,
                 ];
-                let (_, mut after) = llr.insert_here(&x);
+                let (_, after) = llr.insert_here(&x);
                 let after: Vec<u32> = after.sorted().iter().map(|c| c.slot).collect();
                 assert_eq!(after, brute_force(&llr, &x), "insertion {i}");
             }
@@ -807,7 +849,7 @@ mod tests {
                 let x = point();
                 llr.fit(&x, &[0.0], 0.0);
                 assert_eq!(neighbours(&llr, &q), brute_force(&llr, &q), "step {i}");
-                let (_, mut after) = llr.insert_here(&q);
+                let (_, after) = llr.insert_here(&q);
                 let after: Vec<u32> = after.sorted().iter().map(|c| c.slot).collect();
                 assert_eq!(after, brute_force(&llr, &q), "step {i}");
             }

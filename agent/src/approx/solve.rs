@@ -8,6 +8,7 @@ pub const MAX_N: usize = 8;
 /// Solves `A X = B` in place for symmetric positive definite `A` (`n × n`, row-major in
 /// `a`) and `B` (`n × m`, row-major in `b`, overwritten by `X`). Returns `false` if `A`
 /// is not numerically positive definite (then `b` is unspecified).
+#[inline(always)]
 pub fn cholesky_solve(a: &mut [f64], n: usize, b: &mut [f64], m: usize) -> bool {
     debug_assert!(n <= MAX_N);
     // Factor A = L Lᵀ, L stored in the lower triangle of a.
