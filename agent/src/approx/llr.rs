@@ -7,7 +7,8 @@
 //! * **Neighbour search**: a dynamic [`KdTree`] over the memory (or, with
 //!   [`Search::Scan`], a partial selection over it) — never a sort of the whole memory.
 //!   The two most recent searches are remembered and kept exact across insertions, and a
-//!   new search is warm-started from the nearest remembered one.
+//!   new search is warm-started from the nearest remembered one: the farthest of its
+//!   remembered neighbours from the new query bounds the new search from the start.
 //! * **Fit**: `β = Y Xᵀ (X Xᵀ)⁻¹` solved as a centred ridge regression in coordinates
 //!   relative to the query: with `dᵢ = W (xᵢ − x_q)` (angles wrapped), the slope is
 //!   `B = (Σ d̃ d̃ᵀ + εI)⁻¹ Σ d̃ ỹᵀ` (tilde: minus the mean) and the prediction
@@ -30,6 +31,15 @@
 //!   and its neighbours eligibility 1, decaying all others. Outputs can be bounded (the
 //!   actor's memory is saturated to the input bounds, so it never proposes an action
 //!   beyond them).
+//!
+//! # Speed
+//!
+//! Besides the search itself (see [`super::kdtree`] for what was changed there and the
+//! measurements), the fit is monomorphised per input dimension like the search, and the
+//! last fit is remembered with the memory's version (bumped by every change of a stored
+//! input or output): MLAC asks for `π(x_k)` and then shifts the actor at `x_k`, which
+//! fits at the same point on the same memory again — one fit of about six per agent
+//! step saved. The results are bit-identical: the same sums in the same order.
 
 use std::cell::{Cell, RefCell};
 use std::collections::VecDeque;
