@@ -145,21 +145,22 @@ fn the_arm_and_the_linear_system_run_with_their_presets() {
     }
 }
 
+/// Runs `cfg` with `rig learn` on two threads into a fresh test directory.
+fn learn_in(name: &str, cfg: &ExperimentConfig) -> rig::learn::LearnSummary {
+    let options = LearnOptions {
+        out: out_dir(name),
+        threads: Some(2),
+        progress: false,
+    };
+    learn(cfg, &options).unwrap()
+}
+
 #[test]
 fn mlac_llr_learns_the_swing_up() {
     // A policy that never swings up earns about −4900 per 3 s trial; a swing-up about
     // −750 to −900. After 50 trials (2.5 simulated minutes) MLAC/LLR swings up.
     let cfg = config(Algo::Mlac, ApproxKind::Llr, 4, 50, 3);
-    let out = out_dir("learns");
-    let summary = learn(
-        &cfg,
-        &LearnOptions {
-            out,
-            threads: Some(2),
-            progress: false,
-        },
-    )
-    .unwrap();
+    let summary = learn_in("learns", &cfg);
     let greedy = summary.greedy_curve.last().unwrap();
     assert_eq!(greedy.trial, 50);
     assert!(
@@ -181,16 +182,7 @@ fn vgbp_lstd_learns_the_swing_up_fast() {
     // trials (1.5 min) every one of 4 runs swings up (a policy that does not earns
     // about −4900).
     let cfg = config(Algo::Vgbp, ApproxKind::Lstd, 4, 30, 1);
-    let out = out_dir("vgbp-learns");
-    let summary = learn(
-        &cfg,
-        &LearnOptions {
-            out,
-            threads: Some(2),
-            progress: false,
-        },
-    )
-    .unwrap();
+    let summary = learn_in("vgbp-learns", &cfg);
     let greedy = summary.greedy_curve.last().unwrap();
     assert_eq!(greedy.trial, 30);
     assert!(
