@@ -169,6 +169,35 @@ impl ActorCritic {
         u
     }
 
+    /// Lines 6–19 for one transition; `terminal`: `x_next` ends the trial with value zero.
+    /// Writes the next action into `u` if given (and the trial goes on).
+    fn transition(&mut self, r: f64, x_next: &[f64], terminal: bool, u: Option<&mut [f64]>) {
+        let Learning { gamma, lambda } = self.learning;
+        let td = self
+            .critic
+            .observe(&self.x, r, (!terminal).then_some(x_next), gamma, lambda);
+        let after = self.improver.acts_after_update();
+        let u_next = (u.is_some() && !after).then(|| self.policy(x_next, &self.u));
+        let t = Transition {
+            x: &self.x,
+            u: &self.u,
+            u_policy: &self.u_policy,
+            du: &self.du,
+            r,
+            x_next,
+            td,
+        };
+        self.improver.improve(&t, self.critic.function());
+        self.critic.update(td);
+        let u_next =
+            u_next.or_else(|| (u.is_some() && after).then(|| self.policy(x_next, &self.u)));
+        self.x.copy_from_slice(x_next);
+        match (u, u_next) {
+            (Some(u), Some(u_next)) => self.explore(&u_next, u),
+            _ => self.critic.end_trial(),
+        }
+    }
+
     /// Lines 14–15: `u ← sat(π(x) + Δu)`; remembers `π(x)` and the applied exploration.
     fn explore(&mut self, u_policy: &[f64], u: &mut [f64]) {
         self.u_policy.copy_from_slice(u_policy);
@@ -194,28 +223,11 @@ impl Agent for ActorCritic {
     }
 
     fn learn(&mut self, r: f64, x_next: &[f64], u: Option<&mut [f64]>) {
-        let Learning { gamma, lambda } = self.learning;
-        let td = self.critic.observe(&self.x, r, x_next, gamma, lambda);
-        let after = self.improver.acts_after_update();
-        let u_next = (u.is_some() && !after).then(|| self.policy(x_next, &self.u));
-        let t = Transition {
-            x: &self.x,
-            u: &self.u,
-            u_policy: &self.u_policy,
-            du: &self.du,
-            r,
-            x_next,
-            td,
-        };
-        self.improver.improve(&t, self.critic.function());
-        self.critic.update(td);
-        let u_next =
-            u_next.or_else(|| (u.is_some() && after).then(|| self.policy(x_next, &self.u)));
-        self.x.copy_from_slice(x_next);
-        match (u, u_next) {
-            (Some(u), Some(u_next)) => self.explore(&u_next, u),
-            _ => self.critic.end_trial(),
-        }
+        self.transition(r, x_next, false, u);
+    }
+
+    fn learn_terminal(&mut self, r: f64, x_next: &[f64]) {
+        self.transition(r, x_next, true, None);
     }
 
     fn greedy(&self, x: &[f64], u_prev: &[f64], u: &mut [f64]) {

@@ -8,6 +8,7 @@
 //!
 //! ```text
 //! δ_k ← observe(x_k, r_{k+1}, x_{k+1})   visit x_k (trace), TD error     Eq. 2.19a–b
+//!                                         (x_{k+1} = None: terminal, V = 0)
 //! …   the policy improvement reads V (before the critic changes)
 //! update(δ_k)                             θ ← θ + α_c δ_k z_k             Eq. 2.19c
 //! end_trial()                             LSTD: θ ← A⁻¹ b                  Eq. 6.19
@@ -22,8 +23,16 @@ pub trait Critic: Send {
     /// Clears the eligibility traces at the start of a trial.
     fn start_trial(&mut self);
     /// Visits `x_k` (traces, Eq. 2.19b / 6.16) and returns the temporal difference
-    /// `δ_k = r_{k+1} + γ V(x_{k+1}) − V(x_k)` (Eq. 2.19a).
-    fn observe(&mut self, x: &[f64], r: f64, x_next: &[f64], gamma: f64, lambda: f64) -> f64;
+    /// `δ_k = r_{k+1} + γ V(x_{k+1}) − V(x_k)` (Eq. 2.19a); `x_next = None` is a terminal
+    /// state, whose value is zero.
+    fn observe(
+        &mut self,
+        x: &[f64],
+        r: f64,
+        x_next: Option<&[f64]>,
+        gamma: f64,
+        lambda: f64,
+    ) -> f64;
     /// Updates the parameters with `δ_k` (Eq. 2.19c); called after the policy
     /// improvement has read the critic.
     fn update(&mut self, td: f64);
@@ -58,11 +67,19 @@ impl Critic for TdLambda {
         self.f.clear_traces();
     }
 
-    fn observe(&mut self, x: &[f64], r: f64, x_next: &[f64], gamma: f64, lambda: f64) -> f64 {
+    fn observe(
+        &mut self,
+        x: &[f64],
+        r: f64,
+        x_next: Option<&[f64]>,
+        gamma: f64,
+        lambda: f64,
+    ) -> f64 {
         // z ← λγ z + ∇_θ V(x_k) (an LLR critic stores [x_k | V(x_k)] first, §3.5.2), then
         // δ_k with V(x_{k+1}) as the critic stands after the visit.
         let v = self.f.visit_value(x, lambda * gamma);
-        r + gamma * scalar(self.f.as_ref(), x_next) - v
+        let v_next = x_next.map_or(0.0, |x_next| scalar(self.f.as_ref(), x_next));
+        r + gamma * v_next - v
     }
 
     fn update(&mut self, td: f64) {
@@ -71,5 +88,46 @@ impl Critic for TdLambda {
 
     fn fill(&self) -> Option<(usize, usize)> {
         self.f.fill()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::approx::rbf::{Rbf, RbfParams};
+
+    /// TD(λ) on a single basis function `φ ≡ 1` (`V = θ`), starting at `θ = 1`.
+    fn one_feature(alpha: f64) -> TdLambda {
+        let rbf = Rbf::new(&RbfParams {
+            centres: vec![1],
+            range: vec![(0.0, 1.0)],
+            periodic: vec![false],
+            intersection: 0.5,
+            outputs: 1,
+            initial: 1.0,
+            bounds: None,
+        });
+        TdLambda::new(Box::new(rbf), alpha)
+    }
+
+    /// `δ = r + γ V(x') − V(x)`, then `θ ← θ + α δ z` with `z = λγ z + 1` (Eq. 2.19);
+    /// into a terminal state `V(x') = 0` while the trace still decays with `λγ`.
+    #[test]
+    fn td_steps_by_hand_including_a_terminal_one() {
+        let (alpha, gamma, lambda) = (0.5, 0.9, 0.5);
+        let mut c = one_feature(alpha);
+        c.start_trial();
+        // δ = −1 + 0.9·1 − 1 = −1.1; z = 1; θ = 1 − 0.55 = 0.45.
+        let td = c.observe(&[0.3], -1.0, Some(&[0.6]), gamma, lambda);
+        assert!((td + 1.1).abs() < 1e-12, "{td}");
+        c.update(td);
+        assert!((scalar(c.function(), &[0.1]) - 0.45).abs() < 1e-12);
+        // Terminal: δ = −2 + 0 − 0.45 = −2.45; z = 0.45·1 + 1 = 1.45;
+        // θ = 0.45 + 0.5·(−2.45)·1.45.
+        let td = c.observe(&[0.6], -2.0, None, gamma, lambda);
+        assert!((td + 2.45).abs() < 1e-12, "{td}");
+        c.update(td);
+        let want = 0.45 - 0.5 * 2.45 * 1.45;
+        assert!((scalar(c.function(), &[0.1]) - want).abs() < 1e-12);
     }
 }

@@ -36,12 +36,17 @@ pub use build::build;
 ///
 /// Per trial: [`Agent::start_trial`] with `x_0` gives `u_0`; then for every sample
 /// [`Agent::learn`] with `r_{k+1} = ρ(x_k, u_k)` and `x_{k+1}` learns from the transition
-/// and — unless it is the trial's last — gives `u_{k+1}`.
+/// and — unless it is the trial's last — gives `u_{k+1}`. A transition that leaves a
+/// task's operating range (§6.4.2) ends the trial through [`Agent::learn_terminal`]
+/// instead.
 pub trait Agent: Send {
     /// Starts a trial in `x0` (clears eligibility traces) and writes the first action.
     fn start_trial(&mut self, x0: &[f64], u: &mut [f64]);
     /// Learns from the last transition; writes the next action if `u` is given.
     fn learn(&mut self, r: f64, x_next: &[f64], u: Option<&mut [f64]>);
+    /// Learns from a transition into a terminal state — the system left its operating
+    /// range and the trial is over: the value beyond it is zero, `V(x_{k+1}) = 0`.
+    fn learn_terminal(&mut self, r: f64, x_next: &[f64]);
     /// The greedy action in `x` — no exploration, no learning. `u_prev` is the action
     /// applied in the previous sample (zero at a trial start).
     fn greedy(&self, x: &[f64], u_prev: &[f64], u: &mut [f64]);

@@ -159,14 +159,39 @@ impl Agent for Sarsa {
     }
 
     fn learn(&mut self, r: f64, x_next: &[f64], u: Option<&mut [f64]>) {
+        let a_next = self.choose(x_next);
+        self.q_of(x_next);
+        let q_next = self.q_values[a_next];
+        self.update(r, q_next, x_next, a_next);
+        if let Some(u) = u {
+            u.copy_from_slice(&self.actions[a_next]);
+        }
+    }
+
+    fn learn_terminal(&mut self, r: f64, x_next: &[f64]) {
+        // A terminal state has value zero: Q(x_{k+1}, ·) = 0.
+        self.update(r, 0.0, x_next, self.a);
+    }
+
+    fn greedy(&self, x: &[f64], _u_prev: &[f64], u: &mut [f64]) {
+        u.copy_from_slice(&self.actions[self.greedy_index(x)]);
+    }
+
+    fn memories(&self) -> Vec<(&'static str, usize, usize)> {
+        Vec::new()
+    }
+}
+
+impl Sarsa {
+    /// Eq. 6.1–6.5 for the transition `(x_k, u_k, r_{k+1}, x_{k+1})` with
+    /// `Q(x_{k+1}, u_{k+1}) = q_next`; then `u_{k+1}` is the action index `a_next`.
+    fn update(&mut self, r: f64, q_next: f64, x_next: &[f64], a_next: usize) {
         let k = self.actions.len();
         let x = std::mem::take(&mut self.x);
         self.q_of(&x);
         let q_now = self.q_values[self.a];
-        let a_next = self.choose(x_next);
-        self.q_of(x_next);
         // δ = r + γ Q(x_{k+1}, u_{k+1}) − Q(x_k, u_k)                       (Eq. 6.1)
-        let td = r + self.gamma * self.q_values[a_next] - q_now;
+        let td = r + self.gamma * q_next - q_now;
         // z ← λγ z + ∂Q(x_k, u_k)/∂θ: φ(x_k) in the block of u_k             (Eq. 6.4)
         self.q.basis(&x, &mut self.phi);
         let decay = self.lambda * self.gamma;
@@ -185,17 +210,6 @@ impl Agent for Sarsa {
         self.x = x;
         self.x.copy_from_slice(x_next);
         self.a = a_next;
-        if let Some(u) = u {
-            u.copy_from_slice(&self.actions[a_next]);
-        }
-    }
-
-    fn greedy(&self, x: &[f64], _u_prev: &[f64], u: &mut [f64]) {
-        u.copy_from_slice(&self.actions[self.greedy_index(x)]);
-    }
-
-    fn memories(&self) -> Vec<(&'static str, usize, usize)> {
-        Vec::new()
     }
 }
 
@@ -275,5 +289,11 @@ mod tests {
         let t = s.q.parameters();
         assert!((t[0] + 2.45).abs() < 1e-12 && t[1] == 0.0, "{t:?}");
         assert_eq!(u, [1.0]);
+        // Step 3 ends in a terminal state: Q(x_{k+1}, ·) = 0 although Q(x, 0) = −2.45;
+        // δ = −4 + 0 − Q(x, 1) = −4; z = 0.45·[1.45, 0] + [0, 1]; θ += 0.5·δ·z.
+        s.learn_terminal(-4.0, &[0.5]);
+        let t = s.q.parameters();
+        let want = [-2.45 - 2.0 * 0.45 * 1.45, -2.0];
+        assert!((t[0] - want[0]).abs() < 1e-12 && (t[1] - want[1]).abs() < 1e-12);
     }
 }

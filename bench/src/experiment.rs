@@ -5,7 +5,10 @@
 //! observer's estimate; the reward of each sample is `ρ(x_k, u_k)` of the true state and
 //! the applied action (Eq. 3.16), and the trial's return is their sum. Every
 //! `eval_every` trials one extra *greedy* trial is run from the same start state: no
-//! exploration, no learning, and it does not count as learning time.
+//! exploration, no learning, and it does not count as learning time. A task with several
+//! start states (§6.4.2) is evaluated from each of them, and the greedy return is their
+//! mean. A trial that leaves the task's operating range ends there (§6.4.2): the agent
+//! learns the transition as terminal, and the simulated time counts only the samples run.
 
 use std::sync::Arc;
 
@@ -39,6 +42,8 @@ pub struct Experiment {
     trials: u32,
     eval_every: u32,
     trial: u32,
+    /// Samples not run because trials ended early (left the operating range).
+    skipped_samples: u64,
 }
 
 impl Experiment {
@@ -56,6 +61,7 @@ impl Experiment {
             trials: cfg.run.trials,
             eval_every: cfg.run.eval_every,
             trial: 0,
+            skipped_samples: 0,
         }
     }
 
@@ -90,28 +96,46 @@ impl Experiment {
             let x = self
                 .observer
                 .update(self.plant.state(), self.plant.applied_action());
+            if self.plant.terminated() {
+                self.agent.learn_terminal(r, x);
+                self.skipped_samples += (steps - k - 1) as u64;
+                break;
+            }
             let last = k + 1 == steps;
             self.agent
                 .learn(r, x, if last { None } else { Some(&mut u) });
         }
         self.trial += 1;
         let greedy = (self.eval_every > 0 && self.trial.is_multiple_of(self.eval_every))
-            .then(|| self.greedy_return(&x0));
+            .then(|| self.greedy_return());
         Some(TrialRecord {
             run: self.run,
             trial: self.trial,
-            sim_time_s: f64::from(self.trial) * self.task.trial_seconds,
+            sim_time_s: f64::from(self.trial) * self.task.trial_seconds
+                - self.skipped_samples as f64 * self.task.ts,
             ret,
             greedy,
         })
     }
 
-    /// The return of one trial from `x0` under the greedy policy, without learning.
-    pub fn greedy_return(&mut self, x0: &[f64]) -> f64 {
-        self.greedy_trajectory(x0).iter().map(|s| s.reward).sum()
+    /// The greedy policy's return without learning: the mean over the task's start
+    /// states of one trial from each.
+    pub fn greedy_return(&mut self) -> f64 {
+        let starts = self.task.initial_states.clone();
+        let total: f64 = starts
+            .iter()
+            .map(|x0| {
+                self.greedy_trajectory(x0)
+                    .iter()
+                    .map(|s| s.reward)
+                    .sum::<f64>()
+            })
+            .sum();
+        total / starts.len() as f64
     }
 
-    /// One greedy trial from `x0`: the time response of the current policy.
+    /// One greedy trial from `x0`: the time response of the current policy (until the
+    /// trial's end or until the system leaves its operating range).
     pub fn greedy_trajectory(&mut self, x0: &[f64]) -> Vec<Sample> {
         let m = self.task.action_dim();
         let (mut u, mut u_prev) = (vec![0.0; m], vec![0.0; m]);
@@ -130,6 +154,9 @@ impl Experiment {
                 reward,
             });
             x.copy_from_slice(self.observer.update(self.plant.state(), &u_prev));
+            if self.plant.terminated() {
+                break;
+            }
         }
         out
     }

@@ -88,7 +88,10 @@ struct RunArgs {
 /// overriding any of its keys, and flags overriding both.
 #[derive(Args)]
 struct Selection {
-    /// System to learn on [default: pendulum].
+    /// System to learn on: pendulum (§3.6, §6.4.1), arm-vertical (Case I, §5.3),
+    /// arm-horizontal (Case II, §5.4), arm-6.4 (the manipulator of §6.4.2: ±0.1 N m,
+    /// ±1.2 rad operating range, four start states) or double-integrator (LQR check)
+    /// [default: pendulum].
     #[arg(long, value_parser = parse_system)]
     system: Option<SystemName>,
     /// Algorithm: sac (Algorithm 1), mlac (Algorithm 2), rmac (Algorithm 3), vgbp
@@ -99,7 +102,8 @@ struct Selection {
     /// critic on RBFs with an LLR process model); sarsa uses rbf [default: llr].
     #[arg(long, value_parser = parse_approx)]
     approx: Option<ApproxKind>,
-    /// Trials per run [preset: 400 for the pendulum (vgbp, sarsa: 200), 600 for the arm].
+    /// Trials per run [preset: 400 for the pendulum (vgbp, sarsa: 200), 600 for the
+    /// arms (vgbp, sarsa: 200)].
     #[arg(long)]
     trials: Option<u32>,
     /// Independent runs [preset: 30 for the pendulum (vgbp, sarsa: 20), 20 for the arm].
@@ -109,7 +113,8 @@ struct Selection {
     #[arg(long)]
     seed: Option<u64>,
     /// A greedy evaluation trial (no exploration, no learning) after every N trials; 0
-    /// disables [preset: 10; vgbp, sarsa: 5].
+    /// disables [preset: 10; vgbp, sarsa: 5; vgbp on arm-6.4: 4]. With several start
+    /// states (arm-6.4) the evaluation runs from each and reports the mean.
     #[arg(long)]
     eval_every: Option<u32>,
     /// TOML file overriding preset values; see `rig config` for every key.

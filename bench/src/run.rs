@@ -58,8 +58,15 @@ pub struct RunSummary {
 struct Returns {
     out: BufWriter<File>,
     trial_seconds: f64,
+    ts: f64,
+    steps_per_trial: u64,
+    /// Samples not run because trials ended early (left the operating range).
+    skipped_samples: u64,
     pending: Option<TrialRecord>,
-    greedy: f64,
+    /// The running greedy trial's reward sum.
+    greedy_trial: f64,
+    /// Sum of the returns of the greedy trials after the pending trial, and their count.
+    greedy: (f64, u32),
     records: Vec<TrialRecord>,
 }
 
@@ -75,14 +82,13 @@ impl Returns {
         }
         if f & flags::START != 0 {
             if greedy {
-                self.greedy = 0.0;
+                self.greedy_trial = 0.0;
             } else {
-                let trial = m.header.trial as u32;
-                let sim_time_s = f64::from(trial) * self.trial_seconds;
+                self.greedy = (0.0, 0);
                 self.pending = Some(TrialRecord {
                     run: 0,
-                    trial,
-                    sim_time_s,
+                    trial: m.header.trial as u32,
+                    sim_time_s: 0.0,
                     ret: 0.0,
                     greedy: None,
                 });
@@ -94,12 +100,20 @@ impl Returns {
             .as_mut()
             .ok_or_else(|| anyhow!("a sample arrived before any trial started"))?;
         if greedy {
-            self.greedy += m.reward;
+            // One greedy trial per start state: the greedy return is their mean.
+            self.greedy_trial += m.reward;
             if f & flags::END != 0 {
-                pending.greedy = Some(self.greedy);
+                self.greedy.0 += self.greedy_trial;
+                self.greedy.1 += 1;
+                pending.greedy = Some(self.greedy.0 / f64::from(self.greedy.1));
             }
         } else {
             pending.ret += m.reward;
+            if f & flags::END != 0 {
+                self.skipped_samples += self.steps_per_trial.saturating_sub(m.header.step);
+                pending.sim_time_s = f64::from(pending.trial) * self.trial_seconds
+                    - self.skipped_samples as f64 * self.ts;
+            }
         }
         Ok(())
     }
@@ -501,8 +515,12 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let returns = Returns {
         out,
         trial_seconds: task.trial_seconds,
+        ts: task.ts,
+        steps_per_trial: task.steps_per_trial() as u64,
+        skipped_samples: 0,
         pending: None,
-        greedy: 0.0,
+        greedy_trial: 0.0,
+        greedy: (0.0, 0),
         records: Vec::new(),
     };
 

@@ -385,3 +385,58 @@ fn sigterm_stops_the_run_and_keeps_the_recording() {
     );
     assert!(children_of(std::process::id()).iter().all(|&p| p != 0));
 }
+
+#[test]
+fn trials_that_leave_the_operating_range_end_early_in_both_drivers() {
+    // VGBP on the §6.4.2 manipulator leaves the ±1.2 rad range in its first trials.
+    let dir = tmp("arm64");
+    let args = [
+        "--system",
+        "arm-6.4",
+        "--algo",
+        "vgbp",
+        "--approx",
+        "lstd",
+        "--trials",
+        "8",
+        "--eval-every",
+        "4",
+        "--quiet",
+        "--out",
+    ];
+    ok(rig()
+        .args(["learn", "--runs", "1"])
+        .args(args)
+        .arg(dir.join("learn"))
+        .output()
+        .unwrap());
+    ok(rig()
+        .arg("run")
+        .args(args)
+        .arg(dir.join("run"))
+        .output()
+        .unwrap());
+    let learned = std::fs::read_to_string(dir.join("learn/runs.csv")).unwrap();
+    let ran = std::fs::read_to_string(dir.join("run/returns.csv")).unwrap();
+    assert_eq!(learned, ran);
+    let rows: Vec<Vec<f64>> = ran
+        .lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 8);
+    // A terminated trial carries the −4·10⁴ penalty and lasts less than 10 s.
+    let terminated = rows
+        .iter()
+        .zip(std::iter::once(0.0).chain(rows.iter().map(|r| r[2])))
+        .filter(|(r, t_before)| r[3] < -4e4 && r[2] - t_before < 10.0 - 1e-9)
+        .count();
+    assert!(terminated > 0, "no trial left the range:\n{ran}");
+    assert!(rows[7][2] < 80.0 - 1e-9, "{ran}");
+    // Greedy evaluations (mean over the four start states) after trials 4 and 8.
+    assert!(rows[3][4].is_finite() && rows[7][4].is_finite(), "{ran}");
+}

@@ -22,7 +22,7 @@ pub mod task;
 pub mod two_link;
 
 pub use reward::QuadraticReward;
-pub use task::{SystemName, Task};
+pub use task::{OperatingRange, SystemName, Task};
 
 /// Largest state dimension of any system in this crate (the two-link arm has 4; a
 /// finite-horizon learner appends time, which lives in the agent, not here).
@@ -43,12 +43,15 @@ pub trait Dynamics: Send + Sync {
 /// The simulated plant: one sample period of a [`Task`]'s system per [`Plant::step`].
 ///
 /// The action is saturated to the task's bounds (Eq. 6.11's `sat`); a non-finite action
-/// component is replaced by zero, the safe action, and counted.
+/// component is replaced by zero, the safe action, and counted. A task with an
+/// [`OperatingRange`] ends its trial when the state leaves the range (§6.4.2):
+/// [`Plant::terminated`].
 pub struct Plant {
     task: std::sync::Arc<Task>,
     x: Vec<f64>,
     applied: Vec<f64>,
     rejected_actions: u64,
+    terminated: bool,
 }
 
 impl Plant {
@@ -61,6 +64,7 @@ impl Plant {
             x,
             applied,
             rejected_actions: 0,
+            terminated: false,
         }
     }
 
@@ -74,6 +78,21 @@ impl Plant {
         self.x.copy_from_slice(x0);
         self.task.wrap_state(&mut self.x);
         self.applied.fill(0.0);
+        self.terminated = false;
+    }
+
+    /// Whether the state has left the task's operating range: the trial is over, and
+    /// the last step's reward was the range's penalty.
+    pub fn terminated(&self) -> bool {
+        self.terminated
+    }
+
+    /// Wraps the angles and checks the operating range after an integration.
+    fn settle(&mut self) {
+        self.task.wrap_state(&mut self.x);
+        if let Some(range) = &self.task.operating_range {
+            self.terminated |= range.excludes(&self.x);
+        }
     }
 
     /// The current state `x_k`.
@@ -109,7 +128,7 @@ impl Plant {
 
     /// Applies `u` (saturated) for one sample period `Ts` and returns the reward
     /// `ρ(x_k, u_k)` of the transition: the state before it and the action actually applied
-    /// (Eq. 3.16).
+    /// (Eq. 3.16) — or the operating range's penalty if the transition leaves the range.
     pub fn step(&mut self, u: &[f64]) -> f64 {
         self.rejected_actions += Self::saturate(&self.task, u, &mut self.applied);
         let r = self.task.reward.reward(&self.x, &self.applied);
@@ -117,8 +136,16 @@ impl Plant {
         for _ in 0..self.task.substeps {
             rk4::step(self.task.dynamics.as_ref(), &mut self.x, &self.applied, h);
         }
-        self.task.wrap_state(&mut self.x);
-        r
+        self.settle();
+        self.reward_of_transition(r)
+    }
+
+    /// `r`, or the operating range's penalty once the range has been left.
+    pub fn reward_of_transition(&self, r: f64) -> f64 {
+        match &self.task.operating_range {
+            Some(range) if self.terminated => range.penalty,
+            _ => r,
+        }
     }
 
     /// Applies `u` (saturated) for `duration` seconds — part of a sample period, when an
@@ -135,6 +162,6 @@ impl Plant {
         for _ in 0..n {
             rk4::step(self.task.dynamics.as_ref(), &mut self.x, &self.applied, h);
         }
-        self.task.wrap_state(&mut self.x);
+        self.settle();
     }
 }

@@ -22,14 +22,19 @@ pub enum SystemName {
     ArmHorizontal,
     /// Linear double integrator with a quadratic reward (LQR check).
     DoubleIntegrator,
+    /// The manipulator of §6.4.2 (Table 6.3): horizontal plane, `|u| ≤ 0.1 N m`, operating
+    /// range ±1.2 rad (leaving it ends the trial with reward −4·10⁴), four start states.
+    #[serde(rename = "arm-6.4")]
+    Arm64,
 }
 
 impl SystemName {
     /// All systems, for `--help` texts and validation messages.
-    pub const ALL: [SystemName; 4] = [
+    pub const ALL: [SystemName; 5] = [
         SystemName::Pendulum,
         SystemName::ArmVertical,
         SystemName::ArmHorizontal,
+        SystemName::Arm64,
         SystemName::DoubleIntegrator,
     ];
 
@@ -40,6 +45,7 @@ impl SystemName {
             SystemName::ArmVertical => "arm-vertical",
             SystemName::ArmHorizontal => "arm-horizontal",
             SystemName::DoubleIntegrator => "double-integrator",
+            SystemName::Arm64 => "arm-6.4",
         }
     }
 }
@@ -77,6 +83,26 @@ pub struct Task {
     pub state_range: Vec<(f64, f64)>,
     /// Short names of the state components, for files and plots.
     pub state_names: Vec<&'static str>,
+    /// Where the system may go; leaving it ends the trial (§6.4.2). `None`: anywhere.
+    pub operating_range: Option<OperatingRange>,
+}
+
+/// The operating range of a system with physical limits, and the penalty for leaving it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OperatingRange {
+    /// `(low, high)` per state component; infinite bounds for unlimited components.
+    pub limits: Vec<(f64, f64)>,
+    /// The reward of the transition that leaves the range, which is the trial's last.
+    pub penalty: f64,
+}
+
+impl OperatingRange {
+    /// Whether `x` lies outside the range (a non-finite component counts as outside).
+    pub fn excludes(&self, x: &[f64]) -> bool {
+        x.iter()
+            .zip(&self.limits)
+            .any(|(&xi, &(lo, hi))| !(lo..=hi).contains(&xi))
+    }
 }
 
 impl Task {
@@ -99,6 +125,7 @@ impl Task {
                 6.0,
             ),
             SystemName::DoubleIntegrator => Self::double_integrator(),
+            SystemName::Arm64 => Self::manipulator_6_4(),
         }
     }
 
@@ -124,6 +151,7 @@ impl Task {
             trial_seconds: 3.0,
             state_range: vec![(-PI, PI), (-8.0 * PI, 8.0 * PI)],
             state_names: vec!["phi", "phi_dot"],
+            operating_range: None,
         }
     }
 
@@ -161,6 +189,7 @@ impl Task {
                 (-2.0 * PI, 2.0 * PI),
             ],
             state_names: vec!["phi1", "phi2", "phi1_dot", "phi2_dot"],
+            operating_range: None,
         }
     }
 
@@ -185,6 +214,59 @@ impl Task {
             trial_seconds: 3.0,
             state_range: vec![(-2.0, 2.0), (-2.0, 2.0)],
             state_names: vec!["p", "v"],
+            operating_range: None,
+        }
+    }
+
+    /// The manipulator of §6.4.2 ([`TwoLink::manipulator_6_4`], Table 6.3), with the
+    /// state kept in this crate's order `x = [φ₁, φ₂, φ̇₁, φ̇₂]` (the thesis writes
+    /// `[φ₁, φ̇₁, φ₂, φ̇₂]` there; every vector below is reordered accordingly):
+    ///
+    /// * `u ∈ [−0.1, 0.1]² N m`; reward Eq. 6.20 with `Q = diag(200, 50, 1, 1)`,
+    ///   `P = diag(2, 2)`;
+    /// * operating range `φ₁, φ₂ ∈ [−1.2, 1.2] rad`: leaving it gives reward −4·10⁴ and
+    ///   ends the trial. Inside it the angles never wrap, so they are plain coordinates
+    ///   (no angle mask: RBF grids over ±1.2 rad are not periodic);
+    /// * trials of at most 10 s, starting in turn from `S₀ = {[1, 1, 0, 0], [1, −1, 0, 0],
+    ///   [−1, 1, 0, 0], [−1, −1, 0, 0]}`;
+    /// * `Ts = 0.05 s`: the text of §6.4.2 says 0.05 s and its discussion blames "the long
+    ///   sampling time", Table 6.3 prints 0.01 s. 25 RK4 sub-steps of 2 ms keep the
+    ///   friction-dominated second link (time constant ≈ 2.4 ms) stable and accurate;
+    /// * the critic's grid covers `φ ∈ [−1.2, 1.2]`, `φ̇ ∈ [−0.8, 0.8]` (Table 6.4).
+    fn manipulator_6_4() -> Self {
+        let no_mask = vec![false; 4];
+        Self {
+            name: SystemName::Arm64,
+            dynamics: Box::new(TwoLink::manipulator_6_4()),
+            ts: 0.05,
+            substeps: 25,
+            action_low: vec![-0.1, -0.1],
+            action_high: vec![0.1, 0.1],
+            angle_mask: no_mask.clone(),
+            reward: QuadraticReward {
+                q: vec![200.0, 50.0, 1.0, 1.0],
+                p: vec![2.0, 2.0],
+                reference: vec![0.0; 4],
+                angle_mask: no_mask,
+            },
+            initial_states: vec![
+                vec![1.0, 1.0, 0.0, 0.0],
+                vec![1.0, -1.0, 0.0, 0.0],
+                vec![-1.0, 1.0, 0.0, 0.0],
+                vec![-1.0, -1.0, 0.0, 0.0],
+            ],
+            trial_seconds: 10.0,
+            state_range: vec![(-1.2, 1.2), (-1.2, 1.2), (-0.8, 0.8), (-0.8, 0.8)],
+            state_names: vec!["phi1", "phi2", "phi1_dot", "phi2_dot"],
+            operating_range: Some(OperatingRange {
+                limits: vec![
+                    (-1.2, 1.2),
+                    (-1.2, 1.2),
+                    (f64::NEG_INFINITY, f64::INFINITY),
+                    (f64::NEG_INFINITY, f64::INFINITY),
+                ],
+                penalty: -4e4,
+            }),
         }
     }
 
@@ -316,6 +398,63 @@ mod tests {
         pieces.advance(&[-3.0], 0.01);
         pieces.advance(&[9.0], 0.02);
         assert_eq!(pieces.applied_action(), &[3.0]);
+    }
+
+    /// The §6.4.2 manipulator under constant torques `u` from its first start state.
+    fn manipulator(substeps: usize, u: [f64; 2], seconds: f64) -> Vec<Vec<f64>> {
+        let mut task = Task::new(SystemName::Arm64);
+        task.substeps = substeps;
+        task.operating_range = None;
+        let mut plant = Plant::new(Arc::new(task));
+        plant.reset(&[0.0; 4]);
+        let steps = (seconds / 0.05).round() as usize;
+        (0..steps)
+            .map(|_| {
+                plant.step(&u);
+                plant.state().to_vec()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn manipulator_6_4_integrates_accurately_and_is_friction_limited() {
+        // The second link's time constant is ≈ 2.4 ms; 25 sub-steps of 2 ms must be
+        // stable and as accurate as 50 of 1 ms.
+        let u = [0.1, -0.1];
+        let coarse = manipulator(25, u, 1.5);
+        let fine = manipulator(50, u, 1.5);
+        let max_dev = coarse
+            .iter()
+            .zip(&fine)
+            .flat_map(|(a, b)| a.iter().zip(b).map(|(p, q)| (p - q).abs()))
+            .fold(0.0, f64::max);
+        assert!(max_dev < 1e-6, "max deviation {max_dev}");
+        // Friction limits the velocities to about the critic grid's ±0.8 rad/s.
+        let x = coarse.last().unwrap();
+        assert!(x[2] > 0.6 && x[2] < 0.9, "φ̇₁ = {}", x[2]);
+        assert!(x[3].abs() < 3.0, "φ̇₂ = {}", x[3]);
+    }
+
+    #[test]
+    fn leaving_the_operating_range_ends_the_trial_with_the_penalty() {
+        let mut plant = Plant::new(Arc::new(Task::new(SystemName::Arm64)));
+        plant.reset(&[1.15, 0.0, 0.0, 0.0]);
+        let mut rewards = Vec::new();
+        while !plant.terminated() && rewards.len() < 200 {
+            rewards.push(plant.step(&[0.1, 0.0]));
+        }
+        assert!(
+            plant.terminated(),
+            "pushed outward for 10 s without leaving"
+        );
+        assert!(plant.state()[0] > 1.2);
+        let (last, before) = rewards.split_last().unwrap();
+        assert_eq!(*last, -4e4);
+        assert!(before.iter().all(|&r| r > -1e3 && r < 0.0));
+        // A reset starts a fresh trial.
+        plant.reset(&[0.0; 4]);
+        assert!(!plant.terminated());
+        assert!(plant.step(&[0.0, 0.0]) > -1e-12);
     }
 
     #[test]

@@ -9,6 +9,10 @@
 
 use crate::Dynamics;
 
+/// Viscous joint friction assumed for the §6.4.2 manipulator \[N m s/rad\]
+/// (see [`TwoLink::manipulator_6_4`]).
+pub const MANIPULATOR_6_4_FRICTION: f64 = 0.125;
+
 /// Parameters of Table A.2 and whether gravity acts (vertical plane, Case I).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TwoLink {
@@ -44,6 +48,24 @@ impl TwoLink {
         Self {
             gravity: 0.0,
             ..Self::vertical()
+        }
+    }
+
+    /// The manipulator of §6.4.2 (Table 6.3), horizontal plane (`G(φ) = 0`).
+    ///
+    /// Table 6.3 prints `I₂ = 1.2·10⁴ kg m²`; `1.2·10⁻⁴` is used (a link of 50 g and
+    /// 0.1 m cannot have the printed inertia). The thesis calls the joints' friction
+    /// "very high" without a value: viscous friction of `0.125 N m s/rad` per joint is
+    /// assumed, which limits the steady velocity under the largest torque (0.1 N m) to
+    /// the ±0.8 rad/s the critic's RBF grid covers (Table 6.4).
+    pub fn manipulator_6_4() -> Self {
+        Self {
+            length: [0.1, 0.1],
+            mass: [0.125, 0.05],
+            centre_of_mass: [0.04, 0.06],
+            inertia: [0.074, 1.2e-4],
+            gravity: 0.0,
+            friction: [MANIPULATOR_6_4_FRICTION; 2],
         }
     }
 

@@ -117,6 +117,8 @@ fn the_arm_and_the_linear_system_run_with_their_presets() {
         (SystemName::DoubleIntegrator, Algo::Mlac, ApproxKind::Llr),
         (SystemName::DoubleIntegrator, Algo::Vgbp, ApproxKind::Lstd),
         (SystemName::ArmHorizontal, Algo::Vgbp, ApproxKind::Lstd),
+        (SystemName::Arm64, Algo::Vgbp, ApproxKind::Lstd),
+        (SystemName::Arm64, Algo::Mlac, ApproxKind::Llr),
     ] {
         let o = Overrides {
             system: Some(system),
@@ -189,6 +191,39 @@ fn vgbp_lstd_learns_the_swing_up_fast() {
         greedy.min > -1500.0,
         "worst greedy return after 30 trials: {}",
         greedy.min
+    );
+}
+
+#[test]
+fn vgbp_lstd_learns_to_stay_in_the_manipulators_operating_range() {
+    // §6.4.2: at first VGBP steers the arm out of its ±1.2 rad range (−4·10⁴ and the
+    // trial ends); within ten sequences of the four start states it brings the arm to
+    // the centre from each of them. Seed 1, 4 runs: greedy means −44 600 after trial 4,
+    // −8 000 after trial 40 (the worst run −13 700).
+    let o = Overrides {
+        system: Some(plant::SystemName::Arm64),
+        algo: Some(Algo::Vgbp),
+        approx: Some(ApproxKind::Lstd),
+        runs: Some(4),
+        trials: Some(40),
+        ..Default::default()
+    };
+    let cfg = resolve(None, &o).expect("preset resolves");
+    let summary = learn_in("vgbp-arm64", &cfg);
+    let first = &summary.greedy_curve[0];
+    assert_eq!(first.trial, 4);
+    assert!(
+        first.mean < -3e4,
+        "greedy mean after 4 trials: {}",
+        first.mean
+    );
+    let last = summary.greedy_curve.last().unwrap();
+    assert_eq!(last.trial, 40);
+    assert!(
+        last.min > -2e4,
+        "worst greedy return after 40 trials (a run that still leaves the range \
+         earns below −4·10⁴): {}",
+        last.min
     );
 }
 

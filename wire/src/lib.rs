@@ -39,6 +39,9 @@ pub mod flags {
     pub const GREEDY: u64 = 4;
     /// The run is over: forward and exit.
     pub const SHUTDOWN: u64 = 8;
+    /// With [`END`]: the trial ended early because the state left the operating range
+    /// (§6.4.2); the state is terminal, its value zero.
+    pub const TERMINAL: u64 = 16;
 }
 
 /// Header fields shared by all messages.

@@ -36,6 +36,8 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                 }
             } else if f & flags::START != 0 {
                 agent.start_trial(x, &mut u);
+            } else if f & flags::TERMINAL != 0 {
+                agent.learn_terminal(e.reward, x);
             } else if f & flags::END != 0 {
                 agent.learn(e.reward, x, None);
             } else {

@@ -9,7 +9,9 @@ use wire::{Action, Bus, Header, Measurement, flags, now_ns, topic};
 use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
 
 /// Runs the plant side of a run: every trial of the configuration, greedy evaluation
-/// trials where due, then announces the end of the run.
+/// trials where due (one from each of the task's start states), then announces the end
+/// of the run. A trial that leaves the task's operating range ends early with
+/// [`flags::END`] | [`flags::TERMINAL`]; the simulated time counts only samples run.
 pub fn run(args: &ProcessArgs) -> Result<()> {
     let cfg = args.config()?;
     let task = Arc::new(Task::new(cfg.system));
@@ -40,24 +42,24 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         }),
     };
     let eval_every = cfg.run.eval_every;
+    let trial_seconds = p.task.trial_seconds;
+    let mut skipped = 0;
+    let t_sim =
+        |trials: u64, skipped: usize| trials as f64 * trial_seconds - skipped as f64 * task_ts;
     for trial in 1..=u64::from(cfg.run.trials) {
         let x0 = p.start_state(trial);
-        let t_sim = (trial - 1) as f64 * p.task.trial_seconds;
-        p.trial(trial, &x0, 0, t_sim)?;
+        skipped += p.trial(trial, &x0, 0, t_sim(trial - 1, skipped))?;
         if eval_every > 0 && trial.is_multiple_of(u64::from(eval_every)) {
-            p.trial(
-                trial,
-                &x0,
-                flags::GREEDY,
-                trial as f64 * p.task.trial_seconds,
-            )?;
+            for x0 in p.task.initial_states.clone() {
+                p.trial(trial, &x0, flags::GREEDY, t_sim(trial, skipped))?;
+            }
         }
     }
     // The end of the run, stamped with the run's final simulated and monotonic time.
     let header = Header {
         seq: p.seq,
         flags: flags::SHUTDOWN,
-        t_sim: f64::from(cfg.run.trials) * p.task.trial_seconds,
+        t_sim: t_sim(u64::from(cfg.run.trials), skipped),
         ..Header::default()
     };
     let now = now_ns();
@@ -158,8 +160,9 @@ impl PlantLoop {
         Ok(a.u[..self.task.action_dim()].to_vec())
     }
 
-    /// One trial from `x0`; `mode` is 0 (learning) or [`flags::GREEDY`].
-    fn trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<()> {
+    /// One trial from `x0`; `mode` is 0 (learning) or [`flags::GREEDY`]. Returns how many
+    /// of the trial's samples were not run because it left the operating range.
+    fn trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<usize> {
         if self.realtime.is_some() {
             return self.realtime_trial(trial, x0, mode, t0);
         }
@@ -174,10 +177,25 @@ impl PlantLoop {
         let mut u = self.exchange(header.at(self.seq, 0, flags::START), 0.0)?;
         for k in 0..steps {
             let r = self.plant.step(&u);
-            let last = if k + 1 == steps { flags::END } else { 0 };
-            u = self.exchange(header.at(self.seq, k + 1, last), r)?;
+            let end = self.end_flags(k + 1 == steps);
+            u = self.exchange(header.at(self.seq, k + 1, end), r)?;
+            if self.plant.terminated() {
+                return Ok(steps - k - 1);
+            }
         }
-        Ok(())
+        Ok(0)
+    }
+
+    /// The flags that end a trial after this sample: [`flags::END`] on the last sample,
+    /// [`flags::END`] | [`flags::TERMINAL`] when the operating range was left.
+    fn end_flags(&self, last: bool) -> u64 {
+        if self.plant.terminated() {
+            flags::END | flags::TERMINAL
+        } else if last {
+            flags::END
+        } else {
+            0
+        }
     }
 
     /// Publishes the current sample; returns when it was published (monotonic ns).
@@ -203,7 +221,7 @@ impl PlantLoop {
     /// until then); an interval in which the action for its sample did not arrive is a
     /// missed deadline. The reward of an interval is `ρ(x_k, u)` with the action in effect
     /// at its end.
-    fn realtime_trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<()> {
+    fn realtime_trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<usize> {
         let steps = self.task.steps_per_trial();
         let (period_ns, speed) = {
             let c = self.realtime.as_ref().expect("realtime");
@@ -220,6 +238,7 @@ impl PlantLoop {
         let mut t_k = self.realtime.as_ref().expect("realtime").next_ns;
         sleep_until(t_k);
         self.publish(header.at(self.seq, 0, flags::START), 0.0, t_k)?;
+        let mut ended_after = None;
         for k in 0..=steps {
             let waiting_for = self.seq - 1;
             let deadline = t_k + period_ns;
@@ -252,9 +271,10 @@ impl PlantLoop {
             if !answered {
                 self.misses += 1;
             }
-            if k == steps {
+            if let Some(skipped) = ended_after {
                 // The END sample's answer only acknowledges learning; the trial is over.
-                break;
+                self.realtime.as_mut().expect("realtime").next_ns = deadline;
+                return Ok(skipped);
             }
             // Integrate the interval piecewise, in simulated seconds.
             let sim = |dt_ns: u64| dt_ns as f64 * 1e-9 * speed;
@@ -266,16 +286,19 @@ impl PlantLoop {
                 t = *t_a;
             }
             self.plant.advance(&u_hold, sim(deadline - t));
-            let r = self
-                .task
-                .reward
-                .reward(&x_k_reward_state, self.plant.applied_action());
+            let r = self.plant.reward_of_transition(
+                self.task
+                    .reward
+                    .reward(&x_k_reward_state, self.plant.applied_action()),
+            );
             sleep_until(deadline);
             t_k = deadline;
-            let last = if k + 1 == steps { flags::END } else { 0 };
-            self.publish(header.at(self.seq, k + 1, last), r, t_k)?;
+            let end = self.end_flags(k + 1 == steps);
+            self.publish(header.at(self.seq, k + 1, end), r, t_k)?;
+            if end != 0 {
+                ended_after = Some(steps - k - 1);
+            }
         }
-        self.realtime.as_mut().expect("realtime").next_ns = t_k + period_ns;
-        Ok(())
+        unreachable!("the loop returns after the END sample's answer")
     }
 }
