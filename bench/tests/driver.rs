@@ -119,6 +119,17 @@ fn check_driver(id: &str) -> Output {
         .unwrap()
 }
 
+/// `rig run --plant external --driver ID` with `extra` flags, writing to `dir`.
+fn run_external(id: &str, extra: &[&str], dir: &std::path::Path) -> Output {
+    rig()
+        .args(["run", "--plant", "external", "--driver", id])
+        .args(extra)
+        .arg("--out")
+        .arg(dir)
+        .output()
+        .unwrap()
+}
+
 fn line<'a>(stdout: &'a str, check: &str) -> &'a str {
     stdout
         .lines()
@@ -155,24 +166,18 @@ fn rig_run_learns_against_the_python_driver_and_records_it() {
     let Some(py) = python() else { return };
     let d = Driver::start(&py, "run", &["--speed", "10"]);
     let dir = tmp("run");
-    let out = rig()
-        .args([
-            "run",
-            "--plant",
-            "external",
-            "--driver",
-            &d.id,
+    let out = run_external(
+        &d.id,
+        &[
             "--trials",
             "6",
             "--eval-every",
             "3",
             "--driver-timeout",
             "20",
-            "--out",
-        ])
-        .arg(&dir)
-        .output()
-        .unwrap();
+        ],
+        &dir,
+    );
     let (stdout, stderr) = text(&out);
     assert!(out.status.success(), "{stdout}\n{stderr}");
     assert!(stdout.contains("deadline misses:"), "{stdout}");
@@ -274,21 +279,7 @@ fn no_driver_is_a_clear_error_after_the_timeout() {
     );
     let dir = tmp("nobody");
     let t0 = Instant::now();
-    let out = rig()
-        .args([
-            "run",
-            "--plant",
-            "external",
-            "--driver",
-            &id,
-            "--driver-timeout",
-            "1",
-            "--quiet",
-            "--out",
-        ])
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = run_external(&id, &["--driver-timeout", "1", "--quiet"], &dir);
     let (_, stderr) = text(&out);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains(&format!("no driver {id:?}")), "{stderr}");

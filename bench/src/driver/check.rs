@@ -161,6 +161,12 @@ impl Session<'_> {
         self.outcomes.push(o);
     }
 
+    /// Records a check that passes when `problems` is empty (then saying `ok`).
+    fn record_problems(&mut self, name: &'static str, problems: Vec<String>, ok: String) {
+        let pass = problems.is_empty();
+        self.record(name, pass, if pass { ok } else { problems.join("; ") });
+    }
+
     fn period_ns(&self) -> f64 {
         self.info.period_ns as f64
     }
@@ -323,17 +329,13 @@ impl Session<'_> {
             }
         }
         problems.truncate(3);
-        self.record(
+        self.record_problems(
             "samples",
-            problems.is_empty(),
-            if problems.is_empty() {
-                format!(
-                    "{} well-formed: READY, finite, stamped on this host's monotonic clock, seq increasing",
-                    samples.len()
-                )
-            } else {
-                problems.join("; ")
-            },
+            problems,
+            format!(
+                "{} well-formed: READY, finite, stamped on this host's monotonic clock, seq increasing",
+                samples.len()
+            ),
         );
         let period = self.period_ns();
         let (first, last) = (samples[0].0, samples[samples.len() - 1].0);
@@ -514,19 +516,12 @@ impl Session<'_> {
                 ));
             }
         }
-        self.record(
-            "out-of-range actions",
-            wrong.is_empty(),
-            if wrong.is_empty() {
-                format!(
-                    "10 ranges above and below: applied as {} and {}, each counted as clamped",
-                    vector(hi),
-                    vector(lo)
-                )
-            } else {
-                wrong.join("; ")
-            },
+        let ok = format!(
+            "10 ranges above and below: applied as {} and {}, each counted as clamped",
+            vector(hi),
+            vector(lo)
         );
+        self.record_problems("out-of-range actions", wrong, ok);
         Ok(())
     }
 
@@ -557,14 +552,10 @@ impl Session<'_> {
                 ));
             }
         }
-        self.record(
+        self.record_problems(
             "non-finite and malformed actions",
-            wrong.is_empty(),
-            if wrong.is_empty() {
-                "NaN, +inf, -inf and n_u = 0, each after a valid action: zero applied, each counted as rejected".to_string()
-            } else {
-                wrong.join("; ")
-            },
+            wrong,
+            "NaN, +inf, -inf and n_u = 0, each after a valid action: zero applied, each counted as rejected".to_string(),
         );
         Ok(())
     }
