@@ -99,11 +99,12 @@ struct RunArgs {
     quiet: bool,
 }
 
-/// Which external driver, and how long to wait for it.
+/// Which external driver, and how long to wait for it (`rig run`: with `--plant
+/// external` only).
 #[derive(Args)]
 struct DriverArgs {
     /// The external driver's id: its services are rig/driver/ID/{info,sample,command}
-    /// [default: the system's name, e.g. pendulum].
+    /// (`rig run`: needs `--plant external`) [default: the system's name, e.g. pendulum].
     #[arg(long, value_name = "ID")]
     driver: Option<String>,
     /// How long to wait for the driver to appear (its first info message) [s].
@@ -137,7 +138,7 @@ struct CheckDriverArgs {
     #[command(flatten)]
     driver: DriverArgs,
     /// The task the driver must fit: pendulum, arm-vertical, arm-horizontal,
-    /// double-integrator [default: pendulum].
+    /// double-integrator.
     #[arg(long, value_parser = parse_system, default_value = "pendulum")]
     system: SystemName,
     /// How long to measure the sample rate, answering every sample with zero [s].

@@ -463,7 +463,7 @@ impl Session<'_> {
             late.is_empty() && tripped,
             if late.is_empty() {
                 format!(
-                    "zero applied from between {} and {} periods after the last action (bound: by 2), WATCHDOG set, trips {trips_before} → {trips_after}",
+                    "zero applied from between {} and {} periods after the last action (bound: by 2) with WATCHDOG; watchdog_trips {trips_before} → {trips_after} (must grow)",
                     after(last_nonzero.filter(|&t| first_zero.is_none_or(|z| t < z))),
                     after(first_zero)
                 )
