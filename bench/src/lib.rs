@@ -2,6 +2,7 @@
 //! `rig learn` ([`learn`]), and reports — learning-curve statistics and plots
 //! ([`report`]).
 
+pub mod driver;
 pub mod experiment;
 pub mod learn;
 pub mod loop_bench;

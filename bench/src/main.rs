@@ -6,9 +6,10 @@ use std::process::ExitCode;
 use agent::config::{Algo, ApproxKind, Overrides, resolve};
 use clap::{Args, Parser, Subcommand};
 use plant::{SystemName, Task};
+use rig::driver::check::{CheckOptions, check};
 use rig::learn::{LearnOptions, learn};
 use rig::process::ProcessArgs;
-use rig::run::{RunOptions, run};
+use rig::run::{ExternalDriver, RunOptions, run};
 
 /// Learning controllers of Grondman's thesis "Online Model Learning Algorithms for
 /// Actor-Critic Control": run experiments, write learning curves.
@@ -31,6 +32,11 @@ enum Command {
     /// Print the resolved configuration (preset ← --config file ← flags) as TOML, to
     /// start a configuration file from.
     Config(Selection),
+    /// Check a running external driver against the driver contract (docs/driver.md):
+    /// payload types, advertised limits, reset, sample rate and jitter, step response,
+    /// the stale-action watchdog, clamping and rejection of bad actions. Prints one
+    /// PASS/FAIL line per check; exits non-zero if any fails.
+    CheckDriver(CheckDriverArgs),
     /// Measure the three-process lockstep loop (trivial agent, no recorder) next to a
     /// raw iceoryx2 ping-pong between two processes, in the same run; writes loop.csv.
     BenchLoop(BenchLoopArgs),
@@ -79,9 +85,76 @@ struct RunArgs {
     /// sample period takes 3 ms).
     #[arg(long, default_value_t = 1.0)]
     speed: f64,
+    /// `sim`: the plant process simulates the system. `external`: a driver someone else
+    /// started (docs/driver.md; e.g. examples/python_driver/driver.py) is the system and
+    /// the clock; `rig run` waits for it, and the plant process resets it before each
+    /// trial and passes its samples and the agent's actions on (`--timing` and `--speed`
+    /// do not apply).
+    #[arg(long, default_value = "sim", value_parser = ["sim", "external"])]
+    plant: String,
+    #[command(flatten)]
+    driver: DriverArgs,
     /// No progress bar and no summary.
     #[arg(long)]
     quiet: bool,
+}
+
+/// Which external driver, and how long to wait for it (`rig run`: with `--plant
+/// external` only).
+#[derive(Args)]
+struct DriverArgs {
+    /// The external driver's id: its services are rig/driver/ID/{info,sample,command}
+    /// (`rig run`: needs `--plant external`) [default: the system's name, e.g. pendulum].
+    #[arg(long, value_name = "ID")]
+    driver: Option<String>,
+    /// How long to wait for the driver to appear (its first info message) [s].
+    #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
+    driver_timeout: f64,
+    /// How long the driver may take for one reset (to bring the system to rest at the
+    /// start state and report READY) [s].
+    #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
+    reset_timeout: f64,
+}
+
+impl DriverArgs {
+    fn resolve(&self, system: SystemName) -> Result<ExternalDriver, String> {
+        let id = self
+            .driver
+            .clone()
+            .unwrap_or_else(|| system.as_str().to_string());
+        wire::driver::check_id(&id).map_err(|e| format!("`--driver`: {e}"))?;
+        Ok(ExternalDriver {
+            id,
+            timeout: rig::process::seconds("--driver-timeout", self.driver_timeout)
+                .map_err(|e| e.to_string())?,
+            reset_timeout: rig::process::seconds("--reset-timeout", self.reset_timeout)
+                .map_err(|e| e.to_string())?,
+        })
+    }
+}
+
+#[derive(Args)]
+struct CheckDriverArgs {
+    #[command(flatten)]
+    driver: DriverArgs,
+    /// The task the driver must fit: pendulum, arm-vertical, arm-horizontal,
+    /// double-integrator.
+    #[arg(long, value_parser = parse_system, default_value = "pendulum")]
+    system: SystemName,
+    /// How long to measure the sample rate, answering every sample with zero [s].
+    #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
+    rate_seconds: f64,
+    /// Largest allowed p99 of the samples' lateness against a regular grid (jitter), as
+    /// a fraction of the period.
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.1)]
+    max_jitter: f64,
+    /// Largest allowed fraction of periods without a sample.
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.01)]
+    max_missed: f64,
+    /// Size of the step input, as a fraction of the way from the middle of the action
+    /// range to its upper limit (0.25: 0.75 V for the pendulum's ±3 V).
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.25)]
+    step: f64,
 }
 
 /// Which experiment: the preset for (system, algorithm, approximator), a TOML file
@@ -231,6 +304,7 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+        Command::CheckDriver(args) => check_driver(&args),
         Command::Plant(args) => process(rig::process::plant::run, &args),
         Command::Observer(args) => process(rig::process::observer::run, &args),
         Command::Agent(args) => process(rig::process::agent::run, &args),
@@ -251,11 +325,33 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
             let realtime = (args.timing == "realtime").then_some(args.speed);
+            let driver = if args.plant == "external" {
+                if realtime.is_some() || args.speed != 1.0 {
+                    eprintln!(
+                        "error: `--timing`/`--speed` do not apply with `--plant external`: the driver is the clock"
+                    );
+                    return ExitCode::from(2);
+                }
+                match args.driver.resolve(cfg.system) {
+                    Ok(d) => Some(d),
+                    Err(e) => {
+                        eprintln!("error: {e}");
+                        return ExitCode::from(2);
+                    }
+                }
+            } else {
+                if args.driver.driver.is_some() {
+                    eprintln!("error: `--driver` needs `--plant external`");
+                    return ExitCode::from(2);
+                }
+                None
+            };
             let opts = RunOptions {
                 out: args.out.clone(),
                 run_id: args.run_id.clone(),
                 progress: !args.quiet,
                 realtime,
+                driver,
             };
             match run(&cfg, &opts) {
                 Ok(s) => {
@@ -270,7 +366,16 @@ fn main() -> ExitCode {
                             s.wall.as_secs_f64(),
                             s.wall.as_secs_f64() * 1e6 / steps
                         );
-                        if realtime.is_some() {
+                        if let Some(i) = &s.driver {
+                            println!(
+                                "  driver {:?}: period {:.3} ms × time scale {}; deadline misses: {} of {} samples",
+                                i.system_name(),
+                                i.period_ns as f64 * 1e-6,
+                                i.time_scale,
+                                s.deadline_misses,
+                                s.messages / 3
+                            );
+                        } else if realtime.is_some() {
                             println!(
                                 "  deadline misses: {} of {} samples",
                                 s.deadline_misses,
@@ -328,6 +433,64 @@ fn main() -> ExitCode {
                     ExitCode::FAILURE
                 }
             }
+        }
+    }
+}
+
+fn check_driver(args: &CheckDriverArgs) -> ExitCode {
+    let fraction = |flag: &str, v: f64| {
+        if v.is_finite() && (0.0..=1.0).contains(&v) {
+            Ok(v)
+        } else {
+            Err(format!(
+                "`{flag}` {v} is out of range: must be a fraction in [0, 1]"
+            ))
+        }
+    };
+    let opts = (|| -> Result<CheckOptions, String> {
+        let d = args.driver.resolve(args.system)?;
+        let rate_seconds = rig::process::seconds("--rate-seconds", args.rate_seconds)
+            .map_err(|e| e.to_string())?
+            .as_secs_f64();
+        Ok(CheckOptions {
+            driver: d.id,
+            system: args.system,
+            timeout: d.timeout,
+            reset_timeout: d.reset_timeout,
+            rate_seconds,
+            max_jitter: fraction("--max-jitter", args.max_jitter)?,
+            max_missed: fraction("--max-missed", args.max_missed)?,
+            step: fraction("--step", args.step)?,
+        })
+    })();
+    let opts = match opts {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    println!(
+        "rig check-driver: driver {:?} (rig/driver/{}/...) against the {} task",
+        opts.driver, opts.driver, opts.system
+    );
+    match check(&opts, &mut |o| println!("{o}")) {
+        Ok(outcomes) => {
+            let failed = outcomes.iter().filter(|o| !o.pass).count();
+            if failed == 0 {
+                println!("check-driver: PASS ({} checks)", outcomes.len());
+                ExitCode::SUCCESS
+            } else {
+                println!(
+                    "check-driver: FAIL ({failed} of {} checks failed)",
+                    outcomes.len()
+                );
+                ExitCode::FAILURE
+            }
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
         }
     }
 }

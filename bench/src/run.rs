@@ -10,6 +10,10 @@
 //!   other processes are killed, the reason is reported, the recording is finished (so
 //!   `run.mcap` stays readable), and the call fails. Each process's output goes to
 //!   `DIR/<process>.log`.
+//! * With an external driver (`--plant external`, `docs/driver.md`), the supervisor
+//!   first waits for the driver's info and checks it against the task, then starts the
+//!   plant process as the episode master for that driver (`rig plant --driver ID`), and
+//!   records the driver's samples and commands too (`/driver/...`).
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -21,6 +25,7 @@ use std::time::{Duration, Instant};
 use ::agent::config::ExperimentConfig;
 use anyhow::{Context, Result, anyhow, bail};
 use indicatif::ProgressBar;
+use wire::driver::{DriverCommand, DriverInfo, DriverSample, DriverWatch};
 use wire::{Action, Bus, Estimate, Header, Measurement, flags, topic};
 
 use crate::experiment::TrialRecord;
@@ -37,8 +42,22 @@ pub struct RunOptions {
     pub run_id: Option<String>,
     /// Show a progress bar.
     pub progress: bool,
-    /// `None`: lockstep; `Some(speed)`: realtime at `speed` × real time.
+    /// `None`: lockstep; `Some(speed)`: realtime at `speed` × real time (simulated
+    /// plant only).
     pub realtime: Option<f64>,
+    /// An external driver in place of the simulated plant.
+    pub driver: Option<ExternalDriver>,
+}
+
+/// An external driver in place of the simulated plant (`rig run --plant external`).
+#[derive(Clone, Debug)]
+pub struct ExternalDriver {
+    /// The driver's id (services `rig/driver/<id>/...`).
+    pub id: String,
+    /// How long to wait for the driver to appear.
+    pub timeout: Duration,
+    /// How long one reset may take.
+    pub reset_timeout: Duration,
 }
 
 /// What a run produced.
@@ -50,8 +69,10 @@ pub struct RunSummary {
     pub messages: u64,
     /// Wall-clock time of the run.
     pub wall: Duration,
-    /// Deadlines the plant missed (realtime only).
+    /// Deadlines the plant missed (realtime and external driver only).
     pub deadline_misses: u64,
+    /// The external driver's info, if one was used.
+    pub driver: Option<DriverInfo>,
 }
 
 /// Builds `returns.csv` rows from the plant's measurements.
@@ -139,6 +160,8 @@ struct Recording {
     t_measurement: ChannelId,
     t_estimate: ChannelId,
     t_action: ChannelId,
+    /// `/driver/sample` and `/driver/command`, with an external driver.
+    driver: Option<(ChannelId, ChannelId)>,
     n: usize,
     m: usize,
     values: Vec<Value>,
@@ -213,6 +236,7 @@ impl Recording {
             t_measurement,
             t_estimate,
             t_action,
+            driver: None,
             n,
             m,
             values: Vec::new(),
@@ -287,6 +311,56 @@ impl Recording {
         )
     }
 
+    /// Adds the channels of an external driver's samples and commands.
+    fn add_driver(&mut self) -> Result<()> {
+        let (n, m) = (self.n, self.m);
+        let ints =
+            |names: &[&str]| -> Vec<Field> { names.iter().map(|f| Field::integer(f)).collect() };
+        let mut sample = ints(&["seq", "t_sample_ns", "status", "reset_id", "last_command"]);
+        sample.extend(Field::array("x", n, FieldKind::Number));
+        sample.extend(Field::array("u_applied", m, FieldKind::Number));
+        sample.extend(ints(&["clamped", "rejected", "watchdog_trips"]));
+        let mut command = ints(&["seq", "kind", "sample_seq", "t_publish_ns"]);
+        command.extend(Field::array("u", m, FieldKind::Number));
+        command.extend(Field::array("x0", n, FieldKind::Number));
+        let s = self
+            .rec
+            .channel("/driver/sample", "rig.DriverSample", &sample)?;
+        let c = self
+            .rec
+            .channel("/driver/command", "rig.DriverCommand", &command)?;
+        self.driver = Some((s, c));
+        Ok(())
+    }
+
+    fn driver_sample(&mut self, s: &DriverSample) -> Result<()> {
+        let Some((ch, _)) = self.driver else {
+            return Ok(());
+        };
+        self.values.clear();
+        self.values
+            .extend([s.seq, s.t_sample_ns, s.status, s.reset_id, s.last_command].map(Value::Int));
+        self.nums(&s.x[..self.n]);
+        self.nums(&s.u_applied[..self.m]);
+        self.values
+            .extend([s.clamped, s.rejected, s.watchdog_trips].map(Value::Int));
+        self.rec
+            .write(ch, s.t_sample_ns, s.t_sample_ns, &self.values)
+    }
+
+    fn driver_command(&mut self, c: &DriverCommand) -> Result<()> {
+        let Some((_, ch)) = self.driver else {
+            return Ok(());
+        };
+        self.values.clear();
+        self.values
+            .extend([c.seq, c.kind, c.sample_seq, c.t_publish_ns].map(Value::Int));
+        self.nums(&c.u[..self.m]);
+        self.nums(&c.x0[..self.n]);
+        self.rec
+            .write(ch, c.t_publish_ns, c.t_publish_ns, &self.values)
+    }
+
     fn action(&mut self, msg: &Action) -> Result<()> {
         self.t_sample_ns = msg.t_sample_ns;
         let t = self.header(&msg.header);
@@ -351,6 +425,8 @@ struct Supervisor {
     messages: u64,
     continuity: [Continuity; 3],
     deadline_misses: u64,
+    /// The external driver's traffic, recorded.
+    driver: Option<DriverWatch>,
 }
 
 impl Supervisor {
@@ -381,6 +457,15 @@ impl Supervisor {
             self.continuity[1].check(topic::ESTIMATE, e.header.seq)?;
             self.recording.estimate(&e)?;
             self.messages += 1;
+        }
+        if let Some(d) = &self.driver {
+            while d.info.try_recv().map_err(wire_err)?.is_some() {}
+            while let Some(s) = d.samples.try_recv().map_err(wire_err)? {
+                self.recording.driver_sample(&s)?;
+            }
+            while let Some(c) = d.commands.try_recv().map_err(wire_err)? {
+                self.recording.driver_command(&c)?;
+            }
         }
         Ok(done)
     }
@@ -477,12 +562,22 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let actions = bus.rx::<Action>(topic::ACTION).map_err(wire_err)?;
 
     let task = plant::Task::new(cfg.system);
+    let (watch, driver_info) = match &opts.driver {
+        Some(d) => {
+            let (watch, info) = wait_for_driver(&bus, d, &task, opts.progress)?;
+            (Some(watch), Some(info))
+        }
+        None => (None, None),
+    };
     let mut recording = Recording::create(
         &opts.out.join("run.mcap"),
         task.state_dim(),
         task.action_dim(),
     )?;
-    recording.realtime = opts.realtime.is_some();
+    recording.realtime = opts.realtime.is_some() || opts.driver.is_some();
+    if opts.driver.is_some() {
+        recording.add_driver()?;
+    }
     recording
         .rec
         .attach("config.toml", "application/toml", cfg.to_toml().as_bytes())?;
@@ -494,9 +589,13 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         ("approx", cfg.approx.to_string()),
         (
             "timing",
-            match opts.realtime {
-                None => "lockstep".to_string(),
-                Some(speed) => format!("realtime, speed {speed}"),
+            match (&opts.driver, &driver_info, opts.realtime) {
+                (Some(d), Some(i), _) => format!(
+                    "external driver {:?}: period {} ns, time scale {}",
+                    d.id, i.period_ns, i.time_scale
+                ),
+                (_, _, None) => "lockstep".to_string(),
+                (_, _, Some(speed)) => format!("realtime, speed {speed}"),
             },
         ),
         ("rig_version", env!("CARGO_PKG_VERSION").to_string()),
@@ -526,9 +625,17 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
 
     let exe = std::env::current_exe().context("cannot find the rig executable")?;
     let mut children = Children(Vec::new());
-    let plant_timing: Vec<String> = match opts.realtime {
-        None => Vec::new(),
-        Some(speed) => vec![
+    let plant_timing: Vec<String> = match (&opts.driver, opts.realtime) {
+        (Some(d), _) => vec![
+            "--driver".into(),
+            d.id.clone(),
+            "--driver-timeout".into(),
+            d.timeout.as_secs_f64().to_string(),
+            "--reset-timeout".into(),
+            d.reset_timeout.as_secs_f64().to_string(),
+        ],
+        (None, None) => Vec::new(),
+        (None, Some(speed)) => vec![
             "--timing".into(),
             "realtime".into(),
             "--speed".into(),
@@ -571,6 +678,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         messages: 0,
         continuity: Default::default(),
         deadline_misses: 0,
+        driver: watch,
     };
     let outcome = sup.supervise(&bar);
     bar.finish_and_clear();
@@ -593,5 +701,38 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         messages,
         wall: t0.elapsed(),
         deadline_misses,
+        driver: driver_info,
     })
+}
+
+/// Waits for driver `d`'s info (saying so after a second of silence when `verbose`)
+/// and checks that the driver fits `task`; returns a watch on its traffic (to record it)
+/// and its info.
+fn wait_for_driver(
+    bus: &Bus,
+    d: &ExternalDriver,
+    task: &plant::Task,
+    verbose: bool,
+) -> Result<(DriverWatch, DriverInfo)> {
+    let watch = DriverWatch::open(bus, &d.id).map_err(wire_err)?;
+    let first = Duration::from_secs(1).min(d.timeout);
+    let info = match wire::driver::wait_info(bus, &watch.info, &d.id, first) {
+        Ok(i) => i,
+        Err(_) => {
+            if verbose {
+                eprintln!(
+                    "waiting up to {:.0} s for driver {:?} (services {}) ...",
+                    d.timeout.as_secs_f64(),
+                    d.id,
+                    wire::driver::service(&d.id, "*")
+                );
+            }
+            wire::driver::wait_info(bus, &watch.info, &d.id, d.timeout.saturating_sub(first))
+                .map_err(wire_err)?
+        }
+    };
+    info.validate()
+        .and_then(|()| crate::driver::fits_task(&info, task))
+        .map_err(|e| anyhow!("driver {:?} does not fit the task: {e}", d.id))?;
+    Ok((watch, info))
 }

@@ -131,4 +131,31 @@ fn config_prints_a_resolvable_preset_and_help_explains_every_flag() {
     ] {
         assert!(help.contains(flag), "--help lacks {flag}");
     }
+    let help = |cmd: &str| {
+        String::from_utf8(rig().args([cmd, "--help"]).output().unwrap().stdout).unwrap()
+    };
+    let run = help("run");
+    for flag in [
+        "--plant",
+        "--driver",
+        "--driver-timeout",
+        "--reset-timeout",
+        "--timing",
+        "--speed",
+    ] {
+        assert!(run.contains(flag), "run --help lacks {flag}");
+    }
+    let check = help("check-driver");
+    for flag in [
+        "--driver",
+        "--driver-timeout",
+        "--reset-timeout",
+        "--system",
+        "--rate-seconds",
+        "--max-jitter",
+        "--max-missed",
+        "--step",
+    ] {
+        assert!(check.contains(flag), "check-driver --help lacks {flag}");
+    }
 }

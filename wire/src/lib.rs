@@ -29,6 +29,8 @@ pub const MAX_X: usize = 8;
 /// Action components a message can carry.
 pub const MAX_U: usize = 4;
 
+pub mod driver;
+
 /// Bits of the `flags` field.
 pub mod flags {
     /// The sample is a trial's start state `x_0` (no reward yet).
@@ -167,6 +169,55 @@ unsafe extern "C" {
     fn clock_gettime(clock: i32, ts: *mut libc_timespec) -> i32;
 }
 
+/// Publish-subscribe settings of a service. Both ends must use the same values:
+/// iceoryx2 refuses to open a service whose settings cannot serve the opener's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Qos {
+    /// Publishers at most.
+    pub max_publishers: usize,
+    /// Subscribers at most.
+    pub max_subscribers: usize,
+    /// Samples a subscriber may have waiting (the oldest is overwritten when full).
+    pub buffer: usize,
+}
+
+/// Settings of the run topics (`rig/<run id>/...`).
+pub const RUN_QOS: Qos = Qos {
+    max_publishers: 1,
+    max_subscribers: 4,
+    buffer: BUFFER,
+};
+
+/// The `#[type_name]` of a payload type: its identity across processes and languages.
+pub fn type_name_of<T: ZeroCopySend>() -> &'static str {
+    // SAFETY: only reads the name; the layout guarantee the trait asks for is the
+    // implementer's (every payload here is `#[repr(C)]` and derives it).
+    unsafe { <T as ZeroCopySend>::type_name() }
+}
+
+/// What an existing publish-subscribe service carries, in words, e.g. "the existing
+/// service carries payload `X` (16 bytes, alignment 8), max 1 publisher(s), 8
+/// subscribers, buffer 2" — for error messages about incompatible peers.
+pub fn describe_service(name: &ServiceName, config: &iceoryx2::config::Config) -> String {
+    match ipc::Service::details(name, config, MessagingPattern::PublishSubscribe) {
+        Ok(Some(d)) => {
+            let ps = d.static_details.publish_subscribe();
+            let p = &ps.message_type_details().payload;
+            format!(
+                "the existing service carries payload {} ({} bytes, alignment {}), max {} publisher(s), {} subscribers, buffer {}",
+                p.type_name(),
+                p.size(),
+                p.alignment(),
+                ps.max_publishers(),
+                ps.max_subscribers(),
+                ps.subscriber_max_buffer_size()
+            )
+        }
+        Ok(None) => "no such service exists yet".to_string(),
+        Err(e) => format!("its settings cannot be read ({e:?})"),
+    }
+}
+
 /// Errors of the transport.
 pub type Error = Box<dyn std::error::Error + Send + Sync>;
 
@@ -203,6 +254,11 @@ impl Bus {
         {
             return Err(format!("run id {run_id:?}: use letters, digits, '-' and '_' only").into());
         }
+        if run_id == "driver" {
+            return Err(
+                "run id \"driver\" is reserved for driver services (rig/driver/...)".into(),
+            );
+        }
         set_log_level_from_env_or(LogLevel::Error);
         let config = iceoryx2::config::Config::default();
         let node = NodeBuilder::new()
@@ -217,70 +273,118 @@ impl Bus {
         })
     }
 
-    fn service_name(&self, topic: &str) -> Result<ServiceName, Error> {
-        Ok(ServiceName::new(&format!("rig/{}/{topic}", self.run_id))?)
+    /// The full service name of a run topic: `rig/<run id>/<topic>`.
+    pub fn run_service(&self, topic: &str) -> String {
+        format!("rig/{}/{topic}", self.run_id)
+    }
+
+    /// The iceoryx2 node of this process.
+    pub fn node(&self) -> &Node<ipc::Service> {
+        &self.node
     }
 
     fn pubsub<T: std::fmt::Debug + ZeroCopySend + 'static>(
         &self,
-        topic: &str,
+        service: &str,
+        qos: Qos,
     ) -> Result<
         iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>,
         Error,
     > {
-        Ok(self
-            .node
-            .service_builder(&self.service_name(topic)?)
+        let name = ServiceName::new(service)?;
+        self.node
+            .service_builder(&name)
             .publish_subscribe::<T>()
-            .max_publishers(1)
-            .max_subscribers(4)
-            .subscriber_max_buffer_size(BUFFER)
+            .max_publishers(qos.max_publishers)
+            .max_subscribers(qos.max_subscribers)
+            .subscriber_max_buffer_size(qos.buffer)
             .enable_safe_overflow(true)
             .open_or_create()
             .map_err(|e| {
+                let found = describe_service(&name, self.node.config());
                 format!(
-                    "service rig/{}/{topic}: {e:?} (a peer with an incompatible message layout?)",
-                    self.run_id
+                    "service {service}: {e:?}: this process needs payload {} ({} bytes, alignment {}), \
+                     max {} publisher(s), {} subscribers, buffer {}; {found}",
+                    type_name_of::<T>(),
+                    std::mem::size_of::<T>(),
+                    std::mem::align_of::<T>(),
+                    qos.max_publishers,
+                    qos.max_subscribers,
+                    qos.buffer,
                 )
-            })?)
+                .into()
+            })
     }
 
     fn event(
         &self,
-        topic: &str,
+        service: &str,
     ) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, Error> {
         Ok(self
             .node
-            .service_builder(&self.service_name(topic)?)
+            .service_builder(&ServiceName::new(service)?)
             .event()
-            .open_or_create()?)
+            .open_or_create()
+            .map_err(|e| format!("event service {service}: {e:?}"))?)
     }
 
-    /// A sender on `topic`.
+    /// A sender on run topic `topic`.
     pub fn tx<T: std::fmt::Debug + ZeroCopySend + 'static>(
         &self,
         topic: &str,
     ) -> Result<Tx<T>, Error> {
-        let service = self.pubsub::<T>(topic)?;
-        let publisher = service.publisher_builder().max_loaned_samples(2).create().map_err(|e| {
-            format!("publisher on rig/{}/{topic}: {e:?} (is another process of the same run id publishing?)", self.run_id)
-        })?;
-        let notifier = self.event(topic)?.notifier_builder().create()?;
-        Ok(Tx {
-            publisher,
-            notifier,
-            service,
-        })
+        self.tx_on(&self.run_service(topic), RUN_QOS)
     }
 
-    /// A receiver on `topic`.
+    /// A receiver on run topic `topic`.
     pub fn rx<T: std::fmt::Debug + ZeroCopySend + 'static>(
         &self,
         topic: &str,
     ) -> Result<Rx<T>, Error> {
-        let service = self.pubsub::<T>(topic)?;
-        let subscriber = service.subscriber_builder().create()?;
-        let listener = self.event(topic)?.listener_builder().create()?;
+        self.rx_on(&self.run_service(topic), RUN_QOS)
+    }
+
+    /// A sender on the service named `service` (publish-subscribe with settings `qos`,
+    /// plus the event service of the same name).
+    pub fn tx_on<T: std::fmt::Debug + ZeroCopySend + 'static>(
+        &self,
+        service: &str,
+        qos: Qos,
+    ) -> Result<Tx<T>, Error> {
+        let factory = self.pubsub::<T>(service, qos)?;
+        let publisher = factory
+            .publisher_builder()
+            .max_loaned_samples(2)
+            .create()
+            .map_err(|e| {
+                format!(
+                    "publisher on {service}: {e:?} (is another process publishing there already?)"
+                )
+            })?;
+        let notifier = self.event(service)?.notifier_builder().create()?;
+        Ok(Tx {
+            publisher,
+            notifier,
+            service: factory,
+        })
+    }
+
+    /// A receiver on the service named `service` (see [`Bus::tx_on`]).
+    pub fn rx_on<T: std::fmt::Debug + ZeroCopySend + 'static>(
+        &self,
+        service: &str,
+        qos: Qos,
+    ) -> Result<Rx<T>, Error> {
+        let factory = self.pubsub::<T>(service, qos)?;
+        let subscriber = factory
+            .subscriber_builder()
+            .create()
+            .map_err(|e| format!("subscriber on {service}: {e:?}"))?;
+        let listener = self
+            .event(service)?
+            .listener_builder()
+            .create()
+            .map_err(|e| format!("listener on {service}: {e:?}"))?;
         Ok(Rx {
             subscriber,
             listener,

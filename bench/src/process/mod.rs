@@ -16,6 +16,7 @@
 //! announce ([`wire::flags`]).
 
 pub mod agent;
+pub mod external;
 pub mod observer;
 pub mod plant;
 
@@ -66,6 +67,18 @@ pub struct ProcessArgs {
     /// action (ns, one per line) to this file.
     #[arg(long, value_name = "FILE")]
     pub latency_out: Option<PathBuf>,
+    /// Plant only: do not simulate; be the episode master for the external driver with
+    /// this id (services rig/driver/ID/..., docs/driver.md), which is the clock.
+    /// `--timing` and `--speed` do not apply then.
+    #[arg(long, value_name = "ID")]
+    pub driver: Option<String>,
+    /// Plant only, with `--driver`: how long to wait for the driver to appear [s].
+    #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
+    pub driver_timeout: f64,
+    /// Plant only, with `--driver`: how long the driver may take for one reset (bring
+    /// the system to rest at the start state) [s].
+    #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
+    pub reset_timeout: f64,
 }
 
 impl ProcessArgs {
@@ -76,6 +89,14 @@ impl ProcessArgs {
         resolve(Some((&self.config, &text)), &Overrides::default())
             .map_err(|e| anyhow::anyhow!("{e}"))
     }
+}
+
+/// A positive, finite number of seconds as a duration, or an error naming `flag`.
+pub fn seconds(flag: &str, s: f64) -> Result<Duration> {
+    if !(s.is_finite() && s > 0.0 && s <= 1e6) {
+        anyhow::bail!("`{flag}` {s} is out of range: must be a number of seconds in (0, 1e6]");
+    }
+    Ok(Duration::from_secs_f64(s))
 }
 
 /// Copies `v` into a fixed-size wire array (the rest zero).

@@ -10,8 +10,10 @@ use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
 
 /// Runs the plant side of a run: every trial of the configuration, greedy evaluation
 /// trials where due (one from each of the task's start states), then announces the end
-/// of the run. A trial that leaves the task's operating range ends early with
-/// [`flags::END`] | [`flags::TERMINAL`]; the simulated time counts only samples run.
+/// of the run. The system is simulated here, or, with `--driver ID`, is an external
+/// driver's ([`super::external`]). A trial that leaves the task's operating range ends
+/// early with [`flags::END`] | [`flags::TERMINAL`]; the simulated time counts only
+/// samples run.
 pub fn run(args: &ProcessArgs) -> Result<()> {
     let cfg = args.config()?;
     let task = Arc::new(Task::new(cfg.system));
@@ -20,41 +22,51 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
     let out = bus
         .tx::<Measurement>(topic::MEASUREMENT)
         .map_err(wire_err)?;
-    out.wait_for_receivers(args.receivers, STARTUP, &bus)
-        .map_err(wire_err)?;
-    let task_ts = task.ts;
-    let mut p = PlantLoop {
-        plant: Plant::new(task.clone()),
-        task,
+    let link = Link {
+        task: task.clone(),
         bus,
         out,
         actions,
         seq: 0,
         latencies: Vec::new(),
         misses: 0,
-        realtime: (args.timing == "realtime").then(|| {
-            let period_ns = (task_ts * 1e9 / args.speed).round() as u64;
-            Clock {
-                period_ns,
-                next_ns: now_ns() + period_ns,
-                speed: args.speed,
-            }
-        }),
+    };
+    let mut runner: Box<dyn Trials> = match &args.driver {
+        Some(id) => Box::new(super::external::Bridge::connect(link, id, args)?),
+        None => {
+            link.out
+                .wait_for_receivers(args.receivers, STARTUP, &link.bus)
+                .map_err(wire_err)?;
+            let realtime = (args.timing == "realtime").then(|| {
+                let period_ns = (task.ts * 1e9 / args.speed).round() as u64;
+                Clock {
+                    period_ns,
+                    next_ns: now_ns() + period_ns,
+                    speed: args.speed,
+                }
+            });
+            Box::new(PlantLoop {
+                plant: Plant::new(task.clone()),
+                link,
+                realtime,
+            })
+        }
     };
     let eval_every = cfg.run.eval_every;
-    let trial_seconds = p.task.trial_seconds;
+    let (trial_seconds, task_ts) = (task.trial_seconds, task.ts);
     let mut skipped = 0;
     let t_sim =
         |trials: u64, skipped: usize| trials as f64 * trial_seconds - skipped as f64 * task_ts;
     for trial in 1..=u64::from(cfg.run.trials) {
-        let x0 = p.start_state(trial);
-        skipped += p.trial(trial, &x0, 0, t_sim(trial - 1, skipped))?;
+        let x0 = task.initial_states[(trial as usize - 1) % task.initial_states.len()].clone();
+        skipped += runner.trial(trial, &x0, 0, t_sim(trial - 1, skipped))?;
         if eval_every > 0 && trial.is_multiple_of(u64::from(eval_every)) {
-            for x0 in p.task.initial_states.clone() {
-                p.trial(trial, &x0, flags::GREEDY, t_sim(trial, skipped))?;
+            for x0 in &task.initial_states {
+                runner.trial(trial, x0, flags::GREEDY, t_sim(trial, skipped))?;
             }
         }
     }
+    let p = runner.link();
     // The end of the run, stamped with the run's final simulated and monotonic time.
     let header = Header {
         seq: p.seq,
@@ -79,33 +91,91 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
     Ok(())
 }
 
-struct PlantLoop {
-    task: Arc<Task>,
-    plant: Plant,
-    bus: Bus,
-    out: wire::Tx<Measurement>,
-    actions: wire::Rx<Action>,
-    seq: u64,
+/// Runs trials: the simulation ([`PlantLoop`]) or an external driver
+/// ([`super::external::Bridge`]).
+pub(super) trait Trials {
+    /// One trial from `x0`; `mode` is 0 (learning) or [`flags::GREEDY`]; `t0` is the
+    /// simulated time at its start. Returns how many of the trial's samples were not run
+    /// because it left the operating range.
+    fn trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<usize>;
+    /// The run topics.
+    fn link(&mut self) -> &mut Link;
+}
+
+/// The plant process's end of the run topics: measurements out, actions in.
+pub(super) struct Link {
+    pub(super) task: Arc<Task>,
+    pub(super) bus: Bus,
+    pub(super) out: wire::Tx<Measurement>,
+    pub(super) actions: wire::Rx<Action>,
+    /// The next sample's sequence number.
+    pub(super) seq: u64,
     /// Publish-to-action time of every sample \[ns\].
-    latencies: Vec<u64>,
-    /// Sample intervals in which no action arrived (realtime).
-    misses: u64,
+    pub(super) latencies: Vec<u64>,
+    /// Deadlines missed so far (realtime, external driver).
+    pub(super) misses: u64,
+}
+
+impl Link {
+    /// Publishes a sample; returns when it was published (monotonic ns).
+    pub(super) fn publish(
+        &mut self,
+        header: Header,
+        reward: f64,
+        y: &[f64],
+        u_applied: &[f64],
+        t_sample_ns: u64,
+    ) -> Result<u64> {
+        let m = Measurement {
+            header,
+            n_x: self.task.state_dim() as u64,
+            n_u: self.task.action_dim() as u64,
+            reward,
+            y: pack(y),
+            u_applied: pack(u_applied),
+            t_sample_ns,
+            t_publish_ns: now_ns(),
+            deadline_misses: self.misses,
+        };
+        self.out.send(m).map_err(wire_err)?;
+        self.seq += 1;
+        Ok(m.t_publish_ns)
+    }
+
+    /// Checks that action `a` answers sample `seq`.
+    pub(super) fn check_answer(a: &Action, seq: u64) -> Result<()> {
+        if a.header.seq != seq {
+            bail!(
+                "action for sample {} arrived while waiting for sample {seq}",
+                a.header.seq
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The simulated system, lockstep or realtime.
+struct PlantLoop {
+    plant: Plant,
+    link: Link,
     /// The sampling clock, in realtime timing.
     realtime: Option<Clock>,
 }
 
 /// Headers of one trial's samples.
-struct TrialHeader {
-    trial: u64,
+pub(super) struct TrialHeader {
+    pub(super) trial: u64,
     /// 0 (learning) or [`flags::GREEDY`].
-    mode: u64,
+    pub(super) mode: u64,
     /// Simulated time at the trial's start \[s\].
-    t0: f64,
-    ts: f64,
+    pub(super) t0: f64,
+    /// Sample time \[s\].
+    pub(super) ts: f64,
 }
 
 impl TrialHeader {
-    fn at(&self, seq: u64, step: usize, flags: u64) -> Header {
+    /// The header of sample `step` of the trial, with sequence number `seq`.
+    pub(super) fn at(&self, seq: u64, step: usize, flags: u64) -> Header {
         Header {
             seq,
             trial: self.trial,
@@ -140,50 +210,20 @@ fn sleep_until(t_ns: u64) {
 }
 
 impl PlantLoop {
-    fn start_state(&self, trial: u64) -> Vec<f64> {
-        let s = &self.task.initial_states;
-        s[(trial as usize - 1) % s.len()].clone()
-    }
-
     /// Publishes the current sample and waits for the action that answers it.
     fn exchange(&mut self, header: Header, reward: f64) -> Result<Vec<f64>> {
-        let t_publish_ns = self.publish(header, reward, now_ns())?;
-        let a = self.actions.recv(&self.bus, SILENCE).map_err(wire_err)?;
-        self.latencies.push(now_ns() - t_publish_ns);
-        if a.header.seq != header.seq {
-            bail!(
-                "action for sample {} arrived while waiting for sample {}",
-                a.header.seq,
-                header.seq
-            );
-        }
-        Ok(a.u[..self.task.action_dim()].to_vec())
-    }
-
-    /// One trial from `x0`; `mode` is 0 (learning) or [`flags::GREEDY`]. Returns how many
-    /// of the trial's samples were not run because it left the operating range.
-    fn trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<usize> {
-        if self.realtime.is_some() {
-            return self.realtime_trial(trial, x0, mode, t0);
-        }
-        let steps = self.task.steps_per_trial();
-        self.plant.reset(x0);
-        let header = TrialHeader {
-            trial,
-            mode,
-            t0,
-            ts: self.task.ts,
-        };
-        let mut u = self.exchange(header.at(self.seq, 0, flags::START), 0.0)?;
-        for k in 0..steps {
-            let r = self.plant.step(&u);
-            let end = self.end_flags(k + 1 == steps);
-            u = self.exchange(header.at(self.seq, k + 1, end), r)?;
-            if self.plant.terminated() {
-                return Ok(steps - k - 1);
-            }
-        }
-        Ok(0)
+        let l = &mut self.link;
+        let t_publish_ns = l.publish(
+            header,
+            reward,
+            self.plant.state(),
+            self.plant.applied_action(),
+            now_ns(),
+        )?;
+        let a = l.actions.recv(&l.bus, SILENCE).map_err(wire_err)?;
+        l.latencies.push(now_ns() - t_publish_ns);
+        Link::check_answer(&a, header.seq)?;
+        Ok(a.u[..l.task.action_dim()].to_vec())
     }
 
     /// The flags that end a trial after this sample: [`flags::END`] on the last sample,
@@ -198,22 +238,15 @@ impl PlantLoop {
         }
     }
 
-    /// Publishes the current sample; returns when it was published (monotonic ns).
+    /// Publishes the current sample without waiting (realtime).
     fn publish(&mut self, header: Header, reward: f64, t_sample_ns: u64) -> Result<u64> {
-        let m = Measurement {
+        self.link.publish(
             header,
-            n_x: self.task.state_dim() as u64,
-            n_u: self.task.action_dim() as u64,
             reward,
-            y: pack(self.plant.state()),
-            u_applied: pack(self.plant.applied_action()),
+            self.plant.state(),
+            self.plant.applied_action(),
             t_sample_ns,
-            t_publish_ns: now_ns(),
-            deadline_misses: self.misses,
-        };
-        self.out.send(m).map_err(wire_err)?;
-        self.seq += 1;
-        Ok(m.t_publish_ns)
+        )
     }
 
     /// One trial in real time: the plant samples at absolute deadlines; every action that
@@ -222,25 +255,25 @@ impl PlantLoop {
     /// missed deadline. The reward of an interval is `ρ(x_k, u)` with the action in effect
     /// at its end.
     fn realtime_trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<usize> {
-        let steps = self.task.steps_per_trial();
+        let steps = self.link.task.steps_per_trial();
         let (period_ns, speed) = {
             let c = self.realtime.as_ref().expect("realtime");
             (c.period_ns, c.speed)
         };
         self.plant.reset(x0);
-        let mut u_hold = vec![0.0; self.task.action_dim()];
+        let mut u_hold = vec![0.0; self.link.task.action_dim()];
         let header = TrialHeader {
             trial,
             mode,
             t0,
-            ts: self.task.ts,
+            ts: self.link.task.ts,
         };
         let mut t_k = self.realtime.as_ref().expect("realtime").next_ns;
         sleep_until(t_k);
-        self.publish(header.at(self.seq, 0, flags::START), 0.0, t_k)?;
+        self.publish(header.at(self.link.seq, 0, flags::START), 0.0, t_k)?;
         let mut ended_after = None;
         for k in 0..=steps {
-            let waiting_for = self.seq - 1;
+            let waiting_for = self.link.seq - 1;
             let deadline = t_k + period_ns;
             // Collect the actions arriving in [t_k, deadline). The plant owns the clock and
             // polls (every 20 µs) rather than blocking on the event service: blocking waits
@@ -252,7 +285,7 @@ impl PlantLoop {
                 if now >= deadline {
                     break;
                 }
-                let Some(a) = self.actions.try_recv().map_err(wire_err)? else {
+                let Some(a) = self.link.actions.try_recv().map_err(wire_err)? else {
                     std::thread::sleep(
                         std::time::Duration::from_micros(20)
                             .min(std::time::Duration::from_nanos(deadline - now)),
@@ -261,15 +294,15 @@ impl PlantLoop {
                 };
                 {
                     let t_a = now_ns().min(deadline);
-                    arrivals.push((t_a, a.u[..self.task.action_dim()].to_vec()));
+                    arrivals.push((t_a, a.u[..self.link.task.action_dim()].to_vec()));
                     if a.header.seq == waiting_for {
-                        self.latencies.push(t_a.saturating_sub(t_k));
+                        self.link.latencies.push(t_a.saturating_sub(t_k));
                         answered = true;
                     }
                 }
             }
             if !answered {
-                self.misses += 1;
+                self.link.misses += 1;
             }
             if let Some(skipped) = ended_after {
                 // The END sample's answer only acknowledges learning; the trial is over.
@@ -287,18 +320,50 @@ impl PlantLoop {
             }
             self.plant.advance(&u_hold, sim(deadline - t));
             let r = self.plant.reward_of_transition(
-                self.task
+                self.link
+                    .task
                     .reward
                     .reward(&x_k_reward_state, self.plant.applied_action()),
             );
             sleep_until(deadline);
             t_k = deadline;
             let end = self.end_flags(k + 1 == steps);
-            self.publish(header.at(self.seq, k + 1, end), r, t_k)?;
+            self.publish(header.at(self.link.seq, k + 1, end), r, t_k)?;
             if end != 0 {
                 ended_after = Some(steps - k - 1);
             }
         }
         unreachable!("the loop returns after the END sample's answer")
+    }
+}
+
+impl Trials for PlantLoop {
+    fn trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<usize> {
+        if self.realtime.is_some() {
+            return self.realtime_trial(trial, x0, mode, t0);
+        }
+        let task = self.link.task.clone();
+        let steps = task.steps_per_trial();
+        self.plant.reset(x0);
+        let header = TrialHeader {
+            trial,
+            mode,
+            t0,
+            ts: task.ts,
+        };
+        let mut u = self.exchange(header.at(self.link.seq, 0, flags::START), 0.0)?;
+        for k in 0..steps {
+            let r = self.plant.step(&u);
+            let end = self.end_flags(k + 1 == steps);
+            u = self.exchange(header.at(self.link.seq, k + 1, end), r)?;
+            if self.plant.terminated() {
+                return Ok(steps - k - 1);
+            }
+        }
+        Ok(0)
+    }
+
+    fn link(&mut self) -> &mut Link {
+        &mut self.link
     }
 }

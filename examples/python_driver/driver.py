@@ -1,0 +1,436 @@
+#!/usr/bin/env python3
+"""Example motor driver for the rig: the pendulum of Appendix A.1, simulated.
+
+It speaks the driver contract of docs/driver.md over iceoryx2 (the official Python
+bindings, pinned to the Rust crate's version 0.10.0) exactly as a driver for the real
+motor would: it is the clock (a sample every Ts = 30 ms on CLOCK_MONOTONIC, whether or
+not actions arrive), applies each action from the moment it arrives (clamped to
+[-3, 3] V; a non-finite action is rejected and zero applied), falls back to zero when
+no action arrives for a whole period (the watchdog), and resets by bringing the
+pendulum to rest at the bottom with a PD controller, then reports READY. The physics is
+Table A.1's model integrated with RK4 (steps of at most 1.5 ms) over the real elapsed
+time, piecewise between action arrivals.
+
+    python3 driver.py [--driver-id pendulum] [--speed 1]
+
+Stop it with Ctrl-C or SIGTERM (it finishes the current period and exits).
+"""
+
+import argparse
+import ctypes
+import math
+import os
+import signal
+import sys
+import time
+
+import iceoryx2 as iox2
+
+# DriverInfo, DriverSample, DriverCommand and the constants of docs/driver.md.
+from messages import (  # the module next to this file
+    ACTION,
+    READY,
+    RESET,
+    RESETTING,
+    VERSION,
+    WATCHDOG,
+    DriverCommand,
+    DriverInfo,
+    DriverSample,
+)
+
+
+class BadSample(ctypes.Structure):
+    """--inject-fault layout: the right type name with a wrong layout (no counters)."""
+
+    _fields_ = DriverSample._fields_[:-3]
+
+    @staticmethod
+    def type_name() -> str:
+        return "rig.DriverSample.v1"
+
+
+class Pendulum:
+    """Appendix A.1: J φ̈ = M g l sin φ − (b + K²/R) φ̇ + (K/R) u, φ from upright."""
+
+    J, M, G, L, B, K, R = 1.91e-4, 5.50e-2, 9.81, 4.20e-2, 3e-6, 5.36e-2, 9.50
+    TS = 0.03  # sample time [s]
+    U_MAX = 3.0  # |u| ≤ 3 V
+    H_MAX = 0.0015  # longest RK4 step [s] (20 per sample, as the rig's simulation)
+
+    def __init__(self):
+        self.x = [-math.pi, 0.0]  # hanging at rest
+
+    def derivative(self, phi, omega, u):
+        k_r = self.K / self.R
+        return omega, (
+            self.M * self.G * self.L * math.sin(phi)
+            - (self.B + self.K * k_r) * omega
+            + k_r * u
+        ) / self.J
+
+    def advance(self, u, seconds):
+        """Integrates `seconds` of simulated time with the action `u` held."""
+        if seconds <= 0.0:
+            return
+        n = max(1, math.ceil(seconds / self.H_MAX))
+        h = seconds / n
+        p, w = self.x
+        f = self.derivative
+        for _ in range(n):
+            a1, b1 = f(p, w, u)
+            a2, b2 = f(p + 0.5 * h * a1, w + 0.5 * h * b1, u)
+            a3, b3 = f(p + 0.5 * h * a2, w + 0.5 * h * b2, u)
+            a4, b4 = f(p + h * a3, w + h * b3, u)
+            p += h / 6.0 * (a1 + 2 * a2 + 2 * a3 + a4)
+            w += h / 6.0 * (b1 + 2 * b2 + 2 * b3 + b4)
+        self.x = [wrap(p), w]
+
+
+def wrap(a):
+    """Angle to [-π, π)."""
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def finite(values):
+    return all(math.isfinite(v) for v in values)
+
+
+class Driver:
+    """One driver instance: services, the simulated pendulum, the watchdog, resets."""
+
+    KP, KD = 1.0, 0.7  # reset controller [V/rad], [V s/rad]
+    REST_ANGLE, REST_SPEED = 0.02, 0.05  # "at rest" tolerance [rad], [rad/s]
+    REST_SAMPLES = 3  # consecutive samples at rest before READY
+
+    def __init__(self, args):
+        self.args = args
+        self.speed = args.speed
+        self.period_ns = round(Pendulum.TS / self.speed * 1e9)
+        self.plant = Pendulum()
+        self.t_start = time.monotonic_ns()
+        self.t_phys = self.t_start  # monotonic time the physics has reached
+        self.u = 0.0  # the action in effect
+        self.status = 0  # no reset yet: actions are not applied
+        self.reset_id = 0
+        self.reset_target = None
+        self.at_rest = 0
+        self.last_command = 0
+        self.action_this_period = False
+        self.acted_since_reset = False
+        self.periods_without_action = 0
+        self.clamped = 0
+        self.rejected = 0
+        self.watchdog_trips = 0
+
+        iox2.set_log_level_from_env_or(iox2.LogLevel.Error)
+        self.node = (
+            iox2.NodeBuilder.new()
+            .name(iox2.NodeName.new(f"rig-driver-{args.driver_id}"))
+            .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
+            .create(iox2.ServiceType.Ipc)
+        )
+        sample_type = BadSample if args.inject_fault == "layout" else DriverSample
+        self.info_pub, self.info_note = self.publisher("info", DriverInfo)
+        self.sample_pub, self.sample_note = self.publisher("sample", sample_type)
+        cmd_service = self.pubsub("command", DriverCommand)
+        self.commands = cmd_service.subscriber_builder().create()
+        self.command_events = (
+            self.node.service_builder(self.service_name("command"))
+            .event()
+            .open_or_create()
+            .listener_builder()
+            .create()
+        )
+        self.waitset = (
+            iox2.WaitSetBuilder.new()
+            .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
+            .create(iox2.ServiceType.Ipc)
+        )
+        self.command_guard = self.waitset.attach_notification(self.command_events)
+        self.stopping = False
+
+    def service_name(self, topic):
+        return iox2.ServiceName.new(f"rig/driver/{self.args.driver_id}/{topic}")
+
+    def pubsub(self, topic, payload):
+        # The settings every driver service uses (docs/driver.md, "Services").
+        return (
+            self.node.service_builder(self.service_name(topic))
+            .publish_subscribe(payload)
+            .max_publishers(1)
+            .max_subscribers(8)
+            .subscriber_max_buffer_size(256)
+            .enable_safe_overflow(True)
+            .open_or_create()
+        )
+
+    def publisher(self, topic, payload):
+        pub = self.pubsub(topic, payload).publisher_builder().create()
+        notifier = (
+            self.node.service_builder(self.service_name(topic))
+            .event()
+            .open_or_create()
+            .notifier_builder()
+            .create()
+        )
+        return pub, notifier
+
+    def publish(self, pub, notifier, msg):
+        pub.loan_uninit().write_payload(msg).send()
+        notifier.notify()
+
+    def publish_info(self):
+        info = DriverInfo(
+            version=VERSION,
+            system=b"pendulum",
+            n_x=2,
+            n_u=1,
+            period_ns=self.period_ns,
+            time_scale=self.speed,
+            watchdog_periods=1,
+            t_start_ns=self.t_start,
+            t_publish_ns=time.monotonic_ns(),
+        )
+        info.u_min[0] = -Pendulum.U_MAX
+        info.u_max[0] = Pendulum.U_MAX
+        self.publish(self.info_pub, self.info_note, info)
+
+    def physics_to(self, t_ns):
+        """Advances the simulation to monotonic time t_ns with the action in effect."""
+        self.plant.advance(self.u, (t_ns - self.t_phys) * 1e-9 * self.speed)
+        self.t_phys = max(self.t_phys, t_ns)
+
+    def log(self, text):
+        if self.args.verbose:
+            print(f"driver: {text}", file=sys.stderr, flush=True)
+
+    def command(self, c):
+        """Handles one command, at its arrival (the physics is already there)."""
+        if c.kind == ACTION:
+            u = c.u[0]
+            if self.status & READY == 0:
+                self.rejected += 1  # not reset yet, or resetting: ignored
+            elif c.n_u != 1 or not finite([u]):
+                if self.args.inject_fault == "limits" and c.n_u == 1:
+                    return  # the fault: keep the previous action
+                self.rejected += 1
+                self.u = 0.0  # the safe action
+                self.log(f"rejected command {c.seq}: n_u {c.n_u}, u {u}")
+            else:
+                lo, hi = -Pendulum.U_MAX, Pendulum.U_MAX
+                if not lo <= u <= hi and self.args.inject_fault != "limits":
+                    self.clamped += 1
+                    u = min(max(u, lo), hi)
+                self.u = u
+                self.last_command = c.seq
+                self.action_this_period = True
+                self.acted_since_reset = True
+                self.status &= ~WATCHDOG
+        elif c.kind == RESET:
+            x0 = [c.x0[0], c.x0[1]]
+            if c.n_x != 2 or not finite(x0):
+                self.rejected += 1
+                self.log(f"rejected reset {c.seq}: n_x {c.n_x}, x0 {x0}")
+                return
+            self.status = RESETTING
+            self.reset_id = c.seq
+            self.reset_target = x0
+            self.at_rest = 0
+            self.log(f"reset {c.seq} to {x0}")
+        else:
+            self.rejected += 1
+
+    def at_sample_instant(self):
+        """Decisions at a sample instant, after sampling: reset progress, watchdog."""
+        phi, omega = self.plant.x
+        if self.status & RESETTING:
+            target_phi, target_omega = self.reset_target
+            e_phi = wrap(target_phi - phi)
+            e_omega = target_omega - omega
+            rest = abs(e_phi) < self.REST_ANGLE and abs(e_omega) < self.REST_SPEED
+            self.at_rest = self.at_rest + 1 if rest else 0
+            if self.at_rest >= self.REST_SAMPLES:
+                self.status = READY
+                self.u = 0.0
+                self.action_this_period = False
+                self.acted_since_reset = False
+                self.periods_without_action = 0
+                self.log(f"reset {self.reset_id} done at {self.plant.x}")
+            else:
+                u = self.KP * e_phi + self.KD * e_omega
+                self.u = min(max(u, -Pendulum.U_MAX), Pendulum.U_MAX)
+            return
+        if self.status & READY:
+            if self.action_this_period:
+                self.periods_without_action = 0
+            else:
+                self.periods_without_action += 1
+            self.action_this_period = False
+            engage = self.periods_without_action >= 1 and self.acted_since_reset
+            if engage and not self.status & WATCHDOG and self.args.inject_fault != "watchdog":
+                self.status |= WATCHDOG
+                self.watchdog_trips += 1
+                self.u = 0.0
+                self.log("watchdog: no action for a period, applying zero")
+
+    def sample(self, seq, t_sample):
+        s = (BadSample if self.args.inject_fault == "layout" else DriverSample)()
+        s.seq = seq
+        s.t_sample_ns = t_sample
+        s.status = self.status
+        s.reset_id = self.reset_id
+        s.last_command = self.last_command
+        s.n_x = 2
+        s.n_u = 1
+        s.x[0], s.x[1] = self.plant.x
+        s.u_applied[0] = self.u
+        if self.args.inject_fault != "layout":
+            s.clamped = self.clamped
+            s.rejected = self.rejected
+            s.watchdog_trips = self.watchdog_trips
+        return s
+
+    def drain_commands(self):
+        """Handles every command waiting, each at the time it is taken."""
+        while True:
+            c = self.commands.receive()
+            if c is None:
+                return
+            cmd = DriverCommand.from_buffer_copy(c.payload().contents)
+            del c  # returns the slot
+            self.physics_to(time.monotonic_ns())
+            self.command(cmd)
+
+    def wait_until(self, deadline):
+        """Handles commands as they arrive until monotonic time `deadline`.
+
+        The WaitSet wakes on a command within ~0.2 ms, but its timeout overshoots by up
+        to several ms on a loaded machine (Listener.timed_wait's by ~8 ms always): sleep
+        the last 12 ms in steps of 0.2 ms instead, polling for commands between them.
+        """
+        while not self.stopping:
+            now = time.monotonic_ns()
+            if now >= deadline:
+                return
+            left = deadline - now
+            if left > 13_000_000:
+                self.waitset.wait_and_process_with_timeout(
+                    iox2.Duration.from_nanos(left - 12_000_000)
+                )
+                self.command_events.try_wait()  # consume the wake-up
+            else:
+                time.sleep(min(left, 200_000) * 1e-9)
+            self.drain_commands()
+
+    def run(self):
+        period = self.period_ns
+        seq = 0
+        next_info = self.t_start
+        while not self.stopping:
+            t_sample = time.monotonic_ns()
+            self.physics_to(t_sample)
+            s = self.sample(seq, t_sample)
+            self.at_sample_instant()
+            s.status = self.status  # status after this instant's decisions
+            s.t_publish_ns = time.monotonic_ns()
+            self.publish(self.sample_pub, self.sample_note, s)
+            if t_sample >= next_info:
+                self.publish_info()
+                next_info = t_sample + 1_000_000_000
+            seq += 1
+            self.wait_until(self.t_start + seq * period)
+            # Woken late by a period or more: those periods were missed.
+            late = (time.monotonic_ns() - (self.t_start + seq * period)) // period
+            if late > 0:
+                seq += late
+                self.log(f"missed {late} period(s)")
+
+
+def main():
+    p = argparse.ArgumentParser(
+        description="Example rig driver: simulates the pendulum of Appendix A.1 "
+        "and speaks the driver contract of docs/driver.md over iceoryx2 0.10."
+    )
+    p.add_argument(
+        "--driver-id",
+        default="pendulum",
+        help="the id the rig connects to (services rig/driver/ID/...); "
+        "letters, digits, '-' and '_' [default: pendulum]",
+    )
+    p.add_argument(
+        "--speed",
+        type=float,
+        default=1.0,
+        help="run S times faster than real time: a sample every 30 ms / S of wall "
+        "time, advertised as time_scale S [default: 1, real time]",
+    )
+    p.add_argument(
+        "--inject-fault",
+        choices=["layout", "watchdog", "limits"],
+        help="misbehave on purpose, to see what `rig check-driver` says: publish a "
+        "wrong sample layout, never engage the watchdog, or apply out-of-range and "
+        "non-finite actions instead of clamping and rejecting them",
+    )
+    p.add_argument(
+        "--realtime-priority",
+        type=int,
+        metavar="N",
+        help="run with SCHED_FIFO priority N (1-99), as a hardware driver should, so that "
+        "a loaded machine does not delay the sample instants by milliseconds; needs "
+        "CAP_SYS_NICE (or root) [default: normal scheduling]",
+    )
+    p.add_argument("--verbose", action="store_true", help="log resets and faults")
+    args = p.parse_args()
+    if not (math.isfinite(args.speed) and 0.0 < args.speed <= 1000.0):
+        p.error(f"--speed {args.speed}: must be in (0, 1000]")
+    ok = all(ch.isascii() and (ch.isalnum() or ch in "-_") for ch in args.driver_id)
+    if not args.driver_id or not ok:
+        p.error(f"--driver-id {args.driver_id!r}: letters, digits, '-' and '_' only")
+
+    try:
+        driver = Driver(args)
+    except iox2.PublishSubscribeOpenOrCreateError as e:
+        print(
+            f"driver: cannot open the services rig/driver/{args.driver_id}/*: {e!r} "
+            "(another driver with this id, or a peer with another layout?)",
+            file=sys.stderr,
+        )
+        return 1
+    except iox2.PublisherCreateError as e:
+        print(
+            f"driver: cannot publish on rig/driver/{args.driver_id}/*: {e!r} "
+            "(is another driver with this id running?)",
+            file=sys.stderr,
+        )
+        return 1
+    print(
+        f"driver {args.driver_id!r}: pendulum, Ts 30 ms, "
+        f"period {driver.period_ns / 1e6:g} ms of wall time (speed {args.speed:g})",
+        file=sys.stderr,
+        flush=True,
+    )
+    if args.realtime_priority is not None:
+        try:
+            param = os.sched_param(args.realtime_priority)
+            os.sched_setscheduler(0, os.SCHED_FIFO, param)
+        except (OSError, ValueError) as e:
+            print(
+                f"driver: --realtime-priority {args.realtime_priority}: {e} "
+                "(needs CAP_SYS_NICE; priority 1-99)",
+                file=sys.stderr,
+            )
+            return 1
+
+    def stop(signum, frame):
+        driver.stopping = True
+
+    signal.signal(signal.SIGTERM, stop)
+    signal.signal(signal.SIGINT, stop)
+    driver.run()
+    print("driver: stopped", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
