@@ -79,6 +79,33 @@ impl ApproxKind {
     ];
 }
 
+/// The horizon of the cost function ([`crate::horizon`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum HorizonKind {
+    /// Discounted rewards without end (Chapters 3, 5, 6).
+    #[default]
+    Infinite,
+    /// A trial is the horizon: its samples' rewards plus the terminal reward `τ_N`, actor
+    /// and critic time-varying (Chapter 4; SAC, MLAC and RMAC, Algorithms 4–6).
+    Finite,
+}
+
+impl HorizonKind {
+    /// Both horizons, for help texts and validation messages.
+    pub const ALL: [HorizonKind; 2] = [HorizonKind::Infinite, HorizonKind::Finite];
+
+    /// The runtime horizon of `task`: a finite horizon is one trial, `N` samples.
+    pub fn of(self, task: &Task) -> crate::horizon::Horizon {
+        match self {
+            HorizonKind::Infinite => crate::horizon::Horizon::Infinite,
+            HorizonKind::Finite => crate::horizon::Horizon::Finite {
+                steps: task.steps_per_trial(),
+            },
+        }
+    }
+}
+
 macro_rules! names {
     ($t:ty, $($v:ident => $s:literal),*) => {
         impl $t {
@@ -92,6 +119,7 @@ macro_rules! names {
 }
 names!(Algo, Sac => "sac", Mlac => "mlac", Rmac => "rmac", Vgbp => "vgbp", Sarsa => "sarsa");
 names!(ApproxKind, Llr => "llr", Rbf => "rbf", Tiles => "tiles", Lstd => "lstd");
+names!(HorizonKind, Infinite => "infinite", Finite => "finite");
 
 /// A complete experiment.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -103,11 +131,15 @@ pub struct ExperimentConfig {
     pub algo: Algo,
     /// The approximator of every component.
     pub approx: ApproxKind,
+    /// Infinite (discounted) or finite horizon (Chapter 4); absent: infinite.
+    #[serde(default)]
+    pub horizon: HorizonKind,
     /// Trials, runs, seed, evaluation.
     pub run: RunConfig,
     /// Parameters of Template 2.1 and the exploration.
     pub learning: LearningConfig,
-    /// The actor (SAC, MLAC) or reference model (RMAC); none for VGBP and SARSA.
+    /// The actor (SAC, MLAC) or reference model (RMAC); none for VGBP and SARSA. With a
+    /// finite horizon its input (like the critic's) is the state followed by time.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub actor: Option<Component>,
     /// The critic `V(x)` (SARSA: `Q(x, ·)`, one output per action).
@@ -163,7 +195,8 @@ pub struct RunConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LearningConfig {
-    /// Discount `γ`.
+    /// Discount `γ`, in (0, 1); a finite horizon also allows 1 (no discount, as in
+    /// Algorithms 4–6).
     pub gamma: f64,
     /// Eligibility-trace decay `λ` of the critic.
     pub lambda: f64,
@@ -296,6 +329,16 @@ fn err(key: &str, message: impl Into<String>) -> ConfigError {
     }
 }
 
+/// The error for a finite horizon with an algorithm that has none (VGBP, SARSA).
+pub(crate) fn finite_horizon_unsupported(algo: Algo) -> ConfigError {
+    err(
+        "horizon",
+        format!(
+            "\"finite\" (Chapter 4) is for sac, mlac and rmac; {algo} needs horizon = \"infinite\""
+        ),
+    )
+}
+
 /// Checks `lo ≤ v ≤ hi` (and finiteness) for a float key.
 fn check_f(key: &str, v: f64, lo: f64, hi: f64, open: bool) -> Result<(), ConfigError> {
     let ok = v.is_finite()
@@ -350,7 +393,21 @@ impl ExperimentConfig {
         check_i("run.runs", self.run.runs.into(), 1, 100_000)?;
         check_i("run.eval_every", self.run.eval_every.into(), 0, 10_000_000)?;
         let l = &self.learning;
-        check_f("learning.gamma", l.gamma, 0.0, 1.0, true)?;
+        let finite = self.horizon == HorizonKind::Finite;
+        if finite && !self.algo.has_actor() {
+            return Err(finite_horizon_unsupported(self.algo));
+        }
+        if !finite {
+            check_f("learning.gamma", l.gamma, 0.0, 1.0, true)?;
+        } else if !(l.gamma > 0.0 && l.gamma <= 1.0) {
+            return Err(err(
+                "learning.gamma",
+                format!(
+                    "{} is out of range: must be a number in (0, 1] (1: no discount, Algorithms 4–6)",
+                    l.gamma
+                ),
+            ));
+        }
         check_f("learning.lambda", l.lambda, 0.0, 1.0, false)?;
         check_f("learning.sigma", l.sigma, 0.0, 1e3, false)?;
         check_i(
@@ -385,6 +442,12 @@ impl ExperimentConfig {
             ));
         }
         let own = [self.approx];
+        // Actor, reference model and critic read the state, and time if finite (Eq. 4.6).
+        let (d, input) = if finite {
+            (n + 1, "state component and time")
+        } else {
+            (n, "state component")
+        };
         match (&self.actor, self.algo.has_actor()) {
             (None, true) => {
                 return Err(err(
@@ -398,10 +461,10 @@ impl ExperimentConfig {
                     format!("{} has no actor: remove the [actor] section", self.algo),
                 ));
             }
-            (Some(c), true) => self.check_component("actor", c, &own, n, "state component")?,
+            (Some(c), true) => self.check_component("actor", c, &own, d, input)?,
             (None, false) => {}
         }
-        self.check_component("critic", &self.critic, &own, n, "state component")?;
+        self.check_component("critic", &self.critic, &own, d, input)?;
         // VGBP's process model is LLR whatever its critic (§6.3.1); the others learn every
         // component with the same approximator.
         let model_kinds: &[ApproxKind] = if self.algo == Algo::Vgbp {
@@ -594,6 +657,8 @@ pub struct Overrides {
     pub algo: Option<Algo>,
     /// `--approx`.
     pub approx: Option<ApproxKind>,
+    /// `--horizon`.
+    pub horizon: Option<HorizonKind>,
     /// `--trials`.
     pub trials: Option<u32>,
     /// `--runs`.
@@ -661,7 +726,18 @@ pub fn resolve(
         .expect("checked"),
         (None, None) => ApproxKind::Llr,
     };
-    let preset = crate::preset::preset(system, algo, approx).map_err(with_file)?;
+    let horizon: HorizonKind = match (o.horizon, pick("horizon")?) {
+        (Some(h), _) => h,
+        (None, Some(s)) => parse(
+            "horizon",
+            s,
+            &HorizonKind::ALL.map(HorizonKind::as_str).join(", "),
+        )?
+        .try_into()
+        .expect("checked"),
+        (None, None) => HorizonKind::Infinite,
+    };
+    let preset = crate::preset::preset(system, algo, approx, horizon).map_err(with_file)?;
     let mut merged = toml::Table::try_from(&preset).expect("a preset always serialises");
     merge(&mut merged, user, "").map_err(with_file)?;
     let mut cfg: ExperimentConfig = toml::Value::Table(merged)
@@ -670,6 +746,7 @@ pub fn resolve(
     cfg.system = system;
     cfg.algo = algo;
     cfg.approx = approx;
+    cfg.horizon = horizon;
     if let Some(v) = o.trials {
         cfg.run.trials = v;
     }
@@ -812,6 +889,39 @@ mod tests {
         assert!(e.message.contains("wrong type"), "{e}");
         let e = resolve_str("system = \"cartpole\"\n").unwrap_err();
         assert!(e.message.contains("pendulum, arm-vertical"), "{e}");
+    }
+
+    #[test]
+    fn finite_horizon_adds_time_to_actor_and_critic() {
+        let c = resolve_str("horizon = \"finite\"\nalgo = \"sac\"\napprox = \"rbf\"\n").unwrap();
+        assert_eq!(c.horizon, HorizonKind::Finite);
+        assert_eq!(c.learning.gamma, 1.0, "Algorithms 4–6 do not discount");
+        assert_eq!(resolve_str(&c.to_toml()).unwrap(), c);
+        let e = resolve_str("horizon = \"finit\"\n").unwrap_err();
+        assert_eq!(e.key, "horizon");
+        assert!(e.to_string().starts_with("exp.toml: `horizon`"), "{e}");
+        assert!(e.message.contains("infinite, finite"), "{e}");
+        let fh = "horizon = \"finite\"\nalgo = \"mlac\"\napprox = \"rbf\"\n";
+        let e = resolve_str(&format!("{fh}[critic]\ncentres = [9, 9]\n")).unwrap_err();
+        assert_eq!(e.key, "critic.centres");
+        assert!(
+            e.message
+                .contains("must have 3, one per state component and time"),
+            "{e}"
+        );
+        assert!(resolve_str(&format!("{fh}[learning]\ngamma = 1.01\n")).is_err());
+        let e = resolve_str("[learning]\ngamma = 1.0\n").unwrap_err();
+        assert_eq!(e.key, "learning.gamma", "an infinite horizon must discount");
+        let e =
+            resolve_str("horizon = \"finite\"\nalgo = \"vgbp\"\napprox = \"lstd\"\n").unwrap_err();
+        assert_eq!(e.key, "horizon");
+        let e =
+            resolve_str("horizon = \"finite\"\nalgo = \"sac\"\napprox = \"llr\"\n").unwrap_err();
+        assert_eq!(e.key, "approx");
+        // Validation, for a configuration not made by `resolve`.
+        let mut c = c;
+        c.algo = Algo::Sarsa;
+        assert_eq!(c.validate().unwrap_err().key, "horizon");
     }
 
     #[test]

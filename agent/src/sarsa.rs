@@ -190,7 +190,7 @@ impl Agent for Sarsa {
         }
     }
 
-    fn greedy(&self, x: &[f64], _u_prev: &[f64], u: &mut [f64]) {
+    fn greedy(&self, _k: usize, x: &[f64], _u_prev: &[f64], u: &mut [f64]) {
         u.copy_from_slice(&self.actions[self.greedy_index(x)]);
     }
 

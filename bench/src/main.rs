@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use agent::config::{Algo, ApproxKind, Overrides, resolve};
+use agent::config::{Algo, ApproxKind, HorizonKind, Overrides, resolve};
 use clap::{Args, Parser, Subcommand};
 use plant::{SystemName, Task};
 use rig::learn::{LearnOptions, learn};
@@ -99,10 +99,20 @@ struct Selection {
     /// critic on RBFs with an LLR process model); sarsa uses rbf [default: llr].
     #[arg(long, value_parser = parse_approx)]
     approx: Option<ApproxKind>,
-    /// Trials per run [preset: 400 for the pendulum (vgbp, sarsa: 200), 600 for the arm].
+    /// Horizon of the cost function. `infinite`: discounted rewards without end
+    /// (Chapters 3, 5, 6). `finite`: a trial is the horizon — its return is the rewards
+    /// plus a terminal reward τ_N = −xᵀQx of the final state, and actor and critic take
+    /// time as an extra input (Chapter 4, Eq. 4.6; sac, mlac, rmac with rbf: SAC-FH,
+    /// MLAC-FH, RMAC-FH, Algorithms 4–6, with the parameters of §4.4) [default:
+    /// infinite].
+    #[arg(long, value_parser = parse_horizon)]
+    horizon: Option<HorizonKind>,
+    /// Trials per run [preset: 400 for the pendulum (vgbp, sarsa: 200; finite horizon:
+    /// 600), 600 for the arm].
     #[arg(long)]
     trials: Option<u32>,
-    /// Independent runs [preset: 30 for the pendulum (vgbp, sarsa: 20), 20 for the arm].
+    /// Independent runs [preset: 30 for the pendulum (vgbp, sarsa, finite horizon: 20),
+    /// 20 for the arm].
     #[arg(long)]
     runs: Option<u32>,
     /// Seed of every random stream of every run [preset: 1].
@@ -163,6 +173,18 @@ fn parse_approx(s: &str) -> Result<ApproxKind, String> {
         })
 }
 
+fn parse_horizon(s: &str) -> Result<HorizonKind, String> {
+    HorizonKind::ALL
+        .into_iter()
+        .find(|h| h.as_str() == s)
+        .ok_or_else(|| {
+            format!(
+                "one of: {}",
+                HorizonKind::ALL.map(HorizonKind::as_str).join(", ")
+            )
+        })
+}
+
 fn resolve_selection(s: &Selection) -> Result<agent::config::ExperimentConfig, String> {
     let text = match &s.config {
         Some(p) => Some(
@@ -174,6 +196,7 @@ fn resolve_selection(s: &Selection) -> Result<agent::config::ExperimentConfig, S
         system: s.system,
         algo: s.algo,
         approx: s.approx,
+        horizon: s.horizon,
         trials: s.trials,
         runs: s.runs,
         seed: s.seed,
@@ -356,6 +379,29 @@ fn print_summary(
         println!(
             "  greedy return, mean of the last 3 evaluations (trials {}–{}): {:.1}",
             tail[0].trial, tail[2].trial, mean
+        );
+    }
+    if let Some(trial) = s
+        .records
+        .iter()
+        .filter(|r| r.greedy.is_some())
+        .map(|r| r.trial)
+        .max()
+    {
+        // Table 4.1's statistic: the last greedy return of every run.
+        let last: Vec<f64> = s
+            .records
+            .iter()
+            .filter(|r| r.trial == trial)
+            .filter_map(|r| r.greedy)
+            .collect();
+        let n = last.len() as f64;
+        let mean = last.iter().sum::<f64>() / n;
+        let var = last.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+        println!(
+            "  greedy return after trial {trial}: mean {mean:.1}, sample std {:.1} ({} runs)",
+            var.sqrt(),
+            last.len()
         );
     }
     println!(

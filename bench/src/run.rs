@@ -19,6 +19,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use ::agent::config::ExperimentConfig;
+use ::agent::horizon::Horizon;
 use anyhow::{Context, Result, anyhow, bail};
 use indicatif::ProgressBar;
 use wire::{Action, Bus, Estimate, Header, Measurement, flags, topic};
@@ -58,6 +59,9 @@ pub struct RunSummary {
 struct Returns {
     out: BufWriter<File>,
     trial_seconds: f64,
+    /// Adds `τ_N(x_N)` of a finite horizon's last measurement to the return (Eq. 4.1).
+    horizon: Horizon,
+    reward: plant::QuadraticReward,
     pending: Option<TrialRecord>,
     greedy: f64,
     records: Vec<TrialRecord>,
@@ -93,13 +97,20 @@ impl Returns {
             .pending
             .as_mut()
             .ok_or_else(|| anyhow!("a sample arrived before any trial started"))?;
-        if greedy {
-            self.greedy += m.reward;
-            if f & flags::END != 0 {
-                pending.greedy = Some(self.greedy);
-            }
+        let end = f & flags::END != 0;
+        let ret = if greedy {
+            &mut self.greedy
         } else {
-            pending.ret += m.reward;
+            &mut pending.ret
+        };
+        *ret += m.reward;
+        if end {
+            *ret += self
+                .horizon
+                .final_reward(&self.reward, &m.y[..m.n_x as usize]);
+        }
+        if greedy && end {
+            pending.greedy = Some(self.greedy);
         }
         Ok(())
     }
@@ -478,6 +489,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         ("system", cfg.system.to_string()),
         ("algo", cfg.algo.to_string()),
         ("approx", cfg.approx.to_string()),
+        ("horizon", cfg.horizon.to_string()),
         (
             "timing",
             match opts.realtime {
@@ -501,6 +513,8 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let returns = Returns {
         out,
         trial_seconds: task.trial_seconds,
+        horizon: cfg.horizon.of(&task),
+        reward: task.reward.clone(),
         pending: None,
         greedy: 0.0,
         records: Vec::new(),
