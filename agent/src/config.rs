@@ -106,6 +106,36 @@ impl HorizonKind {
     }
 }
 
+/// A value chosen by name, on the command line and in configuration files.
+pub trait Choice: Copy + 'static {
+    /// Every value, in the order messages list them.
+    fn all() -> &'static [Self];
+    /// Its spelling.
+    fn spelling(self) -> &'static str;
+    /// The spellings, comma-separated.
+    fn spellings() -> String {
+        let names: Vec<&str> = Self::all().iter().map(|v| v.spelling()).collect();
+        names.join(", ")
+    }
+    /// The value spelled `s`; the error lists the spellings.
+    fn parse(s: &str) -> Result<Self, String> {
+        Self::all()
+            .iter()
+            .copied()
+            .find(|v| v.spelling() == s)
+            .ok_or_else(|| format!("one of: {}", Self::spellings()))
+    }
+}
+
+impl Choice for SystemName {
+    fn all() -> &'static [Self] {
+        &SystemName::ALL
+    }
+    fn spelling(self) -> &'static str {
+        self.as_str()
+    }
+}
+
 macro_rules! names {
     ($t:ty, $($v:ident => $s:literal),*) => {
         impl $t {
@@ -114,6 +144,10 @@ macro_rules! names {
         }
         impl fmt::Display for $t {
             fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result { f.write_str(self.as_str()) }
+        }
+        impl Choice for $t {
+            fn all() -> &'static [Self] { &Self::ALL }
+            fn spelling(self) -> &'static str { self.as_str() }
         }
     };
 }
@@ -691,52 +725,17 @@ pub fn resolve(
             Some(v) => Err(with_file(err(key, format!("{v} must be a string")))),
         }
     };
-    let parse = |key: &str, s: String, allowed: &str| -> Result<toml::Value, ConfigError> {
-        let v = toml::Value::String(s.clone());
-        if allowed.split(", ").any(|a| a == s) {
-            Ok(v)
-        } else {
-            Err(with_file(err(
-                key,
-                format!("\"{s}\" is not one of: {allowed}"),
-            )))
-        }
-    };
-    let systems = SystemName::ALL.map(|s| s.as_str()).join(", ");
-    let system: SystemName = match (o.system, pick("system")?) {
-        (Some(s), _) => s,
-        (None, Some(s)) => parse("system", s, &systems)?.try_into().expect("checked"),
-        (None, None) => SystemName::Pendulum,
-    };
-    let algo: Algo = match (o.algo, pick("algo")?) {
-        (Some(a), _) => a,
-        (None, Some(s)) => parse("algo", s, &Algo::ALL.map(Algo::as_str).join(", "))?
-            .try_into()
-            .expect("checked"),
-        (None, None) => Algo::Mlac,
-    };
-    let approx: ApproxKind = match (o.approx, pick("approx")?) {
-        (Some(a), _) => a,
-        (None, Some(s)) => parse(
-            "approx",
-            s,
-            &ApproxKind::ALL.map(ApproxKind::as_str).join(", "),
-        )?
-        .try_into()
-        .expect("checked"),
-        (None, None) => ApproxKind::Llr,
-    };
-    let horizon: HorizonKind = match (o.horizon, pick("horizon")?) {
-        (Some(h), _) => h,
-        (None, Some(s)) => parse(
-            "horizon",
-            s,
-            &HorizonKind::ALL.map(HorizonKind::as_str).join(", "),
-        )?
-        .try_into()
-        .expect("checked"),
-        (None, None) => HorizonKind::Infinite,
-    };
+    let system =
+        choose("system", o.system, pick("system")?, SystemName::Pendulum).map_err(with_file)?;
+    let algo = choose("algo", o.algo, pick("algo")?, Algo::Mlac).map_err(with_file)?;
+    let approx = choose("approx", o.approx, pick("approx")?, ApproxKind::Llr).map_err(with_file)?;
+    let horizon = choose(
+        "horizon",
+        o.horizon,
+        pick("horizon")?,
+        HorizonKind::Infinite,
+    )
+    .map_err(with_file)?;
     let preset = crate::preset::preset(system, algo, approx, horizon).map_err(with_file)?;
     let mut merged = toml::Table::try_from(&preset).expect("a preset always serialises");
     merge(&mut merged, user, "").map_err(with_file)?;
@@ -761,6 +760,23 @@ pub fn resolve(
     }
     cfg.validate().map_err(with_file)?;
     Ok(cfg)
+}
+
+/// The value of a choice key: the command line's, else the file's spelling, else
+/// `default`.
+fn choose<T: Choice>(
+    key: &str,
+    flag: Option<T>,
+    file: Option<String>,
+    default: T,
+) -> Result<T, ConfigError> {
+    match (flag, file) {
+        (Some(v), _) => Ok(v),
+        (None, Some(s)) => {
+            T::parse(&s).map_err(|_| err(key, format!("\"{s}\" is not one of: {}", T::spellings())))
+        }
+        (None, None) => Ok(default),
+    }
 }
 
 /// Overlays `user` on `base`, rejecting keys `base` does not have.

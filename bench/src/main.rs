@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use agent::config::{Algo, ApproxKind, HorizonKind, Overrides, resolve};
+use agent::config::{Algo, ApproxKind, Choice, HorizonKind, Overrides, resolve};
 use clap::{Args, Parser, Subcommand};
 use plant::{SystemName, Task};
 use rig::learn::{LearnOptions, learn};
@@ -89,15 +89,15 @@ struct RunArgs {
 #[derive(Args)]
 struct Selection {
     /// System to learn on [default: pendulum].
-    #[arg(long, value_parser = parse_system)]
+    #[arg(long, value_parser = SystemName::parse)]
     system: Option<SystemName>,
     /// Algorithm: sac (Algorithm 1), mlac (Algorithm 2), rmac (Algorithm 3), vgbp
     /// (Algorithm 7) or sarsa (§6.2) [default: mlac].
-    #[arg(long, value_parser = parse_algo)]
+    #[arg(long, value_parser = Algo::parse)]
     algo: Option<Algo>,
     /// Function approximator: llr, rbf, tiles (sac only) or lstd (vgbp only: an LSTD
     /// critic on RBFs with an LLR process model); sarsa uses rbf [default: llr].
-    #[arg(long, value_parser = parse_approx)]
+    #[arg(long, value_parser = ApproxKind::parse)]
     approx: Option<ApproxKind>,
     /// Horizon of the cost function. `infinite`: discounted rewards without end
     /// (Chapters 3, 5, 6). `finite`: a trial is the horizon — its return is the rewards
@@ -105,7 +105,7 @@ struct Selection {
     /// time as an extra input (Chapter 4, Eq. 4.6; sac, mlac, rmac with rbf: SAC-FH,
     /// MLAC-FH, RMAC-FH, Algorithms 4–6, with the parameters of §4.4) [default:
     /// infinite].
-    #[arg(long, value_parser = parse_horizon)]
+    #[arg(long, value_parser = HorizonKind::parse)]
     horizon: Option<HorizonKind>,
     /// Trials per run [preset: 400 for the pendulum (vgbp, sarsa: 200; finite horizon:
     /// 600), 600 for the arm].
@@ -140,49 +140,6 @@ struct LearnArgs {
     /// No progress bar and no summary.
     #[arg(long)]
     quiet: bool,
-}
-
-fn parse_system(s: &str) -> Result<SystemName, String> {
-    SystemName::ALL
-        .into_iter()
-        .find(|n| n.as_str() == s)
-        .ok_or_else(|| {
-            format!(
-                "unknown system; one of: {}",
-                SystemName::ALL.map(|n| n.as_str()).join(", ")
-            )
-        })
-}
-
-fn parse_algo(s: &str) -> Result<Algo, String> {
-    Algo::ALL
-        .into_iter()
-        .find(|a| a.as_str() == s)
-        .ok_or_else(|| format!("one of: {}", Algo::ALL.map(Algo::as_str).join(", ")))
-}
-
-fn parse_approx(s: &str) -> Result<ApproxKind, String> {
-    ApproxKind::ALL
-        .into_iter()
-        .find(|a| a.as_str() == s)
-        .ok_or_else(|| {
-            format!(
-                "one of: {}",
-                ApproxKind::ALL.map(ApproxKind::as_str).join(", ")
-            )
-        })
-}
-
-fn parse_horizon(s: &str) -> Result<HorizonKind, String> {
-    HorizonKind::ALL
-        .into_iter()
-        .find(|h| h.as_str() == s)
-        .ok_or_else(|| {
-            format!(
-                "one of: {}",
-                HorizonKind::ALL.map(HorizonKind::as_str).join(", ")
-            )
-        })
 }
 
 fn resolve_selection(s: &Selection) -> Result<agent::config::ExperimentConfig, String> {
