@@ -24,15 +24,39 @@
 //!
 //! What differs between the algorithms is the [`Improver`]: [`crate::sac`],
 //! [`crate::mlac`], [`crate::rmac`], [`crate::vgbp`].
+//!
+//! **Finite horizon** (Chapter 4, Algorithms 4–6): the same step with the task's
+//! [`Horizon`] (in [`TaskInfo`]). The agent counts the samples `k` of a trial; actor,
+//! critic and reference model read `(x_k, k)` (Eq. 4.6) wherever the infinite-horizon
+//! algorithms read `x_k`, so the improvers are those of Chapter 3; and the last sample's
+//! temporal difference targets the terminal reward (Eq. 4.3):
+//!
+//! ```text
+//! δ_k ← r_{k+1} + γ V(x_{k+1}, k+1) − V(x_k, k)         k < N − 1
+//! δ_k ← r_{k+1} + γ τ_N(x_{k+1})   − V(x_k, k)          k = N − 1  (γ = 1 in §4.4)
+//! ```
+//!
+//! Algorithms 4 and 5 write their loop with the action applied at its top (line 7), that
+//! is from the actor as updated by the previous sample; the shared step keeps line 9 of
+//! Algorithms 1–3 — the action chosen before the update — which is also the order of
+//! Algorithm 6 (lines 10–11). The difference is one sample's update of the actor.
+//! Measured (MLAC-FH, 20 runs × 600 trials, last greedy return, mean ± sample std, seeds
+//! 1 and 2): −901 ± 148 and −888 ± 113 with this order, −858 ± 56 and −906 ± 114 with
+//! the action chosen after the update — no systematic difference.
 
 use plant::QuadraticReward;
 
 use crate::Agent;
 use crate::approx::{Differentiable, scalar};
-use crate::critic::Critic;
+use crate::critic::{Critic, Next};
 use crate::explore::Exploration;
+use crate::horizon::{Horizon, Input};
 
 /// One experienced transition, as the policy improvement sees it.
+///
+/// With a finite horizon, `x` and `x_next` carry time after the state: `(x_k, k)` and
+/// `(x_{k+1}, k+1)` (Eq. 4.6) — the inputs of actor, critic and reference model; the
+/// process model reads their state parts.
 pub struct Transition<'a> {
     /// `x_k`.
     pub x: &'a [f64],
@@ -61,16 +85,19 @@ pub struct TaskInfo {
     pub angle_mask: Vec<bool>,
     /// The reward function, known to model-based learners (MLAC, VGBP).
     pub reward: QuadraticReward,
+    /// Infinite, or finite with time as an input (Chapter 4).
+    pub horizon: Horizon,
 }
 
 impl TaskInfo {
-    /// From a plant task.
+    /// From a plant task, with an infinite horizon.
     pub fn of(task: &plant::Task) -> Self {
         Self {
             action_low: task.action_low.clone(),
             action_high: task.action_high.clone(),
             angle_mask: task.angle_mask.clone(),
             reward: task.reward.clone(),
+            horizon: Horizon::Infinite,
         }
     }
 
@@ -86,6 +113,12 @@ impl TaskInfo {
         self.angle_mask.len()
     }
 
+    /// Input dimension of actor, critic and reference model: the state, and time for a
+    /// finite horizon (Eq. 4.6).
+    pub fn input_dim(&self) -> usize {
+        self.n() + self.horizon.extra_inputs()
+    }
+
     /// Action dimension.
     pub fn m(&self) -> usize {
         self.action_low.len()
@@ -97,6 +130,7 @@ impl TaskInfo {
 pub trait Improver: Send {
     /// The policy's action `π(x)` (without exploration) into `u`; `u_prev` is the action
     /// applied in the previous sample (RMAC and VGBP linearise their model around it).
+    /// With a finite horizon `x` is `(x_k, k)`.
     fn act(&self, x: &[f64], u_prev: &[f64], critic: &dyn Differentiable, u: &mut [f64]);
     /// Improves the policy and learns any models from transition `t`.
     fn improve(&mut self, t: &Transition, critic: &dyn Differentiable);
@@ -127,7 +161,10 @@ pub struct ActorCritic {
     critic: Box<dyn Critic>,
     improver: Box<dyn Improver>,
     exploration: Exploration,
-    x: Vec<f64>,
+    /// `x_k`, as the actor and critic read it: `(x_k, k)` for a finite horizon.
+    x: Input,
+    /// `k`, the sample index within the trial.
+    k: usize,
     u: Vec<f64>,
     u_policy: Vec<f64>,
     du: Vec<f64>,
@@ -143,25 +180,28 @@ impl ActorCritic {
         exploration: Exploration,
     ) -> Self {
         let (n, m) = (info.n(), info.m());
+        let x = info.horizon.input(&vec![0.0; n], 0);
         Self {
             info,
             learning,
             critic,
             improver,
             exploration,
-            x: vec![0.0; n],
+            x,
+            k: 0,
             u: vec![0.0; m],
             u_policy: vec![0.0; m],
             du: vec![0.0; m],
         }
     }
 
-    /// The critic's value `V(x)`.
-    pub fn value(&self, x: &[f64]) -> f64 {
-        scalar(self.critic.function(), x)
+    /// The critic's value `V(x)`, or `V(x, k)` for a finite horizon (`k` is ignored for
+    /// an infinite one).
+    pub fn value(&self, x: &[f64], k: usize) -> f64 {
+        scalar(self.critic.function(), &self.info.horizon.input(x, k))
     }
 
-    /// Line 9 (Algorithm 7: lines 12–14): `π(x)`, saturated.
+    /// Line 9 (Algorithm 7: lines 12–14): `π(x)`, saturated; `x` is an actor input.
     fn policy(&self, x: &[f64], u_prev: &[f64]) -> Vec<f64> {
         let mut u = vec![0.0; self.info.m()];
         self.improver.act(x, u_prev, self.critic.function(), &mut u);
@@ -169,29 +209,39 @@ impl ActorCritic {
         u
     }
 
-    /// Lines 6–19 for one transition; `terminal`: `x_next` ends the trial with value zero.
+    /// Lines 6–19 for one transition into `x_next` (a state; the time input is added
+    /// here). `terminal`: `x_next` left the operating range and has value zero (§6.4.2).
     /// Writes the next action into `u` if given (and the trial goes on).
     fn transition(&mut self, r: f64, x_next: &[f64], terminal: bool, u: Option<&mut [f64]>) {
         let Learning { gamma, lambda } = self.learning;
-        let td = self
-            .critic
-            .observe(&self.x, r, (!terminal).then_some(x_next), gamma, lambda);
+        let horizon = self.info.horizon;
+        let x_next_in = horizon.input(x_next, self.k + 1);
+        let next = if terminal {
+            Next::Terminal(0.0)
+        } else if horizon.ends_after(self.k) {
+            // After a finite horizon's last sample V(x_N, N) is τ_N(x_N)    (Eq. 4.3)
+            Next::Terminal(self.info.reward.state_reward(x_next))
+        } else {
+            Next::State(&x_next_in)
+        };
+        let td = self.critic.observe(&self.x, r, next, gamma, lambda);
         let after = self.improver.acts_after_update();
-        let u_next = (u.is_some() && !after).then(|| self.policy(x_next, &self.u));
+        let u_next = (u.is_some() && !after).then(|| self.policy(&x_next_in, &self.u));
         let t = Transition {
             x: &self.x,
             u: &self.u,
             u_policy: &self.u_policy,
             du: &self.du,
             r,
-            x_next,
+            x_next: &x_next_in,
             td,
         };
         self.improver.improve(&t, self.critic.function());
         self.critic.update(td);
         let u_next =
-            u_next.or_else(|| (u.is_some() && after).then(|| self.policy(x_next, &self.u)));
-        self.x.copy_from_slice(x_next);
+            u_next.or_else(|| (u.is_some() && after).then(|| self.policy(&x_next_in, &self.u)));
+        self.x = x_next_in;
+        self.k += 1;
         match (u, u_next) {
             (Some(u), Some(u_next)) => self.explore(&u_next, u),
             _ => self.critic.end_trial(),
@@ -217,8 +267,9 @@ impl Agent for ActorCritic {
     fn start_trial(&mut self, x0: &[f64], u: &mut [f64]) {
         self.critic.start_trial();
         self.exploration.start_trial();
-        self.x.copy_from_slice(x0);
-        let u_policy = self.policy(x0, &vec![0.0; self.info.m()]);
+        self.k = 0;
+        self.x = self.info.horizon.input(x0, 0);
+        let u_policy = self.policy(&self.x, &vec![0.0; self.info.m()]);
         self.explore(&u_policy, u);
     }
 
@@ -230,8 +281,8 @@ impl Agent for ActorCritic {
         self.transition(r, x_next, true, None);
     }
 
-    fn greedy(&self, x: &[f64], u_prev: &[f64], u: &mut [f64]) {
-        u.copy_from_slice(&self.policy(x, u_prev));
+    fn greedy(&self, k: usize, x: &[f64], u_prev: &[f64], u: &mut [f64]) {
+        u.copy_from_slice(&self.policy(&self.info.horizon.input(x, k), u_prev));
     }
 
     fn memories(&self) -> Vec<(&'static str, usize, usize)> {
@@ -243,5 +294,47 @@ impl Agent for ActorCritic {
             .collect();
         m.extend(self.improver.memories());
         m
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::Agent;
+    use crate::approx::scalar;
+    use crate::sac::Sac;
+    use crate::testing::{self, close, dot, psi};
+
+    /// The last sample of a finite horizon targets `τ_N(x_N)` (Eq. 4.3, Algorithm 4
+    /// line 12), not the critic's `V(x_N, N)` — which here is about 5, where
+    /// `τ_N(x_N) = −x_N² = −0.64`. No exploration, so only the critic learns; `λ = 0`.
+    #[test]
+    fn the_last_sample_targets_the_terminal_reward() {
+        let theta = [1.0, 5.0];
+        let mut critic = testing::rbf(1, None);
+        critic.parameters_mut().copy_from_slice(&theta);
+        let v_at_n = scalar(&critic, &[0.8, 2.0]);
+        assert!(v_at_n > 4.9, "V(x_N, N) = {v_at_n}");
+        let v = |theta: [f64; 2], k| dot(theta, psi(k));
+        let sac = Box::new(Sac::new(Box::new(testing::rbf(1, None)), 1.0));
+        let mut ac = testing::agent(testing::info(10.0), critic, 1.0, 0.0, sac, 0.0);
+        let (x2, r1, r2) = (0.8, -1.0, -2.0);
+        let mut u = [0.0];
+        ac.start_trial(&[0.3], &mut u);
+        ac.learn(r1, &[0.6], Some(&mut u));
+        // δ_0 = r_1 + V(x_1, 1) − V(x_0, 0),  θ ← θ + δ_0 ψ(0)
+        let d0 = r1 + v(theta, 1) - v(theta, 0);
+        let theta = [theta[0] + d0 * psi(0)[0], theta[1] + d0 * psi(0)[1]];
+        ac.learn(r2, &[x2], None);
+        // δ_1 = r_2 + τ_N(x_2) − V(x_1, 1),  θ ← θ + δ_1 ψ(1)
+        let d1 = r2 - x2 * x2 - v(theta, 1);
+        let theta = [theta[0] + d1 * psi(1)[0], theta[1] + d1 * psi(1)[1]];
+        for k in 0..2 {
+            close(ac.value(&[0.5], k), v(theta, k));
+        }
+        assert_eq!(
+            testing::greedy(&ac, 0.5, 1),
+            0.0,
+            "σ = 0: the actor is unchanged"
+        );
     }
 }

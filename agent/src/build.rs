@@ -147,11 +147,27 @@ impl crate::approx::Traced for GradientFree {
 /// The agent `cfg` describes, for `task`, with every random stream derived from
 /// `run_seed`.
 pub fn build(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Box<dyn Agent> {
-    let info = TaskInfo::of(task);
+    let horizon = cfg.horizon.of(task);
+    let info = TaskInfo {
+        horizon,
+        ..TaskInfo::of(task)
+    };
     let (n, m) = (task.state_dim(), task.action_dim());
+    // Actors, critics and reference models read the state, and time if the horizon is
+    // finite (Eq. 4.6).
     let state = |outputs, bounds| Space {
-        range: task.state_range.clone(),
-        periodic: task.angle_mask.clone(),
+        range: task
+            .state_range
+            .iter()
+            .copied()
+            .chain(horizon.time_range())
+            .collect(),
+        periodic: task
+            .angle_mask
+            .iter()
+            .copied()
+            .chain(horizon.time_range().map(|_| false))
+            .collect(),
         outputs,
         bounds,
     };

@@ -79,6 +79,63 @@ impl ApproxKind {
     ];
 }
 
+/// The horizon of the cost function ([`crate::horizon`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum HorizonKind {
+    /// Discounted rewards without end (Chapters 3, 5, 6).
+    #[default]
+    Infinite,
+    /// A trial is the horizon: its samples' rewards plus the terminal reward `τ_N`, actor
+    /// and critic time-varying (Chapter 4; SAC, MLAC and RMAC, Algorithms 4–6).
+    Finite,
+}
+
+impl HorizonKind {
+    /// Both horizons, for help texts and validation messages.
+    pub const ALL: [HorizonKind; 2] = [HorizonKind::Infinite, HorizonKind::Finite];
+
+    /// The runtime horizon of `task`: a finite horizon is one trial, `N` samples.
+    pub fn of(self, task: &Task) -> crate::horizon::Horizon {
+        match self {
+            HorizonKind::Infinite => crate::horizon::Horizon::Infinite,
+            HorizonKind::Finite => crate::horizon::Horizon::Finite {
+                steps: task.steps_per_trial(),
+            },
+        }
+    }
+}
+
+/// A value chosen by name, on the command line and in configuration files.
+pub trait Choice: Copy + 'static {
+    /// Every value, in the order messages list them.
+    fn all() -> &'static [Self];
+    /// Its spelling.
+    fn spelling(self) -> &'static str;
+    /// The spellings, comma-separated.
+    fn spellings() -> String {
+        let names: Vec<&str> = Self::all().iter().map(|v| v.spelling()).collect();
+        names.join(", ")
+    }
+    /// The value spelled `s`; the error lists the spellings.
+    fn parse(s: &str) -> Result<Self, String> {
+        Self::all()
+            .iter()
+            .copied()
+            .find(|v| v.spelling() == s)
+            .ok_or_else(|| format!("one of: {}", Self::spellings()))
+    }
+}
+
+impl Choice for SystemName {
+    fn all() -> &'static [Self] {
+        &SystemName::ALL
+    }
+    fn spelling(self) -> &'static str {
+        self.as_str()
+    }
+}
+
 macro_rules! names {
     ($t:ty, $($v:ident => $s:literal),*) => {
         impl $t {
@@ -88,10 +145,15 @@ macro_rules! names {
         impl fmt::Display for $t {
             fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result { f.write_str(self.as_str()) }
         }
+        impl Choice for $t {
+            fn all() -> &'static [Self] { &Self::ALL }
+            fn spelling(self) -> &'static str { self.as_str() }
+        }
     };
 }
 names!(Algo, Sac => "sac", Mlac => "mlac", Rmac => "rmac", Vgbp => "vgbp", Sarsa => "sarsa");
 names!(ApproxKind, Llr => "llr", Rbf => "rbf", Tiles => "tiles", Lstd => "lstd");
+names!(HorizonKind, Infinite => "infinite", Finite => "finite");
 
 /// A complete experiment.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -103,11 +165,15 @@ pub struct ExperimentConfig {
     pub algo: Algo,
     /// The approximator of every component.
     pub approx: ApproxKind,
+    /// Infinite (discounted) or finite horizon (Chapter 4); absent: infinite.
+    #[serde(default)]
+    pub horizon: HorizonKind,
     /// Trials, runs, seed, evaluation.
     pub run: RunConfig,
     /// Parameters of Template 2.1 and the exploration.
     pub learning: LearningConfig,
-    /// The actor (SAC, MLAC) or reference model (RMAC); none for VGBP and SARSA.
+    /// The actor (SAC, MLAC) or reference model (RMAC); none for VGBP and SARSA. With a
+    /// finite horizon its input (like the critic's) is the state followed by time.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub actor: Option<Component>,
     /// The critic `V(x)` (SARSA: `Q(x, ·)`, one output per action).
@@ -163,7 +229,8 @@ pub struct RunConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LearningConfig {
-    /// Discount `γ`.
+    /// Discount `γ`, in (0, 1); a finite horizon also allows 1 (no discount, as in
+    /// Algorithms 4–6).
     pub gamma: f64,
     /// Eligibility-trace decay `λ` of the critic.
     pub lambda: f64,
@@ -296,6 +363,16 @@ fn err(key: &str, message: impl Into<String>) -> ConfigError {
     }
 }
 
+/// The error for a finite horizon with an algorithm that has none (VGBP, SARSA).
+pub(crate) fn finite_horizon_unsupported(algo: Algo) -> ConfigError {
+    err(
+        "horizon",
+        format!(
+            "\"finite\" (Chapter 4) is for sac, mlac and rmac; {algo} needs horizon = \"infinite\""
+        ),
+    )
+}
+
 /// Checks `lo ≤ v ≤ hi` (and finiteness) for a float key.
 fn check_f(key: &str, v: f64, lo: f64, hi: f64, open: bool) -> Result<(), ConfigError> {
     let ok = v.is_finite()
@@ -350,7 +427,21 @@ impl ExperimentConfig {
         check_i("run.runs", self.run.runs.into(), 1, 100_000)?;
         check_i("run.eval_every", self.run.eval_every.into(), 0, 10_000_000)?;
         let l = &self.learning;
-        check_f("learning.gamma", l.gamma, 0.0, 1.0, true)?;
+        let finite = self.horizon == HorizonKind::Finite;
+        if finite && !self.algo.has_actor() {
+            return Err(finite_horizon_unsupported(self.algo));
+        }
+        if !finite {
+            check_f("learning.gamma", l.gamma, 0.0, 1.0, true)?;
+        } else if !(l.gamma > 0.0 && l.gamma <= 1.0) {
+            return Err(err(
+                "learning.gamma",
+                format!(
+                    "{} is out of range: must be a number in (0, 1] (1: no discount, Algorithms 4–6)",
+                    l.gamma
+                ),
+            ));
+        }
         check_f("learning.lambda", l.lambda, 0.0, 1.0, false)?;
         check_f("learning.sigma", l.sigma, 0.0, 1e3, false)?;
         check_i(
@@ -385,6 +476,12 @@ impl ExperimentConfig {
             ));
         }
         let own = [self.approx];
+        // Actor, reference model and critic read the state, and time if finite (Eq. 4.6).
+        let (d, input) = if finite {
+            (n + 1, "state component and time")
+        } else {
+            (n, "state component")
+        };
         match (&self.actor, self.algo.has_actor()) {
             (None, true) => {
                 return Err(err(
@@ -398,10 +495,10 @@ impl ExperimentConfig {
                     format!("{} has no actor: remove the [actor] section", self.algo),
                 ));
             }
-            (Some(c), true) => self.check_component("actor", c, &own, n, "state component")?,
+            (Some(c), true) => self.check_component("actor", c, &own, d, input)?,
             (None, false) => {}
         }
-        self.check_component("critic", &self.critic, &own, n, "state component")?;
+        self.check_component("critic", &self.critic, &own, d, input)?;
         // VGBP's process model is LLR whatever its critic (§6.3.1); the others learn every
         // component with the same approximator.
         let model_kinds: &[ApproxKind] = if self.algo == Algo::Vgbp {
@@ -594,6 +691,8 @@ pub struct Overrides {
     pub algo: Option<Algo>,
     /// `--approx`.
     pub approx: Option<ApproxKind>,
+    /// `--horizon`.
+    pub horizon: Option<HorizonKind>,
     /// `--trials`.
     pub trials: Option<u32>,
     /// `--runs`.
@@ -626,42 +725,18 @@ pub fn resolve(
             Some(v) => Err(with_file(err(key, format!("{v} must be a string")))),
         }
     };
-    let parse = |key: &str, s: String, allowed: &str| -> Result<toml::Value, ConfigError> {
-        let v = toml::Value::String(s.clone());
-        if allowed.split(", ").any(|a| a == s) {
-            Ok(v)
-        } else {
-            Err(with_file(err(
-                key,
-                format!("\"{s}\" is not one of: {allowed}"),
-            )))
-        }
-    };
-    let systems = SystemName::ALL.map(|s| s.as_str()).join(", ");
-    let system: SystemName = match (o.system, pick("system")?) {
-        (Some(s), _) => s,
-        (None, Some(s)) => parse("system", s, &systems)?.try_into().expect("checked"),
-        (None, None) => SystemName::Pendulum,
-    };
-    let algo: Algo = match (o.algo, pick("algo")?) {
-        (Some(a), _) => a,
-        (None, Some(s)) => parse("algo", s, &Algo::ALL.map(Algo::as_str).join(", "))?
-            .try_into()
-            .expect("checked"),
-        (None, None) => Algo::Mlac,
-    };
-    let approx: ApproxKind = match (o.approx, pick("approx")?) {
-        (Some(a), _) => a,
-        (None, Some(s)) => parse(
-            "approx",
-            s,
-            &ApproxKind::ALL.map(ApproxKind::as_str).join(", "),
-        )?
-        .try_into()
-        .expect("checked"),
-        (None, None) => ApproxKind::Llr,
-    };
-    let preset = crate::preset::preset(system, algo, approx).map_err(with_file)?;
+    let system =
+        choose("system", o.system, pick("system")?, SystemName::Pendulum).map_err(with_file)?;
+    let algo = choose("algo", o.algo, pick("algo")?, Algo::Mlac).map_err(with_file)?;
+    let approx = choose("approx", o.approx, pick("approx")?, ApproxKind::Llr).map_err(with_file)?;
+    let horizon = choose(
+        "horizon",
+        o.horizon,
+        pick("horizon")?,
+        HorizonKind::Infinite,
+    )
+    .map_err(with_file)?;
+    let preset = crate::preset::preset(system, algo, approx, horizon).map_err(with_file)?;
     let mut merged = toml::Table::try_from(&preset).expect("a preset always serialises");
     merge(&mut merged, user, "").map_err(with_file)?;
     let mut cfg: ExperimentConfig = toml::Value::Table(merged)
@@ -670,6 +745,7 @@ pub fn resolve(
     cfg.system = system;
     cfg.algo = algo;
     cfg.approx = approx;
+    cfg.horizon = horizon;
     if let Some(v) = o.trials {
         cfg.run.trials = v;
     }
@@ -684,6 +760,23 @@ pub fn resolve(
     }
     cfg.validate().map_err(with_file)?;
     Ok(cfg)
+}
+
+/// The value of a choice key: the command line's, else the file's spelling, else
+/// `default`.
+fn choose<T: Choice>(
+    key: &str,
+    flag: Option<T>,
+    file: Option<String>,
+    default: T,
+) -> Result<T, ConfigError> {
+    match (flag, file) {
+        (Some(v), _) => Ok(v),
+        (None, Some(s)) => {
+            T::parse(&s).map_err(|_| err(key, format!("\"{s}\" is not one of: {}", T::spellings())))
+        }
+        (None, None) => Ok(default),
+    }
 }
 
 /// Overlays `user` on `base`, rejecting keys `base` does not have.
@@ -812,6 +905,39 @@ mod tests {
         assert!(e.message.contains("wrong type"), "{e}");
         let e = resolve_str("system = \"cartpole\"\n").unwrap_err();
         assert!(e.message.contains("pendulum, arm-vertical"), "{e}");
+    }
+
+    #[test]
+    fn finite_horizon_adds_time_to_actor_and_critic() {
+        let c = resolve_str("horizon = \"finite\"\nalgo = \"sac\"\napprox = \"rbf\"\n").unwrap();
+        assert_eq!(c.horizon, HorizonKind::Finite);
+        assert_eq!(c.learning.gamma, 1.0, "Algorithms 4–6 do not discount");
+        assert_eq!(resolve_str(&c.to_toml()).unwrap(), c);
+        let e = resolve_str("horizon = \"finit\"\n").unwrap_err();
+        assert_eq!(e.key, "horizon");
+        assert!(e.to_string().starts_with("exp.toml: `horizon`"), "{e}");
+        assert!(e.message.contains("infinite, finite"), "{e}");
+        let fh = "horizon = \"finite\"\nalgo = \"mlac\"\napprox = \"rbf\"\n";
+        let e = resolve_str(&format!("{fh}[critic]\ncentres = [9, 9]\n")).unwrap_err();
+        assert_eq!(e.key, "critic.centres");
+        assert!(
+            e.message
+                .contains("must have 3, one per state component and time"),
+            "{e}"
+        );
+        assert!(resolve_str(&format!("{fh}[learning]\ngamma = 1.01\n")).is_err());
+        let e = resolve_str("[learning]\ngamma = 1.0\n").unwrap_err();
+        assert_eq!(e.key, "learning.gamma", "an infinite horizon must discount");
+        let e =
+            resolve_str("horizon = \"finite\"\nalgo = \"vgbp\"\napprox = \"lstd\"\n").unwrap_err();
+        assert_eq!(e.key, "horizon");
+        let e =
+            resolve_str("horizon = \"finite\"\nalgo = \"sac\"\napprox = \"llr\"\n").unwrap_err();
+        assert_eq!(e.key, "approx");
+        // Validation, for a configuration not made by `resolve`.
+        let mut c = c;
+        c.algo = Algo::Sarsa;
+        assert_eq!(c.validate().unwrap_err().key, "horizon");
     }
 
     #[test]

@@ -7,14 +7,27 @@
 //! sample:
 //!
 //! ```text
-//! δ_k ← observe(x_k, r_{k+1}, x_{k+1})   visit x_k (trace), TD error     Eq. 2.19a–b
-//!                                         (x_{k+1} = None: terminal, V = 0)
+//! δ_k ← observe(x_k, r_{k+1}, next)      visit x_k (trace), TD error     Eq. 2.19a–b
 //! …   the policy improvement reads V (before the critic changes)
 //! update(δ_k)                             θ ← θ + α_c δ_k z_k             Eq. 2.19c
 //! end_trial()                             LSTD: θ ← A⁻¹ b                  Eq. 6.19
 //! ```
+//!
+//! `next` is the state `x_{k+1}`, whose value the critic estimates, or — at the end of a
+//! finite horizon — the known terminal value `τ_N(x_N)` (Eq. 4.3, [`Next::Terminal`]).
 
 use crate::approx::{Differentiable, ValueFunction, scalar};
+
+/// What follows `x_k` in the target of the temporal difference.
+#[derive(Clone, Copy, Debug)]
+pub enum Next<'a> {
+    /// The next input `x_{k+1}` (with time, for a finite horizon): the target is
+    /// `r_{k+1} + γ V(x_{k+1})`.
+    State(&'a [f64]),
+    /// The horizon has ended in a state worth this much, `V_N(x_N) = τ_N(x_N)` (Eq. 4.3):
+    /// the target is `r_N + γ τ_N(x_N)` (Algorithms 4–6, where `γ = 1`).
+    Terminal(f64),
+}
 
 /// A critic and its learning rule.
 pub trait Critic: Send {
@@ -23,16 +36,9 @@ pub trait Critic: Send {
     /// Clears the eligibility traces at the start of a trial.
     fn start_trial(&mut self);
     /// Visits `x_k` (traces, Eq. 2.19b / 6.16) and returns the temporal difference
-    /// `δ_k = r_{k+1} + γ V(x_{k+1}) − V(x_k)` (Eq. 2.19a); `x_next = None` is a terminal
-    /// state, whose value is zero.
-    fn observe(
-        &mut self,
-        x: &[f64],
-        r: f64,
-        x_next: Option<&[f64]>,
-        gamma: f64,
-        lambda: f64,
-    ) -> f64;
+    /// `δ_k = r_{k+1} + γ V(x_{k+1}) − V(x_k)` (Eq. 2.19a), with `τ_N(x_N)` in place of
+    /// `V(x_{k+1})` after a finite horizon's last sample ([`Next::Terminal`]).
+    fn observe(&mut self, x: &[f64], r: f64, next: Next, gamma: f64, lambda: f64) -> f64;
     /// Updates the parameters with `δ_k` (Eq. 2.19c); called after the policy
     /// improvement has read the critic.
     fn update(&mut self, td: f64);
@@ -67,18 +73,14 @@ impl Critic for TdLambda {
         self.f.clear_traces();
     }
 
-    fn observe(
-        &mut self,
-        x: &[f64],
-        r: f64,
-        x_next: Option<&[f64]>,
-        gamma: f64,
-        lambda: f64,
-    ) -> f64 {
+    fn observe(&mut self, x: &[f64], r: f64, next: Next, gamma: f64, lambda: f64) -> f64 {
         // z ← λγ z + ∇_θ V(x_k) (an LLR critic stores [x_k | V(x_k)] first, §3.5.2), then
         // δ_k with V(x_{k+1}) as the critic stands after the visit.
         let v = self.f.visit_value(x, lambda * gamma);
-        let v_next = x_next.map_or(0.0, |x_next| scalar(self.f.as_ref(), x_next));
+        let v_next = match next {
+            Next::State(x_next) => scalar(self.f.as_ref(), x_next),
+            Next::Terminal(tau) => tau,
+        };
         r + gamma * v_next - v
     }
 
@@ -111,20 +113,20 @@ mod tests {
     }
 
     /// `δ = r + γ V(x') − V(x)`, then `θ ← θ + α δ z` with `z = λγ z + 1` (Eq. 2.19);
-    /// into a terminal state `V(x') = 0` while the trace still decays with `λγ`.
+    /// into a terminal state of value zero (§6.4.2) the trace still decays with `λγ`.
     #[test]
     fn td_steps_by_hand_including_a_terminal_one() {
         let (alpha, gamma, lambda) = (0.5, 0.9, 0.5);
         let mut c = one_feature(alpha);
         c.start_trial();
         // δ = −1 + 0.9·1 − 1 = −1.1; z = 1; θ = 1 − 0.55 = 0.45.
-        let td = c.observe(&[0.3], -1.0, Some(&[0.6]), gamma, lambda);
+        let td = c.observe(&[0.3], -1.0, Next::State(&[0.6]), gamma, lambda);
         assert!((td + 1.1).abs() < 1e-12, "{td}");
         c.update(td);
         assert!((scalar(c.function(), &[0.1]) - 0.45).abs() < 1e-12);
         // Terminal: δ = −2 + 0 − 0.45 = −2.45; z = 0.45·1 + 1 = 1.45;
         // θ = 0.45 + 0.5·(−2.45)·1.45.
-        let td = c.observe(&[0.6], -2.0, None, gamma, lambda);
+        let td = c.observe(&[0.6], -2.0, Next::Terminal(0.0), gamma, lambda);
         assert!((td + 2.45).abs() < 1e-12, "{td}");
         c.update(td);
         let want = 0.45 - 0.5 * 2.45 * 1.45;

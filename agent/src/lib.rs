@@ -1,6 +1,7 @@
 //! Learning agents of Grondman's thesis: function approximators (§3.5), the
-//! actor-critic algorithms SAC, MLAC and RMAC (Chapter 3, Algorithms 1–3) and the
-//! critic-only VGBP (Chapter 6, Algorithm 7) and SARSA (§6.2).
+//! actor-critic algorithms SAC, MLAC and RMAC (Chapter 3, Algorithms 1–3; with a
+//! finite horizon, Chapter 4, Algorithms 4–6) and the critic-only VGBP (Chapter 6,
+//! Algorithm 7) and SARSA (§6.2).
 //!
 //! * [`approx`] — RBF ([`approx::rbf`]), LLR ([`approx::llr`]) and tile coding
 //!   ([`approx::tiles`]) behind the [`approx::Approximator`] traits.
@@ -9,6 +10,8 @@
 //!   the critic and its learning rule, TD(λ) or [`lstd`]; [`model`] — the learned
 //!   process model; [`explore`] — Gaussian exploration; [`sarsa`] — the discrete-action
 //!   baseline.
+//! * [`horizon`] — infinite or finite horizon (Chapter 4: time as an input, terminal
+//!   reward; SAC-FH, MLAC-FH, RMAC-FH are the shared step with a finite horizon).
 //! * [`config`], [`preset`], [`build()`] — from a configuration to a running agent.
 //!
 //! An [`Agent`] is a plain step function; it knows nothing about processes or
@@ -20,6 +23,7 @@ mod build;
 pub mod config;
 pub mod critic;
 pub mod explore;
+pub mod horizon;
 pub mod lstd;
 pub mod mlac;
 pub mod model;
@@ -28,6 +32,8 @@ pub mod rmac;
 pub mod sac;
 pub mod sarsa;
 pub mod seed;
+#[cfg(test)]
+mod testing;
 pub mod vgbp;
 
 pub use build::build;
@@ -47,9 +53,10 @@ pub trait Agent: Send {
     /// Learns from a transition into a terminal state — the system left its operating
     /// range and the trial is over: the value beyond it is zero, `V(x_{k+1}) = 0`.
     fn learn_terminal(&mut self, r: f64, x_next: &[f64]);
-    /// The greedy action in `x` — no exploration, no learning. `u_prev` is the action
-    /// applied in the previous sample (zero at a trial start).
-    fn greedy(&self, x: &[f64], u_prev: &[f64], u: &mut [f64]);
+    /// The greedy action in `x` at sample `k` of a trial — no exploration, no learning.
+    /// `u_prev` is the action applied in the previous sample (zero at a trial start); `k`
+    /// matters to a finite-horizon agent, whose policy is time-varying (Chapter 4).
+    fn greedy(&self, k: usize, x: &[f64], u_prev: &[f64], u: &mut [f64]);
     /// `(name, stored, capacity)` of each memory-based (LLR) approximator.
     fn memories(&self) -> Vec<(&'static str, usize, usize)>;
 }

@@ -22,7 +22,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::approx::Differentiable;
 use crate::approx::rbf::Rbf;
-use crate::critic::Critic;
+use crate::critic::{Critic, Next};
 
 /// An LSTD(λ) critic on a scalar RBF approximator.
 pub struct Lstd {
@@ -87,28 +87,25 @@ impl Critic for Lstd {
         self.x_next.clear();
     }
 
-    fn observe(
-        &mut self,
-        x: &[f64],
-        r: f64,
-        x_next: Option<&[f64]>,
-        gamma: f64,
-        lambda: f64,
-    ) -> f64 {
+    fn observe(&mut self, x: &[f64], r: f64, next: Next, gamma: f64, lambda: f64) -> f64 {
         if self.x_next.as_slice() == x {
             std::mem::swap(&mut self.phi, &mut self.phi_next);
         } else {
             self.v.basis(x, self.phi.as_mut_slice());
         }
         self.x_next.clear();
-        match x_next {
-            Some(x_next) => {
+        // A known terminal value enters as reward, with φ(x_{k+1}) = 0 (Eq. 4.3).
+        let r = match next {
+            Next::State(x_next) => {
                 self.v.basis(x_next, self.phi_next.as_mut_slice());
                 self.x_next.extend_from_slice(x_next);
+                r
             }
-            // A terminal state has no features: φ(x_{k+1}) = 0.
-            None => self.phi_next.fill(0.0),
-        }
+            Next::Terminal(tau) => {
+                self.phi_next.fill(0.0);
+                r + gamma * tau
+            }
+        };
         // z_k = λγ z_{k−1} + φ(x_k)                                          (Eq. 6.16)
         self.z.axpy(1.0, &self.phi, lambda * gamma);
         let td = r + gamma * self.value(&self.phi_next) - self.value(&self.phi);
@@ -156,7 +153,7 @@ mod tests {
     fn one_transition_by_hand() {
         let mut c = Lstd::new(grid(1), 0.5);
         c.start_trial();
-        let td = c.observe(&[0.2], -2.0, Some(&[0.7]), 0.9, 0.3);
+        let td = c.observe(&[0.2], -2.0, Next::State(&[0.7]), 0.9, 0.3);
         assert_eq!(td, -2.0, "θ = 0 before the first solve");
         assert_eq!(
             scalar(c.function(), &[0.5]),
@@ -168,15 +165,16 @@ mod tests {
         assert!((scalar(c.function(), &[0.5]) - want).abs() < 1e-12);
     }
 
-    /// A transition into a terminal state has `φ(x_{k+1}) = 0`: `A = a₀ + 1`, `b = r`.
+    /// A terminal transition (Eq. 4.3): `φ(x_{k+1}) = 0` and `τ_N` joins the reward, so
+    /// `A = a₀ + 1`, `b = r + γ τ_N`.
     #[test]
-    fn terminal_transition_by_hand() {
+    fn terminal_value_enters_as_reward() {
         let mut c = Lstd::new(grid(1), 0.5);
         c.start_trial();
-        let td = c.observe(&[0.2], -2.0, None, 0.9, 0.3);
-        assert_eq!(td, -2.0);
+        let td = c.observe(&[0.2], -2.0, Next::Terminal(-4.0), 0.9, 0.3);
+        assert_eq!(td, -2.0 + 0.9 * -4.0);
         c.end_trial();
-        let want = -2.0 / (0.5 + 1.0);
+        let want = (-2.0 + 0.9 * -4.0) / (0.5 + 1.0);
         assert!((scalar(c.function(), &[0.5]) - want).abs() < 1e-12);
     }
 
@@ -187,8 +185,8 @@ mod tests {
         let (g, l) = (0.9, 0.5);
         let mut c = Lstd::new(grid(1), 0.5);
         c.start_trial();
-        c.observe(&[0.1], -1.0, Some(&[0.2]), g, l);
-        c.observe(&[0.2], -3.0, Some(&[0.3]), g, l);
+        c.observe(&[0.1], -1.0, Next::State(&[0.2]), g, l);
+        c.observe(&[0.2], -3.0, Next::State(&[0.3]), g, l);
         c.end_trial();
         let a = 0.5 + (1.0 + (1.0 + l * g)) * (1.0 - g);
         let b = -1.0 + (1.0 + l * g) * -3.0;
@@ -206,7 +204,7 @@ mod tests {
             for k in 0..20 {
                 let x = (k % 5) as f64 / 4.0;
                 let x2 = ((k + 1) % 5) as f64 / 4.0;
-                c.observe(&[x], -1.0, Some(&[x2]), g, 0.3);
+                c.observe(&[x], -1.0, Next::State(&[x2]), g, 0.3);
             }
             c.end_trial();
         }

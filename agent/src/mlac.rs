@@ -14,6 +14,12 @@
 //! observed transition (line 13). Input saturation (§3.5.1): where `ũ_k` lies within
 //! `saturation_margin` of a bound, `∇_u f̂` is taken as zero, since the real plant does not
 //! respond to pushing further.
+//!
+//! **MLAC-FH** (Algorithm 5, §4.3.3) is this improver with a finite horizon: the actor
+//! reads `(x_k, k)`, the model's prediction carries time, `x̃_{k+1} = (f̂(x_k, ũ_k), k+1)`,
+//! and the gradient of Eq. 4.7 takes `∇_x V(x̃_{k+1}, k+1)` — the critic's gradient with
+//! respect to the state part of its input only (time does not depend on the action).
+//! At `k = N − 1` the critic is read at `k + 1 = N`, as line 15 of Algorithm 5 prints it.
 
 use crate::actor_critic::{Improver, TaskInfo, Transition};
 use crate::approx::{Approximator, Differentiable};
@@ -65,7 +71,7 @@ impl Improver for Mlac {
     }
 
     fn improve(&mut self, t: &Transition, critic: &dyn Differentiable) {
-        let (n, m) = (self.info.n(), self.info.m());
+        let (n, m, d) = (self.info.n(), self.info.m(), self.info.input_dim());
         // ũ_k = π_ϑk(x_k), x̃_{k+1} = f̂(x_k, ũ_k)                      (Eq. 3.4–3.5)
         let mut u_tilde = [0.0; MAX_ACTION];
         self.actor.value(t.x, &mut u_tilde[..m]);
@@ -73,9 +79,9 @@ impl Improver for Mlac {
         if self.saturated(&u_tilde[..m]) {
             p.du = [0.0; MAX_STATE * MAX_ACTION];
         }
-        // ∇_x V(x̃_{k+1})
+        // ∇_x V(x̃_{k+1}); finite horizon: of V(x̃_{k+1}, k+1), its first n entries
         let (mut v, mut dv) = ([0.0], [0.0; MAX_STATE]);
-        critic.value_and_jacobian(&p.x_next[..n], &mut v, &mut dv[..n]);
+        critic.value_and_jacobian(&p.x_next[..d], &mut v, &mut dv[..d]);
         // {∇_u ρ + γ ∇_x Vᵀ ∇_u f̂}                                    (Eq. 3.9)
         let mut g = [0.0; MAX_ACTION];
         self.info.reward.grad_u(&u_tilde[..m], &mut g[..m]);
@@ -93,5 +99,41 @@ impl Improver for Mlac {
         let actor = self.actor.fill().map(|(s, c)| ("actor", s, c));
         let model = self.model.fill().map(|(s, c)| ("model", s, c));
         actor.into_iter().chain(model).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Agent;
+    use crate::testing::{self, close, dot, psi, slope_at_0};
+
+    /// MLAC-FH (Algorithm 5), the actor update of one sample by hand (line 15), on the
+    /// tiny task of [`crate::testing`] with the model `x' = x + b u`: the critic is read at
+    /// the predicted *time* `k + 1`, and only its gradient in the state enters.
+    #[test]
+    fn mlac_fh_step_by_hand() {
+        let (alpha_a, b) = (0.5, 0.5);
+        // V(x, k) = Σ θ_ij φ_i(x) ψ_j(k): rises with x, and with k (∂V/∂k ≠ 0).
+        let theta = [0.0, 0.0, 2.0, 3.0];
+        let actor = Box::new(testing::rbf(1, Some(10.0)));
+        let info = testing::info(10.0);
+        let mlac = Mlac::new(info.clone(), actor, testing::model(b), alpha_a, 1.0, 0.0);
+        let critic = testing::critic(theta);
+        let mut ac = testing::agent(info, critic, 0.0, 0.0, Box::new(mlac), 1.0);
+        let mut u = [0.0];
+        ac.start_trial(&[0.0], &mut u);
+        ac.learn(-1.0, &[0.1], Some(&mut u));
+        // ũ_0 = π(x_0, 0) = 0, x̃_1 = (x_0 + b ũ_0, 0 + 1) = (0, 1)           (lines 13–14)
+        // ∇_x V(x̃_1, 1) = Σ θ_ij ∂φ_i/∂x(0) ψ_j(1)
+        let s = slope_at_0();
+        let dv =
+            s[0] * dot([theta[0], theta[1]], psi(1)) + s[1] * dot([theta[2], theta[3]], psi(1));
+        // ϑ ← ϑ + α_a {∇_u ρ(x_0, ũ_0) + ∇_x Vᵀ ∇_u f̂} ψ(x_0, 0), ∇_u ρ(0) = 0  (line 15)
+        let g = alpha_a * (0.0 + dv * b);
+        assert!(g > 0.0);
+        for k in 0..2 {
+            close(testing::greedy(&ac, 0.0, k), g * dot(psi(0), psi(k)));
+        }
     }
 }

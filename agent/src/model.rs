@@ -5,6 +5,12 @@
 //! wrapped), and the prediction is `x + Δx̂` wrapped. This is the same model — the
 //! Jacobian `∂f̂/∂u = ∂Δx̂/∂u` is unchanged — but the regression target stays smooth when
 //! the pendulum crosses ±π, where `x'` itself jumps by 2π.
+//!
+//! The model is time-invariant also for a finite horizon (footnote 2 of §4.2): given an
+//! actor/critic input `(x, k)` ([`crate::horizon::Input`]) it reads the state part, and its
+//! prediction is `(f̂(x, u), k + 1)` — the known dynamics of time, a discrete-time
+//! integrator (§4.3.1) — so that the critic can be read at the predicted input. `∂f̂/∂u`
+//! is that of the state part (time does not depend on the action).
 
 use plant::angle::wrap;
 use plant::{MAX_ACTION, MAX_STATE};
@@ -21,7 +27,7 @@ pub struct ProcessModel {
 
 /// One model prediction: the next state and the input Jacobian `∂f̂/∂u`.
 pub struct Prediction {
-    /// Predicted next state `x̃' = f̂(x, u)`.
+    /// Predicted next state `x̃' = f̂(x, u)`, followed by `k + 1` if `x` carried time `k`.
     pub x_next: [f64; MAX_STATE],
     /// `∂f̂/∂u`, row-major `n × m`.
     pub du: [f64; MAX_STATE * MAX_ACTION],
@@ -41,14 +47,21 @@ impl ProcessModel {
         self.angle_mask.len()
     }
 
+    /// `[x, u]`, of the state part of `x`.
     fn input(&self, x: &[f64], u: &[f64]) -> [f64; MAX_IN] {
+        let n = self.n();
+        debug_assert!(
+            x.len() == n || x.len() == n + 1,
+            "a state, or a state and time"
+        );
         let mut xu = [0.0; MAX_IN];
-        xu[..x.len()].copy_from_slice(x);
-        xu[x.len()..x.len() + u.len()].copy_from_slice(u);
+        xu[..n].copy_from_slice(&x[..n]);
+        xu[n..n + u.len()].copy_from_slice(u);
         xu
     }
 
-    /// `f̂(x, u)` and `∂f̂/∂u`.
+    /// `f̂(x, u)` and `∂f̂/∂u`; `x` may carry time `k` after the state, and the prediction
+    /// then carries `k + 1`.
     pub fn predict(&self, x: &[f64], u: &[f64]) -> Prediction {
         let (n, m) = (self.n(), u.len());
         let xu = self.input(x, u);
@@ -67,6 +80,9 @@ impl ProcessModel {
                 p.du[i * m + j] = jac[i * (n + m) + n + j];
             }
         }
+        if let Some(&k) = x.get(n) {
+            p.x_next[n] = k + 1.0;
+        }
         p
     }
 
@@ -75,7 +91,8 @@ impl ProcessModel {
         self.f.fill()
     }
 
-    /// Learns from the observed transition `(x, u) → x'`.
+    /// Learns from the observed transition `(x, u) → x'` (of their state parts, if they
+    /// carry time).
     pub fn learn(&mut self, x: &[f64], u: &[f64], x_next: &[f64]) {
         let n = self.n();
         let xu = self.input(x, u);
@@ -85,10 +102,26 @@ impl ProcessModel {
     }
 }
 
-/// `to − from`, angle components wrapped.
+/// `to − from` of the first `out.len()` components (the state part, if `from` and `to`
+/// carry time), angle components wrapped.
 pub fn increment(angle_mask: &[bool], from: &[f64], to: &[f64], out: &mut [f64]) {
     for i in 0..out.len() {
         let d = to[i] - from[i];
         out[i] = if angle_mask[i] { wrap(d) } else { d };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::testing;
+
+    /// Given `(x, k)` the model predicts from the state part and advances time by one.
+    #[test]
+    fn a_prediction_carries_time() {
+        let model = testing::model(0.5);
+        let p = model.predict(&[0.2], &[1.0]);
+        assert_eq!((p.x_next[0], p.x_next[1], p.du[0]), (0.7, 0.0, 0.5));
+        let p = model.predict(&[0.2, 3.0], &[1.0]);
+        assert_eq!((p.x_next[0], p.x_next[1], p.du[0]), (0.7, 4.0, 0.5));
     }
 }

@@ -38,12 +38,14 @@
 //!   learning curve rises from there.
 //! * Combinations the thesis did not tune (RMAC on the arm, anything on the double
 //!   integrator) start from the pendulum values of the same algorithm and approximator.
+//! * Finite horizon (Chapter 4, §4.4): see [`finite_horizon`].
 
 use plant::{SystemName, Task};
 
 use crate::config::{
-    Algo, ApproxKind, Component, ConfigError, ExperimentConfig, LearningConfig, LlrConfig,
-    LstdConfig, RbfConfig, RunConfig, SarsaConfig, TilesConfig, VgbpConfig,
+    Algo, ApproxKind, Component, ConfigError, ExperimentConfig, HorizonKind, LearningConfig,
+    LlrConfig, LstdConfig, RbfConfig, RunConfig, SarsaConfig, TilesConfig, VgbpConfig,
+    finite_horizon_unsupported,
 };
 
 /// LLR memories of actors, critics and reference models replace a stored sample closer
@@ -119,11 +121,12 @@ fn input_scaling(system: SystemName) -> (Vec<f64>, Vec<f64>) {
     (w_state, w_model)
 }
 
-/// The preset for `(system, algo, approx)`.
+/// The preset for `(system, algo, approx)` with the given horizon.
 pub fn preset(
     system: SystemName,
     algo: Algo,
     approx: ApproxKind,
+    horizon: HorizonKind,
 ) -> Result<ExperimentConfig, ConfigError> {
     if !algo.approximators().contains(&approx) {
         let names: Vec<&str> = algo.approximators().iter().map(|a| a.as_str()).collect();
@@ -140,6 +143,9 @@ pub fn preset(
                 }
             ),
         });
+    }
+    if horizon == HorizonKind::Finite {
+        return finite_horizon(system, algo, approx);
     }
     if matches!(algo, Algo::Vgbp | Algo::Sarsa) {
         return Ok(critic_only(system, algo, approx));
@@ -277,6 +283,99 @@ pub fn preset(
             explore_every: 1,
             saturation_margin: if approx == Rbf { 0.1 } else { 0.0 },
         },
+        horizon: HorizonKind::Infinite,
+        actor: Some(actor),
+        critic,
+        model,
+        vgbp: None,
+        sarsa: None,
+    })
+}
+
+/// Chapter 4's finite-horizon learners, SAC-FH, MLAC-FH and RMAC-FH (Algorithms 4–6),
+/// with the parameters of §4.4: 600 trials (episodes) of 3 s, 20 runs, RBFs with 9
+/// centres along every input — `φ ∈ [−π, π]`, `φ̇ ∈ [−8π, 8π]` and time
+/// `k ∈ {0, …, 99}` for actor, critic and reference model (729 RBFs each). "Widths" are
+/// intersection heights, as in Table 3.1 (§5.3 calls Table 3.1's intersection 0.9 a
+/// "width of 0.9").
+///
+/// | | learning rates | widths |
+/// |---|---|---|
+/// | SAC-FH (§4.4.1) | `α_a = 0.05`, `α_c = 0.2` | 0.55 |
+/// | MLAC-FH (§4.4.2) | `α_a = 0.15`, `α_c = 0.4`, `α_p = 0.8` | actor 0.55, critic 0.65, model 0.75 |
+/// | RMAC-FH (§4.4.3) | `α_r = 0.6`, `α_c = 0.2`, `α_p = 0.6` | reference and critic 0.7, model 0.6 |
+///
+/// Where §4.4 is silent or inconsistent, the choice made here:
+///
+/// * §4.4.3 prints "`α_r = 0.6`, `α_c = 0.2`, `α_r = 0.6`"; the second `α_r` is read as
+///   the process model's `α_p`, the one rate not otherwise given.
+/// * §4.4 counts 81 RBFs in the process model, over `(φ, φ̇)` only; but the model is
+///   `f̂(x, u)` and MLAC and RMAC need `∂f̂/∂u`, so the action is an input too, with 9
+///   centres as every other input (729 RBFs).
+/// * Not given in Chapter 4, taken from Chapter 3 (§3.6, Table 3.1 presets): `λ = 0.65`,
+///   `σ = 1` on every step, and MLAC's saturation margin 0.1 of the RBF presets.
+/// * `γ = 1`: Algorithms 4–6 have no discount.
+/// * A greedy evaluation every 10 trials: the one after trial 600 is Table 4.1's "last
+///   episode … carried out *without* exploration".
+/// * Other systems (not in the thesis) take the same values with 9 centres along every
+///   input.
+///
+/// The thesis used RBFs only for Chapter 4; LLR and tile coding have no finite-horizon
+/// preset.
+pub fn finite_horizon(
+    system: SystemName,
+    algo: Algo,
+    approx: ApproxKind,
+) -> Result<ExperimentConfig, ConfigError> {
+    if !algo.has_actor() {
+        return Err(finite_horizon_unsupported(algo));
+    }
+    if approx != ApproxKind::Rbf {
+        return Err(ConfigError {
+            file: None,
+            key: "approx".into(),
+            message: format!(
+                "the finite-horizon presets (§4.4) use rbf; there is none for {algo} with {approx}"
+            ),
+        });
+    }
+    let task = Task::new(system);
+    let (n, m) = (task.state_dim(), task.action_dim());
+    // Actor, critic, reference model: state and time; process model: state and action.
+    let timed = vec![9; n + 1];
+    let model = vec![9; n + m];
+    let (actor, critic, model) = match algo {
+        Algo::Sac => (rbf(0.05, timed.clone(), 0.55), rbf(0.2, timed, 0.55), None),
+        Algo::Mlac => (
+            rbf(0.15, timed.clone(), 0.55),
+            rbf(0.4, timed, 0.65),
+            Some(rbf(0.8, model, 0.75)),
+        ),
+        Algo::Rmac => (
+            rbf(0.6, timed.clone(), 0.7),
+            rbf(0.2, timed, 0.7),
+            Some(rbf(0.6, model, 0.6)),
+        ),
+        Algo::Vgbp | Algo::Sarsa => unreachable!("rejected above"),
+    };
+    Ok(ExperimentConfig {
+        system,
+        algo,
+        approx,
+        horizon: HorizonKind::Finite,
+        run: RunConfig {
+            trials: 600,
+            runs: 20,
+            seed: 1,
+            eval_every: 10,
+        },
+        learning: LearningConfig {
+            gamma: 1.0,
+            lambda: 0.65,
+            sigma: 1.0,
+            explore_every: 1,
+            saturation_margin: 0.1,
+        },
         actor: Some(actor),
         critic,
         model,
@@ -346,6 +445,7 @@ fn critic_only(system: SystemName, algo: Algo, approx: ApproxKind) -> Experiment
         system,
         algo,
         approx,
+        horizon: HorizonKind::Infinite,
         run: RunConfig {
             trials: 200,
             runs: 20,
@@ -393,14 +493,45 @@ mod tests {
         for system in SystemName::ALL {
             for algo in Algo::ALL {
                 for approx in ApproxKind::ALL {
-                    match preset(system, algo, approx) {
-                        Ok(c) => c
-                            .validate()
-                            .unwrap_or_else(|e| panic!("{system}/{algo}/{approx}: {e}")),
-                        Err(e) => assert!(!algo.approximators().contains(&approx), "{e}"),
+                    for horizon in HorizonKind::ALL {
+                        let supported = algo.approximators().contains(&approx)
+                            && (horizon == HorizonKind::Infinite
+                                || (algo.has_actor() && approx == ApproxKind::Rbf));
+                        match preset(system, algo, approx, horizon) {
+                            Ok(c) => c.validate().unwrap_or_else(|e| {
+                                panic!("{system}/{algo}/{approx}/{horizon}: {e}")
+                            }),
+                            Err(e) => assert!(!supported, "{e}"),
+                        }
                     }
                 }
             }
         }
+    }
+
+    #[test]
+    fn finite_horizon_presets_are_those_of_section_4_4() {
+        let rates = |algo| {
+            let c = preset(
+                SystemName::Pendulum,
+                algo,
+                ApproxKind::Rbf,
+                HorizonKind::Finite,
+            )
+            .unwrap();
+            assert_eq!((c.run.trials, c.run.runs, c.learning.gamma), (600, 20, 1.0));
+            let Some(Component::Rbf(a)) = c.actor else {
+                panic!()
+            };
+            let Component::Rbf(v) = c.critic else {
+                panic!()
+            };
+            assert_eq!((&a.centres, &v.centres), (&vec![9; 3], &vec![9; 3]));
+            let p = c.model.map(|m| m.alpha());
+            (a.alpha, v.alpha, p, a.intersection, v.intersection)
+        };
+        assert_eq!(rates(Algo::Sac), (0.05, 0.2, None, 0.55, 0.55));
+        assert_eq!(rates(Algo::Mlac), (0.15, 0.4, Some(0.8), 0.55, 0.65));
+        assert_eq!(rates(Algo::Rmac), (0.6, 0.2, Some(0.6), 0.7, 0.7));
     }
 }

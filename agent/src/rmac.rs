@@ -15,6 +15,10 @@
 //!
 //! `R` is represented as the desired *increment* `x̂ − x` (angles wrapped), for the same
 //! reason as the process model (see [`crate::model`]).
+//!
+//! **RMAC-FH** (Algorithm 6, §4.3.4) is this improver with a finite horizon: the
+//! reference model reads `(x, k)` and still outputs a state (without time), and the
+//! reachable states `(f̂(x_k, u), k+1)` are compared by the critic at time `k + 1`.
 
 use crate::actor_critic::{Improver, TaskInfo, Transition};
 use crate::approx::solve::cholesky_solve;
@@ -95,12 +99,12 @@ impl Improver for Rmac {
     }
 
     fn improve(&mut self, t: &Transition, critic: &dyn Differentiable) {
-        let n = self.info.n();
+        let (n, d) = (self.info.n(), self.info.input_dim());
         // x_r = argmax_{x' ∈ R̂_x} V(x'),  R̂_x = { f̂(x_k, u) : u ∈ U_e }   (line 11)
         let mut best = (f64::NEG_INFINITY, [0.0; MAX_STATE]);
         for u in self.extremes() {
             let p = self.model.predict(t.x, &u[..self.info.m()]);
-            let v = scalar(critic, &p.x_next[..n]);
+            let v = scalar(critic, &p.x_next[..d]);
             if v > best.0 {
                 best = (v, p.x_next);
             }
@@ -110,5 +114,45 @@ impl Improver for Rmac {
         increment(&self.info.angle_mask, t.x, &best.1[..n], &mut target[..n]);
         self.reference.fit(t.x, &target[..n], self.alpha);
         self.model.learn(t.x, t.u, t.x_next); //                            (line 14)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Agent;
+    use crate::testing::{self, AT_0, AT_1, close, dot, psi};
+
+    /// RMAC-FH (Algorithm 6), the reference-model update of one sample by hand
+    /// (lines 23–24), on the tiny task of [`crate::testing`] with the model `x' = x + b u`
+    /// and actions in `[−1, 1]`: the reachable states are compared at time `k + 1`.
+    #[test]
+    fn rmac_fh_step_by_hand() {
+        let (alpha_r, b, x0) = (0.5, 0.5, 0.5);
+        // V prefers x = 0 at k = 0 and x = 1 at k = 1.
+        let theta = [0.0, -10.0, -10.0, 0.0];
+        let v = |phi: [f64; 2], k| {
+            phi[0] * dot([theta[0], theta[1]], psi(k)) + phi[1] * dot([theta[2], theta[3]], psi(k))
+        };
+        assert!(v(AT_1, 1) > v(AT_0, 1) && v(AT_0, 0) > v(AT_1, 0));
+        let info = testing::info(1.0);
+        let reference = Box::new(testing::rbf(1, None));
+        let rmac = Rmac::new(info.clone(), reference, testing::model(b), alpha_r);
+        let mut ac = testing::agent(info, testing::critic(theta), 0.0, 0.0, Box::new(rmac), 1.0);
+        let mut u = [0.0];
+        ac.start_trial(&[x0], &mut u);
+        ac.learn(-1.0, &[0.7], Some(&mut u));
+        // Reachable from (x_0, 0): (x_0 ∓ b, 1) = (0, 1), (1, 1); the best is x_r = 1
+        // (line 23). R is the desired increment: η ← η + α_r (x_r − x_0 − R(x_0, 0)) ψ(0)
+        // with R(x_0, 0) = 0 (line 24).
+        let eta = alpha_r * (1.0 - x0);
+        for k in 0..2 {
+            // u = f̂⁻¹(x, x + R(x, k)) around u_prev = 0: b R / (b² + ridge)      (line 11)
+            let r = eta * dot(psi(0), psi(k));
+            close(
+                testing::greedy(&ac, x0, k),
+                b * r / (b * b + INVERSION_RIDGE),
+            );
+        }
     }
 }

@@ -34,3 +34,44 @@ impl Improver for Sac {
         self.actor.shift(t.x, &step);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Agent;
+    use crate::testing::{self, close, dot, psi};
+
+    /// SAC-FH (Algorithm 4), one trial of `N = 2` samples by hand, on the tiny task of
+    /// [`crate::testing`] (actor and critic features `ψ(k)`, independent of `x`).
+    #[test]
+    fn sac_fh_trial_by_hand() {
+        let (alpha_a, alpha_c, lambda) = (0.5, 0.25, 0.5);
+        let actor = Box::new(testing::rbf(1, Some(10.0)));
+        let sac = Box::new(Sac::new(actor, alpha_a));
+        let critic = testing::rbf(1, None);
+        let mut ac = testing::agent(testing::info(10.0), critic, alpha_c, lambda, sac, 1.0);
+        let (x0, x1, x2, r1, r2) = (0.3, 0.6, 0.8, -1.0, -2.0);
+        let mut u = [0.0];
+        ac.start_trial(&[x0], &mut u);
+        let du0 = u[0]; // π(x_0, 0) = 0: u_0 is all exploration (line 7)
+        ac.learn(r1, &[x1], Some(&mut u));
+        // k = 0, critic 0: δ_0 = r_1 + θᵀ[φ(x_1, 1) − φ(x_0, 0)] = r_1        (line 14)
+        // ϑ = α_a δ_0 Δu_0 ψ(0) (line 16), z = φ(0), θ = α_c δ_0 φ(0)  (lines 17–18)
+        let d0 = r1;
+        // u_1 = π(x_1, 1) + Δu_1 was chosen before this update (the shared step's order,
+        // Algorithm 1 line 9), from the actor still at 0.
+        let du1 = u[0];
+        assert!(u[0].abs() < 10.0 && du0.abs() < 10.0, "no saturation");
+        ac.learn(r2, &[x2], None);
+        // k = N − 1: δ_1 = r_2 + τ_N(x_2) − θᵀφ(x_1, 1), τ_N(x) = −x²         (line 12)
+        let d1 = r2 - x2 * x2 - alpha_c * d0 * dot(psi(0), psi(1));
+        // ϑ += α_a δ_1 Δu_1 ψ(1);  z = λ φ(0) + φ(1), θ += α_c δ_1 z
+        for k in 0..2 {
+            let (p0, p1) = (dot(psi(0), psi(k)), dot(psi(1), psi(k)));
+            let pi = alpha_a * (d0 * du0 * p0 + d1 * du1 * p1);
+            close(testing::greedy(&ac, 0.42, k), pi);
+            let v = alpha_c * (d0 * p0 + d1 * (lambda * p0 + p1));
+            close(ac.value(&[0.42], k), v);
+        }
+    }
+}

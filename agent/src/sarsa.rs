@@ -173,7 +173,7 @@ impl Agent for Sarsa {
         self.update(r, 0.0, x_next, self.a);
     }
 
-    fn greedy(&self, x: &[f64], _u_prev: &[f64], u: &mut [f64]) {
+    fn greedy(&self, _k: usize, x: &[f64], _u_prev: &[f64], u: &mut [f64]) {
         u.copy_from_slice(&self.actions[self.greedy_index(x)]);
     }
 

@@ -9,11 +9,15 @@
 //! start states (§6.4.2) is evaluated from each of them, and the greedy return is their
 //! mean. A trial that leaves the task's operating range ends there (§6.4.2): the agent
 //! learns the transition as terminal, and the simulated time counts only the samples run.
+//!
+//! With a finite horizon (Chapter 4) a trial's return also counts the terminal reward of
+//! the state it ends in, `τ_N(x_N) + Σ_k ρ(x_k, u_k)` (Eq. 4.1).
 
 use std::sync::Arc;
 
 use agent::Agent;
 use agent::config::ExperimentConfig;
+use agent::horizon::Horizon;
 use observer::{Observer, PassThrough};
 use plant::{Plant, Task};
 
@@ -38,6 +42,7 @@ pub struct Experiment {
     plant: Plant,
     observer: Box<dyn Observer>,
     agent: Box<dyn Agent>,
+    horizon: Horizon,
     run: u32,
     trials: u32,
     eval_every: u32,
@@ -55,6 +60,7 @@ impl Experiment {
         Self {
             plant: Plant::new(task.clone()),
             observer: Box::new(PassThrough::new(task.state_dim())),
+            horizon: cfg.horizon.of(&task),
             task,
             agent,
             run,
@@ -105,6 +111,7 @@ impl Experiment {
             self.agent
                 .learn(r, x, if last { None } else { Some(&mut u) });
         }
+        ret += self.final_reward();
         self.trial += 1;
         let greedy = (self.eval_every > 0 && self.trial.is_multiple_of(self.eval_every))
             .then(|| self.greedy_return());
@@ -118,20 +125,25 @@ impl Experiment {
         })
     }
 
+    /// `τ_N(x_N)` of the plant's state after a finite horizon's last sample (Eq. 4.1); 0
+    /// for an infinite horizon.
+    fn final_reward(&self) -> f64 {
+        self.horizon
+            .final_reward(&self.task.reward, self.plant.state())
+    }
+
     /// The greedy policy's return without learning: the mean over the task's start
     /// states of one trial from each.
     pub fn greedy_return(&mut self) -> f64 {
         let starts = self.task.initial_states.clone();
-        let total: f64 = starts
-            .iter()
-            .map(|x0| {
-                self.greedy_trajectory(x0)
-                    .iter()
-                    .map(|s| s.reward)
-                    .sum::<f64>()
-            })
-            .sum();
+        let total: f64 = starts.iter().map(|x0| self.greedy_return_from(x0)).sum();
         total / starts.len() as f64
+    }
+
+    /// The return of one trial from `x0` under the greedy policy, without learning.
+    pub fn greedy_return_from(&mut self, x0: &[f64]) -> f64 {
+        let rewards: f64 = self.greedy_trajectory(x0).iter().map(|s| s.reward).sum();
+        rewards + self.final_reward()
     }
 
     /// One greedy trial from `x0`: the time response of the current policy (until the
@@ -144,7 +156,7 @@ impl Experiment {
         let mut x = self.plant.state().to_vec();
         let mut out = Vec::with_capacity(self.task.steps_per_trial());
         for k in 0..self.task.steps_per_trial() {
-            self.agent.greedy(&x, &u_prev, &mut u);
+            self.agent.greedy(k, &x, &u_prev, &mut u);
             let reward = self.plant.step(&u);
             u_prev.copy_from_slice(self.plant.applied_action());
             out.push(Sample {

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use agent::config::{Algo, ApproxKind, Overrides, resolve};
+use agent::config::{Algo, ApproxKind, Choice, HorizonKind, Overrides, resolve};
 use clap::{Args, Parser, Subcommand};
 use plant::{SystemName, Task};
 use rig::driver::check::{CheckOptions, check};
@@ -139,7 +139,7 @@ struct CheckDriverArgs {
     driver: DriverArgs,
     /// The task the driver must fit: pendulum, arm-vertical, arm-horizontal,
     /// double-integrator.
-    #[arg(long, value_parser = parse_system, default_value = "pendulum")]
+    #[arg(long, value_parser = SystemName::parse, default_value = "pendulum")]
     system: SystemName,
     /// How long to measure the sample rate, answering every sample with zero [s].
     #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
@@ -165,21 +165,30 @@ struct Selection {
     /// arm-horizontal (Case II, §5.4), arm-6.4 (the manipulator of §6.4.2: ±0.1 N m,
     /// ±1.2 rad operating range, four start states) or double-integrator (LQR check)
     /// [default: pendulum].
-    #[arg(long, value_parser = parse_system)]
+    #[arg(long, value_parser = SystemName::parse)]
     system: Option<SystemName>,
     /// Algorithm: sac (Algorithm 1), mlac (Algorithm 2), rmac (Algorithm 3), vgbp
     /// (Algorithm 7) or sarsa (§6.2) [default: mlac].
-    #[arg(long, value_parser = parse_algo)]
+    #[arg(long, value_parser = Algo::parse)]
     algo: Option<Algo>,
     /// Function approximator: llr, rbf, tiles (sac only) or lstd (vgbp only: an LSTD
     /// critic on RBFs with an LLR process model); sarsa uses rbf [default: llr].
-    #[arg(long, value_parser = parse_approx)]
+    #[arg(long, value_parser = ApproxKind::parse)]
     approx: Option<ApproxKind>,
-    /// Trials per run [preset: 400 for the pendulum (vgbp, sarsa: 200), 600 for the
-    /// arms (vgbp, sarsa: 200)].
+    /// Horizon of the cost function. `infinite`: discounted rewards without end
+    /// (Chapters 3, 5, 6). `finite`: a trial is the horizon — its return is the rewards
+    /// plus a terminal reward τ_N = −xᵀQx of the final state, and actor and critic take
+    /// time as an extra input (Chapter 4, Eq. 4.6; sac, mlac, rmac with rbf: SAC-FH,
+    /// MLAC-FH, RMAC-FH, Algorithms 4–6, with the parameters of §4.4) [default:
+    /// infinite].
+    #[arg(long, value_parser = HorizonKind::parse)]
+    horizon: Option<HorizonKind>,
+    /// Trials per run [preset: 400 for the pendulum (vgbp, sarsa: 200; finite horizon:
+    /// 600), 600 for the arms (vgbp, sarsa: 200)].
     #[arg(long)]
     trials: Option<u32>,
-    /// Independent runs [preset: 30 for the pendulum (vgbp, sarsa: 20), 20 for the arm].
+    /// Independent runs [preset: 30 for the pendulum (vgbp, sarsa, finite horizon: 20),
+    /// 20 for the arm].
     #[arg(long)]
     runs: Option<u32>,
     /// Seed of every random stream of every run [preset: 1].
@@ -210,37 +219,6 @@ struct LearnArgs {
     quiet: bool,
 }
 
-fn parse_system(s: &str) -> Result<SystemName, String> {
-    SystemName::ALL
-        .into_iter()
-        .find(|n| n.as_str() == s)
-        .ok_or_else(|| {
-            format!(
-                "unknown system; one of: {}",
-                SystemName::ALL.map(|n| n.as_str()).join(", ")
-            )
-        })
-}
-
-fn parse_algo(s: &str) -> Result<Algo, String> {
-    Algo::ALL
-        .into_iter()
-        .find(|a| a.as_str() == s)
-        .ok_or_else(|| format!("one of: {}", Algo::ALL.map(Algo::as_str).join(", ")))
-}
-
-fn parse_approx(s: &str) -> Result<ApproxKind, String> {
-    ApproxKind::ALL
-        .into_iter()
-        .find(|a| a.as_str() == s)
-        .ok_or_else(|| {
-            format!(
-                "one of: {}",
-                ApproxKind::ALL.map(ApproxKind::as_str).join(", ")
-            )
-        })
-}
-
 fn resolve_selection(s: &Selection) -> Result<agent::config::ExperimentConfig, String> {
     let text = match &s.config {
         Some(p) => Some(
@@ -252,6 +230,7 @@ fn resolve_selection(s: &Selection) -> Result<agent::config::ExperimentConfig, S
         system: s.system,
         algo: s.algo,
         approx: s.approx,
+        horizon: s.horizon,
         trials: s.trials,
         runs: s.runs,
         seed: s.seed,
@@ -524,6 +503,29 @@ fn print_summary(
         println!(
             "  greedy return, mean of the last 3 evaluations (trials {}–{}): {:.1}",
             tail[0].trial, tail[2].trial, mean
+        );
+    }
+    if let Some(trial) = s
+        .records
+        .iter()
+        .filter(|r| r.greedy.is_some())
+        .map(|r| r.trial)
+        .max()
+    {
+        // Table 4.1's statistic: the last greedy return of every run.
+        let last: Vec<f64> = s
+            .records
+            .iter()
+            .filter(|r| r.trial == trial)
+            .filter_map(|r| r.greedy)
+            .collect();
+        let n = last.len() as f64;
+        let mean = last.iter().sum::<f64>() / n;
+        let var = last.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+        println!(
+            "  greedy return after trial {trial}: mean {mean:.1}, sample std {:.1} ({} runs)",
+            var.sqrt(),
+            last.len()
         );
     }
     println!(

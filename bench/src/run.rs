@@ -23,6 +23,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use ::agent::config::ExperimentConfig;
+use ::agent::horizon::Horizon;
 use anyhow::{Context, Result, anyhow, bail};
 use indicatif::ProgressBar;
 use wire::driver::{DriverCommand, DriverInfo, DriverSample, DriverWatch};
@@ -83,6 +84,9 @@ struct Returns {
     steps_per_trial: u64,
     /// Samples not run because trials ended early (left the operating range).
     skipped_samples: u64,
+    /// Adds `τ_N(x_N)` of a finite horizon's last measurement to the return (Eq. 4.1).
+    horizon: Horizon,
+    reward: plant::QuadraticReward,
     pending: Option<TrialRecord>,
     /// The running greedy trial's reward sum.
     greedy_trial: f64,
@@ -120,17 +124,26 @@ impl Returns {
             .pending
             .as_mut()
             .ok_or_else(|| anyhow!("a sample arrived before any trial started"))?;
+        let end = f & flags::END != 0;
+        let final_reward = if end {
+            self.horizon
+                .final_reward(&self.reward, &m.y[..m.n_x as usize])
+        } else {
+            0.0
+        };
         if greedy {
             // One greedy trial per start state: the greedy return is their mean.
             self.greedy_trial += m.reward;
-            if f & flags::END != 0 {
+            if end {
+                self.greedy_trial += final_reward;
                 self.greedy.0 += self.greedy_trial;
                 self.greedy.1 += 1;
                 pending.greedy = Some(self.greedy.0 / f64::from(self.greedy.1));
             }
         } else {
             pending.ret += m.reward;
-            if f & flags::END != 0 {
+            if end {
+                pending.ret += final_reward;
                 self.skipped_samples += self.steps_per_trial.saturating_sub(m.header.step);
                 pending.sim_time_s = f64::from(pending.trial) * self.trial_seconds
                     - self.skipped_samples as f64 * self.ts;
@@ -587,6 +600,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         ("system", cfg.system.to_string()),
         ("algo", cfg.algo.to_string()),
         ("approx", cfg.approx.to_string()),
+        ("horizon", cfg.horizon.to_string()),
         (
             "timing",
             match (&opts.driver, &driver_info, opts.realtime) {
@@ -617,6 +631,8 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         ts: task.ts,
         steps_per_trial: task.steps_per_trial() as u64,
         skipped_samples: 0,
+        horizon: cfg.horizon.of(&task),
+        reward: task.reward.clone(),
         pending: None,
         greedy_trial: 0.0,
         greedy: (0.0, 0),

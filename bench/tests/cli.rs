@@ -67,6 +67,7 @@ fn bad_config_is_a_one_line_error_naming_file_and_key() {
         ("[learning]\ngamma = 1.2\n", "learning.gamma", "(0, 1)"),
         ("[run]\nruns = 0\n", "run.runs", "1..=100000"),
         ("algo = \"ppo\"\n", "algo", "sac, mlac, rmac"),
+        ("horizon = \"finit\"\n", "horizon", "infinite, finite"),
         ("[actor\n", "", "not valid TOML"),
     ] {
         std::fs::write(&file, text).unwrap();
@@ -120,6 +121,7 @@ fn config_prints_a_resolvable_preset_and_help_explains_every_flag() {
         "--system",
         "--algo",
         "--approx",
+        "--horizon",
         "--trials",
         "--runs",
         "--seed",

@@ -31,13 +31,20 @@ impl QuadraticReward {
 
     /// `ρ(x, u)`.
     pub fn reward(&self, x: &[f64], u: &[f64]) -> f64 {
+        let mut r = self.state_reward(x);
+        for j in 0..self.p.len() {
+            r -= self.p[j] * u[j] * u[j];
+        }
+        r
+    }
+
+    /// `−eᵀ Q e`, the state part of `ρ`: also the terminal reward `τ_N(x) = −xᵀQx` of the
+    /// finite-horizon task (§4.4).
+    pub fn state_reward(&self, x: &[f64]) -> f64 {
         let mut r = 0.0;
         for i in 0..self.q.len() {
             let e = self.error(x, i);
             r -= self.q[i] * e * e;
-        }
-        for j in 0..self.p.len() {
-            r -= self.p[j] * u[j] * u[j];
         }
         r
     }

@@ -32,7 +32,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         if f & flags::SHUTDOWN == 0 && !args.trivial {
             if f & flags::GREEDY != 0 {
                 if f & flags::END == 0 {
-                    agent.greedy(x, &e.u_applied[..m], &mut u);
+                    agent.greedy(e.header.step as usize, x, &e.u_applied[..m], &mut u);
                 }
             } else if f & flags::START != 0 {
                 agent.start_trial(x, &mut u);
