@@ -165,6 +165,24 @@ fn two_runs_at_once_do_not_see_each_other() {
     }
 }
 
+/// Waits (at most 30 s) until the file at `path` has at least `n` lines: a run under way.
+fn wait_for_lines(path: &Path, n: usize) {
+    let t0 = Instant::now();
+    while std::fs::read_to_string(path)
+        .unwrap_or_default()
+        .lines()
+        .count()
+        < n
+    {
+        assert!(
+            t0.elapsed() < Duration::from_secs(30),
+            "the run did not start: {}",
+            path.display()
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
 fn children_of(pid: u32) -> Vec<u32> {
     let out = Command::new("pgrep")
         .args(["-P", &pid.to_string()])
@@ -185,21 +203,7 @@ fn after_kill_9_of_all_three_processes_the_next_run_just_works() {
         .spawn()
         .unwrap();
     // Wait until learning is under way.
-    let t0 = Instant::now();
-    loop {
-        let rows = std::fs::read_to_string(dir.join("killed/returns.csv"))
-            .unwrap_or_default()
-            .lines()
-            .count();
-        if rows > 3 {
-            break;
-        }
-        assert!(
-            t0.elapsed() < Duration::from_secs(30),
-            "the run did not start"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    wait_for_lines(&dir.join("killed/returns.csv"), 4);
     let kids = children_of(sup.id());
     assert_eq!(kids.len(), 3, "plant, observer and agent");
     for pid in &kids {
@@ -358,19 +362,7 @@ fn sigterm_stops_the_run_and_keeps_the_recording() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let t0 = Instant::now();
-    while std::fs::read_to_string(dir.join("returns.csv"))
-        .unwrap_or_default()
-        .lines()
-        .count()
-        < 4
-    {
-        assert!(
-            t0.elapsed() < Duration::from_secs(30),
-            "the run did not start"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    wait_for_lines(&dir.join("returns.csv"), 4);
     Command::new("kill")
         .args(["-TERM", &sup.id().to_string()])
         .status()
@@ -478,19 +470,7 @@ fn a_stalled_agent_meets_the_watchdog_within_two_periods() {
         .arg(&dir)
         .spawn()
         .unwrap();
-    let t0 = Instant::now();
-    while std::fs::read_to_string(dir.join("returns.csv"))
-        .unwrap_or_default()
-        .lines()
-        .count()
-        < 2
-    {
-        assert!(
-            t0.elapsed() < Duration::from_secs(30),
-            "the run did not start"
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
+    wait_for_lines(&dir.join("returns.csv"), 2);
     std::thread::sleep(Duration::from_millis(100));
     let agent = children_of(sup.id())
         .into_iter()
