@@ -113,9 +113,17 @@ pub struct Best {
 impl Best {
     /// An empty set that keeps at most `k ≤ MAX_K + 2` candidates.
     pub fn new(k: usize) -> Self {
+        Self::reusing(k, Vec::new())
+    }
+
+    /// [`Best::new`], keeping the candidates in `buffer` (cleared), so that its
+    /// allocation serves again.
+    pub fn reusing(k: usize, mut buffer: Vec<Candidate>) -> Self {
         debug_assert!((1..=MAX_K + 2).contains(&k));
+        buffer.clear();
+        buffer.reserve(k);
         Self {
-            items: Vec::with_capacity(k),
+            items: buffer,
             k,
             ceiling: f64::INFINITY,
         }
@@ -180,6 +188,11 @@ impl Best {
     /// The candidates, nearest first (newer first among equals).
     pub fn sorted(&self) -> &[Candidate] {
         &self.items
+    }
+
+    /// The candidates, nearest first (newer first among equals), as a vector.
+    pub fn into_sorted(self) -> Vec<Candidate> {
+        self.items
     }
 }
 
