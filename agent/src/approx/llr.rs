@@ -116,6 +116,14 @@ struct Cached {
     found: Vec<Candidate>,
 }
 
+/// The k-d tree is rebuilt, balanced, after this many times as many insertions as the
+/// memory holds samples. Insertions only ever widen bounding boxes (removals leave them
+/// as they are), and wide boxes prune worse; but a rebuild costs as much as tens of
+/// searches. Measured (best 1000-step chunk of an MLAC/LLR replay on full memories,
+/// rebuild after `x · N` insertions): x = ¼ 6.9–7.0 µs, ½ 6.6–6.7, 1 6.55–6.7,
+/// 4 6.5–6.6, never 6.9.
+const REBUILD_AFTER: usize = 4;
+
 /// How many neighbours beyond K + 1 a search keeps, so that a remembered search survives
 /// this many insertions (each can remove one of its samples).
 const CACHE_SLACK: usize = 1;
@@ -355,12 +363,10 @@ impl Llr {
 
     /// Offers the nearest stored samples to `best`.
     fn search_into(&self, q: &[f64], best: &mut Best) {
-        let live = |slot: u32, seq: u64| self.seq[slot as usize] == seq;
         match self.search {
-            Search::KdTree => self.tree.search(q, &self.period, best, live),
+            Search::KdTree => self.tree.search(q, &self.period, best),
             Search::Scan => {
                 let mut all: Vec<Candidate> = (0..self.len as u32)
-                    .filter(|&slot| live(slot, self.seq[slot as usize]))
                     .map(|slot| Candidate {
                         d2: dist2(self.coords(slot), q, &self.period),
                         seq: self.seq[slot as usize],
@@ -569,7 +575,7 @@ impl Llr {
             self.outputs[s * self.m + o] = self.clamp(o, self.outputs[s * self.m + o]);
         }
         self.fifo.push_back((slot, seq));
-        self.index(slot, seq);
+        self.index(slot, seq, removed.is_some());
         let new = Candidate { d2: 0.0, seq, slot };
         self.update_cache(new, removed);
         (new, removed)
@@ -584,21 +590,18 @@ impl Llr {
         unreachable!("a full memory always has a live oldest sample")
     }
 
-    /// Adds a new sample to the search index; rebuilds the tree, balanced, when stale
-    /// entries (overwritten samples) reach a quarter of the live ones: insertions only
-    /// ever widen bounding boxes, and wide boxes prune badly (measured: 17.3 → 15.6 µs per
-    /// MLAC/LLR step against rebuilding at 100 % stale; 16.8 µs at 10 %).
-    fn index(&mut self, slot: u32, seq: u64) {
+    /// Adds a new sample to the search index, removing the entry of the sample it
+    /// `replaced` in `slot`; rebuilds the tree, balanced, after [`REBUILD_AFTER`] times
+    /// as many insertions as samples.
+    fn index(&mut self, slot: u32, seq: u64, replaced: bool) {
         if self.search == Search::Scan {
             return;
         }
-        if 4 * self.tree.entries() >= 5 * self.len + 8 * LEAF_SIZE {
-            let items: Vec<(u32, u64)> = (0..self.len as u32)
-                .map(|s| (s, self.seq[s as usize]))
-                .collect();
-            let n = self.n;
-            let inputs = &self.inputs;
-            self.tree = KdTree::build(n, &items, |s| &inputs[s as usize * n..(s as usize + 1) * n]);
+        if replaced {
+            self.tree.remove(slot);
+        }
+        if self.tree.insertions() >= REBUILD_AFTER * self.len + 8 * LEAF_SIZE {
+            self.tree.rebuild(&self.inputs, &self.seq);
         } else {
             self.tree.insert(
                 &self.inputs[slot as usize * self.n..(slot as usize + 1) * self.n],
