@@ -547,6 +547,10 @@ impl KdTree {
         };
         let mut stack = self.stack.borrow_mut();
         stack.clear();
+        // Per block of leaf entries: their distances, and the positions of those within
+        // the bound (zeroed once per search, not per leaf).
+        let mut d2s = [0.0; SCAN_BLOCK];
+        let mut within = [0u8; SCAN_BLOCK];
         // The node to visit next: the nearer child is descended into directly, the
         // farther one pushed — each only if its box can still hold a better candidate.
         let mut next = Some((0u32, box_dist2(0)));
@@ -568,8 +572,6 @@ impl KdTree {
                 // also branch-free (whether an entry is within is unpredictable); then
                 // the few that can enter `best`.
                 let leaf = &self.leaves[node.right as usize];
-                let mut d2s = [0.0; SCAN_BLOCK];
-                let mut within = [0u8; SCAN_BLOCK];
                 for (b, coords) in leaf.coords.chunks(SCAN_BLOCK * D).enumerate() {
                     let len = coords.len() / D;
                     for (d2, p) in d2s.iter_mut().zip(coords.chunks_exact(D)) {

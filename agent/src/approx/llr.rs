@@ -128,6 +128,13 @@ const REBUILD_AFTER: usize = 4;
 /// this many insertions (each can remove one of its samples).
 const CACHE_SLACK: usize = 1;
 
+/// Whether two queries are the same bits: branch-free and inline (the array comparison
+/// is a call to `memcmp`).
+#[inline]
+fn same_bits(a: &[u64; MAX_DIM], b: &[u64; MAX_DIM]) -> bool {
+    a.iter().zip(b).fold(0, |acc, (x, y)| acc | (x ^ y)) == 0
+}
+
 /// An LLR memory.
 pub struct Llr {
     n: usize,
@@ -297,7 +304,7 @@ impl Llr {
         if let Some(hit) = cache
             .iter()
             .flatten()
-            .find(|c| c.key == key && c.found.len() >= count.min(self.len))
+            .find(|c| same_bits(&c.key, &key) && c.found.len() >= count.min(self.len))
         {
             out.extend_from_slice(&hit.found[..count.min(hit.found.len())]);
             return;
@@ -499,7 +506,7 @@ impl Llr {
         let key = q.map(f64::to_bits);
         {
             let mut last = self.last_fit.borrow_mut();
-            if last.version != self.version || last.key != key {
+            if last.version != self.version || !same_bits(&last.key, &key) {
                 match nb {
                     Some(nb) => self.fit_local(q, nb, &mut last.fit),
                     None => {
