@@ -20,12 +20,15 @@
 //!
 //! # Speed
 //!
-//! Measured with `agent_step/mlac_llr_full` (one MLAC/LLR pendulum step, about three
-//! searches of 2000 samples and one of 100) on the shared 2-core development VM (AMD
-//! EPYC, default x86-64 target; medians vary ±10 % with the other load, so each change
-//! was compared with the previous binary in the same session, and the minimum over 300
-//! batches of 1000 steps used as the steadier figure). Together with the LLR changes
-//! listed in [`super::llr`], the step went from 16.1–16.3 µs to about 10 µs median:
+//! Measured with `agent_step/mlac_llr_full` (one MLAC/LLR pendulum step, three searches
+//! of 2000 samples and one of 100) on the shared 2-core development VM (AMD EPYC,
+//! default x86-64 target). Its medians vary by ±10 % and more with the other load, so
+//! each change was compared with the previous binary in the same session, alternating;
+//! the steadier figure is the best 1000-step chunk of a fixed replay of 200 000 steps on
+//! full memories, and callgrind's instruction and (simulated) mispredict counts.
+//!
+//! First round (with the LLR changes listed in [`super::llr`]: 16.1–16.3 µs → about
+//! 10 µs median):
 //!
 //! * [`Best`] is a sorted array (insertion from the end) instead of a heap sorted at the
 //!   end: the final sort of every search was ~5 % of the step. A branch-free rank by
@@ -43,19 +46,29 @@
 //! * Box distances are branch-free, and leaf distances are computed in one pass per
 //!   block (vectorised by the compiler) before the few admitted entries are offered
 //!   (each about 2 %).
+//!
+//! Second round (branch `speed2`; about 10 µs → 6.5–7 µs median):
+//!
 //! * A second branch-free pass per block collects the positions of the entries within
-//!   the bound, so only those (about 32 of the 168 whose distances a search computes)
+//!   the bound, so only those (about 32 of the 168 whose distances a search computed)
 //!   take a branch: "within?" is unpredictable, and was the search's costliest branch
-//!   (second round, branch `speed2`: step median 22.2 → 20.1 µs at load 6 on 2 cores,
-//!   6 alternating runs each; same neighbours).
-//! * Overwritten samples are removed from their leaves instead of staying as stale
-//!   entries until the next rebuild: a search no longer looks each admitted entry's slot
-//!   up to check that it is live, nor computes distances to stale entries (up to a
-//!   quarter of the tree); and rebuilds are needed for box tightness only, so they are
-//!   rarer (see `REBUILD_AFTER` in [`super::llr`]). A rebuild reuses the old tree's
-//!   storage and permutes indices, not 80-byte points. Best 1000-step chunk of a replay
-//!   on full memories, alternating, load 4–5: 9.0–11.6 µs before, 6.8–7.0 at the old
-//!   rebuild rate, 6.5–6.8 with the rarer rebuilds.
+//!   (step median 22.2 → 20.1 µs at load 6, 6 alternating runs each).
+//! * Overwritten samples are removed from their leaves ([`KdTree::remove`]) instead of
+//!   staying as stale entries until the next rebuild: a search no longer looks each
+//!   admitted entry's slot up to check that it is live, nor computes distances to stale
+//!   entries (up to a quarter of the tree); and rebuilds are needed for box tightness
+//!   only, so they are rarer (`REBUILD_AFTER` in [`super::llr`]). A rebuild reuses the
+//!   old tree's storage and permutes indices, not 80-byte points. Replay, load 4–5:
+//!   9.0–11.6 µs before, 6.8–7.0 at the old rebuild rate, 6.5–6.8 with the rarer ones.
+//!   A search of 2000 samples now visits about 15 nodes and 3.4 leaves, computes 106
+//!   distances and makes 34 offers to a [`Best`] of 17–27.
+//! * The leaf-scan buffers are zeroed once per search, not per leaf.
+//! * Tried and not kept (no gain measurable): [`LEAF_SIZE`] 16, 24, 48, 64 again
+//!   (16, 24: +5 %; 48: ±1 %; 64: +5 %); a tighter warm start from both remembered
+//!   searches (offers 31.95 → 31.89 per search); sorting each block's admitted entries
+//!   before offering them, or filling [`Best`] unsorted and sorting once when full
+//!   (both +1–2 %). [`Best::offer`] is now the largest single cost of a step (about a
+//!   fifth: ~6 items shifted per offer, and an unpredictable stop).
 //!
 //! None of this changes which neighbours are found or in which order: results are
 //! bit-identical (checked against the previous code on whole learning runs).
@@ -164,8 +177,7 @@ impl Best {
             }
             self.items.pop();
         }
-        // Insertion from the end: offers arrive roughly nearest-first (the warm start is
-        // sorted, the tree visits near boxes first), so few items move.
+        // Insertion from the end (measured: about 6 items move per offer).
         self.items.push(c);
         let h = &mut self.items[..];
         let mut i = h.len() - 1;
