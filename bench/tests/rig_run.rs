@@ -532,3 +532,39 @@ fn a_stalled_agent_meets_the_watchdog_within_two_periods() {
         );
     }
 }
+
+#[test]
+fn a_finite_horizon_run_is_the_same_in_both_drivers() {
+    // τ_N(x_N) enters the returns of `rig run` as it does in `rig learn` (Eq. 4.1).
+    let dir = tmp("fh");
+    let args = [
+        "--horizon",
+        "finite",
+        "--algo",
+        "mlac",
+        "--approx",
+        "rbf",
+        "--trials",
+        "6",
+        "--eval-every",
+        "3",
+        "--quiet",
+        "--out",
+    ];
+    ok(rig()
+        .args(["learn", "--runs", "1"])
+        .args(args)
+        .arg(dir.join("learn"))
+        .output()
+        .unwrap());
+    ok(rig()
+        .arg("run")
+        .args(args)
+        .arg(dir.join("run"))
+        .output()
+        .unwrap());
+    let learned = std::fs::read_to_string(dir.join("learn/runs.csv")).unwrap();
+    let ran = std::fs::read_to_string(dir.join("run/returns.csv")).unwrap();
+    assert_eq!(learned, ran);
+    assert_eq!(ran.lines().count(), 7);
+}
