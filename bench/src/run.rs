@@ -559,14 +559,25 @@ impl Supervisor {
 pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let mut cfg = cfg.clone();
     cfg.run.runs = 1;
-    std::fs::create_dir_all(&opts.out)
-        .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
-    let config_path = opts.out.join("config.toml");
-    write_atomic(&config_path, &cfg.to_toml())?;
     let run_id = opts
         .run_id
         .clone()
         .unwrap_or_else(|| format!("{}-{}", std::process::id(), wire::now_ns() % 1_000_000_000));
+    // Joining a run that is going on would feed its processes a second set of messages.
+    let busy = Bus::live_roles(&run_id);
+    if !busy.is_empty() {
+        return Err(anyhow!(
+            "run id {run_id:?} is in use by a run that is going on (its {} running); choose another --run-id",
+            match busy.as_slice() {
+                [one] => format!("{one} process is"),
+                many => format!("{} processes are", many.join(", ")),
+            }
+        ));
+    }
+    std::fs::create_dir_all(&opts.out)
+        .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
+    let config_path = opts.out.join("config.toml");
+    write_atomic(&config_path, &cfg.to_toml())?;
     let bus = Bus::join(&run_id, "rig").map_err(wire_err)?;
     let measurements = bus
         .rx::<Measurement>(topic::MEASUREMENT)

@@ -568,3 +568,40 @@ fn a_finite_horizon_run_is_the_same_in_both_drivers() {
     assert_eq!(learned, ran);
     assert_eq!(ran.lines().count(), 7);
 }
+
+#[test]
+fn a_second_run_with_the_same_run_id_is_refused_and_the_first_goes_on() {
+    let dir = tmp("same-id");
+    let id = format!("same-{}", std::process::id());
+    let mut first = rig()
+        .args([
+            "run", "--run-id", &id, "--trials", "150", "--quiet", "--out",
+        ])
+        .arg(dir.join("first"))
+        .spawn()
+        .unwrap();
+    wait_for_lines(&dir.join("first/returns.csv"), 3);
+    let second = rig()
+        .args(["run", "--run-id", &id, "--trials", "5", "--quiet", "--out"])
+        .arg(dir.join("second"))
+        .output()
+        .unwrap();
+    assert!(!second.status.success());
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert!(
+        err.contains("is in use") && err.trim().lines().count() == 1,
+        "one line: {err}"
+    );
+    assert!(!dir.join("second/config.toml").exists(), "nothing written");
+    assert!(
+        first.wait().unwrap().success(),
+        "the first run is undisturbed"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("first/returns.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        151
+    );
+}

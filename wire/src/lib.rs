@@ -273,6 +273,29 @@ impl Bus {
         })
     }
 
+    /// The roles of the live processes of run `run_id`, sorted (e.g. `["agent",
+    /// "plant"]`): non-empty when a run with this id is going on. Processes killed
+    /// without cleaning up do not count.
+    pub fn live_roles(run_id: &str) -> Vec<String> {
+        use iceoryx2::node::NodeView;
+        let prefix = format!("rig-{run_id}-");
+        let mut roles = Vec::new();
+        let _ = Node::<ipc::Service>::list(&iceoryx2::config::Config::default(), |state| {
+            if let NodeState::Alive(v) = &state
+                && let Some(role) = v
+                    .details()
+                    .as_ref()
+                    .and_then(|d| d.name().to_string().strip_prefix(&prefix).map(String::from))
+            {
+                roles.push(role);
+            }
+            CallbackProgression::Continue
+        });
+        roles.sort();
+        roles.dedup();
+        roles
+    }
+
     /// The full service name of a run topic: `rig/<run id>/<topic>`.
     pub fn run_service(&self, topic: &str) -> String {
         format!("rig/{}/{topic}", self.run_id)
