@@ -207,3 +207,50 @@ pub struct Sample {
     /// `ρ(x_k, u_k)`.
     pub reward: f64,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use agent::config::{ObserverKind, Overrides, resolve};
+
+    fn angle_config(observer: ObserverKind, noise: &str) -> ExperimentConfig {
+        let text = format!("[observer]\nnoise_std = {noise}\n");
+        resolve(
+            Some((std::path::Path::new("o.toml"), &text)),
+            &Overrides {
+                trials: Some(3),
+                runs: Some(1),
+                sensor: Some(agent::config::SensorKind::Angle),
+                observer: Some(observer),
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    }
+
+    /// With an encoder the agent acts on quantised angles, never on the true state; the
+    /// run stays deterministic with sensor noise.
+    #[test]
+    fn the_agent_sees_encoder_angles_only() {
+        for o in [ObserverKind::FiniteDifference, ObserverKind::Predictive] {
+            let cfg = angle_config(o, "0.0");
+            let mut e = Experiment::new(&cfg, 0);
+            while e.next_trial().is_some() {}
+            let q = std::f64::consts::TAU / 4096.0;
+            let traj = e.greedy_trajectory(&[std::f64::consts::PI, 0.0]);
+            for s in &traj[1..] {
+                let counts = s.x[0] / q;
+                assert!((counts - counts.round()).abs() < 1e-6, "{o}: {:?}", s.x);
+                assert!(s.x.iter().all(|v| v.is_finite()));
+            }
+            let noisy = |run| {
+                let mut e = Experiment::new(&angle_config(o, "0.003"), run);
+                (0..3)
+                    .map(|_| e.next_trial().unwrap().ret)
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(noisy(0), noisy(0));
+            assert_ne!(noisy(0), noisy(1));
+        }
+    }
+}
