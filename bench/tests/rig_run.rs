@@ -165,6 +165,24 @@ fn two_runs_at_once_do_not_see_each_other() {
     }
 }
 
+/// Waits (at most 30 s) until the file at `path` has at least `n` lines: a run under way.
+fn wait_for_lines(path: &Path, n: usize) {
+    let t0 = Instant::now();
+    while std::fs::read_to_string(path)
+        .unwrap_or_default()
+        .lines()
+        .count()
+        < n
+    {
+        assert!(
+            t0.elapsed() < Duration::from_secs(30),
+            "the run did not start: {}",
+            path.display()
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
 fn children_of(pid: u32) -> Vec<u32> {
     let out = Command::new("pgrep")
         .args(["-P", &pid.to_string()])
@@ -185,21 +203,7 @@ fn after_kill_9_of_all_three_processes_the_next_run_just_works() {
         .spawn()
         .unwrap();
     // Wait until learning is under way.
-    let t0 = Instant::now();
-    loop {
-        let rows = std::fs::read_to_string(dir.join("killed/returns.csv"))
-            .unwrap_or_default()
-            .lines()
-            .count();
-        if rows > 3 {
-            break;
-        }
-        assert!(
-            t0.elapsed() < Duration::from_secs(30),
-            "the run did not start"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    wait_for_lines(&dir.join("killed/returns.csv"), 4);
     let kids = children_of(sup.id());
     assert_eq!(kids.len(), 3, "plant, observer and agent");
     for pid in &kids {
@@ -358,19 +362,7 @@ fn sigterm_stops_the_run_and_keeps_the_recording() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let t0 = Instant::now();
-    while std::fs::read_to_string(dir.join("returns.csv"))
-        .unwrap_or_default()
-        .lines()
-        .count()
-        < 4
-    {
-        assert!(
-            t0.elapsed() < Duration::from_secs(30),
-            "the run did not start"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    wait_for_lines(&dir.join("returns.csv"), 4);
     Command::new("kill")
         .args(["-TERM", &sup.id().to_string()])
         .status()
@@ -439,4 +431,104 @@ fn trials_that_leave_the_operating_range_end_early_in_both_drivers() {
     assert!(rows[7][2] < 80.0 - 1e-9, "{ran}");
     // Greedy evaluations (mean over the four start states) after trials 4 and 8.
     assert!(rows[3][4].is_finite() && rows[7][4].is_finite(), "{ran}");
+}
+
+/// Per sample `seq`: a field of a recorded JSON message on `topic`.
+fn field(
+    msgs: &BTreeMap<String, Vec<(u64, Vec<u8>)>>,
+    topic: &str,
+    key: &str,
+) -> BTreeMap<u64, f64> {
+    msgs[topic]
+        .iter()
+        .map(|(_, data)| {
+            let v: serde_json::Value = serde_json::from_slice(data).unwrap();
+            (v["seq"].as_u64().unwrap(), v[key].as_f64().unwrap())
+        })
+        .collect()
+}
+
+#[test]
+fn a_stalled_agent_meets_the_watchdog_within_two_periods() {
+    // Realtime at 5 × real time (6 ms periods); the agent is stopped (SIGSTOP) for about
+    // 40 periods in the second trial, then continued.
+    let dir = tmp("watchdog");
+    let mut sup = rig()
+        .args([
+            "run",
+            "--timing",
+            "realtime",
+            "--speed",
+            "5",
+            "--trials",
+            "4",
+            "--eval-every",
+            "0",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&dir)
+        .spawn()
+        .unwrap();
+    wait_for_lines(&dir.join("returns.csv"), 2);
+    std::thread::sleep(Duration::from_millis(100));
+    let agent = children_of(sup.id())
+        .into_iter()
+        .find(|pid| {
+            std::fs::read_to_string(format!("/proc/{pid}/cmdline"))
+                .unwrap_or_default()
+                .contains("agent")
+        })
+        .expect("an agent process");
+    let signal = |s: &str| {
+        Command::new("kill")
+            .args([s, &agent.to_string()])
+            .status()
+            .unwrap()
+    };
+    signal("-STOP");
+    std::thread::sleep(Duration::from_millis(240));
+    signal("-CONT");
+    assert!(sup.wait().unwrap().success());
+    let msgs = messages(&dir.join("run.mcap"));
+    let sampled = field(&msgs, "/timing/plant/measurement", "t_sample_ns");
+    let applied = field(&msgs, "/plant/measurement", "u_applied_0");
+    let answered = field(&msgs, "/timing/agent/action", "t_publish_ns");
+    // Sample k's action was on time if it was published before sample k + 1.
+    let on_time = |k: u64| match (answered.get(&k), sampled.get(&(k + 1))) {
+        (Some(a), Some(s)) => a < s,
+        _ => false,
+    };
+    let seqs: Vec<u64> = sampled.keys().copied().collect();
+    // The stall: the longest run of samples without a timely answer.
+    let (mut best, mut start, mut len) = ((0, 0), 0, 0);
+    for &k in &seqs {
+        if on_time(k) {
+            len = 0;
+        } else {
+            if len == 0 {
+                start = k;
+            }
+            len += 1;
+            if len > best.1 {
+                best = (start, len);
+            }
+        }
+    }
+    let (first_late, late) = best;
+    assert!(
+        late >= 20,
+        "the stall shows as {late} late samples from {first_late}"
+    );
+    // The last action arrived in the interval after sample L = first_late − 1; the next
+    // interval had none, so from sample L + 2 on the plant applies zero: sample L + 3
+    // reports it as applied over the interval before it.
+    let l = first_late - 1;
+    assert_ne!(applied[&(l + 1)], 0.0, "the last action was in effect");
+    for k in l + 3..l + 15 {
+        assert_eq!(
+            applied[&k], 0.0,
+            "sample {k}: the safe action (stall after sample {l})"
+        );
+    }
 }

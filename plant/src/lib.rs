@@ -10,6 +10,8 @@
 //!   sampling time, action bounds, reward, start states, trial length.
 //! * [`Plant`] — the step function: saturate the action, integrate one sample period,
 //!   wrap the angles.
+//! * [`safety`] — the plant side's safety pieces (saturation, operating range, the
+//!   stale-action [`safety::Watchdog`]), for the simulated plant and Rust drivers.
 //!
 //! Conventions: SI units; angles wrapped to [-π, π); actions saturated at the plant
 //! whatever the caller sends; non-finite actions replaced by the safe action (zero).
@@ -19,6 +21,7 @@ pub mod double_integrator;
 pub mod pendulum;
 pub mod reward;
 pub mod rk4;
+pub mod safety;
 pub mod sensor;
 pub mod task;
 pub mod two_link;

@@ -481,16 +481,20 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
     }
 
     /// The next message, waiting for at most `timeout` (`None` if none came).
+    ///
+    /// A signal that interrupts the wait only ends it early: Ctrl-C and termination
+    /// requests are for the caller to notice with [`Bus::interrupted`], and any other
+    /// signal (`SIGCONT` after the process was stopped, `SIGWINCH`, …) must not end the
+    /// process.
     pub fn recv_timeout(&self, timeout: Duration) -> Result<Option<T>, Error> {
         if let Some(m) = self.try_recv()? {
             return Ok(Some(m));
         }
         match self.listener.timed_wait(|_| {}, timeout) {
-            Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => {
-                Err("interrupted".into())
+            Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) | Ok(_) => {
+                self.try_recv()
             }
             Err(e) => Err(e.into()),
-            Ok(_) => self.try_recv(),
         }
     }
 

@@ -1,11 +1,11 @@
-//! A static k-d tree over the LLR memory, for the K-nearest-neighbour search of §3.5.2
+//! A k-d tree over the LLR memory, for the K-nearest-neighbour search of §3.5.2
 //! ("one can reduce the computational burden by using, for instance, k-d trees").
 //!
 //! The tree is dynamic: a new sample descends to a leaf, widening the bounding boxes on
 //! its way, and a leaf that grows past [`LEAF_SIZE`] splits at its median along its
-//! widest axis. A sample that the memory overwrites stays in the tree as a stale entry,
-//! recognised by its sequence number and skipped; when stale entries reach a quarter of
-//! the live ones the memory rebuilds the tree, balanced, from scratch — amortised
+//! widest axis. A sample that the memory overwrites is removed from its leaf (the tree
+//! knows each slot's leaf), leaving the boxes as they are; now and then the memory
+//! rebuilds the tree, balanced, from scratch, to tighten them again — amortised
 //! O(log N) per insertion. A search can be warm-started with a ceiling on [`Best`] (`Llr`
 //! takes the farthest of the remembered neighbours of a nearby query): the bound is then
 //! tight from the first node. Pruning uses the bounding boxes only, so correctness
@@ -20,12 +20,15 @@
 //!
 //! # Speed
 //!
-//! Measured with `agent_step/mlac_llr_full` (one MLAC/LLR pendulum step, about three
-//! searches of 2000 samples and one of 100) on the shared 2-core development VM (AMD
-//! EPYC, default x86-64 target; medians vary ±10 % with the other load, so each change
-//! was compared with the previous binary in the same session, and the minimum over 300
-//! batches of 1000 steps used as the steadier figure). Together with the LLR changes
-//! listed in [`super::llr`], the step went from 16.1–16.3 µs to about 10 µs median:
+//! Measured with `agent_step/mlac_llr_full` (one MLAC/LLR pendulum step, three searches
+//! of 2000 samples and one of 100) on the shared 2-core development VM (AMD EPYC,
+//! default x86-64 target). Its medians vary by ±10 % and more with the other load, so
+//! each change was compared with the previous binary in the same session, alternating;
+//! the steadier figure is the best 1000-step chunk of a fixed replay of 200 000 steps on
+//! full memories, and callgrind's instruction and (simulated) mispredict counts.
+//!
+//! First round (with the LLR changes listed in [`super::llr`]: 16.1–16.3 µs → about
+//! 10 µs median):
 //!
 //! * [`Best`] is a sorted array (insertion from the end) instead of a heap sorted at the
 //!   end: the final sort of every search was ~5 % of the step. A branch-free rank by
@@ -44,6 +47,29 @@
 //!   block (vectorised by the compiler) before the few admitted entries are offered
 //!   (each about 2 %).
 //!
+//! Second round (branch `speed2`; about 10 µs → 6.5–7 µs median):
+//!
+//! * A second branch-free pass per block collects the positions of the entries within
+//!   the bound, so only those (about 32 of the 168 whose distances a search computed)
+//!   take a branch: "within?" is unpredictable, and was the search's costliest branch
+//!   (step median 22.2 → 20.1 µs at load 6, 6 alternating runs each).
+//! * Overwritten samples are removed from their leaves ([`KdTree::remove`]) instead of
+//!   staying as stale entries until the next rebuild: a search no longer looks each
+//!   admitted entry's slot up to check that it is live, nor computes distances to stale
+//!   entries (up to a quarter of the tree); and rebuilds are needed for box tightness
+//!   only, so they are rarer (`REBUILD_AFTER` in [`super::llr`]). A rebuild reuses the
+//!   old tree's storage and permutes indices, not 80-byte points. Replay, load 4–5:
+//!   9.0–11.6 µs before, 6.8–7.0 at the old rebuild rate, 6.5–6.8 with the rarer ones.
+//!   A search of 2000 samples now visits about 15 nodes and 3.4 leaves, computes 106
+//!   distances and makes 34 offers to a [`Best`] of 17–27.
+//! * The leaf-scan buffers are zeroed once per search, not per leaf.
+//! * Tried and not kept (no gain measurable): [`LEAF_SIZE`] 16, 24, 48, 64 again
+//!   (16, 24: +5 %; 48: ±1 %; 64: +5 %); a tighter warm start from both remembered
+//!   searches (offers 31.95 → 31.89 per search); sorting each block's admitted entries
+//!   before offering them, or filling [`Best`] unsorted and sorting once when full
+//!   (both +1–2 %). [`Best::offer`] is now the largest single cost of a step (about a
+//!   fifth: ~6 items shifted per offer, and an unpredictable stop).
+//!
 //! None of this changes which neighbours are found or in which order: results are
 //! bit-identical (checked against the previous code on whole learning runs).
 
@@ -57,6 +83,8 @@ pub const LEAF_SIZE: usize = 32;
 const NO_CHILD: u32 = u32::MAX;
 /// Leaf entries whose distances a search computes in one pass.
 const SCAN_BLOCK: usize = 2 * LEAF_SIZE;
+// Positions within a block are stored as `u8`.
+const _: () = assert!(SCAN_BLOCK <= 256);
 
 /// Squared distance between two scaled points; `period[j] > 0` marks a periodic axis.
 #[inline]
@@ -106,9 +134,17 @@ pub struct Best {
 impl Best {
     /// An empty set that keeps at most `k ≤ MAX_K + 2` candidates.
     pub fn new(k: usize) -> Self {
+        Self::reusing(k, Vec::new())
+    }
+
+    /// [`Best::new`], keeping the candidates in `buffer` (cleared), so that its
+    /// allocation serves again.
+    pub fn reusing(k: usize, mut buffer: Vec<Candidate>) -> Self {
         debug_assert!((1..=MAX_K + 2).contains(&k));
+        buffer.clear();
+        buffer.reserve(k);
         Self {
-            items: Vec::with_capacity(k),
+            items: buffer,
             k,
             ceiling: f64::INFINITY,
         }
@@ -141,8 +177,7 @@ impl Best {
             }
             self.items.pop();
         }
-        // Insertion from the end: offers arrive roughly nearest-first (the warm start is
-        // sorted, the tree visits near boxes first), so few items move.
+        // Insertion from the end (measured: about 6 items move per offer).
         self.items.push(c);
         let h = &mut self.items[..];
         let mut i = h.len() - 1;
@@ -174,14 +209,31 @@ impl Best {
     pub fn sorted(&self) -> &[Candidate] {
         &self.items
     }
+
+    /// The candidates, nearest first (newer first among equals), as a vector.
+    pub fn into_sorted(self) -> Vec<Candidate> {
+        self.items
+    }
 }
 
-/// A stored point: scaled coordinates, memory slot, sequence number.
-#[derive(Clone, Copy)]
-struct Entry {
-    p: [f64; MAX_DIM],
-    slot: u32,
-    seq: u64,
+/// The points a subtree is grown from: point `i` has the scaled coordinates
+/// `coords[i·dim..(i + 1)·dim]`, the sequence number `seqs[i]` and the memory slot
+/// `slots[i]` (or `i` itself without `slots`: a whole memory).
+struct Points<'a> {
+    dim: usize,
+    coords: &'a [f64],
+    slots: Option<&'a [u32]>,
+    seqs: &'a [u64],
+}
+
+impl Points<'_> {
+    fn coords(&self, i: u32) -> &[f64] {
+        &self.coords[i as usize * self.dim..(i as usize + 1) * self.dim]
+    }
+
+    fn slot(&self, i: u32) -> u32 {
+        self.slots.map_or(i, |slots| slots[i as usize])
+    }
 }
 
 /// A node's links; its bounding box lives in [`KdTree::boxes`].
@@ -212,10 +264,16 @@ struct Leaf {
 }
 
 impl Leaf {
-    fn push(&mut self, e: &Entry, dim: usize) {
-        self.coords.extend_from_slice(&e.p[..dim]);
-        self.slots.push(e.slot);
-        self.seqs.push(e.seq);
+    fn push(&mut self, p: &[f64], slot: u32, seq: u64) {
+        self.coords.extend_from_slice(p);
+        self.slots.push(slot);
+        self.seqs.push(seq);
+    }
+
+    fn clear(&mut self) {
+        self.coords.clear();
+        self.slots.clear();
+        self.seqs.clear();
     }
 
     fn len(&self) -> usize {
@@ -234,9 +292,13 @@ pub struct KdTree {
     /// Bounding boxes, `2 * dim` per node: `lo[..dim]`, then `hi[..dim]`.
     boxes: Vec<f64>,
     leaves: Vec<Leaf>,
-    /// Leaves emptied by a split, for reuse.
+    /// Leaves emptied by a split or a rebuild, for reuse.
     free_leaves: Vec<u32>,
+    /// The leaf (index in `leaves`) holding each memory slot's entry, by slot.
+    leaf_of: Vec<u32>,
     entries: usize,
+    /// Insertions since the last balanced build.
+    insertions: usize,
     /// The search's stack, kept between searches to avoid an allocation per search.
     stack: std::cell::RefCell<Vec<(u32, f64)>>,
 }
@@ -244,47 +306,52 @@ pub struct KdTree {
 impl KdTree {
     /// An empty tree for `dim`-dimensional points.
     pub fn new(dim: usize) -> Self {
-        let mut tree = Self::empty(dim, 1);
-        tree.add_leaf(&[]);
-        tree
-    }
-
-    fn empty(dim: usize, nodes: usize) -> Self {
-        Self {
+        let mut tree = Self {
             dim,
-            nodes: Vec::with_capacity(nodes),
-            boxes: Vec::with_capacity(nodes * 2 * dim),
-            leaves: Vec::with_capacity(nodes / 2 + 1),
+            nodes: Vec::new(),
+            boxes: Vec::new(),
+            leaves: Vec::new(),
             free_leaves: Vec::new(),
+            leaf_of: Vec::new(),
             entries: 0,
+            insertions: 0,
             stack: std::cell::RefCell::new(Vec::with_capacity(64)),
-        }
-    }
-
-    /// A balanced tree over `items` = (slot, seq), whose scaled coordinates are
-    /// `coords(slot)`.
-    pub fn build<'a>(dim: usize, items: &[(u32, u64)], coords: impl Fn(u32) -> &'a [f64]) -> Self {
-        let mut entries: Vec<Entry> = items
-            .iter()
-            .map(|&(slot, seq)| {
-                let mut p = [0.0; MAX_DIM];
-                p[..dim].copy_from_slice(coords(slot));
-                Entry { p, slot, seq }
-            })
-            .collect();
-        let mut tree = Self::empty(dim, 2 * items.len() / LEAF_SIZE + 1);
-        tree.entries = entries.len();
-        tree.grow(&mut entries);
+        };
+        tree.rebuild(&[], &[]);
         tree
     }
 
-    /// Bounding box of `entries` (empty: `+∞` below `−∞`).
-    fn bbox(&self, entries: &[Entry]) -> ([f64; MAX_DIM], [f64; MAX_DIM]) {
+    /// Replaces the contents by a balanced tree over a whole memory: sample `i` (in
+    /// slot `i`) has the scaled coordinates `coords[i·dim..(i + 1)·dim]` and the
+    /// sequence number `seqs[i]`. The storage of the old tree is reused.
+    pub fn rebuild(&mut self, coords: &[f64], seqs: &[u64]) {
+        self.nodes.clear();
+        self.boxes.clear();
+        self.free_leaves.clear();
+        for (l, leaf) in self.leaves.iter_mut().enumerate().rev() {
+            leaf.clear();
+            self.free_leaves.push(l as u32);
+        }
+        self.entries = seqs.len();
+        self.insertions = 0;
+        self.leaf_of.resize(seqs.len(), u32::MAX);
+        let points = Points {
+            dim: self.dim,
+            coords,
+            slots: None,
+            seqs,
+        };
+        let mut order: Vec<u32> = (0..seqs.len() as u32).collect();
+        self.grow(&points, &mut order);
+    }
+
+    /// Bounding box of the points `order` (empty: `+∞` below `−∞`).
+    fn bbox(&self, points: &Points, order: &[u32]) -> ([f64; MAX_DIM], [f64; MAX_DIM]) {
         let (mut lo, mut hi) = ([f64::INFINITY; MAX_DIM], [f64::NEG_INFINITY; MAX_DIM]);
-        for e in entries {
-            for j in 0..self.dim {
-                lo[j] = lo[j].min(e.p[j]);
-                hi[j] = hi[j].max(e.p[j]);
+        for &i in order {
+            for (j, &v) in points.coords(i).iter().enumerate() {
+                lo[j] = lo[j].min(v);
+                hi[j] = hi[j].max(v);
             }
         }
         (lo, hi)
@@ -305,9 +372,8 @@ impl KdTree {
         id
     }
 
-    /// Appends a leaf node holding `entries`; returns its id.
-    fn add_leaf(&mut self, entries: &[Entry]) -> u32 {
-        let dim = self.dim;
+    /// Appends a leaf node holding the points `order`; returns its id.
+    fn add_leaf(&mut self, points: &Points, order: &[u32]) -> u32 {
         let leaf = match self.free_leaves.pop() {
             Some(l) => l,
             None => {
@@ -316,13 +382,15 @@ impl KdTree {
             }
         };
         let store = &mut self.leaves[leaf as usize];
-        store.coords.reserve(entries.len() * dim);
-        store.slots.reserve(entries.len());
-        store.seqs.reserve(entries.len());
-        for e in entries {
-            store.push(e, dim);
+        store.coords.reserve(order.len() * points.dim);
+        store.slots.reserve(order.len());
+        store.seqs.reserve(order.len());
+        for &i in order {
+            let slot = points.slot(i);
+            store.push(points.coords(i), slot, points.seqs[i as usize]);
+            self.leaf_of[slot as usize] = leaf;
         }
-        let (lo, hi) = self.bbox(entries);
+        let (lo, hi) = self.bbox(points, order);
         let node = Node {
             split: 0.0,
             axis: 0,
@@ -332,23 +400,27 @@ impl KdTree {
         self.add_node(node, &lo, &hi)
     }
 
-    /// Adds node(s) holding `all`, split recursively at the median of the widest axis;
-    /// returns the subtree's root.
-    fn grow(&mut self, all: &mut [Entry]) -> u32 {
-        let (lo, hi) = self.bbox(all);
-        let axis = if all.len() > LEAF_SIZE {
+    /// Adds node(s) holding the points `order`, split recursively at the median of the
+    /// widest axis; returns the subtree's root. `order` is permuted (indices are moved,
+    /// not points).
+    fn grow(&mut self, points: &Points, order: &mut [u32]) -> u32 {
+        let (lo, hi) = self.bbox(points, order);
+        let axis = if order.len() > LEAF_SIZE {
             self.widest(&lo, &hi)
         } else {
             None
         };
         let Some(axis) = axis else {
-            return self.add_leaf(all);
+            return self.add_leaf(points, order);
         };
-        let mid = all.len() / 2;
-        all.select_nth_unstable_by(mid, |a, b| {
-            a.p[axis].total_cmp(&b.p[axis]).then(a.seq.cmp(&b.seq))
+        let mid = order.len() / 2;
+        let at = |i: u32| points.coords[i as usize * points.dim + axis];
+        order.select_nth_unstable_by(mid, |&a, &b| {
+            at(a)
+                .total_cmp(&at(b))
+                .then(points.seqs[a as usize].cmp(&points.seqs[b as usize]))
         });
-        let split = all[mid].p[axis];
+        let split = at(order[mid]);
         let id = self.add_node(
             Node {
                 split,
@@ -359,9 +431,9 @@ impl KdTree {
             &lo,
             &hi,
         );
-        let (left, right) = all.split_at_mut(mid);
-        let left = self.grow(left);
-        let right = self.grow(right);
+        let (left, right) = order.split_at_mut(mid);
+        let left = self.grow(points, left);
+        let right = self.grow(points, right);
         self.nodes[id as usize].left = left;
         self.nodes[id as usize].right = right;
         id
@@ -370,13 +442,11 @@ impl KdTree {
     /// Inserts a point.
     pub fn insert(&mut self, p: &[f64], slot: u32, seq: u64) {
         let dim = self.dim;
-        let mut e = Entry {
-            p: [0.0; MAX_DIM],
-            slot,
-            seq,
-        };
-        e.p[..dim].copy_from_slice(p);
         self.entries += 1;
+        self.insertions += 1;
+        if slot as usize >= self.leaf_of.len() {
+            self.leaf_of.resize(slot as usize + 1, u32::MAX);
+        }
         let mut id = 0usize;
         loop {
             let b = &mut self.boxes[2 * dim * id..2 * dim * (id + 1)];
@@ -386,8 +456,9 @@ impl KdTree {
             }
             let node = self.nodes[id];
             if node.is_leaf() {
+                self.leaf_of[slot as usize] = node.right;
                 let leaf = &mut self.leaves[node.right as usize];
-                leaf.push(&e, dim);
+                leaf.push(p, slot, seq);
                 if leaf.len() > 2 * LEAF_SIZE {
                     self.split_leaf(id);
                 }
@@ -401,6 +472,25 @@ impl KdTree {
         }
     }
 
+    /// Removes the entry of memory slot `slot`, which must be in the tree (its sample is
+    /// being overwritten). Bounding boxes are not narrowed: they stay valid bounds.
+    pub fn remove(&mut self, slot: u32) {
+        let dim = self.dim;
+        let leaf = &mut self.leaves[self.leaf_of[slot as usize] as usize];
+        let at = leaf
+            .slots
+            .iter()
+            .position(|&s| s == slot)
+            .expect("the slot's entry is in its leaf");
+        let last = leaf.len() - 1;
+        leaf.slots.swap_remove(at);
+        leaf.seqs.swap_remove(at);
+        leaf.coords
+            .copy_within(last * dim..(last + 1) * dim, at * dim);
+        leaf.coords.truncate(last * dim);
+        self.entries -= 1;
+    }
+
     /// Splits an overfull leaf in place (no-op if all its points coincide).
     fn split_leaf(&mut self, id: usize) {
         let dim = self.dim;
@@ -410,54 +500,37 @@ impl KdTree {
         }
         let leaf = self.nodes[id].right;
         let store = std::mem::take(&mut self.leaves[leaf as usize]);
-        let mut entries: Vec<Entry> = (0..store.len())
-            .map(|i| {
-                let mut p = [0.0; MAX_DIM];
-                p[..dim].copy_from_slice(&store.coords[i * dim..(i + 1) * dim]);
-                Entry {
-                    p,
-                    slot: store.slots[i],
-                    seq: store.seqs[i],
-                }
-            })
-            .collect();
         self.free_leaves.push(leaf);
-        let sub = self.grow(&mut entries) as usize;
+        let points = Points {
+            dim,
+            coords: &store.coords,
+            slots: Some(&store.slots),
+            seqs: &store.seqs,
+        };
+        let mut order: Vec<u32> = (0..store.len() as u32).collect();
+        let sub = self.grow(&points, &mut order) as usize;
         // The grown subtree's root replaces the leaf (its own node is left unused).
         self.nodes[id] = self.nodes[sub];
         self.boxes
             .copy_within(2 * dim * sub..2 * dim * (sub + 1), 2 * dim * id);
     }
 
-    /// Offers every live point of the tree that can still improve `best`;
-    /// `live(slot, seq)` says whether an entry is still in the memory.
-    pub fn search(
-        &self,
-        q: &[f64],
-        period: &[f64],
-        best: &mut Best,
-        live: impl Fn(u32, u64) -> bool,
-    ) {
+    /// Offers every point of the tree that can still improve `best`.
+    pub fn search(&self, q: &[f64], period: &[f64], best: &mut Best) {
         // Monomorphised per dimension, so that the distance loops unroll.
         match self.dim {
-            1 => self.search_in::<1>(q, period, best, live),
-            2 => self.search_in::<2>(q, period, best, live),
-            3 => self.search_in::<3>(q, period, best, live),
-            4 => self.search_in::<4>(q, period, best, live),
-            5 => self.search_in::<5>(q, period, best, live),
-            6 => self.search_in::<6>(q, period, best, live),
-            7 => self.search_in::<7>(q, period, best, live),
-            _ => self.search_in::<MAX_DIM>(q, period, best, live),
+            1 => self.search_in::<1>(q, period, best),
+            2 => self.search_in::<2>(q, period, best),
+            3 => self.search_in::<3>(q, period, best),
+            4 => self.search_in::<4>(q, period, best),
+            5 => self.search_in::<5>(q, period, best),
+            6 => self.search_in::<6>(q, period, best),
+            7 => self.search_in::<7>(q, period, best),
+            _ => self.search_in::<MAX_DIM>(q, period, best),
         }
     }
 
-    fn search_in<const D: usize>(
-        &self,
-        q: &[f64],
-        period: &[f64],
-        best: &mut Best,
-        live: impl Fn(u32, u64) -> bool,
-    ) {
+    fn search_in<const D: usize>(&self, q: &[f64], period: &[f64], best: &mut Best) {
         let q: &[f64; D] = q.try_into().expect("query of the tree's dimension");
         let period: &[f64; D] = period.try_into().expect("periods of the tree's dimension");
         let box_dist2 = |id: u32| -> f64 {
@@ -486,6 +559,10 @@ impl KdTree {
         };
         let mut stack = self.stack.borrow_mut();
         stack.clear();
+        // Per block of leaf entries: their distances, and the positions of those within
+        // the bound (zeroed once per search, not per leaf).
+        let mut d2s = [0.0; SCAN_BLOCK];
+        let mut within = [0u8; SCAN_BLOCK];
         // The node to visit next: the nearer child is descended into directly, the
         // farther one pushed — each only if its box can still hold a better candidate.
         let mut next = Some((0u32, box_dist2(0)));
@@ -502,22 +579,29 @@ impl KdTree {
             }
             let node = self.nodes[id as usize];
             if node.is_leaf() {
-                // Two passes per block of entries: the distances, branch-free (the
-                // compiler vectorises it), then the few that can enter `best`.
+                // Three passes per block of entries: the distances, branch-free (the
+                // compiler vectorises it); the positions of those within the bound,
+                // also branch-free (whether an entry is within is unpredictable); then
+                // the few that can enter `best`.
                 let leaf = &self.leaves[node.right as usize];
-                let mut d2s = [0.0; SCAN_BLOCK];
                 for (b, coords) in leaf.coords.chunks(SCAN_BLOCK * D).enumerate() {
                     let len = coords.len() / D;
                     for (d2, p) in d2s.iter_mut().zip(coords.chunks_exact(D)) {
                         let p: &[f64; D] = p.try_into().expect("chunks of D");
                         *d2 = dist2(p, q, period);
                     }
+                    let bound = best.bound();
+                    let mut count = 0;
+                    for (i, &d2) in d2s[..len].iter().enumerate() {
+                        within[count] = i as u8;
+                        count += usize::from(d2 <= bound);
+                    }
                     let at = b * SCAN_BLOCK;
                     let slots = &leaf.slots[at..at + len];
                     let seqs = &leaf.seqs[at..at + len];
-                    for i in 0..len {
-                        let d2 = d2s[i];
-                        if best.admits(d2) && live(slots[i], seqs[i]) {
+                    for &i in &within[..count] {
+                        let (i, d2) = (usize::from(i), d2s[usize::from(i)]);
+                        if best.admits(d2) {
                             best.offer(Candidate {
                                 d2,
                                 seq: seqs[i],
@@ -544,15 +628,68 @@ impl KdTree {
         }
     }
 
-    /// Entries in the tree, stale ones included.
+    /// Entries in the tree.
     pub fn entries(&self) -> usize {
         self.entries
+    }
+
+    /// Insertions since the last balanced build.
+    pub fn insertions(&self) -> usize {
+        self.insertions
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// A ring memory of `cap` slots, overwritten in turn (remove, then insert) with
+    /// coarse points (many duplicates), the tree rebuilt now and then: every search
+    /// equals a brute-force selection over the live samples.
+    #[test]
+    fn removals_insertions_and_rebuilds_keep_searches_exact() {
+        let (dim, cap, k) = (2, 150, 12);
+        let period = [2.0 * std::f64::consts::PI, 0.0];
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        let (mut coords, mut seqs) = (Vec::new(), Vec::new());
+        let mut tree = KdTree::new(dim);
+        for seq in 0..3000u64 {
+            let p = [
+                (rng.random_range(-6..6) as f64) * 0.5,
+                (rng.random_range(-8..8) as f64) * 0.25,
+            ];
+            let slot = (seq % cap as u64) as u32;
+            if seqs.len() < cap {
+                coords.extend_from_slice(&p);
+                seqs.push(seq);
+            } else {
+                tree.remove(slot);
+                coords[slot as usize * dim..(slot as usize + 1) * dim].copy_from_slice(&p);
+                seqs[slot as usize] = seq;
+            }
+            if seq % 700 == 699 {
+                tree.rebuild(&coords, &seqs);
+            } else {
+                tree.insert(&p, slot, seq);
+            }
+            assert_eq!(tree.entries(), seqs.len());
+            let q = [rng.random_range(-3.5..3.5), rng.random_range(-2.5..2.5)];
+            let mut best = Best::new(k);
+            tree.search(&q, &period, &mut best);
+            let mut want: Vec<Candidate> = (0..seqs.len())
+                .map(|s| Candidate {
+                    d2: dist2(&coords[s * dim..(s + 1) * dim], &q, &period),
+                    seq: seqs[s],
+                    slot: s as u32,
+                })
+                .collect();
+            want.sort_by(|a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
+            want.truncate(k);
+            assert_eq!(best.sorted(), &want[..], "after insertion {seq}");
+        }
+    }
 
     #[test]
     fn best_keeps_the_k_nearest_in_order_whatever_the_offer_order() {

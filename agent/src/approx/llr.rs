@@ -40,8 +40,17 @@
 //! input or output): MLAC asks for `π(x_k)` and then shifts the actor at `x_k`, which
 //! fits at the same point on the same memory again — one fit of about six per agent
 //! step saved. The results are bit-identical: the same sums in the same order.
+//!
+//! Second round (branch `speed2`): a query allocates nothing and copies no fit — the
+//! neighbours go into a kept buffer, a new search reuses the list of the remembered
+//! search it replaces, the last fit is kept in place, and the fit's scratch matrices
+//! are `N × N` and `N × m` instead of `8 × 8`; the neighbourhood after an insertion is
+//! the new sample followed by the earlier list, without a second selection (replay of
+//! full memories, best 1000-step chunk: 9.25–9.76 → 8.61–8.84 µs, before the k-d tree
+//! removals). A fit whose sums over outputs run one element at a time (a register
+//! instead of a chain of stores and loads) was not faster and was not kept.
 
-use std::cell::{Cell, RefCell};
+use std::cell::{Cell, Ref, RefCell};
 use std::collections::VecDeque;
 
 use super::kdtree::{Best, Candidate, KdTree, LEAF_SIZE, MAX_DIM, MAX_K, dist2};
@@ -116,9 +125,24 @@ struct Cached {
     found: Vec<Candidate>,
 }
 
+/// The k-d tree is rebuilt, balanced, after this many times as many insertions as the
+/// memory holds samples. Insertions only ever widen bounding boxes (removals leave them
+/// as they are), and wide boxes prune worse; but a rebuild costs as much as tens of
+/// searches. Measured (best 1000-step chunk of an MLAC/LLR replay on full memories,
+/// rebuild after `x · N` insertions): x = ¼ 6.9–7.0 µs, ½ 6.6–6.7, 1 6.55–6.7,
+/// 4 6.5–6.6, never 6.9.
+const REBUILD_AFTER: usize = 4;
+
 /// How many neighbours beyond K + 1 a search keeps, so that a remembered search survives
 /// this many insertions (each can remove one of its samples).
 const CACHE_SLACK: usize = 1;
+
+/// Whether two queries are the same bits: branch-free and inline (the array comparison
+/// is a call to `memcmp`).
+#[inline]
+fn same_bits(a: &[u64; MAX_DIM], b: &[u64; MAX_DIM]) -> bool {
+    a.iter().zip(b).fold(0, |acc, (x, y)| acc | (x ^ y)) == 0
+}
 
 /// An LLR memory.
 pub struct Llr {
@@ -154,9 +178,19 @@ pub struct Llr {
     traced: Vec<(u32, u64)>,
     /// Changes to the stored inputs or outputs so far: a fit depends on nothing else.
     version: u64,
-    /// The last fit from [`Llr::local`]: scaled query (bits), memory version, result.
-    /// MLAC asks for `π(x_k)` and then shifts the actor at `x_k`, which fits there again.
-    last_fit: Cell<Option<([u64; MAX_DIM], u64, Fit)>>,
+    /// The last fit (see [`Llr::fitted`]). MLAC asks for `π(x_k)` and then shifts the
+    /// actor at `x_k`, which fits there again.
+    last_fit: RefCell<LastFit>,
+    /// A buffer for the neighbours of a query, kept to avoid an allocation per query
+    /// (taken while in use).
+    neighbours: Cell<Vec<Candidate>>,
+}
+
+/// The last local model fitted: at which scaled query (bits) and memory version.
+struct LastFit {
+    key: [u64; MAX_DIM],
+    version: u64,
+    fit: Fit,
 }
 
 impl Llr {
@@ -207,7 +241,16 @@ impl Llr {
             cache: RefCell::new([None, None]),
             traced: Vec::new(),
             version: 0,
-            last_fit: Cell::new(None),
+            last_fit: RefCell::new(LastFit {
+                key: [0; MAX_DIM],
+                // No memory version reaches this: nothing is remembered yet.
+                version: u64::MAX,
+                fit: Fit {
+                    y: [0.0; MAX_OUT],
+                    jac: [0.0; MAX_OUT * MAX_DIM],
+                },
+            }),
+            neighbours: Cell::new(Vec::with_capacity(p.neighbours + 1 + CACHE_SLACK)),
         }
     }
 
@@ -260,20 +303,24 @@ impl Llr {
         &self.outputs[slot as usize * self.m..(slot as usize + 1) * self.m]
     }
 
-    /// The `count ≤ K + 1` nearest stored samples to the scaled query `q`. A search keeps
-    /// K + 2 and is remembered, so a value query and a later insertion at the same point
-    /// share one search, even with one insertion elsewhere in between.
-    fn nearest(&self, q: &[f64; MAX_DIM], count: usize) -> Vec<Candidate> {
+    /// The `count ≤ K + 1` nearest stored samples to the scaled query `q`, into `out`. A
+    /// search keeps K + 2 and is remembered, so a value query and a later insertion at
+    /// the same point share one search, even with one insertion elsewhere in between.
+    fn nearest(&self, q: &[f64; MAX_DIM], count: usize, out: &mut Vec<Candidate>) {
+        out.clear();
         let key = q.map(f64::to_bits);
         let mut cache = self.cache.borrow_mut();
         if let Some(hit) = cache
             .iter()
             .flatten()
-            .find(|c| c.key == key && c.found.len() >= count.min(self.len))
+            .find(|c| same_bits(&c.key, &key) && c.found.len() >= count.min(self.len))
         {
-            return hit.found[..count.min(hit.found.len())].to_vec();
+            out.extend_from_slice(&hit.found[..count.min(hit.found.len())]);
+            return;
         }
-        let mut wide = Best::new(self.k + 1 + CACHE_SLACK);
+        // The older remembered search is replaced; its list's allocation is reused.
+        let reused = cache[1].take().map(|c| c.found).unwrap_or_default();
+        let mut wide = Best::reusing(self.k + 1 + CACHE_SLACK, reused);
         // Warm start: the remembered neighbours of the nearest remembered query are as
         // many live samples as the search keeps, so the farthest of them from `q` bounds
         // the search from its first node (a ceiling: every sample within it is offered).
@@ -299,11 +346,10 @@ impl Llr {
             wide.set_ceiling(ceiling);
         }
         self.search_into(&q[..self.n], &mut wide);
-        let found = wide.sorted().to_vec();
-        let out = found[..count.min(found.len())].to_vec();
+        let found = wide.into_sorted();
+        out.extend_from_slice(&found[..count.min(found.len())]);
         cache.swap(0, 1);
         cache[0] = Some(Cached { key, q: *q, found });
-        out
     }
 
     /// Keeps the remembered searches exact across the insertion of `new`, which removed
@@ -333,12 +379,10 @@ impl Llr {
 
     /// Offers the nearest stored samples to `best`.
     fn search_into(&self, q: &[f64], best: &mut Best) {
-        let live = |slot: u32, seq: u64| self.seq[slot as usize] == seq;
         match self.search {
-            Search::KdTree => self.tree.search(q, &self.period, best, live),
+            Search::KdTree => self.tree.search(q, &self.period, best),
             Search::Scan => {
                 let mut all: Vec<Candidate> = (0..self.len as u32)
-                    .filter(|&slot| live(slot, self.seq[slot as usize]))
                     .map(|slot| Candidate {
                         d2: dist2(self.coords(slot), q, &self.period),
                         seq: self.seq[slot as usize],
@@ -358,30 +402,29 @@ impl Llr {
         }
     }
 
-    /// The affine model fitted to the neighbours `nb` of the scaled query `q`.
-    fn fit_local(&self, q: &[f64; MAX_DIM], nb: &[Candidate]) -> Fit {
+    /// The affine model fitted to the neighbours `nb` of the scaled query `q`, into
+    /// `out` (its first `m` outputs and `m × n` slopes).
+    fn fit_local(&self, q: &[f64; MAX_DIM], nb: &[Candidate], out: &mut Fit) {
         // Monomorphised per input dimension, so that the small loops unroll.
         match self.n {
-            1 => self.fit_in::<1>(q, nb),
-            2 => self.fit_in::<2>(q, nb),
-            3 => self.fit_in::<3>(q, nb),
-            4 => self.fit_in::<4>(q, nb),
-            5 => self.fit_in::<5>(q, nb),
-            6 => self.fit_in::<6>(q, nb),
-            7 => self.fit_in::<7>(q, nb),
-            _ => self.fit_in::<MAX_DIM>(q, nb),
+            1 => self.fit_in::<1>(q, nb, out),
+            2 => self.fit_in::<2>(q, nb, out),
+            3 => self.fit_in::<3>(q, nb, out),
+            4 => self.fit_in::<4>(q, nb, out),
+            5 => self.fit_in::<5>(q, nb, out),
+            6 => self.fit_in::<6>(q, nb, out),
+            7 => self.fit_in::<7>(q, nb, out),
+            _ => self.fit_in::<MAX_DIM>(q, nb, out),
         }
     }
 
-    fn fit_in<const N: usize>(&self, q: &[f64; MAX_DIM], nb: &[Candidate]) -> Fit {
+    fn fit_in<const N: usize>(&self, q: &[f64; MAX_DIM], nb: &[Candidate], out: &mut Fit) {
         let (n, m) = (N, self.m);
         debug_assert_eq!(n, self.n);
-        let mut out = Fit {
-            y: [0.0; MAX_OUT],
-            jac: [0.0; MAX_OUT * MAX_DIM],
-        };
         if nb.is_empty() {
-            return out;
+            out.y[..m].fill(0.0);
+            out.jac[..m * n].fill(0.0);
+            return;
         }
         let kf = nb.len() as f64;
         let period: &[f64; N] = self.period[..N].try_into().expect("n periods");
@@ -417,8 +460,12 @@ impl Llr {
                 ym[o] += y / kf;
             }
         }
-        let mut s = [0.0; MAX_DIM * MAX_DIM];
-        let mut cxy = [0.0; MAX_DIM * MAX_OUT];
+        // `N × N` and `N × m` (row-major, in arrays sized for the largest `m`), so that
+        // only what is used is zeroed.
+        let mut s = [[0.0; N]; N];
+        let s = s.as_flattened_mut();
+        let mut cxy = [[0.0; MAX_OUT]; N];
+        let cxy = cxy.as_flattened_mut();
         for c in nb {
             let d = rel(c);
             let y = self.output(c.slot);
@@ -438,8 +485,8 @@ impl Llr {
             }
             s[a * n + a] += RIDGE * kf;
         }
-        if !cholesky_solve(&mut s, n, &mut cxy, m) {
-            cxy = [0.0; MAX_DIM * MAX_OUT]; // fall back to the neighbours' mean
+        if !cholesky_solve(s, n, cxy, m) {
+            cxy.fill(0.0); // fall back to the neighbours' mean
         }
         for o in 0..m {
             let mut y = ym[o];
@@ -459,28 +506,30 @@ impl Llr {
             }
             out.y[o] = self.clamp(o, y);
         }
-        out
     }
 
-    /// Prediction and slope at `x`.
-    fn local(&self, x: &[f64]) -> Fit {
-        let q = self.scale(x);
-        if let Some(fit) = self.remembered_fit(&q) {
-            return fit;
+    /// The local model at the scaled query `q`: the remembered one if it was fitted at
+    /// `q` and the memory has not changed since, else a new fit, to `nb` if given (the K
+    /// nearest samples), else to a search's.
+    fn fitted(&self, q: &[f64; MAX_DIM], nb: Option<&[Candidate]>) -> Ref<'_, Fit> {
+        let key = q.map(f64::to_bits);
+        {
+            let mut last = self.last_fit.borrow_mut();
+            if last.version != self.version || !same_bits(&last.key, &key) {
+                match nb {
+                    Some(nb) => self.fit_local(q, nb, &mut last.fit),
+                    None => {
+                        let mut nb = self.neighbours.take();
+                        self.nearest(q, self.k, &mut nb);
+                        self.fit_local(q, &nb, &mut last.fit);
+                        self.neighbours.set(nb);
+                    }
+                }
+                last.key = key;
+                last.version = self.version;
+            }
         }
-        let nb = self.nearest(&q, self.k);
-        let fit = self.fit_local(&q, &nb);
-        self.last_fit
-            .set(Some((q.map(f64::to_bits), self.version, fit)));
-        fit
-    }
-
-    /// The last fit, if it was at `q` and the memory has not changed since.
-    fn remembered_fit(&self, q: &[f64; MAX_DIM]) -> Option<Fit> {
-        self.last_fit
-            .get()
-            .filter(|(key, version, _)| *version == self.version && *key == q.map(f64::to_bits))
-            .map(|(_, _, fit)| fit)
+        Ref::map(self.last_fit.borrow(), |last| &last.fit)
     }
 
     #[inline]
@@ -505,7 +554,13 @@ impl Llr {
         self.version += 1;
         let replace = match self.eviction {
             Eviction::Redundant(radius) if self.len > 0 => {
-                let nearest = nearest.or_else(|| self.nearest(q, 1).first().copied());
+                let nearest = nearest.or_else(|| {
+                    let mut found = self.neighbours.take();
+                    self.nearest(q, 1, &mut found);
+                    let first = found.first().copied();
+                    self.neighbours.set(found);
+                    first
+                });
                 nearest.filter(|c| c.d2 < radius * radius).map(|c| c.slot)
             }
             _ => None,
@@ -536,7 +591,7 @@ impl Llr {
             self.outputs[s * self.m + o] = self.clamp(o, self.outputs[s * self.m + o]);
         }
         self.fifo.push_back((slot, seq));
-        self.index(slot, seq);
+        self.index(slot, seq, removed.is_some());
         let new = Candidate { d2: 0.0, seq, slot };
         self.update_cache(new, removed);
         (new, removed)
@@ -551,21 +606,18 @@ impl Llr {
         unreachable!("a full memory always has a live oldest sample")
     }
 
-    /// Adds a new sample to the search index; rebuilds the tree, balanced, when stale
-    /// entries (overwritten samples) reach a quarter of the live ones: insertions only
-    /// ever widen bounding boxes, and wide boxes prune badly (measured: 17.3 → 15.6 µs per
-    /// MLAC/LLR step against rebuilding at 100 % stale; 16.8 µs at 10 %).
-    fn index(&mut self, slot: u32, seq: u64) {
+    /// Adds a new sample to the search index, removing the entry of the sample it
+    /// `replaced` in `slot`; rebuilds the tree, balanced, after [`REBUILD_AFTER`] times
+    /// as many insertions as samples.
+    fn index(&mut self, slot: u32, seq: u64, replaced: bool) {
         if self.search == Search::Scan {
             return;
         }
-        if 4 * self.tree.entries() >= 5 * self.len + 8 * LEAF_SIZE {
-            let items: Vec<(u32, u64)> = (0..self.len as u32)
-                .map(|s| (s, self.seq[s as usize]))
-                .collect();
-            let n = self.n;
-            let inputs = &self.inputs;
-            self.tree = KdTree::build(n, &items, |s| &inputs[s as usize * n..(s as usize + 1) * n]);
+        if replaced {
+            self.tree.remove(slot);
+        }
+        if self.tree.insertions() >= REBUILD_AFTER * self.len + 8 * LEAF_SIZE {
+            self.tree.rebuild(&self.inputs, &self.seq);
         } else {
             self.tree.insert(
                 &self.inputs[slot as usize * self.n..(slot as usize + 1) * self.n],
@@ -576,24 +628,20 @@ impl Llr {
     }
 
     /// Stores `[x | f(x)]`; returns `f(x)` (before the insertion) and the neighbourhood of
-    /// `x` after it. One search serves both: the K + 1 nearest before the insertion
-    /// contain the K − 1 that join the new sample, whatever the insertion removed.
-    fn insert_here(&mut self, x: &[f64]) -> (Fit, Best) {
+    /// `x` after it, nearest first, in the [`Llr::neighbours`] buffer (to be given back).
+    /// One search serves both: the K + 1 nearest before the insertion contain the K − 1
+    /// that join the new sample, whatever the insertion removed.
+    fn insert_here(&mut self, x: &[f64]) -> ([f64; MAX_OUT], Vec<Candidate>) {
         let q = self.scale(x);
-        let pre = self.nearest(&q, self.k + 1);
-        let fit = match self.remembered_fit(&q) {
-            Some(fit) => fit,
-            None => self.fit_local(&q, &pre[..pre.len().min(self.k)]),
-        };
-        let (new, removed) = self.insert(&q, &fit.y[..self.m], pre.first().copied());
-        let mut after = Best::new(self.k);
-        after.offer(new);
-        for c in &pre {
-            if Some(c.slot) != removed {
-                after.offer(*c);
-            }
-        }
-        (fit, after)
+        let mut near = self.neighbours.take();
+        self.nearest(&q, self.k + 1, &mut near);
+        let y = self.fitted(&q, Some(&near[..near.len().min(self.k)])).y;
+        let (new, removed) = self.insert(&q, &y[..self.m], near.first().copied());
+        // The new sample (distance 0, newest) ranks first; the others keep their order.
+        near.retain(|c| Some(c.slot) != removed);
+        near.insert(0, new);
+        near.truncate(self.k);
+        (y, near)
     }
 }
 
@@ -605,23 +653,25 @@ impl Approximator for Llr {
         self.m
     }
     fn value(&self, x: &[f64], y: &mut [f64]) {
-        y.copy_from_slice(&self.local(x).y[..self.m]);
+        y.copy_from_slice(&self.fitted(&self.scale(x), None).y[..self.m]);
     }
     fn shift(&mut self, x: &[f64], step: &[f64]) {
         let (_, after) = self.insert_here(x);
         self.version += 1;
-        for c in after.sorted() {
+        for c in &after {
             for o in 0..self.m {
                 let i = c.slot as usize * self.m + o;
                 self.outputs[i] = self.clamp(o, self.outputs[i] + step[o]);
             }
         }
+        self.neighbours.set(after);
     }
     fn fit(&mut self, x: &[f64], target: &[f64], rate: f64) {
         let q = self.scale(x);
         let mut nearest = None;
         if rate > 0.0 && !self.is_empty() {
-            let best = self.nearest(&q, self.k);
+            let mut best = self.neighbours.take();
+            self.nearest(&q, self.k, &mut best);
             nearest = best.first().copied();
             self.version += 1;
             for c in &best {
@@ -631,6 +681,7 @@ impl Approximator for Llr {
                         self.clamp(o, self.outputs[i] + rate * (target[o] - self.outputs[i]));
                 }
             }
+            self.neighbours.set(best);
         }
         self.insert(&q, target, nearest);
     }
@@ -641,7 +692,7 @@ impl Approximator for Llr {
 
 impl Differentiable for Llr {
     fn value_and_jacobian(&self, x: &[f64], y: &mut [f64], jac: &mut [f64]) {
-        let local = self.local(x);
+        let local = self.fitted(&self.scale(x), None);
         y.copy_from_slice(&local.y[..self.m]);
         jac.copy_from_slice(&local.jac[..self.m * self.n]);
     }
@@ -668,14 +719,15 @@ impl Traced for Llr {
             kept += 1;
         }
         self.traced.truncate(kept);
-        let (fit, after) = self.insert_here(x);
-        for c in after.sorted() {
+        let (y, after) = self.insert_here(x);
+        for c in &after {
             if self.trace[c.slot as usize] == 0.0 {
                 self.traced.push((c.slot, c.seq));
             }
             self.trace[c.slot as usize] = 1.0;
         }
-        fit.y[0]
+        self.neighbours.set(after);
+        y[0]
     }
     fn apply_td(&mut self, step: f64) {
         self.version += 1;
@@ -715,10 +767,9 @@ mod tests {
     }
 
     fn neighbours(llr: &Llr, x: &[f64]) -> Vec<u32> {
-        llr.nearest(&llr.scale(x), llr.k)
-            .iter()
-            .map(|c| c.slot)
-            .collect()
+        let mut found = Vec::new();
+        llr.nearest(&llr.scale(x), llr.k, &mut found);
+        found.iter().map(|c| c.slot).collect()
     }
 
     /// The reference: every sample, fully sorted by (distance, newer first).
@@ -831,7 +882,7 @@ mod tests {
                     (rng.random_range(-20..20) as f64) * 0.5,
                 ];
                 let (_, after) = llr.insert_here(&x);
-                let after: Vec<u32> = after.sorted().iter().map(|c| c.slot).collect();
+                let after: Vec<u32> = after.iter().map(|c| c.slot).collect();
                 assert_eq!(after, brute_force(&llr, &x), "insertion {i}");
             }
         }
@@ -860,7 +911,7 @@ mod tests {
                 llr.fit(&x, &[0.0], 0.0);
                 assert_eq!(neighbours(&llr, &q), brute_force(&llr, &q), "step {i}");
                 let (_, after) = llr.insert_here(&q);
-                let after: Vec<u32> = after.sorted().iter().map(|c| c.slot).collect();
+                let after: Vec<u32> = after.iter().map(|c| c.slot).collect();
                 assert_eq!(after, brute_force(&llr, &q), "step {i}");
             }
         }

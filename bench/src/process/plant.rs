@@ -2,6 +2,7 @@
 
 use std::sync::Arc;
 
+use ::plant::safety::Watchdog;
 use ::plant::{Plant, Task};
 use anyhow::{Result, bail};
 use wire::{Action, Bus, Header, Measurement, flags, now_ns, topic};
@@ -49,6 +50,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                 plant: Plant::new(task.clone()),
                 link,
                 realtime,
+                watchdog: Watchdog::new(1),
             })
         }
     };
@@ -160,6 +162,9 @@ struct PlantLoop {
     link: Link,
     /// The sampling clock, in realtime timing.
     realtime: Option<Clock>,
+    /// Realtime: a whole period without a fresh action ⇒ the safe action (zero) until
+    /// actions resume, as `docs/driver.md` asks of a driver.
+    watchdog: Watchdog,
 }
 
 /// Headers of one trial's samples.
@@ -253,7 +258,8 @@ impl PlantLoop {
     /// arrives within an interval is applied from its arrival on (the previous one held
     /// until then); an interval in which the action for its sample did not arrive is a
     /// missed deadline. The reward of an interval is `ρ(x_k, u)` with the action in effect
-    /// at its end.
+    /// at its end. An interval without any action trips the [`Watchdog`]: zero from its
+    /// end on, until an action arrives.
     fn realtime_trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<usize> {
         let steps = self.link.task.steps_per_trial();
         let (period_ns, speed) = {
@@ -262,6 +268,7 @@ impl PlantLoop {
         };
         self.plant.reset(x0);
         let mut u_hold = vec![0.0; self.link.task.action_dim()];
+        self.watchdog.reset();
         let header = TrialHeader {
             trial,
             mode,
@@ -319,6 +326,10 @@ impl PlantLoop {
                 t = *t_a;
             }
             self.plant.advance(&u_hold, sim(deadline - t));
+            if self.watchdog.period(!arrivals.is_empty()) {
+                // No action for a whole period: the safe action from this instant on.
+                u_hold.fill(0.0);
+            }
             let r = self.plant.reward_of_transition(
                 self.link
                     .task
