@@ -106,6 +106,103 @@ impl HorizonKind {
     }
 }
 
+/// What the plant's sensor measures ([`plant::sensor`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SensorKind {
+    /// The full state (the thesis's simulations).
+    #[default]
+    Full,
+    /// Encoder angles only (quantised, optionally noisy); velocities are estimated.
+    Angle,
+}
+
+impl SensorKind {
+    /// Both sensors, for help texts and validation messages.
+    pub const ALL: [SensorKind; 2] = [SensorKind::Full, SensorKind::Angle];
+}
+
+/// The state observer (`observer` crate).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ObserverKind {
+    /// `x̂ = y` (full-state sensor only).
+    #[default]
+    PassThrough,
+    /// Backward-difference velocities, low-pass filtered.
+    FiniteDifference,
+    /// Model prediction `x̂_{k+1|k} = f̂(x̂_k, u_k)` corrected by the measured angle.
+    Predictive,
+}
+
+impl ObserverKind {
+    /// Every observer, for help texts and validation messages.
+    pub const ALL: [ObserverKind; 3] = [
+        ObserverKind::PassThrough,
+        ObserverKind::FiniteDifference,
+        ObserverKind::Predictive,
+    ];
+}
+
+/// The predictive observer's process model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ObserverModel {
+    /// LLR learned online from the observer's own estimates (§3.5.2).
+    #[default]
+    Learned,
+    /// The plant's dynamics integrated with RK4 (the simulator's own model).
+    Known,
+}
+
+impl ObserverModel {
+    /// Both models, for help texts and validation messages.
+    pub const ALL: [ObserverModel; 2] = [ObserverModel::Learned, ObserverModel::Known];
+}
+
+/// Sensor and state observer (`[observer]`); the defaults — full state, pass-through —
+/// are the thesis's simulations, and a configuration with them is written without this
+/// section.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObserverConfig {
+    /// What the plant measures.
+    pub sensor: SensorKind,
+    /// Encoder counts per revolution (angle sensor).
+    pub counts_per_rev: u32,
+    /// Standard deviation of Gaussian angle noise before quantisation \[rad\].
+    pub noise_std: f64,
+    /// The observer.
+    pub observer: ObserverKind,
+    /// The predictive observer's process model.
+    pub model: ObserverModel,
+    /// Finite difference: low-pass coefficient `a` in [0, 1) (0: raw difference).
+    pub filter: f64,
+    /// Predictive: velocity gain `l` on the angle innovation, in [0, 2).
+    pub gain: f64,
+}
+
+impl Default for ObserverConfig {
+    fn default() -> Self {
+        Self {
+            sensor: SensorKind::Full,
+            counts_per_rev: 4096,
+            noise_std: 0.0,
+            observer: ObserverKind::PassThrough,
+            model: ObserverModel::Learned,
+            filter: 0.0,
+            gain: 1.0,
+        }
+    }
+}
+
+impl ObserverConfig {
+    /// Whether this is the default (full state, pass-through, default parameters).
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
 /// A value chosen by name, on the command line and in configuration files.
 pub trait Choice: Copy + 'static {
     /// Every value, in the order messages list them.
@@ -154,6 +251,9 @@ macro_rules! names {
 names!(Algo, Sac => "sac", Mlac => "mlac", Rmac => "rmac", Vgbp => "vgbp", Sarsa => "sarsa");
 names!(ApproxKind, Llr => "llr", Rbf => "rbf", Tiles => "tiles", Lstd => "lstd");
 names!(HorizonKind, Infinite => "infinite", Finite => "finite");
+names!(SensorKind, Full => "full", Angle => "angle");
+names!(ObserverKind, PassThrough => "pass-through", FiniteDifference => "finite-difference", Predictive => "predictive");
+names!(ObserverModel, Learned => "learned", Known => "known");
 
 /// A complete experiment.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -187,6 +287,9 @@ pub struct ExperimentConfig {
     /// SARSA's action set and ε-greedy schedule.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sarsa: Option<SarsaConfig>,
+    /// Sensor and state observer; absent: full state, pass-through.
+    #[serde(default, skip_serializing_if = "ObserverConfig::is_default")]
+    pub observer: ObserverConfig,
 }
 
 /// VGBP's action selection (§6.3, [`crate::vgbp`]).
@@ -426,6 +529,32 @@ impl ExperimentConfig {
         check_i("run.trials", self.run.trials.into(), 1, 10_000_000)?;
         check_i("run.runs", self.run.runs.into(), 1, 100_000)?;
         check_i("run.eval_every", self.run.eval_every.into(), 0, 10_000_000)?;
+        let o = &self.observer;
+        check_i(
+            "observer.counts_per_rev",
+            o.counts_per_rev.into(),
+            4,
+            1 << 30,
+        )?;
+        check_f("observer.noise_std", o.noise_std, 0.0, 1.0, false)?;
+        if !(o.filter.is_finite() && (0.0..1.0).contains(&o.filter)) {
+            return Err(err(
+                "observer.filter",
+                format!("{} is out of range: must be a number in [0, 1)", o.filter),
+            ));
+        }
+        if !(o.gain.is_finite() && (0.0..2.0).contains(&o.gain)) {
+            return Err(err(
+                "observer.gain",
+                format!("{} is out of range: must be a number in [0, 2)", o.gain),
+            ));
+        }
+        if o.sensor == SensorKind::Angle && o.observer == ObserverKind::PassThrough {
+            return Err(err(
+                "observer.observer",
+                "\"pass-through\" needs sensor = \"full\"; an angle sensor needs \"finite-difference\" or \"predictive\"",
+            ));
+        }
         let l = &self.learning;
         let finite = self.horizon == HorizonKind::Finite;
         if finite && !self.algo.has_actor() {
@@ -701,6 +830,10 @@ pub struct Overrides {
     pub seed: Option<u64>,
     /// `--eval-every`.
     pub eval_every: Option<u32>,
+    /// `--sensor`.
+    pub sensor: Option<SensorKind>,
+    /// `--observer`.
+    pub observer: Option<ObserverKind>,
 }
 
 /// Resolves preset ← file ← overrides into a validated configuration.
@@ -738,7 +871,13 @@ pub fn resolve(
     .map_err(with_file)?;
     let preset = crate::preset::preset(system, algo, approx, horizon).map_err(with_file)?;
     let mut merged = toml::Table::try_from(&preset).expect("a preset always serialises");
+    // The observer section is written only when it differs from the default; a user's
+    // file may still set any of its keys.
+    merged.entry("observer").or_insert_with(|| {
+        toml::Value::Table(toml::Table::try_from(ObserverConfig::default()).expect("serialises"))
+    });
     merge(&mut merged, user, "").map_err(with_file)?;
+    check_observer_choices(&merged).map_err(with_file)?;
     let mut cfg: ExperimentConfig = toml::Value::Table(merged)
         .try_into()
         .map_err(|e: toml::de::Error| with_file(err("", e.message())))?;
@@ -758,8 +897,38 @@ pub fn resolve(
     if let Some(v) = o.eval_every {
         cfg.run.eval_every = v;
     }
+    if let Some(v) = o.sensor {
+        cfg.observer.sensor = v;
+    }
+    if let Some(v) = o.observer {
+        cfg.observer.observer = v;
+    }
     cfg.validate().map_err(with_file)?;
     Ok(cfg)
+}
+
+/// Checks the spellings of the `[observer]` choice keys, so that a wrong one is reported
+/// with its key and the allowed values.
+fn check_observer_choices(merged: &toml::Table) -> Result<(), ConfigError> {
+    let Some(toml::Value::Table(o)) = merged.get("observer") else {
+        return Ok(());
+    };
+    fn one<T: Choice>(o: &toml::Table, key: &str) -> Result<(), ConfigError> {
+        let full = format!("observer.{key}");
+        match o.get(key) {
+            None => Ok(()),
+            Some(toml::Value::String(s)) => T::parse(s)
+                .map(|_| ())
+                .map_err(|_| err(&full, format!("\"{s}\" is not one of: {}", T::spellings()))),
+            Some(v) => Err(err(
+                &full,
+                format!("{v} must be a string, one of: {}", T::spellings()),
+            )),
+        }
+    }
+    one::<SensorKind>(o, "sensor")?;
+    one::<ObserverKind>(o, "observer")?;
+    one::<ObserverModel>(o, "model")
 }
 
 /// The value of a choice key: the command line's, else the file's spelling, else
@@ -949,5 +1118,62 @@ mod tests {
         };
         let e = resolve(None, &o).unwrap_err();
         assert_eq!(e.key, "approx");
+    }
+
+    #[test]
+    fn the_default_observer_section_is_not_written() {
+        let c = resolve(None, &Overrides::default()).unwrap();
+        assert!(c.observer.is_default());
+        assert!(!c.to_toml().contains("[observer]"));
+    }
+
+    #[test]
+    fn observer_keys_resolve_and_round_trip() {
+        let text = "[observer]\nsensor = \"angle\"\ncounts_per_rev = 1024\nobserver = \"predictive\"\nmodel = \"known\"\n";
+        let c = resolve(Some((Path::new("o.toml"), text)), &Overrides::default()).unwrap();
+        assert_eq!(c.observer.sensor, SensorKind::Angle);
+        assert_eq!(c.observer.counts_per_rev, 1024);
+        assert_eq!(c.observer.model, ObserverModel::Known);
+        let again = resolve(
+            Some((Path::new("c.toml"), &c.to_toml())),
+            &Overrides::default(),
+        )
+        .unwrap();
+        assert_eq!(again, c);
+    }
+
+    #[test]
+    fn observer_errors_name_file_key_and_range() {
+        let bad = |text: &str, o: &Overrides| {
+            resolve(Some((Path::new("o.toml"), text)), o)
+                .unwrap_err()
+                .to_string()
+        };
+        let none = Overrides::default();
+        let e = bad("[observer]\nsensor = \"camera\"\n", &none);
+        assert_eq!(
+            e,
+            "o.toml: `observer.sensor`: \"camera\" is not one of: full, angle"
+        );
+        let e = bad("[observer]\ncounts_per_rev = 2\n", &none);
+        assert!(
+            e.starts_with("o.toml: `observer.counts_per_rev`: 2 is out of range"),
+            "{e}"
+        );
+        let e = bad("[observer]\ngain = 2.5\n", &none);
+        assert!(e.contains("`observer.gain`") && e.contains("[0, 2)"), "{e}");
+        let e = bad("[observer]\nnoise_std = -1.0\n", &none);
+        assert!(e.contains("`observer.noise_std`"), "{e}");
+        let angle = Overrides {
+            sensor: Some(SensorKind::Angle),
+            ..Default::default()
+        };
+        let e = bad("", &angle);
+        assert!(
+            e.contains("`observer.observer`") && e.contains("pass-through"),
+            "{e}"
+        );
+        let e = bad("[observer]\nfilter = 1.0\n", &none);
+        assert!(e.contains("`observer.filter`"), "{e}");
     }
 }

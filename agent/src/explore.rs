@@ -12,6 +12,8 @@ use rand_distr::{Distribution, StandardNormal};
 pub mod stream {
     /// The agent's exploration noise.
     pub const EXPLORATION: u64 = 1;
+    /// The plant's sensor noise (an angle encoder with `noise_std > 0`).
+    pub const SENSOR_NOISE: u64 = plant::sensor::NOISE_STREAM;
 }
 
 /// Gaussian exploration, every `every`-th step of a trial.

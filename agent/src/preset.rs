@@ -289,6 +289,7 @@ pub fn preset(
         model,
         vgbp: None,
         sarsa: None,
+        observer: Default::default(),
     })
 }
 
@@ -381,6 +382,7 @@ pub fn finite_horizon(
         model,
         vgbp: None,
         sarsa: None,
+        observer: Default::default(),
     })
 }
 
@@ -481,6 +483,7 @@ fn critic_only(system: SystemName, algo: Algo, approx: ApproxKind) -> Experiment
             epsilon_decay: 0.96,
             epsilon_min: 0.1,
         }),
+        observer: Default::default(),
     }
 }
 

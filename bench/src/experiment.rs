@@ -10,6 +10,12 @@
 //! mean. A trial that leaves the task's operating range ends there (§6.4.2): the agent
 //! learns the transition as terminal, and the simulated time counts only the samples run.
 //!
+//! What the observer sees is the plant's *sensor* output (`[observer] sensor`: the full
+//! state, or encoder angles — [`plant::sensor`]); the true state stays with the plant and
+//! serves only rewards and evaluation (ground truth), never the observer or the agent. The
+//! agent acts on the observer's estimate. At a trial start the state is known (the plant
+//! has just been put there), so the observer and the agent start from it.
+//!
 //! With a finite horizon (Chapter 4) a trial's return also counts the terminal reward of
 //! the state it ends in, `τ_N(x_N) + Σ_k ρ(x_k, u_k)` (Eq. 4.1).
 
@@ -17,8 +23,10 @@ use std::sync::Arc;
 
 use agent::Agent;
 use agent::config::ExperimentConfig;
+use agent::config::SensorKind;
 use agent::horizon::Horizon;
-use observer::{Observer, PassThrough};
+use observer::Observer;
+use plant::sensor::Sensor;
 use plant::{Plant, Task};
 
 /// The outcome of one learning trial.
@@ -40,6 +48,9 @@ pub struct TrialRecord {
 pub struct Experiment {
     task: Arc<Task>,
     plant: Plant,
+    sensor: Sensor,
+    /// The sensor's last measurement `y_k`.
+    y: Vec<f64>,
     observer: Box<dyn Observer>,
     agent: Box<dyn Agent>,
     horizon: Horizon,
@@ -56,10 +67,20 @@ impl Experiment {
     /// `cfg.run.seed` and `run`).
     pub fn new(cfg: &ExperimentConfig, run: u32) -> Self {
         let task = Arc::new(Task::new(cfg.system));
-        let agent = agent::build(&task, cfg, agent::seed::run_seed(cfg.run.seed, run));
+        let run_seed = agent::seed::run_seed(cfg.run.seed, run);
+        let agent = agent::build(&task, cfg, run_seed);
+        let o = &cfg.observer;
+        let sensor = match o.sensor {
+            SensorKind::Full => Sensor::Full,
+            SensorKind::Angle => {
+                Sensor::angle(&task.angle_mask, o.counts_per_rev, o.noise_std, run_seed)
+            }
+        };
         Self {
             plant: Plant::new(task.clone()),
-            observer: Box::new(PassThrough::new(task.state_dim())),
+            sensor,
+            y: vec![0.0; task.state_dim()],
+            observer: observer::build(task.clone(), o, cfg.model.as_ref()),
             horizon: cfg.horizon.of(&task),
             task,
             agent,
@@ -99,9 +120,8 @@ impl Experiment {
         for k in 0..steps {
             let r = self.plant.step(&u);
             ret += r;
-            let x = self
-                .observer
-                .update(self.plant.state(), self.plant.applied_action());
+            self.sensor.measure(self.plant.state(), &mut self.y);
+            let x = self.observer.update(&self.y, self.plant.applied_action());
             if self.plant.terminated() {
                 self.agent.learn_terminal(r, x);
                 self.skipped_samples += (steps - k - 1) as u64;
@@ -165,7 +185,8 @@ impl Experiment {
                 u: u_prev.clone(),
                 reward,
             });
-            x.copy_from_slice(self.observer.update(self.plant.state(), &u_prev));
+            self.sensor.measure(self.plant.state(), &mut self.y);
+            x.copy_from_slice(self.observer.update(&self.y, &u_prev));
             if self.plant.terminated() {
                 break;
             }
@@ -185,4 +206,51 @@ pub struct Sample {
     pub u: Vec<f64>,
     /// `ρ(x_k, u_k)`.
     pub reward: f64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use agent::config::{ObserverKind, Overrides, resolve};
+
+    fn angle_config(observer: ObserverKind, noise: &str) -> ExperimentConfig {
+        let text = format!("[observer]\nnoise_std = {noise}\n");
+        resolve(
+            Some((std::path::Path::new("o.toml"), &text)),
+            &Overrides {
+                trials: Some(3),
+                runs: Some(1),
+                sensor: Some(agent::config::SensorKind::Angle),
+                observer: Some(observer),
+                ..Default::default()
+            },
+        )
+        .unwrap()
+    }
+
+    /// With an encoder the agent acts on quantised angles, never on the true state; the
+    /// run stays deterministic with sensor noise.
+    #[test]
+    fn the_agent_sees_encoder_angles_only() {
+        for o in [ObserverKind::FiniteDifference, ObserverKind::Predictive] {
+            let cfg = angle_config(o, "0.0");
+            let mut e = Experiment::new(&cfg, 0);
+            while e.next_trial().is_some() {}
+            let q = std::f64::consts::TAU / 4096.0;
+            let traj = e.greedy_trajectory(&[std::f64::consts::PI, 0.0]);
+            for s in &traj[1..] {
+                let counts = s.x[0] / q;
+                assert!((counts - counts.round()).abs() < 1e-6, "{o}: {:?}", s.x);
+                assert!(s.x.iter().all(|v| v.is_finite()));
+            }
+            let noisy = |run| {
+                let mut e = Experiment::new(&angle_config(o, "0.003"), run);
+                (0..3)
+                    .map(|_| e.next_trial().unwrap().ret)
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(noisy(0), noisy(0));
+            assert_ne!(noisy(0), noisy(1));
+        }
+    }
 }

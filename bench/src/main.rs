@@ -3,7 +3,9 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use agent::config::{Algo, ApproxKind, Choice, HorizonKind, Overrides, resolve};
+use agent::config::{
+    Algo, ApproxKind, Choice, HorizonKind, ObserverKind, Overrides, SensorKind, resolve,
+};
 use clap::{Args, Parser, Subcommand};
 use plant::{SystemName, Task};
 use rig::driver::check::{CheckOptions, check};
@@ -199,6 +201,17 @@ struct Selection {
     /// states (arm-6.4) the evaluation runs from each and reports the mean.
     #[arg(long)]
     eval_every: Option<u32>,
+    /// What the plant's sensor measures: full (the state) or angle (an encoder: angles
+    /// quantised to `observer.counts_per_rev`, default 4096, plus optional Gaussian noise
+    /// `observer.noise_std`; velocities must be estimated) [default: full].
+    #[arg(long, value_parser = SensorKind::parse)]
+    sensor: Option<SensorKind>,
+    /// State observer: pass-through (full sensor only), finite-difference (backward
+    /// difference, low-pass `observer.filter`) or predictive (model prediction corrected by
+    /// the measured angle; `observer.model` = learned (LLR) or known (RK4 of the plant),
+    /// velocity gain `observer.gain`) [default: pass-through].
+    #[arg(long, value_parser = ObserverKind::parse)]
+    observer: Option<ObserverKind>,
     /// TOML file overriding preset values; see `rig config` for every key.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
@@ -235,6 +248,8 @@ fn resolve_selection(s: &Selection) -> Result<agent::config::ExperimentConfig, S
         runs: s.runs,
         seed: s.seed,
         eval_every: s.eval_every,
+        sensor: s.sensor,
+        observer: s.observer,
     };
     resolve(s.config.as_deref().zip(text.as_deref()), &o).map_err(|e| match &e.file {
         Some(_) => e.to_string(),
@@ -296,6 +311,10 @@ fn main() -> ExitCode {
                 }
             };
             cfg.run.runs = 1;
+            if !cfg.observer.is_default() {
+                eprintln!("error: {}", rig::process::OBSERVER_IN_PROCESS_ONLY);
+                return ExitCode::from(2);
+            }
             if !(args.speed.is_finite() && args.speed > 0.0 && args.speed <= 1000.0) {
                 eprintln!(
                     "error: `--speed` {} is out of range: must be a number in (0, 1000]",

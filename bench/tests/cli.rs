@@ -161,3 +161,57 @@ fn config_prints_a_resolvable_preset_and_help_explains_every_flag() {
         assert!(check.contains(flag), "check-driver --help lacks {flag}");
     }
 }
+
+#[test]
+fn sensor_and_observer_flags_are_validated_and_run_in_process() {
+    let dir = tmp("observer");
+    let out = rig()
+        .args(["config", "--sensor", "angle"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("`observer.observer`") && err.lines().count() == 1,
+        "{err}"
+    );
+    let out = rig()
+        .args([
+            "learn",
+            "--sensor",
+            "angle",
+            "--observer",
+            "predictive",
+            "--runs",
+            "1",
+            "--trials",
+            "2",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let toml = std::fs::read_to_string(dir.join("config.toml")).unwrap();
+    assert!(
+        toml.contains("[observer]") && toml.contains("\"predictive\""),
+        "{toml}"
+    );
+    let out = rig()
+        .args([
+            "run",
+            "--sensor",
+            "angle",
+            "--observer",
+            "finite-difference",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("in process only"));
+}

@@ -5,9 +5,21 @@
 //! * [`FiniteDifference`] — the sensor measures only the angles (the physical pendulum
 //!   of §6.4.1 has an encoder on the motor shaft); velocities are estimated by a
 //!   backward difference over one sample, wrapped, smoothed by a first-order low-pass.
+//! * [`Predictive`] — angle-only measurement with a model-predicted state: the process
+//!   model (learned online by LLR from the observer's own estimates, or the plant's known
+//!   dynamics) predicts `x̂_{k+1|k}`, and the measured angle corrects it.
+//! * [`build`] — the observer an [`agent::config::ObserverConfig`] asks for.
 //!
 //! Observers are plain step functions; they know nothing about processes or transport.
 
+pub mod predictive;
+
+pub use predictive::{Predictive, PredictiveModel};
+
+use std::sync::Arc;
+
+use agent::config::{Component, ObserverConfig, ObserverKind, ObserverModel};
+use plant::Task;
 use plant::angle::wrap;
 
 /// A state estimator, updated once per sample.
@@ -81,6 +93,45 @@ impl Observer for FiniteDifference {
             self.x[a] = y[a];
         }
         &self.x
+    }
+}
+
+/// `(velocity index, position index)` pairs of a state `[positions…, velocities…]` of
+/// dimension `n` (every system of the `plant` crate is ordered so).
+pub fn velocity_pairs(n: usize) -> Vec<(usize, usize)> {
+    (0..n / 2).map(|i| (n / 2 + i, i)).collect()
+}
+
+/// The observer `cfg` asks for on `task`. A learned predictive model is an LLR memory with
+/// the input scaling of the agent's LLR process model `agent_model` when there is one
+/// (Table 6.2: angles 1, velocities 0.1, actions 1), else that default.
+pub fn build(
+    task: Arc<Task>,
+    cfg: &ObserverConfig,
+    agent_model: Option<&Component>,
+) -> Box<dyn Observer> {
+    let n = task.state_dim();
+    match cfg.observer {
+        ObserverKind::PassThrough => Box::new(PassThrough::new(n)),
+        ObserverKind::FiniteDifference => Box::new(FiniteDifference::new(
+            n,
+            task.ts,
+            velocity_pairs(n),
+            cfg.filter,
+        )),
+        ObserverKind::Predictive => {
+            let model = match cfg.model {
+                ObserverModel::Known => PredictiveModel::Known,
+                ObserverModel::Learned => {
+                    let weights = match agent_model {
+                        Some(Component::Llr(l)) => l.weights.clone(),
+                        _ => predictive::default_weights(&task),
+                    };
+                    PredictiveModel::learned(&task, weights)
+                }
+            };
+            Box::new(Predictive::new(task, model, cfg.gain))
+        }
     }
 }
 

@@ -5,6 +5,7 @@
 //!   [`double_integrator::DoubleIntegrator`] (a linear check system).
 //! * [`rk4`] — fixed-step fourth-order Runge–Kutta with a zero-order-hold input.
 //! * [`reward::QuadraticReward`] — Eq. 3.16 / 5.1 / 5.2 / 6.20 with ∂ρ/∂x and ∂ρ/∂u.
+//! * [`sensor::Sensor`] — what is measured: the full state or encoder angles.
 //! * [`task::Task`] — everything an experiment needs to know about a system: dynamics,
 //!   sampling time, action bounds, reward, start states, trial length.
 //! * [`Plant`] — the step function: saturate the action, integrate one sample period,
@@ -21,6 +22,7 @@ pub mod pendulum;
 pub mod reward;
 pub mod rk4;
 pub mod safety;
+pub mod sensor;
 pub mod task;
 pub mod two_link;
 
