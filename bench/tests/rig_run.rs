@@ -56,21 +56,7 @@ fn three_processes_reproduce_the_in_process_run_byte_for_byte() {
             "--quiet",
             "--out",
         ];
-        ok(rig()
-            .args(["learn", "--runs", "1"])
-            .args(args)
-            .arg(dir.join(format!("learn-{algo}")))
-            .output()
-            .unwrap());
-        ok(rig()
-            .arg("run")
-            .args(args)
-            .arg(dir.join(format!("run-{algo}")))
-            .output()
-            .unwrap());
-        let learned = std::fs::read_to_string(dir.join(format!("learn-{algo}/runs.csv"))).unwrap();
-        let ran = std::fs::read_to_string(dir.join(format!("run-{algo}/returns.csv"))).unwrap();
-        assert_eq!(learned, ran, "{algo}/{approx}");
+        let ran = learn_and_run(&dir, &format!("-{algo}"), &args);
         assert_eq!(ran.lines().count(), 26);
     }
 }
@@ -181,6 +167,28 @@ fn wait_for_lines(path: &Path, n: usize) {
         );
         std::thread::sleep(Duration::from_millis(5));
     }
+}
+
+/// Runs the experiment `args` (ending in `--out`) with `rig learn --runs 1` into
+/// `dir/learn{tag}` and with `rig run` into `dir/run{tag}`, asserts that `runs.csv` and
+/// `returns.csv` are byte-identical, and returns them.
+fn learn_and_run(dir: &Path, tag: &str, args: &[&str]) -> String {
+    ok(rig()
+        .args(["learn", "--runs", "1"])
+        .args(args)
+        .arg(dir.join(format!("learn{tag}")))
+        .output()
+        .unwrap());
+    ok(rig()
+        .arg("run")
+        .args(args)
+        .arg(dir.join(format!("run{tag}")))
+        .output()
+        .unwrap());
+    let learned = std::fs::read_to_string(dir.join(format!("learn{tag}/runs.csv"))).unwrap();
+    let ran = std::fs::read_to_string(dir.join(format!("run{tag}/returns.csv"))).unwrap();
+    assert_eq!(learned, ran, "{args:?}");
+    ran
 }
 
 fn children_of(pid: u32) -> Vec<u32> {
@@ -396,21 +404,7 @@ fn trials_that_leave_the_operating_range_end_early_in_both_drivers() {
         "--quiet",
         "--out",
     ];
-    ok(rig()
-        .args(["learn", "--runs", "1"])
-        .args(args)
-        .arg(dir.join("learn"))
-        .output()
-        .unwrap());
-    ok(rig()
-        .arg("run")
-        .args(args)
-        .arg(dir.join("run"))
-        .output()
-        .unwrap());
-    let learned = std::fs::read_to_string(dir.join("learn/runs.csv")).unwrap();
-    let ran = std::fs::read_to_string(dir.join("run/returns.csv")).unwrap();
-    assert_eq!(learned, ran);
+    let ran = learn_and_run(&dir, "", &args);
     let rows: Vec<Vec<f64>> = ran
         .lines()
         .skip(1)
@@ -551,21 +545,7 @@ fn a_finite_horizon_run_is_the_same_in_both_drivers() {
         "--quiet",
         "--out",
     ];
-    ok(rig()
-        .args(["learn", "--runs", "1"])
-        .args(args)
-        .arg(dir.join("learn"))
-        .output()
-        .unwrap());
-    ok(rig()
-        .arg("run")
-        .args(args)
-        .arg(dir.join("run"))
-        .output()
-        .unwrap());
-    let learned = std::fs::read_to_string(dir.join("learn/runs.csv")).unwrap();
-    let ran = std::fs::read_to_string(dir.join("run/returns.csv")).unwrap();
-    assert_eq!(learned, ran);
+    let ran = learn_and_run(&dir, "", &args);
     assert_eq!(ran.lines().count(), 7);
 }
 
