@@ -384,7 +384,7 @@ fn main() -> ExitCode {
                             println!("  last greedy return: {g:.1}");
                         }
                         println!(
-                            "  wrote {}/{{returns.csv, config.toml, plant.log, observer.log, agent.log}}",
+                            "  wrote {}/{{returns.csv, run.mcap, config.toml, plant.log, observer.log, agent.log}}",
                             args.out.display()
                         );
                     }

@@ -108,9 +108,16 @@ struct Errors {
     prediction: Option<(f64, f64)>,
 }
 
-/// Velocity RMSE of a finite-difference observer over every trial and over the last.
-fn errors_fd(o: &mut FiniteDifference, rs: &[Recording]) -> Errors {
-    let (mut se_all, mut n_all, mut se_last, mut n_last) = (0.0, 0.0, 0.0, 0.0);
+/// Velocity RMSE of observer `o` over every trial and over the last; with `predicted`
+/// (the observer's one-step prediction `x̂_{k|k−1}`, read after each update) also the
+/// last trial's prediction RMSE.
+fn errors<O: Observer>(
+    o: &mut O,
+    rs: &[Recording],
+    predicted: Option<fn(&O) -> Vec<f64>>,
+) -> Errors {
+    let (mut se_all, mut n_all) = (0.0, 0.0);
+    let (mut se_last, mut sv, mut sa, mut n_last) = (0.0, 0.0, 0.0, 0.0);
     for (i, r) in rs.iter().enumerate() {
         o.reset(&r.truth[0]);
         for k in 1..r.truth.len() {
@@ -120,36 +127,48 @@ fn errors_fd(o: &mut FiniteDifference, rs: &[Recording]) -> Errors {
             if i + 1 == rs.len() {
                 se_last += e * e;
                 n_last += 1.0;
+                if let Some(predicted) = predicted {
+                    let p = predicted(o);
+                    sa += plant::angle::wrap(p[0] - r.truth[k][0]).powi(2);
+                    sv += (p[1] - r.truth[k][1]).powi(2);
+                }
             }
         }
     }
     Errors {
         all: (se_all / n_all).sqrt(),
         last: (se_last / n_last).sqrt(),
-        prediction: None,
+        prediction: predicted.map(|_| ((sv / n_last).sqrt(), (sa / n_last).sqrt())),
     }
+}
+
+/// The one-step prediction of a predictive observer.
+fn prediction(o: &Predictive) -> Vec<f64> {
+    o.predicted().to_vec()
 }
 
 fn compare(noise_std: f64, gain: f64) -> (Errors, Errors, Errors, Errors) {
     let task = Arc::new(Task::new(SystemName::Pendulum));
     let rs = recordings(&task, noise_std);
     let n = task.state_dim();
-    let fd_raw = errors_fd(
+    let fd_raw = errors(
         &mut FiniteDifference::new(n, task.ts, velocity_pairs(n), 0.0),
         &rs,
+        None,
     );
-    let fd_filt = errors_fd(
+    let fd_filt = errors(
         &mut FiniteDifference::new(n, task.ts, velocity_pairs(n), 0.3),
         &rs,
+        None,
     );
     let mut learned = Predictive::new(
         task.clone(),
         PredictiveModel::learned(&task, observer::predictive::default_weights(&task)),
         gain,
     );
-    let pl = errors_predictive(&mut learned, &rs);
+    let pl = errors(&mut learned, &rs, Some(prediction));
     let mut known = Predictive::new(task.clone(), PredictiveModel::Known, gain);
-    let pk = errors_predictive(&mut known, &rs);
+    let pk = errors(&mut known, &rs, Some(prediction));
     println!(
         "noise {noise_std} rad, gain {gain}: velocity RMSE [rad/s] all {TRIALS} trials / last trial: \
          finite difference raw {:.4} / {:.4}, filtered (a = 0.3) {:.4} / {:.4}; \
@@ -163,32 +182,6 @@ fn compare(noise_std: f64, gain: f64) -> (Errors, Errors, Errors, Errors) {
          known velocity {kv:.4} rad/s, angle {ka:.5} rad"
     );
     (fd_raw, fd_filt, pl, pk)
-}
-
-/// [`errors`] of a predictive observer, with its one-step predictions.
-fn errors_predictive(o: &mut Predictive, rs: &[Recording]) -> Errors {
-    let (mut se_all, mut n_all) = (0.0, 0.0);
-    let (mut se_last, mut sv, mut sa, mut n_last) = (0.0, 0.0, 0.0, 0.0);
-    for (i, r) in rs.iter().enumerate() {
-        o.reset(&r.truth[0]);
-        for k in 1..r.truth.len() {
-            let e = o.update(&r.measured[k], &r.actions[k - 1])[1] - r.truth[k][1];
-            se_all += e * e;
-            n_all += 1.0;
-            if i + 1 == rs.len() {
-                let p = o.predicted();
-                se_last += e * e;
-                n_last += 1.0;
-                sa += plant::angle::wrap(p[0] - r.truth[k][0]).powi(2);
-                sv += (p[1] - r.truth[k][1]).powi(2);
-            }
-        }
-    }
-    Errors {
-        all: (se_all / n_all).sqrt(),
-        last: (se_last / n_last).sqrt(),
-        prediction: Some(((sv / n_last).sqrt(), (sa / n_last).sqrt())),
-    }
 }
 
 #[test]
