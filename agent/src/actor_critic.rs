@@ -127,7 +127,7 @@ impl TaskInfo {
 
 /// The algorithm-specific half of an actor-critic learner: how actions are chosen and
 /// how the policy improves given the critic `V`.
-pub trait Improver: Send {
+pub trait Improver: Send + crate::checkpoint::Persist {
     /// The policy's action `π(x)` (without exploration) into `u`; `u_prev` is the action
     /// applied in the previous sample (RMAC and VGBP linearise their model around it).
     /// With a finite horizon `x` is `(x_k, k)`.
@@ -294,6 +294,24 @@ impl Agent for ActorCritic {
             .collect();
         m.extend(self.improver.memories());
         m
+    }
+}
+
+/// The critic, the improver (actor, reference model, process model) and the exploration
+/// stream; the per-sample state is set again by the next trial's start.
+impl crate::checkpoint::Persist for ActorCritic {
+    fn save(&self, s: &mut crate::checkpoint::Snapshot) {
+        s.scope("critic", |s| self.critic.save(s));
+        s.scope("improver", |s| self.improver.save(s));
+        self.exploration.save(s);
+    }
+    fn restore(
+        &mut self,
+        r: &mut crate::checkpoint::Reader,
+    ) -> Result<(), crate::checkpoint::CheckpointError> {
+        r.scope("critic", |r| self.critic.restore(r))?;
+        r.scope("improver", |r| self.improver.restore(r))?;
+        self.exploration.restore(r)
     }
 }
 

@@ -123,6 +123,18 @@ impl Approximator for GradientFree {
     }
 }
 
+impl crate::checkpoint::Persist for GradientFree {
+    fn save(&self, s: &mut crate::checkpoint::Snapshot) {
+        self.0.save(s)
+    }
+    fn restore(
+        &mut self,
+        r: &mut crate::checkpoint::Reader,
+    ) -> Result<(), crate::checkpoint::CheckpointError> {
+        self.0.restore(r)
+    }
+}
+
 impl Differentiable for GradientFree {
     fn value_and_jacobian(&self, _: &[f64], _: &mut [f64], _: &mut [f64]) {
         unreachable!("tile coding has no gradient; validation allows it for SAC only")

@@ -30,7 +30,7 @@ pub enum Next<'a> {
 }
 
 /// A critic and its learning rule.
-pub trait Critic: Send {
+pub trait Critic: Send + crate::checkpoint::Persist {
     /// The value function `V(x)` with its gradient.
     fn function(&self) -> &dyn Differentiable;
     /// Clears the eligibility traces at the start of a trial.
@@ -90,6 +90,18 @@ impl Critic for TdLambda {
 
     fn fill(&self) -> Option<(usize, usize)> {
         self.f.fill()
+    }
+}
+
+impl crate::checkpoint::Persist for TdLambda {
+    fn save(&self, s: &mut crate::checkpoint::Snapshot) {
+        self.f.save(s);
+    }
+    fn restore(
+        &mut self,
+        r: &mut crate::checkpoint::Reader,
+    ) -> Result<(), crate::checkpoint::CheckpointError> {
+        self.f.restore(r)
     }
 }
 

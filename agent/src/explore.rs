@@ -57,6 +57,26 @@ impl Exploration {
     }
 }
 
+/// The random stream's position and the step count.
+impl crate::checkpoint::Persist for Exploration {
+    fn save(&self, s: &mut crate::checkpoint::Snapshot) {
+        s.scope("exploration", |s| {
+            s.rng("rng", &self.rng);
+            s.u64s("step", &[u64::from(self.step)]);
+        });
+    }
+    fn restore(
+        &mut self,
+        r: &mut crate::checkpoint::Reader,
+    ) -> Result<(), crate::checkpoint::CheckpointError> {
+        r.scope("exploration", |r| {
+            self.rng = r.rng("rng")?;
+            self.step = r.u64s("step")?.first().copied().unwrap_or(0) as u32;
+            Ok(())
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

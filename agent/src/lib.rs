@@ -12,7 +12,8 @@
 //!   baseline.
 //! * [`horizon`] — infinite or finite horizon (Chapter 4: time as an input, terminal
 //!   reward; SAC-FH, MLAC-FH, RMAC-FH are the shared step with a finite horizon).
-//! * [`config`], [`preset`], [`build()`] — from a configuration to a running agent.
+//! * [`config`], [`preset`], [`build()`] — from a configuration to a running agent;
+//!   [`checkpoint`] — its learned state saved at a trial's end and restored.
 //!
 //! An [`Agent`] is a plain step function; it knows nothing about processes or
 //! transport.
@@ -20,6 +21,7 @@
 pub mod actor_critic;
 pub mod approx;
 mod build;
+pub mod checkpoint;
 pub mod config;
 pub mod critic;
 pub mod explore;
@@ -45,7 +47,7 @@ pub use build::build;
 /// and — unless it is the trial's last — gives `u_{k+1}`. A transition that leaves a
 /// task's operating range (§6.4.2) ends the trial through [`Agent::learn_terminal`]
 /// instead.
-pub trait Agent: Send {
+pub trait Agent: Send + checkpoint::Persist {
     /// Starts a trial in `x0` (clears eligibility traces) and writes the first action.
     fn start_trial(&mut self, x0: &[f64], u: &mut [f64]);
     /// Learns from the last transition; writes the next action if `u` is given.

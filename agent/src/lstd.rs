@@ -129,6 +129,32 @@ impl Critic for Lstd {
     }
 }
 
+use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
+
+/// `A`, `b`, `z` and `θ` (in the RBF); the basis-function caches are recomputed.
+impl Persist for Lstd {
+    fn save(&self, s: &mut Snapshot) {
+        s.scope("lstd", |s| {
+            self.v.save(s);
+            s.f64s("a", self.a.as_slice());
+            s.f64s("b", self.b.as_slice());
+            s.f64s("z", self.z.as_slice());
+            s.u64s("failed_solves", &[self.failed_solves]);
+        });
+    }
+    fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.scope("lstd", |r| {
+            self.v.restore(r)?;
+            r.f64s_into("a", self.a.as_mut_slice())?;
+            r.f64s_into("b", self.b.as_mut_slice())?;
+            r.f64s_into("z", self.z.as_mut_slice())?;
+            self.failed_solves = r.u64s("failed_solves")?.first().copied().unwrap_or(0);
+            self.x_next.clear();
+            Ok(())
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

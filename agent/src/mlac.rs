@@ -102,6 +102,19 @@ impl Improver for Mlac {
     }
 }
 
+use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
+
+impl Persist for Mlac {
+    fn save(&self, s: &mut Snapshot) {
+        s.scope("actor", |s| self.actor.save(s));
+        self.model.save(s);
+    }
+    fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.scope("actor", |r| self.actor.restore(r))?;
+        self.model.restore(r)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -111,6 +111,17 @@ pub fn increment(angle_mask: &[bool], from: &[f64], to: &[f64], out: &mut [f64])
     }
 }
 
+use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
+
+impl Persist for ProcessModel {
+    fn save(&self, s: &mut Snapshot) {
+        s.scope("model", |s| self.f.save(s));
+    }
+    fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.scope("model", |r| self.f.restore(r))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use crate::testing;

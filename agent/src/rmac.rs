@@ -117,6 +117,19 @@ impl Improver for Rmac {
     }
 }
 
+use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
+
+impl Persist for Rmac {
+    fn save(&self, s: &mut Snapshot) {
+        s.scope("reference", |s| self.reference.save(s));
+        self.model.save(s);
+    }
+    fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.scope("reference", |r| self.reference.restore(r))?;
+        self.model.restore(r)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

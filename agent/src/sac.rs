@@ -35,6 +35,17 @@ impl Improver for Sac {
     }
 }
 
+use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
+
+impl Persist for Sac {
+    fn save(&self, s: &mut Snapshot) {
+        s.scope("actor", |s| self.actor.save(s));
+    }
+    fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.scope("actor", |r| self.actor.restore(r))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -213,6 +213,36 @@ impl Sarsa {
     }
 }
 
+impl crate::checkpoint::Persist for Sarsa {
+    fn save(&self, s: &mut crate::checkpoint::Snapshot) {
+        s.scope("sarsa", |s| {
+            s.scope("q", |s| self.q.save(s));
+            s.rng("rng", &self.rng);
+            s.u64s("trial", &[u64::from(self.trial), self.a as u64]);
+            s.f64s("trace", &self.trace);
+            s.f64s("x", &self.x);
+        });
+    }
+    fn restore(
+        &mut self,
+        r: &mut crate::checkpoint::Reader,
+    ) -> Result<(), crate::checkpoint::CheckpointError> {
+        r.scope("sarsa", |r| {
+            r.scope("q", |r| self.q.restore(r))?;
+            self.rng = r.rng("rng")?;
+            let t = r.u64s("trial")?;
+            if t.len() != 2 || t[1] as usize >= self.actions.len() {
+                return Err(crate::checkpoint::CheckpointError(
+                    "checkpoint section `sarsa.trial` does not fit the action set".into(),
+                ));
+            }
+            (self.trial, self.a) = (t[0] as u32, t[1] as usize);
+            r.f64s_into("trace", &mut self.trace)?;
+            r.f64s_into("x", &mut self.x)
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -85,6 +85,17 @@ pub fn critic(theta: [f64; 4]) -> Rbf {
 /// it does not learn.
 pub struct Linear(pub f64);
 
+/// A known model learns nothing: nothing to save.
+impl crate::checkpoint::Persist for Linear {
+    fn save(&self, _: &mut crate::checkpoint::Snapshot) {}
+    fn restore(
+        &mut self,
+        _: &mut crate::checkpoint::Reader,
+    ) -> Result<(), crate::checkpoint::CheckpointError> {
+        Ok(())
+    }
+}
+
 impl Approximator for Linear {
     fn input_dim(&self) -> usize {
         2

@@ -134,3 +134,13 @@ impl Improver for Vgbp {
             .collect()
     }
 }
+use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
+
+impl Persist for Vgbp {
+    fn save(&self, s: &mut Snapshot) {
+        self.model.save(s);
+    }
+    fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        self.model.restore(r)
+    }
+}

@@ -22,6 +22,7 @@
 use std::sync::Arc;
 
 use agent::Agent;
+use agent::checkpoint::{Checkpoint, CheckpointError, Origin, Snapshot};
 use agent::config::ExperimentConfig;
 use agent::config::SensorKind;
 use agent::horizon::Horizon;
@@ -54,6 +55,8 @@ pub struct Experiment {
     observer: Box<dyn Observer>,
     agent: Box<dyn Agent>,
     horizon: Horizon,
+    /// Which experiment and run this is (for checkpoints).
+    origin: Origin,
     run: u32,
     trials: u32,
     eval_every: u32,
@@ -82,6 +85,7 @@ impl Experiment {
             y: vec![0.0; task.state_dim()],
             observer: observer::build(task.clone(), o, cfg.model.as_ref()),
             horizon: cfg.horizon.of(&task),
+            origin: Origin::of(cfg, run),
             task,
             agent,
             run,
@@ -90,6 +94,48 @@ impl Experiment {
             trial: 0,
             skipped_samples: 0,
         }
+    }
+
+    /// The agent's learned state after the last completed trial.
+    pub fn checkpoint(&self) -> Checkpoint {
+        let mut state = Snapshot::default();
+        self.agent.save(&mut state);
+        Checkpoint {
+            origin: self.origin.clone(),
+            trial: self.trial,
+            sim_time_s: self.sim_time_s(),
+            state,
+        }
+    }
+
+    /// Run `run` of experiment `cfg`, continued after the trial checkpoint `c` was taken
+    /// at. The checkpoint holds the agent's state only: the observer must be stateless
+    /// across trials (the default sensor and observer).
+    pub fn resume(
+        cfg: &ExperimentConfig,
+        run: u32,
+        c: &Checkpoint,
+    ) -> Result<Self, CheckpointError> {
+        c.check_origin(cfg, run)?;
+        if !cfg.observer.is_default() {
+            return Err(CheckpointError(
+                "a checkpoint holds the agent's state only; resuming needs the default sensor and observer".into(),
+            ));
+        }
+        let mut e = Self::new(cfg, run);
+        let mut r = c.state.reader();
+        e.agent.restore(&mut r)?;
+        r.finish()?;
+        e.trial = c.trial;
+        e.skipped_samples = ((f64::from(c.trial) * e.task.trial_seconds - c.sim_time_s) / e.task.ts)
+            .round()
+            .max(0.0) as u64;
+        Ok(e)
+    }
+
+    /// Simulated learning time so far \[s\].
+    fn sim_time_s(&self) -> f64 {
+        f64::from(self.trial) * self.task.trial_seconds - self.skipped_samples as f64 * self.task.ts
     }
 
     /// The agent (for inspection after learning).
@@ -138,8 +184,7 @@ impl Experiment {
         Some(TrialRecord {
             run: self.run,
             trial: self.trial,
-            sim_time_s: f64::from(self.trial) * self.task.trial_seconds
-                - self.skipped_samples as f64 * self.task.ts,
+            sim_time_s: self.sim_time_s(),
             ret,
             greedy,
         })

@@ -82,6 +82,17 @@ fn riccati(a: &M2, b: [f64; 2], q: [f64; 2], p: f64) -> (M2, [f64; 2]) {
 /// The exact critic `V(x) = −xᵀSx`.
 struct Quadratic(M2);
 
+/// The exact critic learns nothing: nothing to save.
+impl agent::checkpoint::Persist for Quadratic {
+    fn save(&self, _: &mut agent::checkpoint::Snapshot) {}
+    fn restore(
+        &mut self,
+        _: &mut agent::checkpoint::Reader,
+    ) -> Result<(), agent::checkpoint::CheckpointError> {
+        Ok(())
+    }
+}
+
 impl Approximator for Quadratic {
     fn input_dim(&self) -> usize {
         2

@@ -28,7 +28,7 @@ pub const MAX_IN: usize = 8;
 pub const MAX_OUT: usize = 8;
 
 /// A function approximator `y = f(x)`.
-pub trait Approximator: Send {
+pub trait Approximator: Send + crate::checkpoint::Persist {
     /// Input dimension `n`.
     fn input_dim(&self) -> usize;
     /// Output dimension `m`.

@@ -158,6 +158,23 @@ impl Traced for Tiles {
     }
 }
 
+use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
+
+impl Persist for Tiles {
+    fn save(&self, s: &mut Snapshot) {
+        s.scope("tiles", |s| {
+            s.f64s("theta", &self.theta);
+            s.f64s("trace", &self.trace);
+        });
+    }
+    fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.scope("tiles", |r| {
+            r.f64s_into("theta", &mut self.theta)?;
+            r.f64s_into("trace", &mut self.trace)
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

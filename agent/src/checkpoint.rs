@@ -1,0 +1,509 @@
+//! Checkpoints: an agent's learned state at the end of a trial, to resume a run after a
+//! crash (`rig run --resume`).
+//!
+//! * [`Persist`] — what every learned component (approximator, critic, improver, agent)
+//!   implements: it writes its learned state into a [`Snapshot`] as named arrays, and
+//!   reads it back, in the same order, into a component freshly built from the same
+//!   configuration. Only what learning changes is stored (weights, LLR memories, LSTD
+//!   statistics, random-stream positions); the shapes come from the configuration, and a
+//!   section of another shape is an error that names it.
+//! * [`Checkpoint`] — a snapshot with what it belongs to (system, algorithm, seed, run,
+//!   the configuration's fingerprint, the trial), stored as a versioned file: the magic
+//!   bytes `RIGCKPT\0`, the format version (u32, little endian), a CRC-32 of the payload
+//!   (u32), then the payload (postcard). Written atomically (temporary file, `fsync`,
+//!   rename), so a crash leaves the previous checkpoint or the new one, never half of one.
+//!
+//! A restored agent continues bit for bit as the agent that wrote the checkpoint would
+//! have (tests: `tests/tests/checkpoint.rs`).
+
+use std::fmt;
+use std::io::Write;
+use std::path::Path;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::config::ExperimentConfig;
+
+/// The checkpoint format version this build writes and reads.
+pub const VERSION: u32 = 1;
+
+const MAGIC: &[u8; 8] = b"RIGCKPT\0";
+
+/// Why a checkpoint cannot be read or does not fit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CheckpointError(pub String);
+
+impl fmt::Display for CheckpointError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for CheckpointError {}
+
+fn err<T>(msg: impl Into<String>) -> Result<T, CheckpointError> {
+    Err(CheckpointError(msg.into()))
+}
+
+/// The values of one section.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+enum Data {
+    F64(Vec<f64>),
+    U64(Vec<u64>),
+}
+
+/// A named array of a component's learned state.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct Section {
+    name: String,
+    data: Data,
+}
+
+/// Learned state as an ordered list of named arrays. Components write into it with
+/// [`Snapshot::f64s`]/[`Snapshot::u64s`] inside [`Snapshot::scope`]s, so each array's
+/// name says whose it is (`critic.llr.outputs`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Snapshot {
+    sections: Vec<Section>,
+    #[serde(skip)]
+    prefix: Vec<&'static str>,
+}
+
+impl Snapshot {
+    fn name(&self, name: &str) -> String {
+        let mut s = self.prefix.join(".");
+        if !s.is_empty() {
+            s.push('.');
+        }
+        s.push_str(name);
+        s
+    }
+
+    /// Writes the sections of `f` under the scope `name`.
+    pub fn scope(&mut self, name: &'static str, f: impl FnOnce(&mut Self)) {
+        self.prefix.push(name);
+        f(self);
+        self.prefix.pop();
+    }
+
+    /// Adds an array of numbers.
+    pub fn f64s(&mut self, name: &str, v: &[f64]) {
+        let name = self.name(name);
+        self.sections.push(Section {
+            name,
+            data: Data::F64(v.to_vec()),
+        });
+    }
+
+    /// Adds an array of integers.
+    pub fn u64s(&mut self, name: &str, v: &[u64]) {
+        let name = self.name(name);
+        self.sections.push(Section {
+            name,
+            data: Data::U64(v.to_vec()),
+        });
+    }
+
+    /// Adds a random stream's position (seed, stream id, word position).
+    pub fn rng(&mut self, name: &str, rng: &ChaCha8Rng) {
+        let seed = rng.get_seed();
+        let mut v: Vec<u64> = seed
+            .chunks(8)
+            .map(|c| u64::from_le_bytes(c.try_into().expect("8 bytes")))
+            .collect();
+        let pos = rng.get_word_pos();
+        v.extend([rng.get_stream(), pos as u64, (pos >> 64) as u64]);
+        self.u64s(name, &v);
+    }
+
+    /// A reader over the sections, from the first.
+    pub fn reader(&self) -> Reader<'_> {
+        Reader {
+            sections: &self.sections,
+            next: 0,
+            prefix: Vec::new(),
+        }
+    }
+
+    /// Number of sections.
+    pub fn len(&self) -> usize {
+        self.sections.len()
+    }
+
+    /// Whether there are no sections.
+    pub fn is_empty(&self) -> bool {
+        self.sections.is_empty()
+    }
+}
+
+/// Reads a [`Snapshot`]'s sections back in the order they were written, checking names
+/// and lengths.
+pub struct Reader<'a> {
+    sections: &'a [Section],
+    next: usize,
+    prefix: Vec<&'static str>,
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, name: &str) -> Result<&'a Data, CheckpointError> {
+        let mut want = self.prefix.join(".");
+        if !want.is_empty() {
+            want.push('.');
+        }
+        want.push_str(name);
+        let Some(s) = self.sections.get(self.next) else {
+            return err(format!(
+                "the checkpoint ends where the agent expects `{want}`: it was written by a differently configured agent"
+            ));
+        };
+        if s.name != want {
+            return err(format!(
+                "the checkpoint has `{}` where the agent expects `{want}`: it was written by a differently configured agent",
+                s.name
+            ));
+        }
+        self.next += 1;
+        Ok(&s.data)
+    }
+
+    /// Reads the sections of `f` under the scope `name`.
+    pub fn scope<T>(
+        &mut self,
+        name: &'static str,
+        f: impl FnOnce(&mut Self) -> Result<T, CheckpointError>,
+    ) -> Result<T, CheckpointError> {
+        self.prefix.push(name);
+        let r = f(self);
+        self.prefix.pop();
+        r
+    }
+
+    /// Reads an array of numbers of any length.
+    pub fn f64s(&mut self, name: &str) -> Result<&'a [f64], CheckpointError> {
+        match self.take(name)? {
+            Data::F64(v) => Ok(v),
+            Data::U64(_) => err(format!(
+                "checkpoint section `{name}` holds integers, not numbers"
+            )),
+        }
+    }
+
+    /// Reads an array of integers of any length.
+    pub fn u64s(&mut self, name: &str) -> Result<&'a [u64], CheckpointError> {
+        match self.take(name)? {
+            Data::U64(v) => Ok(v),
+            Data::F64(_) => err(format!(
+                "checkpoint section `{name}` holds numbers, not integers"
+            )),
+        }
+    }
+
+    /// Reads an array of numbers into `out`, which must have its length.
+    pub fn f64s_into(&mut self, name: &str, out: &mut [f64]) -> Result<(), CheckpointError> {
+        let v = self.f64s(name)?;
+        if v.len() != out.len() {
+            return err(format!(
+                "checkpoint section `{name}` has {} values where the configured agent has {}: it was written by a differently configured agent",
+                v.len(),
+                out.len()
+            ));
+        }
+        out.copy_from_slice(v);
+        Ok(())
+    }
+
+    /// Reads a random stream's position written by [`Snapshot::rng`].
+    pub fn rng(&mut self, name: &str) -> Result<ChaCha8Rng, CheckpointError> {
+        let v = self.u64s(name)?;
+        if v.len() != 7 {
+            return err(format!(
+                "checkpoint section `{name}` is not a random stream"
+            ));
+        }
+        let mut seed = [0u8; 32];
+        for (c, w) in seed.chunks_mut(8).zip(&v[..4]) {
+            c.copy_from_slice(&w.to_le_bytes());
+        }
+        let mut rng = ChaCha8Rng::from_seed(seed);
+        rng.set_stream(v[4]);
+        rng.set_word_pos(u128::from(v[5]) | (u128::from(v[6]) << 64));
+        Ok(rng)
+    }
+
+    /// Checks that every section was read.
+    pub fn finish(&self) -> Result<(), CheckpointError> {
+        match self.sections.get(self.next) {
+            None => Ok(()),
+            Some(s) => err(format!(
+                "the checkpoint has `{}` beyond what the agent expects: it was written by a differently configured agent",
+                s.name
+            )),
+        }
+    }
+}
+
+/// Learned state that can be saved into a [`Snapshot`] and restored from one.
+pub trait Persist {
+    /// Writes the learned state.
+    fn save(&self, s: &mut Snapshot);
+    /// Reads the learned state written by [`Persist::save`] of a component built from
+    /// the same configuration.
+    fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError>;
+}
+
+/// What a checkpoint belongs to.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Origin {
+    /// The system (`pendulum`, `arm-6.4`, ...).
+    pub system: String,
+    /// `algo/approx/horizon`, e.g. `mlac/llr/infinite`.
+    pub learner: String,
+    /// The experiment seed.
+    pub seed: u64,
+    /// The run index within the experiment.
+    pub run: u32,
+    /// Fingerprint of the configuration's learning-relevant part (all but
+    /// `run.trials` and `run.eval_every`).
+    pub fingerprint: u64,
+}
+
+impl Origin {
+    /// The origin of run `run` of experiment `cfg`.
+    pub fn of(cfg: &ExperimentConfig, run: u32) -> Self {
+        let mut c = cfg.clone();
+        c.run.trials = 0;
+        c.run.eval_every = 0;
+        c.run.runs = 0;
+        Self {
+            system: cfg.system.to_string(),
+            learner: format!("{}/{}/{}", cfg.algo, cfg.approx, cfg.horizon),
+            seed: cfg.run.seed,
+            run,
+            fingerprint: fnv1a(c.to_toml().as_bytes()),
+        }
+    }
+}
+
+/// FNV-1a, 64 bit: a fingerprint that is stable across builds and platforms.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// An agent's learned state after a trial, with where it belongs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    /// The run it belongs to.
+    pub origin: Origin,
+    /// The last completed learning trial (1-based).
+    pub trial: u32,
+    /// Simulated learning time at the end of that trial \[s\] (trials that left the
+    /// operating range count only the samples run).
+    pub sim_time_s: f64,
+    /// The learned state.
+    pub state: Snapshot,
+}
+
+impl Checkpoint {
+    /// Encodes the checkpoint as file contents.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let payload = postcard::to_stdvec(self).expect("a checkpoint always serialises");
+        let mut out = Vec::with_capacity(payload.len() + 16);
+        out.extend_from_slice(MAGIC);
+        out.extend_from_slice(&VERSION.to_le_bytes());
+        out.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
+        out.extend_from_slice(&payload);
+        out
+    }
+
+    /// Decodes file contents written by [`Checkpoint::to_bytes`].
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, CheckpointError> {
+        if bytes.len() < 16 || &bytes[..8] != MAGIC {
+            return err("not a rig checkpoint (no RIGCKPT header)");
+        }
+        let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
+        if version != VERSION {
+            return err(format!(
+                "checkpoint format version {version}; this rig reads version {VERSION}"
+            ));
+        }
+        let crc = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes"));
+        let payload = &bytes[16..];
+        if crc32fast::hash(payload) != crc {
+            return err("the checkpoint is corrupt (checksum mismatch)");
+        }
+        postcard::from_bytes(payload)
+            .map_err(|e| CheckpointError(format!("the checkpoint is corrupt ({e})")))
+    }
+
+    /// Writes the checkpoint to `path` atomically: a temporary file beside it, flushed to
+    /// disk, renamed over `path`.
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        let tmp = path.with_extension("ckpt.tmp");
+        {
+            let mut f = std::fs::File::create(&tmp)?;
+            f.write_all(&self.to_bytes())?;
+            f.sync_all()?;
+        }
+        std::fs::rename(&tmp, path)
+    }
+
+    /// Reads a checkpoint file; the error names the file.
+    pub fn read(path: &Path) -> Result<Self, CheckpointError> {
+        let bytes = std::fs::read(path)
+            .map_err(|e| CheckpointError(format!("{}: cannot read ({e})", path.display())))?;
+        Self::from_bytes(&bytes).map_err(|e| CheckpointError(format!("{}: {e}", path.display())))
+    }
+
+    /// Checks that the checkpoint belongs to run `run` of experiment `cfg`.
+    pub fn check_origin(&self, cfg: &ExperimentConfig, run: u32) -> Result<(), CheckpointError> {
+        let want = Origin::of(cfg, run);
+        let have = &self.origin;
+        if have.system != want.system {
+            return err(format!(
+                "the checkpoint is from system {}, but the run's configuration is for {}",
+                have.system, want.system
+            ));
+        }
+        if have.learner != want.learner {
+            return err(format!(
+                "the checkpoint is from learner {}, but the run's configuration uses {}",
+                have.learner, want.learner
+            ));
+        }
+        if (have.seed, have.run) != (want.seed, want.run) {
+            return err(format!(
+                "the checkpoint is from seed {} run {}, but the run's configuration has seed {} run {}",
+                have.seed, have.run, want.seed, want.run
+            ));
+        }
+        if have.fingerprint != want.fingerprint {
+            return err(
+                "the checkpoint was written under different learning parameters than the run's configuration",
+            );
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::Rng;
+
+    fn sample() -> Checkpoint {
+        let mut s = Snapshot::default();
+        s.scope("critic", |s| {
+            s.f64s("theta", &[1.0, -2.5, f64::MIN_POSITIVE]);
+            s.u64s("seq", &[3, u64::MAX]);
+        });
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        rng.set_stream(1);
+        let _: u64 = rng.next_u64();
+        s.rng("exploration", &rng);
+        Checkpoint {
+            origin: Origin::of(&pendulum(), 0),
+            trial: 7,
+            sim_time_s: 21.0,
+            state: s,
+        }
+    }
+
+    fn pendulum() -> ExperimentConfig {
+        use crate::config::{Algo, ApproxKind, HorizonKind};
+        crate::preset::preset(
+            plant::SystemName::Pendulum,
+            Algo::Mlac,
+            ApproxKind::Llr,
+            HorizonKind::Infinite,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn round_trips_bit_for_bit() {
+        let c = sample();
+        let back = Checkpoint::from_bytes(&c.to_bytes()).unwrap();
+        assert_eq!(back, c);
+        let mut r = back.state.reader();
+        r.scope("critic", |r| {
+            let mut theta = [0.0; 3];
+            r.f64s_into("theta", &mut theta)?;
+            assert_eq!(theta, [1.0, -2.5, f64::MIN_POSITIVE]);
+            assert_eq!(r.u64s("seq")?, &[3, u64::MAX]);
+            Ok(())
+        })
+        .unwrap();
+        let mut rng = r.rng("exploration").unwrap();
+        let mut want = ChaCha8Rng::seed_from_u64(5);
+        want.set_stream(1);
+        let _: u64 = want.next_u64();
+        assert_eq!(rng.next_u64(), want.next_u64());
+        r.finish().unwrap();
+    }
+
+    #[test]
+    fn corruption_version_and_shape_errors_say_what() {
+        let bytes = sample().to_bytes();
+        let mut flipped = bytes.clone();
+        let last = flipped.len() - 1;
+        flipped[last] ^= 1;
+        let e = Checkpoint::from_bytes(&flipped).unwrap_err().0;
+        assert!(e.contains("corrupt"), "{e}");
+        let e = Checkpoint::from_bytes(&bytes[..bytes.len() / 2])
+            .unwrap_err()
+            .0;
+        assert!(e.contains("corrupt"), "{e}");
+        let mut newer = bytes.clone();
+        newer[8] = 2;
+        let e = Checkpoint::from_bytes(&newer).unwrap_err().0;
+        assert!(e.contains("version 2"), "{e}");
+        let e = Checkpoint::from_bytes(b"hello").unwrap_err().0;
+        assert!(e.contains("not a rig checkpoint"), "{e}");
+
+        let c = sample();
+        let mut r = c.state.reader();
+        let e = r
+            .scope("critic", |r| r.f64s_into("theta", &mut [0.0; 4]))
+            .unwrap_err()
+            .0;
+        assert!(
+            e.contains("`theta` has 3 values") || e.contains("critic.theta"),
+            "{e}"
+        );
+        let mut r = c.state.reader();
+        let e = r.f64s("actor").unwrap_err().0;
+        assert!(
+            e.contains("`critic.theta` where the agent expects `actor`"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn origin_mismatches_are_named() {
+        let cfg = pendulum();
+        let c = sample();
+        c.check_origin(&cfg, 0).unwrap();
+        assert!(c.check_origin(&cfg, 1).unwrap_err().0.contains("run 1"));
+        let mut other = cfg.clone();
+        other.run.trials += 10;
+        c.check_origin(&other, 0)
+            .expect("more trials is the same learner");
+        let arm = crate::preset::preset(
+            plant::SystemName::ArmVertical,
+            cfg.algo,
+            cfg.approx,
+            cfg.horizon,
+        )
+        .unwrap();
+        let e = c.check_origin(&arm, 0).unwrap_err().0;
+        assert!(e.contains("from system pendulum"), "{e}");
+        let mut tuned = cfg.clone();
+        tuned.learning.gamma = 0.5;
+        let e = c.check_origin(&tuned, 0).unwrap_err().0;
+        assert!(e.contains("different learning parameters"), "{e}");
+    }
+}

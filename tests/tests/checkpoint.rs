@@ -1,0 +1,121 @@
+//! Checkpoints hold an agent's whole learned state: for every learner the thesis defines
+//! (every preset: system × algorithm × approximator × horizon), an agent restored from a
+//! checkpoint — through its file encoding — continues bit for bit as the agent that
+//! wrote it.
+//!
+//! Left out, for test time only: the arms' RBF process models and finite-horizon RBF
+//! grids (6-D and 5-D grids, about a minute per preset here). The same `Persist` code
+//! serves them as the pendulum's RBF presets, which are included.
+
+use agent::checkpoint::{Checkpoint, Snapshot};
+use agent::config::{Algo, ApproxKind, ExperimentConfig, HorizonKind};
+use plant::SystemName;
+use rig::experiment::Experiment;
+
+fn presets() -> Vec<ExperimentConfig> {
+    let mut out = Vec::new();
+    for system in SystemName::ALL {
+        for algo in Algo::ALL {
+            for &approx in algo.approximators() {
+                for horizon in HorizonKind::ALL {
+                    let heavy = system != SystemName::Pendulum
+                        && approx == ApproxKind::Rbf
+                        && (matches!(algo, Algo::Mlac | Algo::Rmac)
+                            || horizon == HorizonKind::Finite);
+                    if heavy {
+                        continue;
+                    }
+                    if let Ok(mut cfg) = agent::preset::preset(system, algo, approx, horizon) {
+                        cfg.run.trials = 6;
+                        cfg.run.eval_every = 1;
+                        out.push(cfg);
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+fn name(cfg: &ExperimentConfig) -> String {
+    format!("{} {}/{}/{}", cfg.system, cfg.algo, cfg.approx, cfg.horizon)
+}
+
+#[test]
+fn every_learner_resumes_bit_for_bit() {
+    let presets = presets();
+    assert!(presets.len() >= 20, "only {} presets", presets.len());
+    for cfg in &presets {
+        let who = name(cfg);
+        let t0 = std::time::Instant::now();
+        let mut straight = Experiment::new(cfg, 1);
+        let want: Vec<_> = std::iter::from_fn(|| straight.next_trial()).collect();
+        assert_eq!(want.len(), 6, "{who}");
+
+        let mut first = Experiment::new(cfg, 1);
+        for _ in 0..3 {
+            first.next_trial().unwrap();
+        }
+        let bytes = first.checkpoint().to_bytes();
+        drop(first);
+        let c = Checkpoint::from_bytes(&bytes).unwrap();
+        assert_eq!(c.trial, 3, "{who}");
+        assert_eq!(
+            c.sim_time_s.to_bits(),
+            want[2].sim_time_s.to_bits(),
+            "{who}"
+        );
+        let mut resumed = Experiment::resume(cfg, 1, &c).unwrap_or_else(|e| panic!("{who}: {e}"));
+        let got: Vec<_> = std::iter::from_fn(|| resumed.next_trial()).collect();
+        assert_eq!(got.len(), 3, "{who}");
+        for (g, w) in got.iter().zip(&want[3..]) {
+            assert_eq!(g.trial, w.trial, "{who}");
+            assert_eq!(g.ret.to_bits(), w.ret.to_bits(), "{who}: trial {}", w.trial);
+            assert_eq!(g.sim_time_s.to_bits(), w.sim_time_s.to_bits(), "{who}");
+            assert_eq!(
+                g.greedy.map(f64::to_bits),
+                w.greedy.map(f64::to_bits),
+                "{who}: greedy after trial {}",
+                w.trial
+            );
+        }
+        // The learned state itself is the same after the same trials.
+        let (mut a, mut b) = (Snapshot::default(), Snapshot::default());
+        straight.agent().save(&mut a);
+        resumed.agent().save(&mut b);
+        assert!(a == b, "{who}: learned states differ after resuming");
+        eprintln!("{who}: resumed bit for bit ({:.2} s)", t0.elapsed().as_secs_f64());
+    }
+}
+
+#[test]
+fn a_checkpoint_does_not_restore_into_another_learner() {
+    let all = presets();
+    let mut mlac = Experiment::new(&all[0], 0);
+    mlac.next_trial().unwrap();
+    let c = mlac.checkpoint();
+    let mut checked = 0;
+    for other in &all[1..] {
+        let e = Experiment::resume(other, 0, &c).err().expect("refused");
+        assert!(
+            e.0.contains("checkpoint is from") || e.0.contains("different learning parameters"),
+            "{}: {e}",
+            name(other)
+        );
+        checked += 1;
+    }
+    assert!(checked > 10);
+    // Past the origin check (a forged origin), the sections' names and shapes still do
+    // not fit another learner: an error, never a panic.
+    for other in &all[1..] {
+        let mut forged = c.clone();
+        forged.origin = agent::checkpoint::Origin::of(other, 0);
+        if let Err(e) = Experiment::resume(other, 0, &forged) {
+            assert!(
+                e.0.contains("differently configured"),
+                "{}: {e}",
+                name(other)
+            );
+        }
+    }
+}
