@@ -9,4 +9,5 @@ pub mod loop_bench;
 pub mod process;
 pub mod record;
 pub mod report;
+pub mod resume;
 pub mod run;

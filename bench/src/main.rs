@@ -96,9 +96,64 @@ struct RunArgs {
     plant: String,
     #[command(flatten)]
     driver: DriverArgs,
+    /// Continue the run in DIR after a crash, a killed process or Ctrl-C: from its last
+    /// trial that is complete in returns.csv, in the agent's checkpoints
+    /// (DIR/checkpoints) and in run.mcap. The configuration is DIR/config.toml; of the
+    /// experiment flags only `--trials` may be given (to learn on past the original
+    /// end). `--timing`, `--speed`, `--plant` and the driver flags apply to the part that
+    /// is run now. Completed trials stay in returns.csv and run.mcap.
+    #[arg(long, value_name = "DIR", conflicts_with = "out")]
+    resume: Option<PathBuf>,
     /// No progress bar and no summary.
     #[arg(long)]
     quiet: bool,
+}
+
+/// The experiment flags given besides `--trials` (which `rig run --resume` refuses).
+fn experiment_flags(s: &Selection) -> Vec<&'static str> {
+    [
+        ("--system", s.system.is_some()),
+        ("--algo", s.algo.is_some()),
+        ("--approx", s.approx.is_some()),
+        ("--horizon", s.horizon.is_some()),
+        ("--runs", s.runs.is_some()),
+        ("--seed", s.seed.is_some()),
+        ("--eval-every", s.eval_every.is_some()),
+        ("--sensor", s.sensor.is_some()),
+        ("--observer", s.observer.is_some()),
+        ("--config", s.config.is_some()),
+    ]
+    .into_iter()
+    .filter_map(|(flag, given)| given.then_some(flag))
+    .collect()
+}
+
+/// The configuration of a run to resume: `DIR/config.toml`, with `--trials` if given.
+fn resume_selection(
+    dir: &std::path::Path,
+    s: &Selection,
+) -> Result<agent::config::ExperimentConfig, String> {
+    let flags = experiment_flags(s);
+    if !flags.is_empty() {
+        return Err(format!(
+            "`--resume` continues the run with its own configuration ({}); {} cannot change it (only `--trials` can)",
+            dir.join("config.toml").display(),
+            flags.join(", ")
+        ));
+    }
+    let path = dir.join("config.toml");
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        format!(
+            "{}: cannot read ({e}); is {} a `rig run` directory?",
+            path.display(),
+            dir.display()
+        )
+    })?;
+    let o = Overrides {
+        trials: s.trials,
+        ..Overrides::default()
+    };
+    resolve(Some((&path, &text)), &o).map_err(|e| e.to_string())
 }
 
 /// Which external driver, and how long to wait for it (`rig run`: with `--plant
@@ -303,7 +358,11 @@ fn main() -> ExitCode {
         Command::Observer(args) => process(rig::process::observer::run, &args),
         Command::Agent(args) => process(rig::process::agent::run, &args),
         Command::Run(args) => {
-            let mut cfg = match resolve_selection(&args.selection) {
+            let selected = match &args.resume {
+                Some(dir) => resume_selection(dir, &args.selection),
+                None => resolve_selection(&args.selection),
+            };
+            let mut cfg = match selected {
                 Ok(c) => c,
                 Err(e) => {
                     eprintln!("error: {e}");
@@ -345,7 +404,8 @@ fn main() -> ExitCode {
                 None
             };
             let opts = RunOptions {
-                out: args.out.clone(),
+                out: args.resume.clone().unwrap_or_else(|| args.out.clone()),
+                resume: args.resume.is_some(),
                 run_id: args.run_id.clone(),
                 progress: !args.quiet,
                 realtime,

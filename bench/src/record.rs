@@ -294,6 +294,38 @@ impl Recorder {
         Ok(())
     }
 
+    /// Whether a channel of `topic` is declared.
+    pub fn has_topic(&self, topic: &str) -> bool {
+        self.channels.iter().any(|c| c.topic == topic)
+    }
+
+    /// Records a message already encoded for the channel of `topic` — one copied from an
+    /// earlier recording with the same channel layout (`rig run --resume`).
+    pub fn write_encoded(
+        &mut self,
+        topic: &str,
+        log_time_ns: u64,
+        publish_time_ns: u64,
+        data: &[u8],
+    ) -> Result<()> {
+        let ch = self
+            .channels
+            .iter_mut()
+            .find(|c| c.topic == topic)
+            .ok_or_else(|| anyhow!("the recording has no topic {topic}"))?;
+        let header = MessageHeader {
+            channel_id: ch.id,
+            sequence: ch.sequence,
+            log_time: log_time_ns,
+            publish_time: publish_time_ns,
+        };
+        self.writer
+            .write_to_known_channel(&header, data)
+            .with_context(|| format!("cannot write {}", self.part.display()))?;
+        ch.sequence = ch.sequence.wrapping_add(1);
+        Ok(())
+    }
+
     /// Stores a file in the recording (e.g. the resolved `config.toml`, `text/x-toml`), with
     /// log and create times 0. Closes the current chunk.
     pub fn attach(&mut self, name: &str, media_type: &str, data: &[u8]) -> Result<()> {

@@ -33,6 +33,7 @@ use crate::experiment::TrialRecord;
 use crate::learn::{RUNS_HEADER, progress_bar, write_atomic, write_row};
 use crate::process::wire_err;
 use crate::record::{ChannelId, Field, FieldKind, Recorder, Value};
+use crate::resume::{self, ResumePoint};
 
 /// Where and how to run.
 #[derive(Clone, Debug)]
@@ -48,6 +49,8 @@ pub struct RunOptions {
     pub realtime: Option<f64>,
     /// An external driver in place of the simulated plant.
     pub driver: Option<ExternalDriver>,
+    /// Continue the run in `out` from its last complete trial ([`crate::resume`]).
+    pub resume: bool,
 }
 
 /// An external driver in place of the simulated plant (`rig run --plant external`).
@@ -88,6 +91,14 @@ struct Returns {
     horizon: Horizon,
     reward: plant::QuadraticReward,
     pending: Option<TrialRecord>,
+    /// Whether the pending learning trial has ended.
+    pending_ended: bool,
+    /// Greedy evaluation trials after a learning trial, when due (one per start state).
+    eval_starts: u32,
+    /// A greedy evaluation after every this-many trials (0: none).
+    eval_every: u32,
+    /// The agent's checkpoints: the two latest are kept.
+    checkpoints: PathBuf,
     /// The running greedy trial's reward sum.
     greedy_trial: f64,
     /// Sum of the returns of the greedy trials after the pending trial, and their count.
@@ -110,6 +121,7 @@ impl Returns {
                 self.greedy_trial = 0.0;
             } else {
                 self.greedy = (0.0, 0);
+                self.pending_ended = false;
                 self.pending = Some(TrialRecord {
                     run: 0,
                     trial: m.header.trial as u32,
@@ -143,6 +155,7 @@ impl Returns {
         } else {
             pending.ret += m.reward;
             if end {
+                self.pending_ended = true;
                 pending.ret += final_reward;
                 self.skipped_samples += self.steps_per_trial.saturating_sub(m.header.step);
                 pending.sim_time_s = f64::from(pending.trial) * self.trial_seconds
@@ -156,7 +169,21 @@ impl Returns {
         if let Some(r) = self.pending.take() {
             write_row(&mut self.out, &r)?;
             self.out.flush()?;
+            resume::prune(&self.checkpoints, r.trial.saturating_sub(1));
             self.records.push(r);
+        }
+        Ok(())
+    }
+
+    /// After a failure: writes the pending trial only if it is complete — the learning
+    /// trial and its greedy evaluations (a resumed run redoes an incomplete one).
+    fn flush_complete(&mut self) -> Result<()> {
+        let complete = self.pending.as_ref().is_some_and(|p| {
+            let due = self.eval_every > 0 && p.trial.is_multiple_of(self.eval_every);
+            self.pending_ended && self.greedy.1 == if due { self.eval_starts } else { 0 }
+        });
+        if complete {
+            self.flush()?;
         }
         Ok(())
     }
@@ -526,6 +553,15 @@ impl Supervisor {
         Ok(())
     }
 
+    /// How far the run got, and how to continue it.
+    fn resume_hint(&self) -> String {
+        format!(
+            "{} completed trials are in returns.csv; continue with `rig run --resume {}`",
+            self.returns.records.len(),
+            self.out.display()
+        )
+    }
+
     fn supervise(&mut self, bar: &ProgressBar) -> Result<()> {
         loop {
             if self.drain(bar)? {
@@ -533,8 +569,8 @@ impl Supervisor {
             }
             if self.bus.interrupted() {
                 bail!(
-                    "interrupted: stopped the plant, observer and agent processes; {} completed trials are in returns.csv",
-                    self.returns.records.len()
+                    "interrupted: stopped the plant, observer and agent processes; {}",
+                    self.resume_hint()
                 );
             }
             if let Some((role, status, log)) = self.exited()? {
@@ -544,7 +580,8 @@ impl Supervisor {
                     break;
                 }
                 bail!(
-                    "the {role} process exited ({status}) before the run finished; last lines of {}:\n{}",
+                    "the {role} process exited ({status}) before the run finished; {}; last lines of {}:\n{}",
+                    self.resume_hint(),
                     log.display(),
                     log_tail(&log)
                 );
@@ -574,8 +611,24 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
             }
         ));
     }
+    // Where a resumed run continues; checked before anything is written.
+    let point = if opts.resume {
+        Some(resume::prepare(&opts.out, &cfg)?)
+    } else {
+        None
+    };
+    if let Some(p) = &point {
+        for note in &p.notes {
+            eprintln!("note: {note}");
+        }
+    }
     std::fs::create_dir_all(&opts.out)
         .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
+    let checkpoints = resume::checkpoint_dir(&opts.out);
+    if point.is_none() {
+        // A new run in an old directory: old checkpoints must not be taken for its own.
+        resume::prune(&checkpoints, u32::MAX);
+    }
     let config_path = opts.out.join("config.toml");
     write_atomic(&config_path, &cfg.to_toml())?;
     let bus = Bus::join(&run_id, "rig").map_err(wire_err)?;
@@ -624,11 +677,20 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
             },
         ),
         ("rig_version", env!("CARGO_PKG_VERSION").to_string()),
+        (
+            "resumed_after_trial",
+            point
+                .as_ref()
+                .map_or("-".to_string(), |p| p.trial.to_string()),
+        ),
     ]
     .into_iter()
     .map(|(k, v)| (k.to_string(), v))
     .collect();
     recording.rec.metadata("run", &meta)?;
+    if let Some(p) = &point {
+        copy_recorded(&mut recording.rec, p, &opts.out)?;
+    }
 
     let returns_path = opts.out.join("returns.csv");
     let mut out = BufWriter::new(
@@ -636,18 +698,30 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
             .with_context(|| format!("cannot create {}", returns_path.display()))?,
     );
     writeln!(out, "{RUNS_HEADER}")?;
+    let kept = point.as_ref().map_or(&[][..], |p| &p.records[..]);
+    for r in kept {
+        write_row(&mut out, r)?;
+    }
+    out.flush()?;
+    let (after, sim_time) = point.as_ref().map_or((0, 0.0), |p| (p.trial, p.sim_time_s));
     let returns = Returns {
         out,
         trial_seconds: task.trial_seconds,
         ts: task.ts,
         steps_per_trial: task.steps_per_trial() as u64,
-        skipped_samples: 0,
+        skipped_samples: ((f64::from(after) * task.trial_seconds - sim_time) / task.ts)
+            .round()
+            .max(0.0) as u64,
         horizon: cfg.horizon.of(&task),
         reward: task.reward.clone(),
         pending: None,
+        pending_ended: false,
+        eval_starts: task.initial_states.len() as u32,
+        eval_every: cfg.run.eval_every,
+        checkpoints: checkpoints.clone(),
         greedy_trial: 0.0,
         greedy: (0.0, 0),
-        records: Vec::new(),
+        records: kept.to_vec(),
     };
 
     let exe = std::env::current_exe().context("cannot find the rig executable")?;
@@ -669,6 +743,27 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
             speed.to_string(),
         ],
     };
+    let first_seq = point.as_ref().map_or(0, |p| p.first_seq);
+    let mut role_args: BTreeMap<&str, Vec<String>> = BTreeMap::new();
+    role_args.insert("plant", plant_timing);
+    let mut agent_args = vec![
+        "--checkpoints".to_string(),
+        checkpoints.display().to_string(),
+    ];
+    if let Some(p) = &point {
+        if let Some(c) = &p.checkpoint {
+            agent_args.extend(["--resume".to_string(), c.display().to_string()]);
+        }
+        role_args.get_mut("plant").expect("plant").extend([
+            "--after-trial".to_string(),
+            p.trial.to_string(),
+            "--sim-time".to_string(),
+            p.sim_time_s.to_string(),
+            "--first-seq".to_string(),
+            p.first_seq.to_string(),
+        ]);
+    }
+    role_args.insert("agent", agent_args);
     for role in ["agent", "observer", "plant"] {
         let log = opts.out.join(format!("{role}.log"));
         let log_file =
@@ -677,11 +772,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
             .arg(role)
             .args(["--run-id", &run_id, "--receivers", "2", "--config"])
             .arg(&config_path)
-            .args(if role == "plant" {
-                &plant_timing[..]
-            } else {
-                &[]
-            })
+            .args(role_args.get(role).map_or(&[][..], |a| &a[..]))
             .stdin(Stdio::null())
             .stdout(log_file.try_clone()?)
             .stderr(log_file)
@@ -692,6 +783,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
 
     let evals = cfg.run.trials.checked_div(cfg.run.eval_every).unwrap_or(0);
     let bar = progress_bar(u64::from(cfg.run.trials + evals), opts.progress, "rig run");
+    bar.inc(u64::from(
+        after + after.checked_div(cfg.run.eval_every).unwrap_or(0),
+    ));
     let t0 = Instant::now();
     let mut sup = Supervisor {
         bus,
@@ -703,7 +797,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         children,
         out: opts.out.clone(),
         messages: 0,
-        continuity: Default::default(),
+        continuity: std::array::from_fn(|_| Continuity { next: first_seq }),
         deadline_misses: 0,
         driver: watch,
     };
@@ -712,7 +806,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     // Stop the processes first (on failure), then finish the recording either way, so
     // that run.mcap is readable after any outcome.
     drop(std::mem::replace(&mut sup.children, Children(Vec::new())));
-    let _ = sup.returns.flush();
+    let _ = sup.returns.flush_complete();
     let Supervisor {
         recording,
         returns,
@@ -730,6 +824,30 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         deadline_misses,
         driver: driver_info,
     })
+}
+
+/// Copies the messages a resumed run keeps into its new recording, then removes the old
+/// recording (so that only the new one holds them).
+fn copy_recorded(rec: &mut Recorder, p: &ResumePoint, out: &Path) -> Result<()> {
+    for m in &p.messages {
+        if m.topic.starts_with("/driver/") && !rec.has_topic(&m.topic) {
+            // An external driver's traffic, recorded before; this part runs without one.
+            continue;
+        }
+        rec.write_encoded(&m.topic, m.log_time, m.publish_time, &m.data)
+            .with_context(|| {
+                format!(
+                    "cannot keep the recorded trials: {} was recorded with another channel layout",
+                    out.join("run.mcap").display()
+                )
+            })?;
+    }
+    rec.flush()?;
+    let old = out.join("run.mcap");
+    if old.exists() {
+        std::fs::remove_file(&old).with_context(|| format!("cannot remove {}", old.display()))?;
+    }
+    Ok(())
 }
 
 /// Waits for driver `d`'s info (saying so after a second of silence when `verbose`)

@@ -84,7 +84,10 @@ fn every_learner_resumes_bit_for_bit() {
         straight.agent().save(&mut a);
         resumed.agent().save(&mut b);
         assert!(a == b, "{who}: learned states differ after resuming");
-        eprintln!("{who}: resumed bit for bit ({:.2} s)", t0.elapsed().as_secs_f64());
+        eprintln!(
+            "{who}: resumed bit for bit ({:.2} s)",
+            t0.elapsed().as_secs_f64()
+        );
     }
 }
 

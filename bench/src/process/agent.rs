@@ -1,10 +1,12 @@
 //! The agent process: state estimates in, actions out; learns as it goes.
 
+use ::agent::checkpoint::{Checkpoint, Origin, Snapshot};
 use ::plant::Task;
-use anyhow::Result;
+use anyhow::{Result, anyhow, bail};
 use wire::{Action, Bus, Estimate, flags, now_ns, topic};
 
 use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
+use crate::resume::CheckpointWriter;
 
 /// Runs the agent side of a run until the plant announces its end.
 pub fn run(args: &ProcessArgs) -> Result<()> {
@@ -15,6 +17,25 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         &cfg,
         ::agent::seed::run_seed(cfg.run.seed, args.run_index),
     );
+    let origin = Origin::of(&cfg, args.run_index);
+    // The first learning trial this process runs.
+    let mut expect_trial = 1;
+    if let Some(path) = &args.resume {
+        let c = Checkpoint::read(path).map_err(|e| anyhow!("{e}"))?;
+        c.check_origin(&cfg, args.run_index)
+            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        let mut r = c.state.reader();
+        agent
+            .restore(&mut r)
+            .and_then(|()| r.finish())
+            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        expect_trial = u64::from(c.trial) + 1;
+    }
+    let mut checkpoints = args
+        .checkpoints
+        .as_deref()
+        .map(CheckpointWriter::new)
+        .transpose()?;
     let bus = Bus::join(&args.run_id, "agent").map_err(wire_err)?;
     let estimates = bus.rx::<Estimate>(topic::ESTIMATE).map_err(wire_err)?;
     let out = bus.tx::<Action>(topic::ACTION).map_err(wire_err)?;
@@ -35,11 +56,31 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                     agent.greedy(e.header.step as usize, x, &e.u_applied[..m], &mut u);
                 }
             } else if f & flags::START != 0 {
+                if e.header.trial != expect_trial {
+                    bail!(
+                        "the plant started trial {} where trial {expect_trial} was due (a resumed agent continues after its checkpoint's trial)",
+                        e.header.trial
+                    );
+                }
+                expect_trial += 1;
                 agent.start_trial(x, &mut u);
-            } else if f & flags::TERMINAL != 0 {
-                agent.learn_terminal(e.reward, x);
             } else if f & flags::END != 0 {
-                agent.learn(e.reward, x, None);
+                if f & flags::TERMINAL != 0 {
+                    agent.learn_terminal(e.reward, x);
+                } else {
+                    agent.learn(e.reward, x, None);
+                }
+                // The trial's learning is complete: checkpoint it before acknowledging.
+                if let Some(w) = &mut checkpoints {
+                    let mut state = Snapshot::default();
+                    agent.save(&mut state);
+                    w.save(Checkpoint {
+                        origin: origin.clone(),
+                        trial: e.header.trial as u32,
+                        sim_time_s: e.header.t_sim,
+                        state,
+                    })?;
+                }
             } else {
                 agent.learn(e.reward, x, Some(&mut u));
             }
@@ -54,6 +95,9 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         };
         out.send(a).map_err(wire_err)?;
         if f & flags::SHUTDOWN != 0 {
+            if let Some(w) = &mut checkpoints {
+                w.finish()?;
+            }
             return Ok(());
         }
     }

@@ -79,6 +79,24 @@ pub struct ProcessArgs {
     /// the system to rest at the start state) [s].
     #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
     pub reset_timeout: f64,
+    /// Agent only: write a checkpoint of the learned state at the end of every learning
+    /// trial into this directory (`trial-NNNNNN.ckpt`, atomically).
+    #[arg(long, value_name = "DIR")]
+    pub checkpoints: Option<PathBuf>,
+    /// Agent only: start from this checkpoint's learned state (the run's trials continue
+    /// after the checkpoint's trial; the plant is started with `--after-trial`).
+    #[arg(long, value_name = "FILE")]
+    pub resume: Option<PathBuf>,
+    /// Plant only: continue a run after this trial (its greedy evaluations done).
+    #[arg(long, value_name = "TRIAL", default_value_t = 0)]
+    pub after_trial: u32,
+    /// Plant only, with `--after-trial`: the simulated learning time at that trial's end
+    /// [s].
+    #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
+    pub sim_time: f64,
+    /// Plant only, with `--after-trial`: the sequence number of the first sample.
+    #[arg(long, value_name = "SEQ", default_value_t = 0)]
+    pub first_seq: u64,
 }
 
 impl ProcessArgs {
