@@ -1,11 +1,13 @@
 //! The `rig` command's library: the in-process experiment driver ([`experiment`]),
-//! `rig learn` ([`learn`]), and reports — learning-curve statistics and plots
+//! `rig learn` ([`learn`]), the pendulum's optimal-control reference ([`optimal`]), and
+//! reports — learning-curve statistics and plots
 //! ([`report`]).
 
 pub mod driver;
 pub mod experiment;
 pub mod learn;
 pub mod loop_bench;
+pub mod optimal;
 pub mod process;
 pub mod record;
 pub mod report;

@@ -39,6 +39,10 @@ enum Command {
     /// the stale-action watchdog, clamping and rejection of bad actions. Prints one
     /// PASS/FAIL line per check; exits non-zero if any fails.
     CheckDriver(CheckDriverArgs),
+    /// Compute the optimal return of the pendulum swing-up from [π, 0] (one 3 s trial,
+    /// Eq. 3.16) by dynamic programming on a grid, run the DP's policy on the plant, and
+    /// write its trajectory to DIR/optimal.csv (t, angle, velocity, u, reward).
+    Optimal(OptimalArgs),
     /// Measure the three-process lockstep loop (trivial agent, no recorder) next to a
     /// raw iceoryx2 ping-pong between two processes, in the same run; writes loop.csv.
     BenchLoop(BenchLoopArgs),
@@ -64,6 +68,21 @@ struct BenchLoopArgs {
     samples: usize,
     /// Output directory.
     #[arg(long, value_name = "DIR", default_value = "out/bench-loop")]
+    out: PathBuf,
+}
+
+#[derive(Args)]
+struct OptimalArgs {
+    /// Grid nodes per state dimension: the angle (periodic, on [-π, π)) and the velocity
+    /// (on [−8π, 8π] rad/s); an integer in [21, 4001], with grid² × actions ≤ 2·10⁸.
+    #[arg(long, value_name = "N", default_value_t = 401)]
+    grid: usize,
+    /// Action levels, evenly spaced on [−3, 3] V with both bounds (61: steps of 0.1 V);
+    /// an integer in [2, 1001].
+    #[arg(long, value_name = "M", default_value_t = 61)]
+    actions: usize,
+    /// Output directory (created if missing).
+    #[arg(long, value_name = "DIR", default_value = "out/optimal")]
     out: PathBuf,
 }
 
@@ -354,6 +373,7 @@ fn main() -> ExitCode {
             }
         },
         Command::CheckDriver(args) => check_driver(&args),
+        Command::Optimal(args) => optimal(&args),
         Command::Plant(args) => process(rig::process::plant::run, &args),
         Command::Observer(args) => process(rig::process::observer::run, &args),
         Command::Agent(args) => process(rig::process::agent::run, &args),
@@ -493,6 +513,56 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+fn optimal(args: &OptimalArgs) -> ExitCode {
+    use rig::optimal::{OptimumOptions, pendulum_optimum, write_trajectory};
+    let opts = OptimumOptions {
+        grid: args.grid,
+        actions: args.actions,
+    };
+    if let Err(e) = opts.validate() {
+        eprintln!("error: {e}");
+        return ExitCode::from(2);
+    }
+    let o = match pendulum_optimum(&opts) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let csv = args.out.join("optimal.csv");
+    let written = std::fs::create_dir_all(&args.out)
+        .map_err(anyhow::Error::from)
+        .and_then(|()| write_trajectory(&csv, &o.trajectory));
+    if let Err(e) = written {
+        eprintln!("error: {}: {e:#}", csv.display());
+        return ExitCode::FAILURE;
+    }
+    println!(
+        "pendulum swing-up from [π, 0], 3 s (100 samples), Eq. 3.16: grid {0}×{0} (velocity ±{1:.2} rad/s), {2} action levels",
+        opts.grid, o.velocity_limit, opts.actions
+    );
+    println!(
+        "  optimal return, grid value V_0:          {:.2}",
+        o.value_grid
+    );
+    println!(
+        "  optimal return, DP policy on the plant:  {:.2}  (gap {:.3} %; max |velocity| {:.1} rad/s)",
+        o.simulated_return,
+        100.0 * o.relative_gap(),
+        o.max_speed
+    );
+    println!(
+        "  wall time {:.1} s (transitions {:.1} s, {} backups {:.1} s)",
+        o.wall.as_secs_f64(),
+        o.transitions_time.as_secs_f64(),
+        o.trajectory.len(),
+        o.backups_time.as_secs_f64()
+    );
+    println!("  wrote {}", csv.display());
+    ExitCode::SUCCESS
 }
 
 fn check_driver(args: &CheckDriverArgs) -> ExitCode {
