@@ -79,6 +79,10 @@ pub struct RunSummary {
     pub driver: Option<DriverInfo>,
 }
 
+/// How long the supervisor watches after a process exits early, to see which process
+/// caused the stop (the others follow within milliseconds).
+const CAUSE_WINDOW: Duration = Duration::from_millis(100);
+
 /// Builds `returns.csv` rows from the plant's measurements.
 struct Returns {
     out: BufWriter<File>,
@@ -467,6 +471,10 @@ struct Supervisor {
     deadline_misses: u64,
     /// The external driver's traffic, recorded.
     driver: Option<DriverWatch>,
+    /// Realtime and external driver: how long to go on recording after a process died,
+    /// so that the recording shows the plant's reaction (its watchdog, or the driver's,
+    /// applying the safe action within two periods).
+    grace: Option<Duration>,
 }
 
 impl Supervisor {
@@ -527,6 +535,23 @@ impl Supervisor {
         Ok(None)
     }
 
+    /// Of the processes that have exited, the one that caused the others to: killed by a
+    /// signal rather than stopped by an error (a process whose peer dies stops with one).
+    fn cause(&mut self) -> Result<(&'static str, std::process::ExitStatus, PathBuf)> {
+        use std::os::unix::process::ExitStatusExt;
+        let mut first = None;
+        for (role, child) in &mut self.children.0 {
+            if let Some(status) = child.try_wait()? {
+                let found = (*role, status, self.out.join(format!("{role}.log")));
+                if status.signal().is_some() {
+                    return Ok(found);
+                }
+                first.get_or_insert(found);
+            }
+        }
+        first.ok_or_else(|| anyhow!("a process exited and could not be found again"))
+    }
+
     /// Waits for every process to exit after the end of the run.
     fn reap(&mut self) -> Result<()> {
         let deadline = Instant::now() + Duration::from_secs(10);
@@ -573,12 +598,32 @@ impl Supervisor {
                     self.resume_hint()
                 );
             }
-            if let Some((role, status, log)) = self.exited()? {
+            if let Some((_, status, _)) = self.exited()? {
                 // A process that ends cleanly after its last message can be seen to exit
                 // before that message is read: look once more.
                 if status.success() && self.drain(bar)? {
                     break;
                 }
+                // Go on recording for a while: the plant's reaction (realtime), and the
+                // peers' exits, to tell the cause from its consequences.
+                let end = Instant::now() + self.grace.unwrap_or_default().max(CAUSE_WINDOW);
+                let mut done = false;
+                while Instant::now() < end {
+                    // Errors here are consequences of the death reported below.
+                    match self.drain(bar) {
+                        Ok(false) => {}
+                        Ok(true) => {
+                            done = true;
+                            break;
+                        }
+                        Err(_) => break,
+                    }
+                }
+                if done && self.cause().is_ok_and(|(_, s, _)| s.success()) {
+                    // The run's end came after all: processes exit as it passes.
+                    break;
+                }
+                let (role, status, log) = self.cause()?;
                 bail!(
                     "the {role} process exited ({status}) before the run finished; {}; last lines of {}:\n{}",
                     self.resume_hint(),
@@ -800,6 +845,11 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         continuity: std::array::from_fn(|_| Continuity { next: first_seq }),
         deadline_misses: 0,
         driver: watch,
+        grace: match (&driver_info, opts.realtime) {
+            (Some(i), _) => Some(Duration::from_nanos(i.period_ns.saturating_mul(4))),
+            (None, Some(speed)) => Some(Duration::from_secs_f64(4.0 * task.ts / speed)),
+            (None, None) => None,
+        },
     };
     let outcome = sup.supervise(&bar);
     bar.finish_and_clear();

@@ -497,6 +497,10 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Tx<T> {
     }
 }
 
+/// How long a receiver still waits for a message after a peer process has left: what the
+/// peer sent last may still be passed on by a process in between.
+const PASSING_ON: Duration = Duration::from_millis(250);
+
 impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
     /// The next message, if one is waiting.
     pub fn try_recv(&self) -> Result<Option<T>, Error> {
@@ -536,8 +540,11 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
             }
             let lost = bus.lost_peers();
             if !lost.is_empty() {
-                // A message sent before its sender left is in the queue by now.
-                if let Some(m) = self.try_recv()? {
+                // A message sent before its sender left is in the queue by now; one that
+                // a process in between (the observer) still forwards comes within
+                // moments — the plant ends a run by sending SHUTDOWN and exiting.
+                if let Some(m) = self.recv_timeout(PASSING_ON)? {
+                    bus.prime();
                     return Ok(m);
                 }
                 let who = match lost.as_slice() {

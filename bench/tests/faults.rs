@@ -1,0 +1,401 @@
+//! Faults with real processes: each of plant, observer and agent killed with `kill -9`
+//! in the middle of a run — lockstep and realtime — and `rig run --resume`.
+//!
+//! * Lockstep: `rig run` names the dead process and exits non-zero, `run.mcap` is
+//!   readable, no completed trial is lost, and `--resume` continues so that
+//!   `returns.csv` and every recorded message equal those of a run never interrupted.
+//! * Realtime: the plant's samples after the death show the safe action (zero) within
+//!   two periods of the last action, on the plant's clock.
+//! * Bad resumes: one-line errors naming the file and the problem.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn rig() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rig"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rig-faults-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn ok(out: Output) -> Output {
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn lines(path: &Path) -> usize {
+    std::fs::read_to_string(path)
+        .unwrap_or_default()
+        .lines()
+        .count()
+}
+
+/// Waits (at most 60 s) until `returns.csv` in `dir` has at least `n` lines.
+fn wait_for_rows(dir: &Path, n: usize) {
+    let t0 = Instant::now();
+    while lines(&dir.join("returns.csv")) < n {
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "the run did not get going: {}",
+            dir.display()
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
+
+/// Kills (`kill -9`) the child of `sup` that runs `role`; returns when.
+fn kill_role(sup: &Child, role: &str) -> Instant {
+    let out = Command::new("pgrep")
+        .args(["-P", &sup.id().to_string()])
+        .output()
+        .unwrap();
+    let pid = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| l.trim().parse::<u32>().ok())
+        .find(|pid| {
+            std::fs::read(format!("/proc/{pid}/cmdline"))
+                .unwrap_or_default()
+                .split(|&b| b == 0)
+                .any(|arg| arg == role.as_bytes())
+        })
+        .unwrap_or_else(|| panic!("no {role} process"));
+    let t = Instant::now();
+    Command::new("kill")
+        .args(["-9", &pid.to_string()])
+        .status()
+        .unwrap();
+    t
+}
+
+/// Messages per topic, in file order: (MCAP sequence, log time, data).
+type Messages = BTreeMap<String, Vec<(u32, u64, Vec<u8>)>>;
+
+/// Reads a recording with its summary (a finished file) and every message.
+fn recording(path: &Path) -> Messages {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let summary = mcap::Summary::read(&bytes)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .expect("a summary: the recording was finished");
+    assert!(summary.stats.is_some());
+    let mut out = Messages::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        out.entry(m.channel.topic.clone()).or_default().push((
+            m.sequence,
+            m.log_time,
+            m.data.into_owned(),
+        ));
+    }
+    out
+}
+
+/// The run messages (plant, observer, agent), without the wall-clock timing channels.
+fn run_messages(path: &Path) -> Messages {
+    let mut m = recording(path);
+    m.retain(|topic, _| !topic.starts_with("/timing/"));
+    m
+}
+
+const RUN: [&str; 6] = ["--trials", "30", "--eval-every", "5", "--quiet", "--out"];
+
+#[test]
+fn a_process_killed_in_lockstep_loses_no_trial_and_resume_continues_bit_for_bit() {
+    let dir = tmp("lockstep");
+    ok(rig()
+        .arg("run")
+        .args(RUN)
+        .arg(dir.join("whole"))
+        .output()
+        .unwrap());
+    let whole = std::fs::read_to_string(dir.join("whole/returns.csv")).unwrap();
+    let whole_msgs = run_messages(&dir.join("whole/run.mcap"));
+    for (i, role) in ["agent", "observer", "plant"].into_iter().enumerate() {
+        let out = dir.join(role);
+        let sup = rig()
+            .arg("run")
+            .args(RUN)
+            .arg(&out)
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Different moments: after 4, 9 and 14 trials have been written.
+        wait_for_rows(&out, 5 + 5 * i);
+        kill_role(&sup, role);
+        let died = sup.wait_with_output().unwrap();
+        let err = stderr(&died);
+        assert!(!died.status.success(), "{role}: rig run must fail");
+        assert!(
+            err.contains(&format!("the {role} process exited (signal: 9")),
+            "{role}: {err}"
+        );
+        assert!(err.contains("rig run --resume"), "{role}: {err}");
+        // Readable, and no completed trial lost: the rows written are the whole run's.
+        let before = std::fs::read_to_string(out.join("returns.csv")).unwrap();
+        assert!(whole.starts_with(&before), "{role}: {before}");
+        let recorded = run_messages(&out.join("run.mcap"));
+        let rows = before.lines().count() - 1;
+        assert!(rows >= 4 + 5 * i && rows < 30, "{role}: {rows} rows");
+        for (topic, msgs) in &recorded {
+            let n = msgs.len();
+            assert_eq!(msgs[..], whole_msgs[topic][..n], "{role}: {topic}");
+        }
+
+        let resumed = ok(rig()
+            .args(["run", "--quiet", "--resume"])
+            .arg(&out)
+            .output()
+            .unwrap());
+        assert!(resumed.status.success());
+        let after = std::fs::read_to_string(out.join("returns.csv")).unwrap();
+        assert_eq!(after, whole, "{role}: returns.csv after --resume");
+        assert_eq!(
+            run_messages(&out.join("run.mcap")),
+            whole_msgs,
+            "{role}: run.mcap after --resume"
+        );
+    }
+}
+
+#[test]
+fn a_finished_run_learns_on_with_more_trials() {
+    let dir = tmp("more");
+    let args = [
+        "--algo",
+        "vgbp",
+        "--approx",
+        "lstd",
+        "--eval-every",
+        "2",
+        "--quiet",
+        "--out",
+    ];
+    ok(rig()
+        .arg("run")
+        .args(["--trials", "8"])
+        .args(args)
+        .arg(dir.join("eight"))
+        .output()
+        .unwrap());
+    ok(rig()
+        .arg("run")
+        .args(["--trials", "4"])
+        .args(args)
+        .arg(dir.join("four"))
+        .output()
+        .unwrap());
+    let done = rig()
+        .args(["run", "--quiet", "--resume"])
+        .arg(dir.join("four"))
+        .output()
+        .unwrap();
+    assert!(!done.status.success());
+    assert!(
+        stderr(&done).contains("nothing to resume"),
+        "{}",
+        stderr(&done)
+    );
+    ok(rig()
+        .args(["run", "--quiet", "--trials", "8", "--resume"])
+        .arg(dir.join("four"))
+        .output()
+        .unwrap());
+    assert_eq!(
+        std::fs::read_to_string(dir.join("four/returns.csv")).unwrap(),
+        std::fs::read_to_string(dir.join("eight/returns.csv")).unwrap()
+    );
+    assert_eq!(
+        run_messages(&dir.join("four/run.mcap")),
+        run_messages(&dir.join("eight/run.mcap"))
+    );
+}
+
+#[test]
+fn bad_resumes_are_one_line_errors() {
+    let dir = tmp("bad");
+    let pendulum = dir.join("pendulum");
+    ok(rig()
+        .args(["run", "--trials", "3", "--quiet", "--out"])
+        .arg(&pendulum)
+        .output()
+        .unwrap());
+    let arm = dir.join("arm");
+    ok(rig()
+        .args([
+            "run",
+            "--system",
+            "arm-vertical",
+            "--trials",
+            "3",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&arm)
+        .output()
+        .unwrap());
+    let resume = |extra: &[&str]| {
+        let out = rig()
+            .args(["run", "--quiet", "--trials", "6"])
+            .args(extra)
+            .arg("--resume")
+            .arg(&pendulum)
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{extra:?} must fail");
+        let err = stderr(&out);
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(!err.contains("panicked"), "{err}");
+        err
+    };
+    let ckpt = pendulum.join("checkpoints/trial-000003.ckpt");
+    let good = std::fs::read(&ckpt).unwrap();
+
+    let err = resume(&["--seed", "2"]);
+    assert!(
+        err.contains("--seed") && err.contains("config.toml"),
+        "{err}"
+    );
+
+    // A checkpoint of another system in its place.
+    std::fs::copy(arm.join("checkpoints/trial-000003.ckpt"), &ckpt).unwrap();
+    let err = resume(&[]);
+    assert!(
+        err.contains("trial-000003.ckpt") && err.contains("from system arm-vertical"),
+        "{err}"
+    );
+
+    // A corrupt checkpoint.
+    let mut bad = good.clone();
+    let mid = bad.len() / 2;
+    bad[mid] ^= 0x40;
+    std::fs::write(&ckpt, &bad).unwrap();
+    let err = resume(&[]);
+    assert!(
+        err.contains("trial-000003.ckpt") && err.contains("corrupt"),
+        "{err}"
+    );
+
+    // A checkpoint of a format this rig does not know.
+    let mut newer = good.clone();
+    newer[8] = 9;
+    std::fs::write(&ckpt, &newer).unwrap();
+    let err = resume(&[]);
+    assert!(err.contains("version 9"), "{err}");
+
+    // Not a run directory.
+    let out = rig()
+        .args(["run", "--quiet", "--resume"])
+        .arg(dir.join("nothing"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("config.toml"), "{}", stderr(&out));
+
+    // With the good checkpoint back, it resumes.
+    std::fs::write(&ckpt, &good).unwrap();
+    ok(rig()
+        .args(["run", "--quiet", "--trials", "6", "--resume"])
+        .arg(&pendulum)
+        .output()
+        .unwrap());
+    assert_eq!(lines(&pendulum.join("returns.csv")), 7);
+}
+
+/// Per sample `seq`: a numeric field of the JSON messages on `topic`.
+fn field(msgs: &Messages, topic: &str, key: &str) -> BTreeMap<u64, f64> {
+    msgs[topic]
+        .iter()
+        .map(|(_, _, data)| {
+            let v: serde_json::Value = serde_json::from_slice(data).unwrap();
+            (
+                v["seq"].as_u64().unwrap(),
+                v[key].as_f64().unwrap_or(f64::NAN),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_process_killed_in_realtime_leaves_the_plant_in_the_safe_action_within_two_periods() {
+    // 3 × real time: 10 ms periods.
+    let period_ns = 10e6;
+    for (i, role) in ["agent", "observer"].into_iter().enumerate() {
+        let dir = tmp(&format!("realtime-{role}"));
+        let sup = rig()
+            .args([
+                "run",
+                "--timing",
+                "realtime",
+                "--speed",
+                "3",
+                "--trials",
+                "400",
+                "--eval-every",
+                "0",
+                "--quiet",
+                "--out",
+            ])
+            .arg(&dir)
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        wait_for_rows(&dir, 3);
+        // Mid-trial, at a different moment for each role.
+        std::thread::sleep(Duration::from_millis(400 + 300 * i as u64));
+        kill_role(&sup, role);
+        let died = sup.wait_with_output().unwrap();
+        let err = stderr(&died);
+        assert!(!died.status.success(), "{role}");
+        assert!(
+            err.contains(&format!("the {role} process exited (signal: 9")),
+            "{err}"
+        );
+
+        let msgs = recording(&dir.join("run.mcap"));
+        let sampled = field(&msgs, "/timing/plant/measurement", "t_sample_ns");
+        let applied = field(&msgs, "/plant/measurement", "u_applied_0");
+        // The last action the plant can have received: the agent's last one.
+        let last = *field(&msgs, "/agent/action", "u_0").keys().max().unwrap();
+        let t_last = sampled[&last];
+        assert!(
+            (last.saturating_sub(5)..=last + 1).any(|k| applied.get(&k).is_some_and(|u| *u != 0.0)),
+            "{role}: actions were being applied before the kill"
+        );
+        // From two periods after the last action's sample on, the plant applies zero:
+        // sample last + 3 reports the interval [t_{last+2}, t_{last+3}).
+        let safe: Vec<u64> = applied.range(last + 3..).map(|(&k, _)| k).collect();
+        assert!(
+            !safe.is_empty(),
+            "{role}: the recording must show the plant after the death (last action at sample {last}, last sample {:?})",
+            applied.keys().max()
+        );
+        for k in safe {
+            assert_eq!(
+                applied[&k], 0.0,
+                "{role}: sample {k} (last action at {last})"
+            );
+            // On the plant's clock.
+            let t = sampled[&k];
+            assert!(t > t_last, "{role}");
+        }
+        let t_safe = sampled[&(last + 2)];
+        assert!(
+            t_safe - t_last <= 2.5 * period_ns,
+            "{role}: safe action {} ms after the last action's sample",
+            (t_safe - t_last) * 1e-6
+        );
+    }
+}
