@@ -295,3 +295,109 @@ fn no_driver_is_a_clear_error_after_the_timeout() {
         assert_eq!(out.status.code(), Some(2), "{args:?}");
     }
 }
+
+/// Per driver sample `seq`: field `key` of the recorded `/driver/sample` messages, and
+/// the recorded `/driver/command` messages as JSON.
+fn driver_traffic(
+    path: &std::path::Path,
+) -> (
+    std::collections::BTreeMap<u64, serde_json::Value>,
+    Vec<serde_json::Value>,
+) {
+    let bytes = std::fs::read(path).unwrap();
+    let (mut samples, mut commands) = (std::collections::BTreeMap::new(), Vec::new());
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        match m.channel.topic.as_str() {
+            "/driver/sample" => {
+                samples.insert(v["seq"].as_u64().unwrap(), v);
+            }
+            "/driver/command" => commands.push(v),
+            _ => {}
+        }
+    }
+    (samples, commands)
+}
+
+/// The plant process (the go-between) or the agent killed while a real driver runs: the
+/// driver's own watchdog applies the safe action within two periods of the last action,
+/// on the driver's clock; `rig run` names the dead process and keeps the recording,
+/// which holds the driver's samples after the death.
+#[test]
+fn a_process_killed_during_an_external_run_leaves_the_driver_safe_within_two_periods() {
+    let Some(py) = python() else { return };
+    for role in ["plant", "agent"] {
+        // 3 × real time: 10 ms periods.
+        let d = Driver::start(&py, &format!("kill{role}"), &["--speed", "3"]);
+        let dir = tmp(&format!("kill-{role}"));
+        let sup = rig()
+            .args(["run", "--plant", "external", "--driver", &d.id])
+            .args(["--trials", "50", "--eval-every", "0", "--quiet", "--out"])
+            .arg(&dir)
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // A row is written when the next trial starts: kill 30 samples into trial 4.
+        let t0 = Instant::now();
+        while std::fs::read_to_string(dir.join("returns.csv"))
+            .unwrap_or_default()
+            .lines()
+            .count()
+            < 4
+        {
+            assert!(t0.elapsed() < Duration::from_secs(60), "no learning");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        std::thread::sleep(Duration::from_millis(300));
+        let pid = String::from_utf8_lossy(
+            &Command::new("pgrep")
+                .args(["-P", &sup.id().to_string()])
+                .output()
+                .unwrap()
+                .stdout,
+        )
+        .lines()
+        .filter_map(|l| l.trim().parse::<u32>().ok())
+        .find(|pid| {
+            std::fs::read(format!("/proc/{pid}/cmdline"))
+                .unwrap_or_default()
+                .split(|&b| b == 0)
+                .any(|a| a == role.as_bytes())
+        })
+        .unwrap();
+        Command::new("kill")
+            .args(["-9", &pid.to_string()])
+            .status()
+            .unwrap();
+        let out = sup.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{role}");
+        assert!(
+            err.contains(&format!("the {role} process exited (signal: 9")),
+            "{role}: {err}"
+        );
+        let (samples, commands) = driver_traffic(&dir.join("run.mcap"));
+        let last = commands.last().expect("commands were recorded");
+        assert_eq!(last["kind"], 1, "{role}: killed mid-trial, the last command is an action");
+        assert_ne!(last["u_0"].as_f64(), Some(0.0), "{role}: a non-zero action");
+        let s = last["sample_seq"].as_u64().unwrap();
+        let period = 10e6;
+        let t = |k: u64| samples[&k]["t_sample_ns"].as_f64().unwrap();
+        let after: Vec<u64> = samples.range(s + 3..).map(|(&k, _)| k).collect();
+        assert!(
+            after.len() >= 2,
+            "{role}: the recording must show the driver after the death (last action for sample {s})"
+        );
+        for k in after {
+            let v = &samples[&k];
+            assert_eq!(v["u_applied_0"].as_f64(), Some(0.0), "{role}: sample {k}: {v}");
+            assert_ne!(v["status"].as_u64().unwrap() & 4, 0, "{role}: WATCHDOG at {k}");
+        }
+        assert!(
+            t(s + 2) - t(s) <= 2.5 * period,
+            "{role}: the safe action from {} ms after the last action's sample",
+            (t(s + 2) - t(s)) * 1e-6
+        );
+    }
+}
