@@ -379,7 +379,10 @@ fn a_process_killed_during_an_external_run_leaves_the_driver_safe_within_two_per
         );
         let (samples, commands) = driver_traffic(&dir.join("run.mcap"));
         let last = commands.last().expect("commands were recorded");
-        assert_eq!(last["kind"], 1, "{role}: killed mid-trial, the last command is an action");
+        assert_eq!(
+            last["kind"], 1,
+            "{role}: killed mid-trial, the last command is an action"
+        );
         assert_ne!(last["u_0"].as_f64(), Some(0.0), "{role}: a non-zero action");
         let s = last["sample_seq"].as_u64().unwrap();
         let period = 10e6;
@@ -391,8 +394,16 @@ fn a_process_killed_during_an_external_run_leaves_the_driver_safe_within_two_per
         );
         for k in after {
             let v = &samples[&k];
-            assert_eq!(v["u_applied_0"].as_f64(), Some(0.0), "{role}: sample {k}: {v}");
-            assert_ne!(v["status"].as_u64().unwrap() & 4, 0, "{role}: WATCHDOG at {k}");
+            assert_eq!(
+                v["u_applied_0"].as_f64(),
+                Some(0.0),
+                "{role}: sample {k}: {v}"
+            );
+            assert_ne!(
+                v["status"].as_u64().unwrap() & 4,
+                0,
+                "{role}: WATCHDOG at {k}"
+            );
         }
         assert!(
             t(s + 2) - t(s) <= 2.5 * period,

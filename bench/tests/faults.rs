@@ -397,5 +397,66 @@ fn a_process_killed_in_realtime_leaves_the_plant_in_the_safe_action_within_two_p
             "{role}: safe action {} ms after the last action's sample",
             (t_safe - t_last) * 1e-6
         );
+        resume_two_more(&dir);
     }
+}
+
+/// Resumes the run in `dir` for two more trials than it completed (lockstep), and checks
+/// that the completed rows stayed as they were.
+fn resume_two_more(dir: &Path) {
+    let before = std::fs::read_to_string(dir.join("returns.csv")).unwrap();
+    let done = before.lines().count() - 1;
+    let out = rig()
+        .args([
+            "run",
+            "--quiet",
+            "--trials",
+            &(done + 2).to_string(),
+            "--resume",
+        ])
+        .arg(dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let after = std::fs::read_to_string(dir.join("returns.csv")).unwrap();
+    assert!(after.starts_with(&before), "{after}");
+    assert_eq!(after.lines().count(), done + 3);
+    let m = recording(&dir.join("run.mcap"));
+    let rows = field(&m, "/plant/measurement", "trial");
+    assert_eq!(
+        rows.values().fold(0.0, |a: f64, &b| a.max(b)),
+        (done + 2) as f64
+    );
+}
+
+#[test]
+fn a_plant_killed_in_realtime_is_named_and_the_run_resumes() {
+    let dir = tmp("realtime-plant");
+    let sup = rig()
+        .args([
+            "run",
+            "--timing",
+            "realtime",
+            "--speed",
+            "3",
+            "--trials",
+            "400",
+            "--eval-every",
+            "0",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&dir)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for_rows(&dir, 3);
+    std::thread::sleep(Duration::from_millis(500));
+    kill_role(&sup, "plant");
+    let died = sup.wait_with_output().unwrap();
+    let err = stderr(&died);
+    assert!(!died.status.success());
+    assert!(err.contains("the plant process exited (signal: 9"), "{err}");
+    assert!(!recording(&dir.join("run.mcap")).is_empty());
+    resume_two_more(&dir);
 }

@@ -48,7 +48,7 @@ use std::sync::Arc;
 use agent::approx::llr::{Eviction, Llr, LlrParams, Search};
 use agent::model::ProcessModel;
 use plant::angle::wrap;
-use plant::{MAX_STATE, Plant, Task, rk4};
+use plant::{MAX_STATE, Task, rk4};
 
 use crate::{Observer, velocity_pairs};
 
@@ -199,7 +199,7 @@ impl Predictive {
             PredictiveModel::Known => {
                 let mut ua = [0.0; plant::MAX_ACTION];
                 let ua = &mut ua[..u.len()];
-                Plant::saturate(&self.task, u, ua);
+                self.task.saturate(u, ua);
                 let h = self.task.ts / self.task.substeps as f64;
                 for _ in 0..self.task.substeps {
                     rk4::step(self.task.dynamics.as_ref(), &mut p[..n], ua, h);
@@ -272,6 +272,7 @@ impl Observer for Predictive {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use plant::Plant;
     use plant::SystemName;
 
     fn pendulum() -> Arc<Task> {

@@ -47,16 +47,17 @@ pub trait Dynamics: Send + Sync {
 
 /// The simulated plant: one sample period of a [`Task`]'s system per [`Plant::step`].
 ///
-/// The action is saturated to the task's bounds (Eq. 6.11's `sat`); a non-finite action
-/// component is replaced by zero, the safe action, and counted. A task with an
-/// [`OperatingRange`] ends its trial when the state leaves the range (§6.4.2):
-/// [`Plant::terminated`].
+/// Every action passes the plant's [`safety::Supervisor`]: saturated to the task's bounds
+/// (Eq. 6.11's `sat`), or, with a non-finite component, replaced by zero, the safe action;
+/// both counted. A task with an [`OperatingRange`] ends its trial when the state leaves
+/// the range (§6.4.2): [`Plant::terminated`].
 pub struct Plant {
     task: std::sync::Arc<Task>,
     x: Vec<f64>,
     applied: Vec<f64>,
-    rejected_actions: u64,
-    terminated: bool,
+    safety: safety::Supervisor,
+    /// The operating range's penalty, once the state has left it this trial.
+    terminated: Option<f64>,
 }
 
 impl Plant {
@@ -65,11 +66,11 @@ impl Plant {
         let x = task.initial_states[0].clone();
         let applied = vec![0.0; task.action_dim()];
         Self {
+            safety: safety::Supervisor::new(&task),
             task,
             x,
             applied,
-            rejected_actions: 0,
-            terminated: false,
+            terminated: None,
         }
     }
 
@@ -83,20 +84,21 @@ impl Plant {
         self.x.copy_from_slice(x0);
         self.task.wrap_state(&mut self.x);
         self.applied.fill(0.0);
-        self.terminated = false;
+        self.terminated = None;
+        self.safety.start_trial();
     }
 
     /// Whether the state has left the task's operating range: the trial is over, and
     /// the last step's reward was the range's penalty.
     pub fn terminated(&self) -> bool {
-        self.terminated
+        self.terminated.is_some()
     }
 
     /// Wraps the angles and checks the operating range after an integration.
     fn settle(&mut self) {
         self.task.wrap_state(&mut self.x);
-        if let Some(range) = &self.task.operating_range {
-            self.terminated |= range.excludes(&self.x);
+        if self.terminated.is_none() {
+            self.terminated = self.safety.check(&self.x);
         }
     }
 
@@ -110,32 +112,16 @@ impl Plant {
         &self.applied
     }
 
-    /// How many non-finite action components have been replaced by the safe action.
-    pub fn rejected_actions(&self) -> u64 {
-        self.rejected_actions
-    }
-
-    /// Saturates `u` to the action bounds, replacing non-finite components by zero.
-    /// Returns how many components were non-finite.
-    pub fn saturate(task: &Task, u: &[f64], out: &mut [f64]) -> u64 {
-        let mut rejected = 0;
-        for i in 0..out.len() {
-            let ui = u[i];
-            out[i] = if ui.is_finite() {
-                ui.clamp(task.action_low[i], task.action_high[i])
-            } else {
-                rejected += 1;
-                0.0
-            };
-        }
-        rejected
+    /// The plant's safety supervisor (its counts; its watchdog, in real time).
+    pub fn safety(&mut self) -> &mut safety::Supervisor {
+        &mut self.safety
     }
 
     /// Applies `u` (saturated) for one sample period `Ts` and returns the reward
     /// `ρ(x_k, u_k)` of the transition: the state before it and the action actually applied
     /// (Eq. 3.16) — or the operating range's penalty if the transition leaves the range.
     pub fn step(&mut self, u: &[f64]) -> f64 {
-        self.rejected_actions += Self::saturate(&self.task, u, &mut self.applied);
+        self.safety.admit(u, &mut self.applied);
         let r = self.task.reward.reward(&self.x, &self.applied);
         let h = self.task.ts / self.task.substeps as f64;
         for _ in 0..self.task.substeps {
@@ -147,17 +133,14 @@ impl Plant {
 
     /// `r`, or the operating range's penalty once the range has been left.
     pub fn reward_of_transition(&self, r: f64) -> f64 {
-        match &self.task.operating_range {
-            Some(range) if self.terminated => range.penalty,
-            _ => r,
-        }
+        self.terminated.unwrap_or(r)
     }
 
     /// Applies `u` (saturated) for `duration` seconds — part of a sample period, when an
     /// action arrives late in real time — with RK4 steps no longer than those of
     /// [`Plant::step`].
     pub fn advance(&mut self, u: &[f64], duration: f64) {
-        self.rejected_actions += Self::saturate(&self.task, u, &mut self.applied);
+        self.safety.admit(u, &mut self.applied);
         if duration <= 0.0 {
             return;
         }

@@ -1,12 +1,159 @@
-//! Safety pieces a plant applies on its side of the loop, whoever computes the actions —
-//! the simulated plant here, or a Rust driver for real hardware:
+//! Safety on the plant's side of the loop, whoever computes the actions — the simulated
+//! plant here, or a Rust driver for real hardware. One [`Supervisor`] per actuator:
 //!
-//! * saturation to the action limits, non-finite components replaced by the safe action
-//!   (zero) and counted: [`crate::Plant::saturate`];
-//! * the operating range, whose violation ends the trial (§6.4.2):
-//!   [`crate::OperatingRange`];
-//! * the stale-action [`Watchdog`]: no fresh action for a number of sample periods ⇒ the
-//!   safe action until actions resume.
+//! * every action passes [`Supervisor::admit`] before it reaches the actuator: clamped
+//!   to the task's limits (counted); an action with a non-finite component is rejected
+//!   whole and the safe action (zero) applies instead (counted);
+//! * [`Supervisor::period`] at every sample instant runs the stale-action [`Watchdog`]:
+//!   no fresh action for a whole period ⇒ the safe action until actions resume;
+//! * [`Supervisor::check`] on every new state: leaving the task's operating range
+//!   (§6.4.2: the arm's ±1.2 rad) ends the trial with the thesis's penalty;
+//! * [`Supervisor::counts`] reports all of it.
+//!
+//! A Rust driver for a DC motor would, per sample instant `t_k`:
+//!
+//! ```
+//! use plant::safety::Supervisor;
+//! use plant::{SystemName, Task};
+//! let task = Task::new(SystemName::Arm64);
+//! let mut safety = Supervisor::new(&task);
+//! let mut torque = [0.0; 2];
+//! // An action arrived during the last period (say from `rig plant --driver`):
+//! safety.admit(&[0.5, f64::NAN], &mut torque);
+//! assert_eq!(torque, [0.0, 0.0]); // rejected whole: the safe action
+//! safety.admit(&[0.5, -0.02], &mut torque);
+//! assert_eq!(torque, [0.1, -0.02]); // clamped to ±0.1 N m
+//! // At the next sample instant: was there a fresh action, is the state in range?
+//! if safety.period(true) {
+//!     torque = [0.0; 2];
+//! }
+//! assert_eq!(safety.check(&[1.3, 0.0, 0.0, 0.0]), Some(-4e4)); // out of range: stop
+//! let c = safety.counts();
+//! assert_eq!((c.clamped, c.rejected, c.range_stops), (1, 1, 1));
+//! ```
+
+use crate::{OperatingRange, Task};
+
+/// What [`Supervisor::admit`] did with an action.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Admission {
+    /// Within the limits: applied as it is.
+    Applied,
+    /// Beyond a limit: clamped to it.
+    Clamped,
+    /// A non-finite component: rejected; the safe action applies.
+    Rejected,
+}
+
+/// `u` clamped to `[low, high]` into `out`, or zero if a component is not finite.
+pub(crate) fn limit(low: &[f64], high: &[f64], u: &[f64], out: &mut [f64]) -> Admission {
+    if u.iter().any(|v| !v.is_finite()) {
+        out.fill(0.0);
+        return Admission::Rejected;
+    }
+    let mut clamped = false;
+    for i in 0..out.len() {
+        out[i] = u[i].clamp(low[i], high[i]);
+        clamped |= out[i] != u[i];
+    }
+    if clamped {
+        Admission::Clamped
+    } else {
+        Admission::Applied
+    }
+}
+
+/// How often each safety measure acted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SafetyCounts {
+    /// Actions clamped to the limits.
+    pub clamped: u64,
+    /// Actions rejected for a non-finite component.
+    pub rejected: u64,
+    /// Times the watchdog engaged.
+    pub watchdog_trips: u64,
+    /// Trials stopped because the state left the operating range.
+    pub range_stops: u64,
+}
+
+impl std::fmt::Display for SafetyCounts {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} actions clamped, {} rejected (non-finite), {} watchdog trips, {} operating-range stops",
+            self.clamped, self.rejected, self.watchdog_trips, self.range_stops
+        )
+    }
+}
+
+/// The plant side's safety supervisor: limits, non-finite actions, the stale-action
+/// watchdog and the operating range of one task (see the module documentation).
+#[derive(Clone, Debug)]
+pub struct Supervisor {
+    low: Vec<f64>,
+    high: Vec<f64>,
+    range: Option<OperatingRange>,
+    watchdog: Watchdog,
+    counts: SafetyCounts,
+}
+
+impl Supervisor {
+    /// The supervisor of `task`'s action limits and operating range, with a watchdog of
+    /// one period (`docs/driver.md`).
+    pub fn new(task: &Task) -> Self {
+        Self {
+            low: task.action_low.clone(),
+            high: task.action_high.clone(),
+            range: task.operating_range.clone(),
+            watchdog: Watchdog::new(1),
+            counts: SafetyCounts::default(),
+        }
+    }
+
+    /// The action to apply for the requested `u`, into `out`: `u` clamped to the limits,
+    /// or the safe action (zero) if a component of `u` is not finite.
+    pub fn admit(&mut self, u: &[f64], out: &mut [f64]) -> Admission {
+        let a = limit(&self.low, &self.high, u, out);
+        match a {
+            Admission::Applied => {}
+            Admission::Clamped => self.counts.clamped += 1,
+            Admission::Rejected => self.counts.rejected += 1,
+        }
+        a
+    }
+
+    /// Ends a sample period in which a fresh action was (`fresh`) or was not admitted;
+    /// returns whether the safe action must apply from now on ([`Watchdog::period`]).
+    pub fn period(&mut self, fresh: bool) -> bool {
+        let trips = self.watchdog.trips();
+        let safe = self.watchdog.period(fresh);
+        self.counts.watchdog_trips += self.watchdog.trips() - trips;
+        safe
+    }
+
+    /// A trial starts with the system at rest under the safe action: the watchdog's
+    /// count restarts.
+    pub fn start_trial(&mut self) {
+        self.watchdog.reset();
+    }
+
+    /// `Some(penalty)` if state `x` lies outside the operating range (a non-finite
+    /// component counts as outside): the trial must end, its last reward the penalty.
+    pub fn check(&mut self, x: &[f64]) -> Option<f64> {
+        let range = self.range.as_ref()?;
+        if range.excludes(x) {
+            self.counts.range_stops += 1;
+            Some(range.penalty)
+        } else {
+            None
+        }
+    }
+
+    /// How often each measure acted so far.
+    pub fn counts(&self) -> SafetyCounts {
+        self.counts
+    }
+}
 
 /// The stale-action watchdog, advanced once per sample period.
 ///

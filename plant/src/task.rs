@@ -285,6 +285,12 @@ impl Task {
         (self.trial_seconds / self.ts).round() as usize
     }
 
+    /// The action the plant applies for `u`, into `out`: clamped to the action bounds, or
+    /// zero (the safe action) if a component is not finite ([`crate::safety::Supervisor`]).
+    pub fn saturate(&self, u: &[f64], out: &mut [f64]) -> crate::safety::Admission {
+        crate::safety::limit(&self.action_low, &self.action_high, u, out)
+    }
+
     /// Wraps the angle components of `x` to [-π, π).
     pub fn wrap_state(&self, x: &mut [f64]) {
         for (xi, &is_angle) in x.iter_mut().zip(&self.angle_mask) {
@@ -378,7 +384,8 @@ mod tests {
         assert_eq!(plant.applied_action(), &[0.0]);
         plant.step(&[f64::INFINITY]);
         assert_eq!(plant.applied_action(), &[0.0]);
-        assert_eq!(plant.rejected_actions(), 2);
+        let c = plant.safety().counts();
+        assert_eq!((c.clamped, c.rejected), (2, 2));
         assert!(plant.state().iter().all(|v| v.is_finite()));
     }
 

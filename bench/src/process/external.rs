@@ -15,6 +15,7 @@
 
 use std::time::Duration;
 
+use ::plant::safety::{SafetyCounts, Supervisor};
 use anyhow::{Result, anyhow, bail};
 use wire::driver::{DriverInfo, DriverLink, DriverSample, status};
 use wire::{flags, now_ns};
@@ -31,6 +32,9 @@ pub struct Bridge {
     /// How long the driver may be silent (it publishes every period, also while it
     /// resets).
     silence: Duration,
+    /// The rig's side of safety: actions are clamped (non-finite ones never reach the
+    /// driver) and the operating range is watched here too; the driver does its own.
+    safety: Supervisor,
 }
 
 impl Bridge {
@@ -48,6 +52,7 @@ impl Bridge {
             .wait_for_receivers(args.receivers, STARTUP, &link.bus)
             .map_err(wire_err)?;
         Ok(Self {
+            safety: Supervisor::new(&link.task),
             silence: (info.period() * 20).max(Duration::from_secs(1)),
             reset_timeout: seconds("--reset-timeout", args.reset_timeout)?,
             link,
@@ -117,8 +122,10 @@ impl Trials for Bridge {
             s.applied(),
             s.t_sample_ns,
         )?;
+        let mut u = vec![0.0; task.action_dim()];
         for k in 0..steps {
-            let u = self.action(self.link.seq - 1, t_publish)?;
+            let requested = self.action(self.link.seq - 1, t_publish)?;
+            self.safety.admit(&requested, &mut u);
             let command = self.driver.act(&u, s.seq).map_err(wire_err)?;
             let next = self.next_sample(s.seq, reset_id)?;
             // Periods that passed without a measurement, and an action the driver had
@@ -126,12 +133,9 @@ impl Trials for Bridge {
             self.link.misses += next.seq - s.seq - 1 + u64::from(next.last_command != command);
             // Leaving the task's operating range ends the trial with its penalty (§6.4.2);
             // no further action is sent, so the driver's watchdog applies zero.
-            let left = task
-                .operating_range
-                .as_ref()
-                .filter(|range| range.excludes(next.state()));
+            let left = self.safety.check(next.state());
             let (r, end) = match left {
-                Some(range) => (range.penalty, flags::END | flags::TERMINAL),
+                Some(penalty) => (penalty, flags::END | flags::TERMINAL),
                 None if k + 1 == steps => {
                     (task.reward.reward(s.state(), next.applied()), flags::END)
                 }
@@ -158,5 +162,9 @@ impl Trials for Bridge {
 
     fn link(&mut self) -> &mut Link {
         &mut self.link
+    }
+
+    fn safety(&mut self) -> SafetyCounts {
+        self.safety.counts()
     }
 }

@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use ::plant::safety::Watchdog;
+use ::plant::safety::SafetyCounts;
 use ::plant::{Plant, Task};
 use anyhow::{Result, bail};
 use wire::{Action, Bus, Header, Measurement, flags, now_ns, topic};
@@ -50,7 +50,6 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                 plant: Plant::new(task.clone()),
                 link,
                 realtime,
-                watchdog: Watchdog::new(1),
             })
         }
     };
@@ -76,6 +75,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
             }
         }
     }
+    eprintln!("safety: {}", runner.safety());
     let p = runner.link();
     // The end of the run, stamped with the run's final simulated and monotonic time.
     let header = Header {
@@ -110,6 +110,8 @@ pub(super) trait Trials {
     fn trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<usize>;
     /// The run topics.
     fn link(&mut self) -> &mut Link;
+    /// How often the plant side's safety measures acted.
+    fn safety(&mut self) -> SafetyCounts;
 }
 
 /// The plant process's end of the run topics: measurements out, actions in.
@@ -170,9 +172,6 @@ struct PlantLoop {
     link: Link,
     /// The sampling clock, in realtime timing.
     realtime: Option<Clock>,
-    /// Realtime: a whole period without a fresh action ⇒ the safe action (zero) until
-    /// actions resume, as `docs/driver.md` asks of a driver.
-    watchdog: Watchdog,
 }
 
 /// Headers of one trial's samples.
@@ -266,7 +265,8 @@ impl PlantLoop {
     /// arrives within an interval is applied from its arrival on (the previous one held
     /// until then); an interval in which the action for its sample did not arrive is a
     /// missed deadline. The reward of an interval is `ρ(x_k, u)` with the action in effect
-    /// at its end. An interval without any action trips the [`Watchdog`]: zero from its
+    /// at its end. An interval without any action trips the plant's watchdog
+    /// ([`plant::safety::Supervisor::period`]): zero from its
     /// end on, until an action arrives.
     fn realtime_trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<usize> {
         let steps = self.link.task.steps_per_trial();
@@ -276,7 +276,6 @@ impl PlantLoop {
         };
         self.plant.reset(x0);
         let mut u_hold = vec![0.0; self.link.task.action_dim()];
-        self.watchdog.reset();
         let header = TrialHeader {
             trial,
             mode,
@@ -334,7 +333,7 @@ impl PlantLoop {
                 t = *t_a;
             }
             self.plant.advance(&u_hold, sim(deadline - t));
-            if self.watchdog.period(!arrivals.is_empty()) {
+            if self.plant.safety().period(!arrivals.is_empty()) {
                 // No action for a whole period: the safe action from this instant on.
                 u_hold.fill(0.0);
             }
@@ -384,5 +383,9 @@ impl Trials for PlantLoop {
 
     fn link(&mut self) -> &mut Link {
         &mut self.link
+    }
+
+    fn safety(&mut self) -> SafetyCounts {
+        self.plant.safety().counts()
     }
 }
