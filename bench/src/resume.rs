@@ -69,39 +69,46 @@ pub fn prune(dir: &Path, trial: u32) {
     }
 }
 
-/// Writes checkpoints on a background thread (atomically: [`Checkpoint::write`]).
+/// Writes checkpoints on a background thread (atomically: [`Checkpoint::write`]) and keeps
+/// the two newest. When the disk is slower than the trials, checkpoints queued behind the
+/// one being written are skipped, except the newest: the loop never waits, and a resume
+/// redoes the few trials after the newest checkpoint written.
 pub struct CheckpointWriter {
-    tx: Option<mpsc::Sender<(PathBuf, Checkpoint)>>,
+    tx: Option<mpsc::Sender<Checkpoint>>,
     thread: Option<JoinHandle<Result<()>>>,
-    dir: PathBuf,
 }
 
 impl CheckpointWriter {
     /// A writer into `dir` (created if missing).
     pub fn new(dir: &Path) -> Result<Self> {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        let (tx, rx) = mpsc::channel::<(PathBuf, Checkpoint)>();
+        let (tx, rx) = mpsc::channel::<Checkpoint>();
+        let dir = dir.to_owned();
         let thread = std::thread::spawn(move || -> Result<()> {
-            for (path, c) in rx {
+            let mut previous = None;
+            while let Ok(mut c) = rx.recv() {
+                // Only the newest of those waiting.
+                if let Some(newer) = rx.try_iter().last() {
+                    c = newer;
+                }
+                let path = checkpoint_path(&dir, c.trial);
                 c.write(&path)
                     .with_context(|| format!("cannot write checkpoint {}", path.display()))?;
+                if let Some(p) = previous.replace(c.trial) {
+                    prune(&dir, p);
+                }
             }
             Ok(())
         });
         Ok(Self {
             tx: Some(tx),
             thread: Some(thread),
-            dir: dir.to_owned(),
         })
     }
 
     /// Queues checkpoint `c` (of trial `c.trial`); fails if an earlier write failed.
     pub fn save(&mut self, c: Checkpoint) -> Result<()> {
-        let path = checkpoint_path(&self.dir, c.trial);
-        let sent = self
-            .tx
-            .as_ref()
-            .is_some_and(|tx| tx.send((path, c)).is_ok());
+        let sent = self.tx.as_ref().is_some_and(|tx| tx.send(c).is_ok());
         if !sent {
             return self.finish();
         }
@@ -352,7 +359,15 @@ pub fn prepare(out: &Path, cfg: &ExperimentConfig) -> Result<ResumePoint> {
         0.0
     };
     if let Some(path) = &checkpoint {
-        let ck = Checkpoint::read(path).map_err(|e| anyhow!("cannot resume: {e}"))?;
+        let ck = Checkpoint::read(path).map_err(|e| {
+            let older = available.iter().rev().find(|&&t| t < c);
+            match older {
+                Some(t) => anyhow!(
+                    "cannot resume: {e}; remove it to resume from the checkpoint of trial {t}"
+                ),
+                None => anyhow!("cannot resume: {e}"),
+            }
+        })?;
         ck.check_origin(cfg, 0)
             .map_err(|e| anyhow!("cannot resume from {}: {e}", path.display()))?;
         if ck.trial != c || ck.sim_time_s.to_bits() != sim_time_s.to_bits() {

@@ -101,8 +101,6 @@ struct Returns {
     eval_starts: u32,
     /// A greedy evaluation after every this-many trials (0: none).
     eval_every: u32,
-    /// The agent's checkpoints: the two latest are kept.
-    checkpoints: PathBuf,
     /// The running greedy trial's reward sum.
     greedy_trial: f64,
     /// Sum of the returns of the greedy trials after the pending trial, and their count.
@@ -173,7 +171,6 @@ impl Returns {
         if let Some(r) = self.pending.take() {
             write_row(&mut self.out, &r)?;
             self.out.flush()?;
-            resume::prune(&self.checkpoints, r.trial.saturating_sub(1));
             self.records.push(r);
         }
         Ok(())
@@ -763,7 +760,6 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         pending_ended: false,
         eval_starts: task.initial_states.len() as u32,
         eval_every: cfg.run.eval_every,
-        checkpoints: checkpoints.clone(),
         greedy_trial: 0.0,
         greedy: (0.0, 0),
         records: kept.to_vec(),
