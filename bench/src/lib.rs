@@ -11,5 +11,6 @@ pub mod optimal;
 pub mod process;
 pub mod record;
 pub mod report;
+pub mod reproduce;
 pub mod resume;
 pub mod run;

@@ -53,12 +53,37 @@ enum Command {
         #[arg(long)]
         run_id: String,
     },
+    /// Regenerate the thesis's learning-curve figures (3.12, 3.17, 3.22, 3.23, 4.4, 5.5,
+    /// 5.9, 6.1, 6.5) from the presets with the thesis's numbers of runs, and write
+    /// DIR/REPORT.md: per figure the plot (PNG, SVG), "thesis says / we measured" and the
+    /// thesis's claims checked against the new data.
+    Reproduce(ReproduceArgs),
     /// The plant process of a run (started by `rig run`, or by hand).
     Plant(ProcessArgs),
     /// The observer process of a run (started by `rig run`, or by hand).
     Observer(ProcessArgs),
     /// The agent process of a run (started by `rig run`, or by hand).
     Agent(ProcessArgs),
+}
+
+#[derive(Args)]
+struct ReproduceArgs {
+    /// Only these figures (comma-separated or repeated): 3.12, 3.17, 3.22, 3.23, 4.4,
+    /// 5.5, 5.9, 6.1, 6.5 [default: all].
+    #[arg(long, value_name = "ID", value_delimiter = ',')]
+    only: Vec<String>,
+    /// Runs per experiment [default: the thesis's, 30 for Chapter 3, 20 otherwise].
+    #[arg(long)]
+    runs: Option<u32>,
+    /// Trials per run [default: the presets']; for a quick look, not a reproduction.
+    #[arg(long)]
+    trials: Option<u32>,
+    /// Output directory: one directory per figure and REPORT.md.
+    #[arg(long, value_name = "DIR", default_value = "out/reproduce")]
+    out: PathBuf,
+    /// No progress bars.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(Args)]
@@ -486,6 +511,38 @@ fn main() -> ExitCode {
                 ExitCode::from(2)
             }
         },
+        Command::Reproduce(args) => {
+            if args.runs == Some(0) || args.trials == Some(0) {
+                eprintln!("error: `--runs` and `--trials` must be at least 1");
+                return ExitCode::from(2);
+            }
+            let opts = rig::reproduce::ReproduceOptions {
+                out: args.out.clone(),
+                only: args.only.clone(),
+                runs: args.runs,
+                trials: args.trials,
+                progress: !args.quiet,
+            };
+            match rig::reproduce::reproduce(&opts) {
+                Ok(figs) => {
+                    for f in &figs {
+                        let confirmed = f.claims.iter().filter(|c| c.1).count();
+                        println!(
+                            "Figure {}: {:.0} s, {confirmed} of {} claims confirmed",
+                            f.id,
+                            f.wall.as_secs_f64(),
+                            f.claims.len()
+                        );
+                    }
+                    println!("wrote {}", args.out.join("REPORT.md").display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
         Command::Learn(args) => {
             let cfg = match resolve_selection(&args.selection) {
                 Ok(c) => c,

@@ -215,3 +215,66 @@ fn sensor_and_observer_flags_are_validated_and_run_in_process() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("in process only"));
 }
+
+#[test]
+fn reproduce_writes_figures_a_report_and_checks_claims() {
+    let dir = tmp("reproduce");
+    let out = rig()
+        .args([
+            "reproduce",
+            "--only",
+            "3.17,3.22",
+            "--runs",
+            "2",
+            "--trials",
+            "30",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("Figure 3.17:") && stdout.contains("Figure 3.22:"),
+        "{stdout}"
+    );
+    for id in ["3.17", "3.22"] {
+        for f in ["figure.png", "figure.svg", "summary.csv"] {
+            assert!(dir.join(id).join(f).is_file(), "{id}/{f}");
+        }
+    }
+    let summary = std::fs::read_to_string(dir.join("3.17/summary.csv")).unwrap();
+    assert_eq!(summary.lines().count(), 3, "{summary}");
+    assert!(
+        summary
+            .lines()
+            .nth(1)
+            .unwrap()
+            .starts_with("MLAC/RBF,2,30,"),
+        "{summary}"
+    );
+    let report = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
+    assert!(report.contains("![3.17](3.17/figure.png)"), "{report}");
+    assert!(report.contains("| MLAC/LLR | 2 × 30 |"), "{report}");
+    // Every claim is marked one way or the other, with the numbers behind it.
+    let marked =
+        report.matches("**confirmed**").count() + report.matches("**not confirmed**").count();
+    assert_eq!(marked, 3, "{report}");
+    // Each experiment's own outputs are there.
+    assert!(dir.join("3.17/mlac-llr/runs.csv").is_file());
+
+    let bad = rig()
+        .args(["reproduce", "--only", "9.9", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("9.9") && err.contains("3.12"), "{err}");
+}
