@@ -281,6 +281,22 @@ impl Recorder {
             }
         }
         buf.push(b'}');
+        let buf = std::mem::take(&mut self.buf);
+        let written = self.put(channel.0, log_time_ns, publish_time_ns, &buf);
+        self.buf = buf;
+        written
+    }
+
+    /// Writes an encoded message on channel `index`, with the channel's next sequence
+    /// number.
+    fn put(
+        &mut self,
+        index: usize,
+        log_time_ns: u64,
+        publish_time_ns: u64,
+        data: &[u8],
+    ) -> Result<()> {
+        let ch = &mut self.channels[index];
         let header = MessageHeader {
             channel_id: ch.id,
             sequence: ch.sequence,
@@ -288,7 +304,7 @@ impl Recorder {
             publish_time: publish_time_ns,
         };
         self.writer
-            .write_to_known_channel(&header, buf)
+            .write_to_known_channel(&header, data)
             .with_context(|| format!("cannot write {}", self.part.display()))?;
         ch.sequence = ch.sequence.wrapping_add(1);
         Ok(())
@@ -308,22 +324,12 @@ impl Recorder {
         publish_time_ns: u64,
         data: &[u8],
     ) -> Result<()> {
-        let ch = self
+        let index = self
             .channels
-            .iter_mut()
-            .find(|c| c.topic == topic)
+            .iter()
+            .position(|c| c.topic == topic)
             .ok_or_else(|| anyhow!("the recording has no topic {topic}"))?;
-        let header = MessageHeader {
-            channel_id: ch.id,
-            sequence: ch.sequence,
-            log_time: log_time_ns,
-            publish_time: publish_time_ns,
-        };
-        self.writer
-            .write_to_known_channel(&header, data)
-            .with_context(|| format!("cannot write {}", self.part.display()))?;
-        ch.sequence = ch.sequence.wrapping_add(1);
-        Ok(())
+        self.put(index, log_time_ns, publish_time_ns, data)
     }
 
     /// Stores a file in the recording (e.g. the resolved `config.toml`, `text/x-toml`), with

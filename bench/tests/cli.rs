@@ -1,17 +1,12 @@
 //! The `rig` binary as a user runs it.
 
 use std::path::PathBuf;
-use std::process::Command;
 
-fn rig() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rig"))
-}
+mod common;
+use common::rig;
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rig-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::tmp("cli", name)
 }
 
 #[test]

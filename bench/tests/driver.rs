@@ -9,15 +9,11 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-fn rig() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rig"))
-}
+mod common;
+use common::rig;
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rig-driver-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::tmp("driver", name)
 }
 
 fn text(out: &Output) -> (String, String) {
@@ -350,26 +346,7 @@ fn a_process_killed_during_an_external_run_leaves_the_driver_safe_within_two_per
             std::thread::sleep(Duration::from_millis(1));
         }
         std::thread::sleep(Duration::from_millis(300));
-        let pid = String::from_utf8_lossy(
-            &Command::new("pgrep")
-                .args(["-P", &sup.id().to_string()])
-                .output()
-                .unwrap()
-                .stdout,
-        )
-        .lines()
-        .filter_map(|l| l.trim().parse::<u32>().ok())
-        .find(|pid| {
-            std::fs::read(format!("/proc/{pid}/cmdline"))
-                .unwrap_or_default()
-                .split(|&b| b == 0)
-                .any(|a| a == role.as_bytes())
-        })
-        .unwrap();
-        Command::new("kill")
-            .args(["-9", &pid.to_string()])
-            .status()
-            .unwrap();
+        common::signal(common::child_running(sup.id(), role), "-9");
         let out = sup.wait_with_output().unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{role}");

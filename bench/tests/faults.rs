@@ -10,27 +10,14 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::process::{Child, Output, Stdio};
+use std::time::Duration;
 
-fn rig() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rig"))
-}
+mod common;
+use common::{child_running, ok, rig, signal};
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rig-faults-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn ok(out: Output) -> Output {
-    assert!(
-        out.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
+    common::tmp("faults", name)
 }
 
 fn stderr(out: &Output) -> String {
@@ -44,41 +31,13 @@ fn lines(path: &Path) -> usize {
         .count()
 }
 
-/// Waits (at most 60 s) until `returns.csv` in `dir` has at least `n` lines.
 fn wait_for_rows(dir: &Path, n: usize) {
-    let t0 = Instant::now();
-    while lines(&dir.join("returns.csv")) < n {
-        assert!(
-            t0.elapsed() < Duration::from_secs(60),
-            "the run did not get going: {}",
-            dir.display()
-        );
-        std::thread::sleep(Duration::from_millis(2));
-    }
+    common::wait_for_lines(&dir.join("returns.csv"), n);
 }
 
-/// Kills (`kill -9`) the child of `sup` that runs `role`; returns when.
-fn kill_role(sup: &Child, role: &str) -> Instant {
-    let out = Command::new("pgrep")
-        .args(["-P", &sup.id().to_string()])
-        .output()
-        .unwrap();
-    let pid = String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .filter_map(|l| l.trim().parse::<u32>().ok())
-        .find(|pid| {
-            std::fs::read(format!("/proc/{pid}/cmdline"))
-                .unwrap_or_default()
-                .split(|&b| b == 0)
-                .any(|arg| arg == role.as_bytes())
-        })
-        .unwrap_or_else(|| panic!("no {role} process"));
-    let t = Instant::now();
-    Command::new("kill")
-        .args(["-9", &pid.to_string()])
-        .status()
-        .unwrap();
-    t
+/// Kills (`kill -9`) the child of `sup` that runs `role`.
+fn kill_role(sup: &Child, role: &str) {
+    signal(child_running(sup.id(), role), "-9");
 }
 
 /// Messages per topic, in file order: (MCAP sequence, log time, data).
@@ -328,41 +287,38 @@ fn field(msgs: &Messages, topic: &str, key: &str) -> BTreeMap<u64, f64> {
         .collect()
 }
 
+/// A realtime run at 3 × real time (10 ms periods) into `dir` whose `role` process is
+/// killed `after_ms` after the third trial started; asserts that `rig run` names it.
+fn realtime_run_killed(dir: &Path, role: &str, after_ms: u64) {
+    let sup = rig()
+        .args([
+            "run", "--timing", "realtime", "--speed", "3", "--trials", "400",
+        ])
+        .args(["--eval-every", "0", "--quiet", "--out"])
+        .arg(dir)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for_rows(dir, 3);
+    std::thread::sleep(Duration::from_millis(after_ms));
+    kill_role(&sup, role);
+    let died = sup.wait_with_output().unwrap();
+    let err = stderr(&died);
+    assert!(!died.status.success(), "{role}");
+    assert!(
+        err.contains(&format!("the {role} process exited (signal: 9")),
+        "{err}"
+    );
+}
+
 #[test]
 fn a_process_killed_in_realtime_leaves_the_plant_in_the_safe_action_within_two_periods() {
     // 3 × real time: 10 ms periods.
     let period_ns = 10e6;
     for (i, role) in ["agent", "observer"].into_iter().enumerate() {
         let dir = tmp(&format!("realtime-{role}"));
-        let sup = rig()
-            .args([
-                "run",
-                "--timing",
-                "realtime",
-                "--speed",
-                "3",
-                "--trials",
-                "400",
-                "--eval-every",
-                "0",
-                "--quiet",
-                "--out",
-            ])
-            .arg(&dir)
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        wait_for_rows(&dir, 3);
         // Mid-trial, at a different moment for each role.
-        std::thread::sleep(Duration::from_millis(400 + 300 * i as u64));
-        kill_role(&sup, role);
-        let died = sup.wait_with_output().unwrap();
-        let err = stderr(&died);
-        assert!(!died.status.success(), "{role}");
-        assert!(
-            err.contains(&format!("the {role} process exited (signal: 9")),
-            "{err}"
-        );
+        realtime_run_killed(&dir, role, 400 + 300 * i as u64);
 
         let msgs = recording(&dir.join("run.mcap"));
         let sampled = field(&msgs, "/timing/plant/measurement", "t_sample_ns");
@@ -432,31 +388,7 @@ fn resume_two_more(dir: &Path) {
 #[test]
 fn a_plant_killed_in_realtime_is_named_and_the_run_resumes() {
     let dir = tmp("realtime-plant");
-    let sup = rig()
-        .args([
-            "run",
-            "--timing",
-            "realtime",
-            "--speed",
-            "3",
-            "--trials",
-            "400",
-            "--eval-every",
-            "0",
-            "--quiet",
-            "--out",
-        ])
-        .arg(&dir)
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    wait_for_rows(&dir, 3);
-    std::thread::sleep(Duration::from_millis(500));
-    kill_role(&sup, "plant");
-    let died = sup.wait_with_output().unwrap();
-    let err = stderr(&died);
-    assert!(!died.status.success());
-    assert!(err.contains("the plant process exited (signal: 9"), "{err}");
+    realtime_run_killed(&dir, "plant", 500);
     assert!(!recording(&dir.join("run.mcap")).is_empty());
     resume_two_more(&dir);
 }

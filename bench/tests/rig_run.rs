@@ -2,27 +2,14 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
-fn rig() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rig"))
-}
+mod common;
+use common::{children_of, ok, rig, wait_for_lines};
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rig-run-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn ok(out: Output) -> Output {
-    assert!(
-        out.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
+    common::tmp("run", name)
 }
 
 /// Messages per topic: (log time, data) in order.
@@ -151,24 +138,6 @@ fn two_runs_at_once_do_not_see_each_other() {
     }
 }
 
-/// Waits (at most 30 s) until the file at `path` has at least `n` lines: a run under way.
-fn wait_for_lines(path: &Path, n: usize) {
-    let t0 = Instant::now();
-    while std::fs::read_to_string(path)
-        .unwrap_or_default()
-        .lines()
-        .count()
-        < n
-    {
-        assert!(
-            t0.elapsed() < Duration::from_secs(30),
-            "the run did not start: {}",
-            path.display()
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
 /// Runs the experiment `args` (ending in `--out`) with `rig learn --runs 1` into
 /// `dir/learn{tag}` and with `rig run` into `dir/run{tag}`, asserts that `runs.csv` and
 /// `returns.csv` are byte-identical, and returns them.
@@ -189,17 +158,6 @@ fn learn_and_run(dir: &Path, tag: &str, args: &[&str]) -> String {
     let ran = std::fs::read_to_string(dir.join(format!("run{tag}/returns.csv"))).unwrap();
     assert_eq!(learned, ran, "{args:?}");
     ran
-}
-
-fn children_of(pid: u32) -> Vec<u32> {
-    let out = Command::new("pgrep")
-        .args(["-P", &pid.to_string()])
-        .output()
-        .unwrap();
-    String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .filter_map(|l| l.trim().parse().ok())
-        .collect()
 }
 
 #[test]
@@ -466,23 +424,10 @@ fn a_stalled_agent_meets_the_watchdog_within_two_periods() {
         .unwrap();
     wait_for_lines(&dir.join("returns.csv"), 2);
     std::thread::sleep(Duration::from_millis(100));
-    let agent = children_of(sup.id())
-        .into_iter()
-        .find(|pid| {
-            std::fs::read_to_string(format!("/proc/{pid}/cmdline"))
-                .unwrap_or_default()
-                .contains("agent")
-        })
-        .expect("an agent process");
-    let signal = |s: &str| {
-        Command::new("kill")
-            .args([s, &agent.to_string()])
-            .status()
-            .unwrap()
-    };
-    signal("-STOP");
+    let agent = common::child_running(sup.id(), "agent");
+    common::signal(agent, "-STOP");
     std::thread::sleep(Duration::from_millis(240));
-    signal("-CONT");
+    common::signal(agent, "-CONT");
     assert!(sup.wait().unwrap().success());
     let msgs = messages(&dir.join("run.mcap"));
     let sampled = field(&msgs, "/timing/plant/measurement", "t_sample_ns");

@@ -1,0 +1,82 @@
+//! What the `rig` integration tests share: the binary, scratch directories, and finding
+//! and signalling the processes a `rig run` started.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+/// The `rig` binary under test.
+pub fn rig() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rig"))
+}
+
+/// A fresh scratch directory `rig-<suite>-<pid>-<name>` in the temporary directory.
+pub fn tmp(suite: &str, name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rig-{suite}-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `out`, after asserting that the command succeeded (showing its stderr if not).
+pub fn ok(out: Output) -> Output {
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Waits (at most 60 s) until the file at `path` has at least `n` lines: a run under way.
+pub fn wait_for_lines(path: &Path, n: usize) {
+    let t0 = Instant::now();
+    while std::fs::read_to_string(path)
+        .unwrap_or_default()
+        .lines()
+        .count()
+        < n
+    {
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "the run did not get going: {}",
+            path.display()
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
+
+/// The child processes of process `pid`.
+pub fn children_of(pid: u32) -> Vec<u32> {
+    let out = Command::new("pgrep")
+        .args(["-P", &pid.to_string()])
+        .output()
+        .unwrap();
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| l.trim().parse().ok())
+        .collect()
+}
+
+/// The child of `pid` that runs `role` (`plant`, `observer`, `agent`: an argument of its
+/// command line).
+pub fn child_running(pid: u32, role: &str) -> u32 {
+    children_of(pid)
+        .into_iter()
+        .find(|child| {
+            std::fs::read(format!("/proc/{child}/cmdline"))
+                .unwrap_or_default()
+                .split(|&b| b == 0)
+                .any(|arg| arg == role.as_bytes())
+        })
+        .unwrap_or_else(|| panic!("no {role} process under {pid}"))
+}
+
+/// Sends `signal` (e.g. `-9`, `-STOP`) to process `pid`.
+pub fn signal(pid: u32, signal: &str) {
+    Command::new("kill")
+        .args([signal, &pid.to_string()])
+        .status()
+        .unwrap();
+}
