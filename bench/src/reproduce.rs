@@ -24,7 +24,9 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use agent::config::{Algo, ApproxKind, ExperimentConfig, HorizonKind, Overrides, resolve};
+use agent::config::{
+    Algo, ApproxKind, Component, ExperimentConfig, HorizonKind, Overrides, resolve,
+};
 use anyhow::{Context, Result, anyhow, bail};
 use plant::SystemName;
 
@@ -32,9 +34,19 @@ use crate::experiment::TrialRecord;
 use crate::learn::{LearnOptions, LearnSummary, learn, write_atomic};
 use crate::report::{self, CurvePoint, Series, SeriesStyle};
 
-/// The figure ids, in the thesis's order.
-pub const FIGURES: [&str; 9] = [
-    "3.12", "3.17", "3.22", "3.23", "4.4", "5.5", "5.9", "6.1", "6.5",
+/// The ids `--only` takes: the figures in the thesis's order, and the sensitivity
+/// analysis.
+pub const FIGURES: [&str; 10] = [
+    "3.12",
+    "3.17",
+    "3.22",
+    "3.23",
+    "4.4",
+    "5.5",
+    "5.9",
+    "6.1",
+    "6.5",
+    "sensitivity",
 ];
 
 /// What to regenerate and where.
@@ -549,11 +561,14 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
     })
     .map_err(|e| anyhow!(e))?
     .simulated_return;
-    // Experiments already run, by configuration: (directory, summary).
-    let mut done: BTreeMap<String, (PathBuf, LearnSummary)> = BTreeMap::new();
+    let mut runner = Runner {
+        opts,
+        done: BTreeMap::new(),
+    };
     let mut results = Vec::new();
+    let wanted = |id: &str| opts.only.is_empty() || opts.only.iter().any(|o| o == id);
     for fig in figures() {
-        if !opts.only.is_empty() && !opts.only.iter().any(|o| o == fig.id) {
+        if !wanted(fig.id) {
             continue;
         }
         let t0 = Instant::now();
@@ -562,45 +577,9 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
         let mut measured = Vec::new();
         let mut curves: Vec<Vec<CurvePoint>> = Vec::new();
         for curve in &fig.curves {
-            let mut cfg = curve.cfg.clone();
-            if let Some(r) = opts.runs {
-                cfg.run.runs = r;
-            }
-            if let Some(t) = opts.trials {
-                cfg.run.trials = t;
-            }
-            let key = cfg.to_toml();
-            let (path, summary) = match done.get(&key) {
-                Some(d) => d.clone(),
-                None => {
-                    let path = dir.join(slug(curve.label));
-                    if opts.progress {
-                        eprintln!(
-                            "{} {}: {} runs × {} trials",
-                            fig.id, curve.label, cfg.run.runs, cfg.run.trials
-                        );
-                    }
-                    let s = learn(
-                        &cfg,
-                        &LearnOptions {
-                            out: path.clone(),
-                            threads: None,
-                            progress: opts.progress,
-                        },
-                    )?;
-                    done.insert(key, (path.clone(), s.clone()));
-                    (path, s)
-                }
-            };
-            let _ = path;
-            measured.push(measure(
-                curve.label,
-                &summary.records,
-                cfg.run.runs as usize,
-                cfg.run.trials as usize,
-                summary.wall,
-            )?);
-            curves.push(summary.curve.clone());
+            let (m, summary) = runner.run(&dir, fig.id, curve.label, &curve.cfg, None)?;
+            measured.push(m);
+            curves.push(summary.curve);
         }
         let style = if curves.len() > 3 {
             SeriesStyle::Line
@@ -646,9 +625,206 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
             wall: t0.elapsed(),
         };
         results.push((result, fig));
-        write_report(&opts.out, &results, optimum, t_all.elapsed())?;
+        write_report(&opts.out, &results, None, optimum, t_all.elapsed())?;
+    }
+    if wanted("sensitivity") {
+        let s = sensitivity(&mut runner)?;
+        write_report(&opts.out, &results, Some(&s), optimum, t_all.elapsed())?;
     }
     Ok(results.into_iter().map(|(r, _)| r).collect())
+}
+
+/// Runs experiments, each configuration once.
+struct Runner<'a> {
+    opts: &'a ReproduceOptions,
+    /// Experiments already run, by configuration.
+    done: BTreeMap<String, LearnSummary>,
+}
+
+impl Runner<'_> {
+    /// Runs `cfg` (with the options' runs and trials, or `runs` if given) into
+    /// `dir/<label>`, unless an identical experiment ran before; returns its measures.
+    fn run(
+        &mut self,
+        dir: &Path,
+        id: &str,
+        label: &str,
+        cfg: &ExperimentConfig,
+        runs: Option<u32>,
+    ) -> Result<(Measured, LearnSummary)> {
+        let mut cfg = cfg.clone();
+        if let Some(r) = runs.or(self.opts.runs) {
+            cfg.run.runs = r;
+        }
+        if let Some(t) = self.opts.trials {
+            cfg.run.trials = t;
+        }
+        let key = cfg.to_toml();
+        let summary = match self.done.get(&key) {
+            Some(s) => s.clone(),
+            None => {
+                if self.opts.progress {
+                    eprintln!(
+                        "{id} {label}: {} runs × {} trials",
+                        cfg.run.runs, cfg.run.trials
+                    );
+                }
+                let s = learn(
+                    &cfg,
+                    &LearnOptions {
+                        out: dir.join(slug(label)),
+                        threads: None,
+                        progress: self.opts.progress,
+                    },
+                )?;
+                self.done.insert(key, s.clone());
+                s
+            }
+        };
+        let m = measure(
+            label,
+            &summary.records,
+            cfg.run.runs as usize,
+            cfg.run.trials as usize,
+            summary.wall,
+        )?;
+        Ok((m, summary))
+    }
+}
+
+/// The parameters the sensitivity analysis varies, and how.
+const PARAMETERS: [(&str, fn(&mut ExperimentConfig, f64)); 5] = [
+    ("α_a (actor rate)", |c, f| {
+        if let Some(Component::Llr(l)) = &mut c.actor {
+            l.alpha *= f;
+        }
+    }),
+    ("α_c (critic rate)", |c, f| {
+        if let Component::Llr(l) = &mut c.critic {
+            l.alpha *= f;
+        }
+    }),
+    ("K (neighbours, every memory)", |c, f| {
+        for_each_llr(c, |l| {
+            l.neighbours = ((l.neighbours as f64 * f).round() as usize).max(3)
+        })
+    }),
+    ("N (memory size, every memory)", |c, f| {
+        for_each_llr(c, |l| {
+            l.memory = ((l.memory as f64 * f).round() as usize).max(10)
+        })
+    }),
+    ("σ (exploration)", |c, f| c.learning.sigma *= f),
+];
+
+/// Factors applied to each parameter (the preset is factor 1).
+pub const FACTORS: [f64; 4] = [0.25, 0.5, 2.0, 4.0];
+
+fn for_each_llr(c: &mut ExperimentConfig, mut f: impl FnMut(&mut agent::config::LlrConfig)) {
+    for comp in [c.actor.as_mut(), Some(&mut c.critic), c.model.as_mut()]
+        .into_iter()
+        .flatten()
+    {
+        if let Component::Llr(l) = comp {
+            f(l);
+        }
+    }
+}
+
+/// The sensitivity analysis (§3.7 and §7.2.1 leave it as future work): final greedy
+/// return and learning speed of SAC/LLR and MLAC/LLR on the pendulum when each main
+/// parameter is scaled by [`FACTORS`] around the preset.
+pub struct Sensitivity {
+    /// Runs per variation.
+    pub runs: u32,
+    /// Per algorithm: the preset's measures and, per parameter, per factor, the measures
+    /// (`None`: the variation is not a valid configuration).
+    pub algos: Vec<(
+        String,
+        Measured,
+        Vec<(String, Vec<(f64, Option<Measured>)>)>,
+    )>,
+    /// Wall-clock time.
+    pub wall: Duration,
+}
+
+fn sensitivity(runner: &mut Runner) -> Result<Sensitivity> {
+    use agent::config::{Algo::*, ApproxKind::Llr, HorizonKind::Infinite};
+    let t0 = Instant::now();
+    let runs = runner.opts.runs.unwrap_or(10);
+    let dir = runner.opts.out.join("sensitivity");
+    let mut algos = Vec::new();
+    for (name, algo) in [("SAC/LLR", Sac), ("MLAC/LLR", Mlac)] {
+        let base = preset(SystemName::Pendulum, algo, Llr, Infinite);
+        let (at_preset, _) = runner.run(
+            &dir,
+            "sensitivity",
+            &format!("{name} preset"),
+            &base,
+            Some(runs),
+        )?;
+        let mut params = Vec::new();
+        for (param, apply) in PARAMETERS {
+            let mut row = Vec::new();
+            for f in FACTORS {
+                let mut cfg = base.clone();
+                apply(&mut cfg, f);
+                if cfg == base || cfg.validate().is_err() {
+                    row.push((f, None));
+                    continue;
+                }
+                let label = format!("{name} {} x{f}", param.split(' ').next().unwrap_or(param));
+                let (m, _) = runner.run(&dir, "sensitivity", &label, &cfg, Some(runs))?;
+                row.push((f, Some(m)));
+            }
+            params.push((param.to_string(), row));
+        }
+        algos.push((name.to_string(), at_preset, params));
+    }
+    let mut csv =
+        String::from("algo,parameter,factor,final_greedy_mean,final_greedy_sd,reaches_final_min\n");
+    for (name, p, params) in &algos {
+        let _ = writeln!(
+            csv,
+            "{name},preset,1,{},{},{}",
+            p.final_greedy, p.final_greedy_sd, p.reaches_min
+        );
+        for (param, row) in params {
+            for (f, m) in row {
+                if let Some(m) = m {
+                    let _ = writeln!(
+                        csv,
+                        "{name},{param},{f},{},{},{}",
+                        m.final_greedy, m.final_greedy_sd, m.reaches_min
+                    );
+                }
+            }
+        }
+    }
+    write_atomic(&dir.join("sensitivity.csv"), &csv)?;
+    Ok(Sensitivity {
+        runs,
+        algos,
+        wall: t0.elapsed(),
+    })
+}
+
+impl Sensitivity {
+    /// Per algorithm, the worst final greedy return over all variations, and the
+    /// largest loss against the preset.
+    fn worst(&self) -> Vec<(String, f64, f64)> {
+        self.algos
+            .iter()
+            .map(|(name, p, params)| {
+                let worst = params
+                    .iter()
+                    .flat_map(|(_, row)| row.iter().filter_map(|(_, m)| m.as_ref()))
+                    .map(|m| m.final_greedy)
+                    .fold(p.final_greedy, f64::min);
+                (name.clone(), worst, p.final_greedy - worst)
+            })
+            .collect()
+    }
 }
 
 fn write_summary(path: &Path, m: &[Measured], optimum: Option<f64>) -> Result<()> {
@@ -679,6 +855,7 @@ fn write_summary(path: &Path, m: &[Measured], optimum: Option<f64>) -> Result<()
 fn write_report(
     out: &Path,
     results: &[(FigureResult, Figure)],
+    sensitivity: Option<&Sensitivity>,
     optimum: f64,
     wall: Duration,
 ) -> Result<()> {
@@ -752,5 +929,59 @@ fn write_report(
         }
         let _ = writeln!(s);
     }
+    if let Some(sens) = sensitivity {
+        write_sensitivity(&mut s, sens);
+    }
     write_atomic(&out.join("REPORT.md"), &s)
+}
+
+/// The sensitivity section of `REPORT.md`.
+fn write_sensitivity(s: &mut String, sens: &Sensitivity) {
+    let _ = writeln!(
+        s,
+        "## Sensitivity analysis (SAC/LLR and MLAC/LLR, pendulum)\n\n\
+         Each main parameter scaled by {} around the preset (K and N in every LLR memory), \
+         {} runs per variation, final greedy return (mean of each run's last three \
+         evaluations) and, in brackets, the minutes until the learning curve is within 10 % \
+         of its final level. Wall time {:.0} s; data in `sensitivity/sensitivity.csv`.\n",
+        FACTORS.map(|f| format!("×{f}")).join(", "),
+        sens.runs,
+        sens.wall.as_secs_f64()
+    );
+    for (name, preset, params) in &sens.algos {
+        let _ = writeln!(
+            s,
+            "**{name}** (preset: {:.0} [{:.1} min])\n\n| parameter | {} |\n|---|{}",
+            preset.final_greedy,
+            preset.reaches_min,
+            FACTORS.map(|f| format!("×{f}")).join(" | "),
+            "---|".repeat(FACTORS.len())
+        );
+        for (param, row) in params {
+            let cells: Vec<String> = row
+                .iter()
+                .map(|(_, m)| match m {
+                    Some(m) => format!("{:.0} [{:.1}]", m.final_greedy, m.reaches_min),
+                    None => "–".to_string(),
+                })
+                .collect();
+            let _ = writeln!(s, "| {param} | {} |", cells.join(" | "));
+        }
+        let _ = writeln!(s);
+    }
+    let worst = sens.worst();
+    let robust = worst
+        .iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or("–", |w| w.0.as_str());
+    for (name, w, loss) in &worst {
+        let _ = writeln!(
+            s,
+            "- {name}: worst final greedy return over all variations {w:.0}, {loss:.0} below its preset."
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nMost robust (the better worst case over these variations): **{robust}**.\n"
+    );
 }

@@ -264,6 +264,36 @@ fn reproduce_writes_figures_a_report_and_checks_claims() {
     // Each experiment's own outputs are there.
     assert!(dir.join("3.17/mlac-llr/runs.csv").is_file());
 
+    // The sensitivity analysis: every parameter at every factor, for both algorithms.
+    let sens = dir.join("sens");
+    let out = rig()
+        .args([
+            "reproduce",
+            "--only",
+            "sensitivity",
+            "--runs",
+            "2",
+            "--trials",
+            "20",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&sens)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(sens.join("sensitivity/sensitivity.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 2 * (1 + 5 * 4), "{csv}");
+    let report = std::fs::read_to_string(sens.join("REPORT.md")).unwrap();
+    assert!(
+        report.contains("| σ (exploration) |") && report.contains("Most robust"),
+        "{report}"
+    );
+
     let bad = rig()
         .args(["reproduce", "--only", "9.9", "--out"])
         .arg(&dir)
