@@ -693,7 +693,10 @@ impl Runner<'_> {
 }
 
 /// The parameters the sensitivity analysis varies, and how.
-const PARAMETERS: [(&str, fn(&mut ExperimentConfig, f64)); 5] = [
+/// Scales a parameter of a configuration by a factor.
+type Scale = fn(&mut ExperimentConfig, f64);
+
+const PARAMETERS: [(&str, Scale); 5] = [
     ("α_a (actor rate)", |c, f| {
         if let Some(Component::Llr(l)) = &mut c.actor {
             l.alpha *= f;
@@ -731,6 +734,10 @@ fn for_each_llr(c: &mut ExperimentConfig, mut f: impl FnMut(&mut agent::config::
     }
 }
 
+/// One algorithm's sensitivity: its name, its preset's measures, and per parameter, per
+/// factor, the measures (`None`: not a valid configuration).
+pub type AlgoSensitivity = (String, Measured, Vec<(String, Vec<(f64, Option<Measured>)>)>);
+
 /// The sensitivity analysis (§3.7 and §7.2.1 leave it as future work): final greedy
 /// return and learning speed of SAC/LLR and MLAC/LLR on the pendulum when each main
 /// parameter is scaled by [`FACTORS`] around the preset.
@@ -739,10 +746,7 @@ pub struct Sensitivity {
     pub runs: u32,
     /// Per algorithm: the preset's measures and, per parameter, per factor, the measures
     /// (`None`: the variation is not a valid configuration).
-    pub algos: Vec<(
-        String,
-        Measured,
-        Vec<(String, Vec<(f64, Option<Measured>)>)>,
+    pub algos: Vec<AlgoSensitivity>,
     )>,
     /// Wall-clock time.
     pub wall: Duration,
