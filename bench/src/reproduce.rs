@@ -736,7 +736,11 @@ fn for_each_llr(c: &mut ExperimentConfig, mut f: impl FnMut(&mut agent::config::
 
 /// One algorithm's sensitivity: its name, its preset's measures, and per parameter, per
 /// factor, the measures (`None`: not a valid configuration).
-pub type AlgoSensitivity = (String, Measured, Vec<(String, Vec<(f64, Option<Measured>)>)>);
+pub type AlgoSensitivity = (
+    String,
+    Measured,
+    Vec<(String, Vec<(f64, Option<Measured>)>)>,
+);
 
 /// The sensitivity analysis (§3.7 and §7.2.1 leave it as future work): final greedy
 /// return and learning speed of SAC/LLR and MLAC/LLR on the pendulum when each main
@@ -747,7 +751,6 @@ pub struct Sensitivity {
     /// Per algorithm: the preset's measures and, per parameter, per factor, the measures
     /// (`None`: the variation is not a valid configuration).
     pub algos: Vec<AlgoSensitivity>,
-    )>,
     /// Wall-clock time.
     pub wall: Duration,
 }
