@@ -11,7 +11,9 @@
 //! * `curve.csv` — `trial,sim_time_s,mean,min,max,ci_low,ci_high` of `return` across
 //!   runs (95 % confidence interval of the mean), `greedy_curve.csv` the same for the
 //!   greedy evaluations;
-//! * `curve.png`, `curve.svg` — the learning curve in the style of the thesis's figures.
+//! * `curve.png`, `curve.svg` — the learning curve in the style of the thesis's figures;
+//! * `response.csv` — `t,x_0,...,u_0,...,reward`: run 0's final greedy policy, one trial
+//!   from the task's first start state (a typical time response).
 //!
 //! Every file is a pure function of the configuration: the same seed gives byte-identical
 //! files whatever the number of threads.
@@ -28,7 +30,7 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 
-use crate::experiment::{Experiment, TrialRecord};
+use crate::experiment::{Experiment, Sample, TrialRecord};
 use crate::report::{self, CurvePoint, Series, SeriesStyle};
 
 /// How to run and where to write.
@@ -53,6 +55,9 @@ pub struct LearnSummary {
     pub greedy_curve: Vec<CurvePoint>,
     /// Wall-clock time of the experiments (excluding plots).
     pub wall: Duration,
+    /// Run 0's final greedy policy: one trial from the task's first start state (a
+    /// typical time response, written to `response.csv`).
+    pub response: Vec<Sample>,
 }
 
 /// Writes finished runs to `runs.csv` in run order.
@@ -146,6 +151,8 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
         .num_threads(opts.threads.unwrap_or(0))
         .build()?;
     let t0 = Instant::now();
+    let x0 = plant::Task::new(cfg.system).initial_states[0].clone();
+    let response = Mutex::new(Vec::new());
     let results: Result<Vec<Vec<TrialRecord>>> = pool.install(|| {
         (0..runs)
             .into_par_iter()
@@ -156,6 +163,9 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
                     bar.inc(1);
                     records.push(r);
                 }
+                if run == 0 {
+                    *response.lock().expect("response poisoned") = exp.greedy_trajectory(&x0);
+                }
                 writer
                     .lock()
                     .expect("writer poisoned")
@@ -165,6 +175,8 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
             .collect()
     });
     let records: Vec<TrialRecord> = results?.into_iter().flatten().collect();
+    let response = response.into_inner().expect("response poisoned");
+    write_response(&opts.out.join("response.csv"), &response)?;
     let wall = t0.elapsed();
     bar.finish_and_clear();
     drop(writer);
@@ -203,7 +215,31 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
         curve,
         greedy_curve,
         wall,
+        response,
     })
+}
+
+/// Writes a time response as `t,x_0,...,u_0,...,reward` (shortest round-trip numbers).
+fn write_response(path: &Path, samples: &[Sample]) -> Result<()> {
+    let mut s = String::new();
+    if let Some(first) = samples.first() {
+        let cols: Vec<String> = (0..first.x.len())
+            .map(|i| format!("x_{i}"))
+            .chain((0..first.u.len()).map(|i| format!("u_{i}")))
+            .collect();
+        s.push_str(&format!("t,{},reward\n", cols.join(",")));
+    }
+    for p in samples {
+        let v: Vec<String> = std::iter::once(p.t)
+            .chain(p.x.iter().copied())
+            .chain(p.u.iter().copied())
+            .chain(std::iter::once(p.reward))
+            .map(|v| v.to_string())
+            .collect();
+        s.push_str(&v.join(","));
+        s.push('\n');
+    }
+    write_atomic(path, &s)
 }
 
 /// Learning and greedy curves from the records of `runs` runs of `trials` trials.

@@ -576,11 +576,32 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
         std::fs::create_dir_all(&dir)?;
         let mut measured = Vec::new();
         let mut curves: Vec<Vec<CurvePoint>> = Vec::new();
+        let mut responses = Vec::new();
         for curve in &fig.curves {
             let (m, summary) = runner.run(&dir, fig.id, curve.label, &curve.cfg, None)?;
             measured.push(m);
             curves.push(summary.curve);
+            responses.push(summary.response);
         }
+        let labelled: Vec<(&str, &[crate::experiment::Sample])> = fig
+            .curves
+            .iter()
+            .zip(&responses)
+            .map(|(c, r)| (c.label, &r[..]))
+            .collect();
+        report::plot_responses(
+            &dir.join("response.png"),
+            &dir.join("response.svg"),
+            &format!(
+                "{}: final policies (run 0, greedy)",
+                fig.title.split(':').next().unwrap_or(fig.id)
+            ),
+            &labelled,
+            match fig.curves[0].cfg.system {
+                SystemName::Pendulum => ("angle φ [rad]", "action u [V]"),
+                _ => ("angle φ₁ [rad]", "torque u₁ [N m]"),
+            },
+        )?;
         let style = if curves.len() > 3 {
             SeriesStyle::Line
         } else {
@@ -886,8 +907,8 @@ fn write_report(
     for (r, fig) in results {
         let _ = writeln!(
             s,
-            "## {}\n\n![{}]({}/figure.png)\n",
-            fig.title, fig.id, fig.id
+            "## {}\n\n![{}]({}/figure.png)\n\n![{} time responses]({}/response.png)\n",
+            fig.title, fig.id, fig.id, fig.id, fig.id
         );
         let _ = writeln!(
             s,

@@ -240,7 +240,13 @@ fn reproduce_writes_figures_a_report_and_checks_claims() {
         "{stdout}"
     );
     for id in ["3.17", "3.22"] {
-        for f in ["figure.png", "figure.svg", "summary.csv"] {
+        for f in [
+            "figure.png",
+            "figure.svg",
+            "summary.csv",
+            "response.png",
+            "response.svg",
+        ] {
             assert!(dir.join(id).join(f).is_file(), "{id}/{f}");
         }
     }

@@ -11,9 +11,12 @@
 //!   ([`curve()`]) and writes them as deterministic CSV ([`write_curve_csv`]).
 //! - [`plot`] draws one or more curves in that style into a PNG and an SVG
 //!   ([`plot_curves`]).
+//! - [`response`] draws time responses of learned policies ([`plot_responses`]).
 
 pub mod curve;
 pub mod plot;
+pub mod response;
 
 pub use curve::{CurvePoint, curve, write_curve_csv};
 pub use plot::{Series, SeriesStyle, plot_curves};
+pub use response::plot_responses;

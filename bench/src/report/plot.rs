@@ -104,7 +104,7 @@ pub fn plot_curves(
 }
 
 /// Registers the embedded font as plotters' `sans-serif`, once per process.
-fn register_fonts() -> Result<()> {
+pub(super) fn register_fonts() -> Result<()> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
         register_font(
@@ -275,6 +275,16 @@ impl<'s, 'a> Plot<'s, 'a> {
     }
 }
 
+/// The range of `values`, widened by `fraction` of its span on each side (see
+/// `Extent::padded`).
+pub(super) fn padded_range(values: impl Iterator<Item = f64>, fraction: f64) -> Range<f64> {
+    let mut e = Extent::default();
+    for v in values {
+        e.add(v);
+    }
+    e.padded(fraction)
+}
+
 /// The smallest interval holding a set of finite numbers.
 #[derive(Default)]
 struct Extent(Option<(f64, f64)>);
@@ -304,7 +314,7 @@ impl Extent {
 
 /// A tick label for `v` on an axis spanning `span`, with just enough decimals
 /// for the ticks plotters picks (about ten per axis) and never "-0".
-fn tick_label(v: f64, span: f64) -> String {
+pub(super) fn tick_label(v: f64, span: f64) -> String {
     let decimals = (1.0 - span.log10()).ceil().clamp(0.0, 9.0) as usize;
     let scale = 10f64.powi(decimals as i32);
     // Adding 0.0 turns a rounded -0.0 into 0.0.
@@ -312,7 +322,7 @@ fn tick_label(v: f64, span: f64) -> String {
 }
 
 /// The palette, repeated forever.
-fn colours() -> impl Iterator<Item = RGBColor> {
+pub(super) fn colours() -> impl Iterator<Item = RGBColor> {
     PALETTE.iter().copied().cycle()
 }
 
