@@ -390,10 +390,6 @@ fn main() -> ExitCode {
                 }
             };
             cfg.run.runs = 1;
-            if !cfg.observer.is_default() {
-                eprintln!("error: {}", rig::process::OBSERVER_IN_PROCESS_ONLY);
-                return ExitCode::from(2);
-            }
             if !(args.speed.is_finite() && args.speed > 0.0 && args.speed <= 1000.0) {
                 eprintln!(
                     "error: `--speed` {} is out of range: must be a number in (0, 1000]",

@@ -3,9 +3,10 @@
 use std::sync::Arc;
 
 use ::plant::safety::SafetyCounts;
+use ::plant::sensor::Sensor;
 use ::plant::{Plant, Task};
 use anyhow::{Result, bail};
-use wire::{Action, Bus, Header, Measurement, flags, now_ns, topic};
+use wire::{Action, Bus, Header, Measurement, Truth, flags, now_ns, topic};
 
 use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
 
@@ -15,6 +16,11 @@ use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
 /// driver's ([`super::external`]). A trial that leaves the task's operating range ends
 /// early with [`flags::END`] | [`flags::TERMINAL`]; the simulated time counts only
 /// samples run.
+///
+/// What is published is the configured sensor's output (`[observer] sensor`,
+/// [`crate::experiment::sensor`], its noise from the run seed exactly as in process); the
+/// true state stays here and, when the sensor does not measure all of it, goes out on
+/// the evaluation topic [`topic::TRUTH`], for the supervisor alone.
 pub fn run(args: &ProcessArgs) -> Result<()> {
     let cfg = args.config()?;
     let task = Arc::new(Task::new(cfg.system));
@@ -23,7 +29,16 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
     let out = bus
         .tx::<Measurement>(topic::MEASUREMENT)
         .map_err(wire_err)?;
+    let run_seed = ::agent::seed::run_seed(cfg.run.seed, args.run_index);
+    let sensor = crate::experiment::sensor(&task, &cfg.observer, run_seed);
+    let truth = match sensor {
+        Sensor::Full => None,
+        Sensor::Angle(_) => Some(bus.tx::<Truth>(topic::TRUTH).map_err(wire_err)?),
+    };
     let link = Link {
+        y: vec![0.0; task.state_dim()],
+        sensor,
+        truth,
         task: task.clone(),
         bus,
         out,
@@ -119,6 +134,12 @@ pub(super) struct Link {
     pub(super) task: Arc<Task>,
     pub(super) bus: Bus,
     pub(super) out: wire::Tx<Measurement>,
+    /// What the plant measures of the true state.
+    sensor: Sensor,
+    /// The last measurement `y_k`.
+    y: Vec<f64>,
+    /// Ground truth for the supervisor, when the sensor does not measure the full state.
+    truth: Option<wire::Tx<Truth>>,
     pub(super) actions: wire::Rx<Action>,
     /// The next sample's sequence number.
     pub(super) seq: u64,
@@ -129,21 +150,40 @@ pub(super) struct Link {
 }
 
 impl Link {
-    /// Publishes a sample; returns when it was published (monotonic ns).
+    /// Publishes a sample of the true state `x`: the ground truth first (if published),
+    /// then the sensor's measurement of `x` — at a trial start `x` itself, as in process
+    /// (the state is known there; the sensor, and its noise stream, are not used).
+    /// Returns when the measurement was published (monotonic ns).
     pub(super) fn publish(
         &mut self,
         header: Header,
         reward: f64,
-        y: &[f64],
+        x: &[f64],
         u_applied: &[f64],
         t_sample_ns: u64,
     ) -> Result<u64> {
+        let n = self.task.state_dim();
+        if header.flags & flags::START != 0 {
+            self.y.copy_from_slice(&x[..n]);
+        } else {
+            self.sensor.measure(&x[..n], &mut self.y);
+        }
+        if let Some(truth) = &self.truth {
+            truth
+                .send(Truth {
+                    header,
+                    n_x: n as u64,
+                    x: pack(&x[..n]),
+                    t_sample_ns,
+                })
+                .map_err(wire_err)?;
+        }
         let m = Measurement {
             header,
-            n_x: self.task.state_dim() as u64,
+            n_x: n as u64,
             n_u: self.task.action_dim() as u64,
             reward,
-            y: pack(y),
+            y: pack(&self.y),
             u_applied: pack(u_applied),
             t_sample_ns,
             t_publish_ns: now_ns(),
