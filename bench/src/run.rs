@@ -55,6 +55,9 @@ pub struct RunOptions {
     pub driver: Option<ExternalDriver>,
     /// Continue the run in `out` from its last complete trial ([`crate::resume`]).
     pub resume: bool,
+    /// Realtime, simulated plant: the plant writes every sample's timing to this file
+    /// (`rig plant --cycles-out`, for `rig latency`).
+    pub cycles_out: Option<PathBuf>,
 }
 
 /// An external driver in place of the simulated plant (`rig run --plant external`).
@@ -858,6 +861,12 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let first_seq = point.as_ref().map_or(0, |p| p.first_seq);
     let mut role_args: BTreeMap<&str, Vec<String>> = BTreeMap::new();
     role_args.insert("plant", plant_timing);
+    if let (Some(path), Some(_), None) = (&opts.cycles_out, opts.realtime, &opts.driver) {
+        role_args
+            .get_mut("plant")
+            .expect("plant")
+            .extend(["--cycles-out".to_string(), path.display().to_string()]);
+    }
     let mut agent_args = vec![
         "--checkpoints".to_string(),
         checkpoints.display().to_string(),

@@ -723,3 +723,77 @@ fn a_run_with_an_observer_is_not_resumed() {
         3
     );
 }
+
+#[test]
+fn latency_times_every_stage_of_every_cycle() {
+    // A short `rig latency` at 3 ms periods (the pendulum 10 × faster than real time).
+    let dir = tmp("latency");
+    let out = ok(rig()
+        .args([
+            "latency",
+            "--cycles",
+            "150",
+            "--period-ms",
+            "3",
+            "--raw-samples",
+            "500",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap());
+    let summary = String::from_utf8_lossy(&out.stdout);
+    for stage in [
+        "plant_to_observer",
+        "observer_to_agent",
+        "agent_to_plant",
+        "slack",
+    ] {
+        assert!(summary.contains(stage), "{summary}");
+    }
+    assert!(summary.contains("deadline misses") && summary.contains("raw iceoryx2"));
+    let csv = std::fs::read_to_string(dir.join("latency.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header.len(), 1 + 9 + 9 + 1, "{header:?}");
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    // Two whole trials (101 samples each), every sample a row.
+    assert_eq!(rows.len(), 202);
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let mut met = 0;
+    for r in &rows {
+        assert_eq!(r.len(), header.len());
+        if r[col("deadline_miss")] == "1" {
+            continue;
+        }
+        met += 1;
+        let v = |name: &str| r[col(name)].parse::<u64>().unwrap();
+        // The stamps are in cycle order and the stages add up.
+        assert!(v("t_sample_ns") <= v("t_measurement_publish_ns"));
+        assert!(v("t_measurement_publish_ns") <= v("t_observer_received_ns"));
+        assert!(v("t_observer_publish_ns") <= v("t_agent_received_ns"));
+        assert!(v("t_agent_publish_ns") <= v("t_action_found_ns"));
+        assert!(v("t_action_found_ns") <= v("deadline_ns"));
+        let parts: u64 = [
+            "plant",
+            "plant_to_observer",
+            "observer",
+            "observer_to_agent",
+            "agent",
+            "agent_to_plant",
+        ]
+        .iter()
+        .map(|s| v(s))
+        .sum();
+        assert_eq!(parts, v("sample_to_actuation"));
+        assert_eq!(v("sample_to_actuation") + v("slack"), 3_000_000);
+    }
+    assert!(
+        met > 150,
+        "{met} of {} cycles met their deadline",
+        rows.len()
+    );
+    for f in ["latency.png", "latency.svg", "summary.txt", "run/run.mcap"] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+}

@@ -79,6 +79,11 @@ pub struct ProcessArgs {
     /// the system to rest at the start state) [s].
     #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
     pub reset_timeout: f64,
+    /// Plant only, realtime: write every sample's timing to this CSV file
+    /// ([`plant::CYCLES_HEADER`]: sequence number, nominal sampling instant, wake-up,
+    /// arrival of the answering action; monotonic ns) — for `rig latency`.
+    #[arg(long, value_name = "FILE")]
+    pub cycles_out: Option<PathBuf>,
     /// Agent only: write a checkpoint of the learned state at the end of every learning
     /// trial into this directory (`trial-NNNNNN.ckpt`, atomically).
     #[arg(long, value_name = "DIR")]

@@ -45,6 +45,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         actions,
         seq: args.first_seq,
         latencies: Vec::new(),
+        cycles: Vec::new(),
         misses: 0,
     };
     let mut runner: Box<dyn Trials> = match &args.driver {
@@ -65,6 +66,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                 plant: Plant::new(task.clone()),
                 link,
                 realtime,
+                record_cycles: args.cycles_out.is_some(),
             })
         }
     };
@@ -113,6 +115,14 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         let text: String = p.latencies.iter().map(|ns| format!("{ns}\n")).collect();
         std::fs::write(path, text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     }
+    if let Some(path) = &args.cycles_out {
+        let mut text = String::from(CYCLES_HEADER);
+        text.push('\n');
+        for c in &p.cycles {
+            text.push_str(&format!("{},{},{},{}\n", c[0], c[1], c[2], c[3]));
+        }
+        std::fs::write(path, text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    }
     Ok(())
 }
 
@@ -145,6 +155,9 @@ pub(super) struct Link {
     pub(super) seq: u64,
     /// Publish-to-action time of every sample \[ns\].
     pub(super) latencies: Vec<u64>,
+    /// Realtime: per sample `[seq, t_sample_ns, t_woke_ns, t_action_ns]` (see
+    /// [`CYCLES_HEADER`]).
+    pub(super) cycles: Vec<[u64; 4]>,
     /// Deadlines missed so far (realtime, external driver).
     pub(super) misses: u64,
 }
@@ -206,12 +219,20 @@ impl Link {
     }
 }
 
+/// Columns of the plant's per-sample timing file (`--cycles-out`, realtime): the sample's
+/// sequence number, its nominal sampling instant, when the plant actually woke for it,
+/// and when the plant found the action answering it (0: not within the period — a
+/// deadline miss). Monotonic ns.
+pub const CYCLES_HEADER: &str = "seq,t_sample_ns,t_woke_ns,t_action_ns";
+
 /// The simulated system, lockstep or realtime.
 struct PlantLoop {
     plant: Plant,
     link: Link,
     /// The sampling clock, in realtime timing.
     realtime: Option<Clock>,
+    /// Realtime: keep every sample's timing ([`Link::cycles`]).
+    record_cycles: bool,
 }
 
 /// Headers of one trial's samples.
@@ -324,6 +345,7 @@ impl PlantLoop {
         };
         let mut t_k = self.realtime.as_ref().expect("realtime").next_ns;
         sleep_until(t_k);
+        let mut woke = now_ns();
         self.publish(header.at(self.link.seq, 0, flags::START), 0.0, t_k)?;
         let mut ended_after = None;
         for k in 0..=steps {
@@ -334,6 +356,7 @@ impl PlantLoop {
             // shorter than a period were seen not to wake on arrival in this mode.
             let mut arrivals: Vec<(u64, Vec<f64>)> = Vec::new();
             let mut answered = false;
+            let mut t_answer = 0;
             loop {
                 let now = now_ns();
                 if now >= deadline {
@@ -352,11 +375,15 @@ impl PlantLoop {
                     if a.header.seq == waiting_for {
                         self.link.latencies.push(t_a.saturating_sub(t_k));
                         answered = true;
+                        t_answer = t_a;
                     }
                 }
             }
             if !answered {
                 self.link.misses += 1;
+            }
+            if self.record_cycles {
+                self.link.cycles.push([waiting_for, t_k, woke, t_answer]);
             }
             if let Some(skipped) = ended_after {
                 // The END sample's answer only acknowledges learning; the trial is over.
@@ -384,6 +411,7 @@ impl PlantLoop {
                     .reward(&x_k_reward_state, self.plant.applied_action()),
             );
             sleep_until(deadline);
+            woke = now_ns();
             t_k = deadline;
             let end = self.end_flags(k + 1 == steps);
             self.publish(header.at(self.link.seq, k + 1, end), r, t_k)?;
