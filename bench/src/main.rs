@@ -92,6 +92,11 @@ struct LatencyArgs {
     /// Raw ping-pong round trips for the baseline.
     #[arg(long, default_value_t = 20_000)]
     raw_samples: usize,
+    /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
+    /// until one misses a deadline; writes DIR/sweep.csv and names the fastest period
+    /// sustained for `--cycles` cycles without a miss.
+    #[arg(long)]
+    sweep: bool,
     /// Output directory.
     #[arg(long, value_name = "DIR", default_value = "out/latency")]
     out: PathBuf,
@@ -383,11 +388,23 @@ fn main() -> ExitCode {
                 raw_samples: args.raw_samples,
                 verbose: true,
             };
-            match rig::latency::latency(&opts) {
-                Ok(_) => {
-                    println!("wrote {}", rig::latency::describe(&args.out));
-                    ExitCode::SUCCESS
-                }
+            let done = if args.sweep {
+                rig::latency::sweep(&opts, 1.5).map(|points| {
+                    match points.iter().rev().find(|p| p.report.misses == 0) {
+                        Some(p) => println!(
+                            "fastest period without a deadline miss in {} cycles: {} ms",
+                            p.report.cycles, p.period_ms
+                        ),
+                        None => println!("every period measured missed a deadline"),
+                    }
+                    println!("wrote {0}/sweep.csv and {0}/period-*/", args.out.display());
+                })
+            } else {
+                rig::latency::latency(&opts)
+                    .map(|_| println!("wrote {}", rig::latency::describe(&args.out)))
+            };
+            match done {
+                Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
                     eprintln!("error: {e:#}");
                     ExitCode::FAILURE
