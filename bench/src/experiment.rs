@@ -24,7 +24,7 @@ use std::sync::Arc;
 use agent::Agent;
 use agent::checkpoint::{Checkpoint, CheckpointError, Origin, Snapshot};
 use agent::config::ExperimentConfig;
-use agent::config::SensorKind;
+use agent::config::{ObserverConfig, SensorKind};
 use agent::horizon::Horizon;
 use observer::Observer;
 use plant::sensor::Sensor;
@@ -43,6 +43,18 @@ pub struct TrialRecord {
     pub ret: f64,
     /// Return of the greedy evaluation trial after this one, if one was run.
     pub greedy: Option<f64>,
+}
+
+/// The sensor `o` asks for on `task`, its noise drawn from the run seed `run_seed`
+/// (stream [`plant::sensor::NOISE_STREAM`]) — the same in process and in the plant
+/// process of `rig run`, so both measure the same numbers.
+pub fn sensor(task: &Task, o: &ObserverConfig, run_seed: u64) -> Sensor {
+    match o.sensor {
+        SensorKind::Full => Sensor::Full,
+        SensorKind::Angle => {
+            Sensor::angle(&task.angle_mask, o.counts_per_rev, o.noise_std, run_seed)
+        }
+    }
 }
 
 /// One experiment's moving parts.
@@ -73,12 +85,7 @@ impl Experiment {
         let run_seed = agent::seed::run_seed(cfg.run.seed, run);
         let agent = agent::build(&task, cfg, run_seed);
         let o = &cfg.observer;
-        let sensor = match o.sensor {
-            SensorKind::Full => Sensor::Full,
-            SensorKind::Angle => {
-                Sensor::angle(&task.angle_mask, o.counts_per_rev, o.noise_std, run_seed)
-            }
-        };
+        let sensor = sensor(&task, o, run_seed);
         Self {
             plant: Plant::new(task.clone()),
             sensor,

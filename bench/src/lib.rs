@@ -5,6 +5,7 @@
 
 pub mod driver;
 pub mod experiment;
+pub mod latency;
 pub mod learn;
 pub mod loop_bench;
 pub mod optimal;

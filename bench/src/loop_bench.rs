@@ -53,7 +53,8 @@ impl Stats {
         }
     }
 
-    fn row(&self, name: &str) -> String {
+    /// `name,n,p50,p90,p99,p999,max` (µs).
+    pub fn row(&self, name: &str) -> String {
         format!(
             "{name},{},{:.2},{:.2},{:.2},{:.2},{:.2}",
             self.n, self.p50, self.p90, self.p99, self.p999, self.max
@@ -117,7 +118,9 @@ pub fn pong(run_id: &str) -> Result<()> {
     }
 }
 
-fn raw_round_trips(exe: &Path, out: &Path, samples: usize) -> Result<Vec<u64>> {
+/// `samples` raw round trips (after 1000 of warm-up) between this process and a `rig
+/// pong` child \[ns\].
+pub fn raw_round_trips(exe: &Path, out: &Path, samples: usize) -> Result<Vec<u64>> {
     let run_id = format!("raw{}", std::process::id());
     let bus = Bus::join(&run_id, "ping").map_err(wire_err)?;
     let rx = bus.rx::<Measurement>("pong").map_err(wire_err)?;

@@ -46,6 +46,12 @@ enum Command {
     /// Measure the three-process lockstep loop (trivial agent, no recorder) next to a
     /// raw iceoryx2 ping-pong between two processes, in the same run; writes loop.csv.
     BenchLoop(BenchLoopArgs),
+    /// Measure the latency budget of the three-process loop in real time (angle sensor,
+    /// an observer, the default learner, recorded): per hop and per stage percentiles
+    /// from every message's timestamps, deadline misses, sample-instant jitter, next to
+    /// a raw iceoryx2 ping-pong measured in the same run. Writes DIR/latency.csv (one row
+    /// per cycle), DIR/summary.txt, a histogram (DIR/latency.png, .svg) and DIR/run/.
+    Latency(LatencyArgs),
     /// The echo side of `rig bench-loop`'s raw ping-pong.
     #[command(hide = true)]
     Pong {
@@ -93,6 +99,31 @@ struct BenchLoopArgs {
     samples: usize,
     /// Output directory.
     #[arg(long, value_name = "DIR", default_value = "out/bench-loop")]
+    out: PathBuf,
+}
+
+#[derive(Args)]
+struct LatencyArgs {
+    /// Samples (cycles) to time, at least (whole 3 s trials are run).
+    #[arg(long, default_value_t = 10_000)]
+    cycles: usize,
+    /// Sampling period [ms] (the pendulum's Ts is 30 ms; a shorter period runs the
+    /// simulation faster than real time).
+    #[arg(long, value_name = "MS", default_value_t = 30.0)]
+    period_ms: f64,
+    /// State observer on the angle encoder: finite-difference or predictive.
+    #[arg(long, default_value = "predictive", value_parser = ObserverKind::parse)]
+    observer: ObserverKind,
+    /// Raw ping-pong round trips for the baseline.
+    #[arg(long, default_value_t = 20_000)]
+    raw_samples: usize,
+    /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
+    /// until one misses a deadline; writes DIR/sweep.csv and names the fastest period
+    /// sustained for `--cycles` cycles without a miss.
+    #[arg(long)]
+    sweep: bool,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "out/latency")]
     out: PathBuf,
 }
 
@@ -373,6 +404,38 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+        Command::Latency(args) => {
+            let opts = rig::latency::LatencyOptions {
+                cycles: args.cycles,
+                period_ms: args.period_ms,
+                out: args.out.clone(),
+                observer: args.observer,
+                raw_samples: args.raw_samples,
+                verbose: true,
+            };
+            let done = if args.sweep {
+                rig::latency::sweep(&opts, 1.5).map(|points| {
+                    match points.iter().rev().find(|p| p.report.misses == 0) {
+                        Some(p) => println!(
+                            "fastest period without a deadline miss in {} cycles: {} ms",
+                            p.report.cycles, p.period_ms
+                        ),
+                        None => println!("every period measured missed a deadline"),
+                    }
+                    println!("wrote {0}/sweep.csv and {0}/period-*/", args.out.display());
+                })
+            } else {
+                rig::latency::latency(&opts)
+                    .map(|_| println!("wrote {}", rig::latency::describe(&args.out)))
+            };
+            match done {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
         Command::BenchLoop(args) => match rig::loop_bench::bench_loop(&args.out, args.samples) {
             Ok(r) => {
                 let (s, w) = (&r.step, &r.raw_rtt);
@@ -415,10 +478,6 @@ fn main() -> ExitCode {
                 }
             };
             cfg.run.runs = 1;
-            if !cfg.observer.is_default() {
-                eprintln!("error: {}", rig::process::OBSERVER_IN_PROCESS_ONLY);
-                return ExitCode::from(2);
-            }
             if !(args.speed.is_finite() && args.speed > 0.0 && args.speed <= 1000.0) {
                 eprintln!(
                     "error: `--speed` {} is out of range: must be a number in (0, 1000]",
@@ -455,6 +514,7 @@ fn main() -> ExitCode {
                 progress: !args.quiet,
                 realtime,
                 driver,
+                cycles_out: None,
             };
             match run(&cfg, &opts) {
                 Ok(s) => {

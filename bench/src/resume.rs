@@ -314,7 +314,19 @@ impl Recorded {
 
 /// Decides where run directory `out` (configuration `cfg`, whose `run.trials` may exceed
 /// the original) continues; see the module documentation.
+///
+/// A run with a sensor or observer other than the defaults cannot be resumed: a
+/// checkpoint holds the agent's state only, not the observer's (a learned model, a
+/// velocity filter) nor where the sensor's noise stream stands.
 pub fn prepare(out: &Path, cfg: &ExperimentConfig) -> Result<ResumePoint> {
+    if !cfg.observer.is_default() {
+        bail!(
+            "{}: cannot resume a run with `[observer]` sensor {} / observer {}: checkpoints hold the agent's state only, not the observer's (its learned model, its filter) nor the sensor's noise stream; start a new run",
+            out.join("config.toml").display(),
+            cfg.observer.sensor,
+            cfg.observer.observer
+        );
+    }
     let mut notes = Vec::new();
     let rows = read_returns(&out.join("returns.csv"))?;
     let done = rows.len() as u32;

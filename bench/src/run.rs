@@ -14,6 +14,10 @@
 //!   first waits for the driver's info and checks it against the task, then starts the
 //!   plant process as the episode master for that driver (`rig plant --driver ID`), and
 //!   records the driver's samples and commands too (`/driver/...`).
+//! * With a sensor that does not measure the full state (`[observer] sensor = "angle"`)
+//!   it also subscribes to the plant's ground truth ([`wire::Truth`], `rig/<id>/truth`,
+//!   which no other process reads), records it as `/plant/truth`, and takes a finite
+//!   horizon's terminal reward `τ_N(x_N)` of the true state, as `rig learn` does.
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -27,7 +31,7 @@ use ::agent::horizon::Horizon;
 use anyhow::{Context, Result, anyhow, bail};
 use indicatif::ProgressBar;
 use wire::driver::{DriverCommand, DriverInfo, DriverSample, DriverWatch};
-use wire::{Action, Bus, Estimate, Header, Measurement, flags, topic};
+use wire::{Action, Bus, Estimate, Header, Measurement, Truth, flags, topic};
 
 use crate::experiment::TrialRecord;
 use crate::learn::{RUNS_HEADER, progress_bar, write_atomic, write_row};
@@ -51,6 +55,9 @@ pub struct RunOptions {
     pub driver: Option<ExternalDriver>,
     /// Continue the run in `out` from its last complete trial ([`crate::resume`]).
     pub resume: bool,
+    /// Realtime, simulated plant: the plant writes every sample's timing to this file
+    /// (`rig plant --cycles-out`, for `rig latency`).
+    pub cycles_out: Option<PathBuf>,
 }
 
 /// An external driver in place of the simulated plant (`rig run --plant external`).
@@ -109,7 +116,9 @@ struct Returns {
 }
 
 impl Returns {
-    fn measurement(&mut self, m: &Measurement) -> Result<()> {
+    /// Accounts for measurement `m`; `x` is the true state of its sample (its `y` with
+    /// full-state sensing).
+    fn measurement(&mut self, m: &Measurement, x: &[f64]) -> Result<()> {
         let f = m.header.flags;
         let greedy = f & flags::GREEDY != 0;
         if f & flags::SHUTDOWN != 0 || (f & flags::START != 0 && !greedy) {
@@ -140,8 +149,7 @@ impl Returns {
             .ok_or_else(|| anyhow!("a sample arrived before any trial started"))?;
         let end = f & flags::END != 0;
         let final_reward = if end {
-            self.horizon
-                .final_reward(&self.reward, &m.y[..m.n_x as usize])
+            self.horizon.final_reward(&self.reward, x)
         } else {
             0.0
         };
@@ -198,6 +206,8 @@ struct Recording {
     measurement: ChannelId,
     estimate: ChannelId,
     action: ChannelId,
+    /// `/plant/truth`, with a sensor that does not measure the full state.
+    truth: Option<ChannelId>,
     t_measurement: ChannelId,
     t_estimate: ChannelId,
     t_action: ChannelId,
@@ -274,6 +284,7 @@ impl Recording {
             measurement,
             estimate,
             action,
+            truth: None,
             t_measurement,
             t_estimate,
             t_action,
@@ -335,6 +346,24 @@ impl Recording {
             msg.header.seq,
             &[msg.t_sample_ns, msg.t_publish_ns],
         )
+    }
+
+    /// Adds the channel of the plant's ground truth.
+    fn add_truth(&mut self) -> Result<()> {
+        let fields = header_fields(vec![Field::array("x", self.n, FieldKind::Number)]);
+        self.truth = Some(self.rec.channel("/plant/truth", "rig.Truth", &fields)?);
+        Ok(())
+    }
+
+    /// Records the ground truth of a sample, with the log time of its measurement.
+    fn truth(&mut self, msg: &Truth) -> Result<()> {
+        let Some(ch) = self.truth else {
+            return Ok(());
+        };
+        self.t_sample_ns = msg.t_sample_ns;
+        let t = self.header(&msg.header);
+        self.nums(&msg.x[..self.n]);
+        self.rec.write(ch, t, t, &self.values)
     }
 
     fn estimate(&mut self, msg: &Estimate) -> Result<()> {
@@ -459,6 +488,12 @@ struct Supervisor {
     measurements: wire::Rx<Measurement>,
     estimates: wire::Rx<Estimate>,
     actions: wire::Rx<Action>,
+    /// The plant's ground truth, with a sensor that does not measure the full state.
+    truths: Option<wire::Rx<Truth>>,
+    /// Measurements drained, waiting for their ground truth to be drained too.
+    batch: Vec<Measurement>,
+    /// Ground truth drained ahead of its measurement.
+    truth_queue: std::collections::VecDeque<Truth>,
     recording: Recording,
     returns: Returns,
     children: Children,
@@ -488,16 +523,46 @@ impl Supervisor {
         while let Some(a) = self.actions.try_recv().map_err(wire_err)? {
             done |= self.action(a)?;
         }
+        // The plant publishes a sample's ground truth before its measurement: drained
+        // after the measurements, the truth of each of them is in.
+        self.batch.clear();
         while let Some(m) = self.measurements.try_recv().map_err(wire_err)? {
+            self.batch.push(m);
+        }
+        if let Some(t) = &self.truths {
+            while let Some(x) = t.try_recv().map_err(wire_err)? {
+                self.truth_queue.push_back(x);
+            }
+        }
+        let batch = std::mem::take(&mut self.batch);
+        for m in &batch {
             self.continuity[0].check(topic::MEASUREMENT, m.header.seq)?;
             self.deadline_misses = self.deadline_misses.max(m.deadline_misses);
-            self.recording.measurement(&m)?;
+            self.recording.measurement(m)?;
             self.messages += 1;
             if m.header.flags & flags::END != 0 {
                 bar.inc(1);
             }
-            self.returns.measurement(&m)?;
+            let n = m.n_x as usize;
+            if self.truths.is_some() && m.header.flags & flags::SHUTDOWN == 0 {
+                let t = self
+                    .truth_queue
+                    .pop_front()
+                    .filter(|t| t.header == m.header);
+                let Some(t) = t else {
+                    bail!(
+                        "the recorder lost messages on {}: no ground truth for sample {}",
+                        topic::TRUTH,
+                        m.header.seq
+                    );
+                };
+                self.recording.truth(&t)?;
+                self.returns.measurement(m, &t.x[..n])?;
+            } else {
+                self.returns.measurement(m, &m.y[..n])?;
+            }
         }
+        self.batch = batch;
         while let Some(e) = self.estimates.try_recv().map_err(wire_err)? {
             self.continuity[1].check(topic::ESTIMATE, e.header.seq)?;
             self.recording.estimate(&e)?;
@@ -679,6 +744,12 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         .map_err(wire_err)?;
     let estimates = bus.rx::<Estimate>(topic::ESTIMATE).map_err(wire_err)?;
     let actions = bus.rx::<Action>(topic::ACTION).map_err(wire_err)?;
+    let full_state = cfg.observer.sensor == ::agent::config::SensorKind::Full;
+    let truths = if full_state {
+        None
+    } else {
+        Some(bus.rx::<Truth>(topic::TRUTH).map_err(wire_err)?)
+    };
 
     let task = plant::Task::new(cfg.system);
     let (watch, driver_info) = match &opts.driver {
@@ -696,6 +767,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     recording.realtime = opts.realtime.is_some() || opts.driver.is_some();
     if opts.driver.is_some() {
         recording.add_driver()?;
+    }
+    if !full_state {
+        recording.add_truth()?;
     }
     recording
         .rec
@@ -787,6 +861,12 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let first_seq = point.as_ref().map_or(0, |p| p.first_seq);
     let mut role_args: BTreeMap<&str, Vec<String>> = BTreeMap::new();
     role_args.insert("plant", plant_timing);
+    if let (Some(path), Some(_), None) = (&opts.cycles_out, opts.realtime, &opts.driver) {
+        role_args
+            .get_mut("plant")
+            .expect("plant")
+            .extend(["--cycles-out".to_string(), path.display().to_string()]);
+    }
     let mut agent_args = vec![
         "--checkpoints".to_string(),
         checkpoints.display().to_string(),
@@ -833,6 +913,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         measurements,
         estimates,
         actions,
+        truths,
+        batch: Vec::new(),
+        truth_queue: std::collections::VecDeque::new(),
         recording,
         returns,
         children,

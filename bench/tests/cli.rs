@@ -158,7 +158,7 @@ fn config_prints_a_resolvable_preset_and_help_explains_every_flag() {
 }
 
 #[test]
-fn sensor_and_observer_flags_are_validated_and_run_in_process() {
+fn sensor_and_observer_flags_are_validated_and_written_to_the_config() {
     let dir = tmp("observer");
     let out = rig()
         .args(["config", "--sensor", "angle"])
@@ -197,18 +197,6 @@ fn sensor_and_observer_flags_are_validated_and_run_in_process() {
         toml.contains("[observer]") && toml.contains("\"predictive\""),
         "{toml}"
     );
-    let out = rig()
-        .args([
-            "run",
-            "--sensor",
-            "angle",
-            "--observer",
-            "finite-difference",
-        ])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("in process only"));
 }
 
 #[test]

@@ -530,3 +530,215 @@ fn a_second_run_with_the_same_run_id_is_refused_and_the_first_goes_on() {
         151
     );
 }
+
+#[test]
+fn angle_sensing_and_observers_over_the_wire_reproduce_rig_learn() {
+    // The plant process measures with the encoder (noise from the run seed's stream 2, as
+    // in process), the observer process estimates the velocities: the returns are those
+    // of `rig learn`, byte for byte — with and without sensor noise, and with a finite
+    // horizon, whose τ_N(x_N) is taken of the ground truth.
+    let dir = tmp("angle");
+    let noisy = dir.join("noisy.toml");
+    std::fs::write(&noisy, "[observer]\nnoise_std = 0.003\n").unwrap();
+    let known = dir.join("known.toml");
+    std::fs::write(&known, "[observer]\nmodel = \"known\"\nnoise_std = 0.002\n").unwrap();
+    let noisy = noisy.to_str().unwrap();
+    let known = known.to_str().unwrap();
+    let cases: [(&str, &[&str]); 5] = [
+        ("fd", &["--observer", "finite-difference"]),
+        ("pred", &["--observer", "predictive"]),
+        (
+            "fd-noise",
+            &["--observer", "finite-difference", "--config", noisy],
+        ),
+        (
+            "pred-noise",
+            &["--observer", "predictive", "--config", noisy],
+        ),
+        (
+            "known-fh",
+            &[
+                "--observer",
+                "predictive",
+                "--config",
+                known,
+                "--horizon",
+                "finite",
+                "--approx",
+                "rbf",
+            ],
+        ),
+    ];
+    for (tag, observer) in cases {
+        let mut args = vec!["--sensor", "angle", "--algo", "mlac", "--seed", "5"];
+        args.extend_from_slice(observer);
+        args.extend(["--trials", "8", "--eval-every", "4", "--quiet", "--out"]);
+        let ran = learn_and_run(&dir, &format!("-{tag}"), &args);
+        assert_eq!(ran.lines().count(), 9, "{tag}");
+    }
+    // Noise changes the numbers (the stream is used), and the recording shows what
+    // crossed the wire: encoder angles with unmeasured (null) velocities, the observer's
+    // finite estimates, and the ground truth on its own channel.
+    let csv = |tag: &str| std::fs::read_to_string(dir.join(format!("run-{tag}/returns.csv")));
+    assert_ne!(csv("pred").unwrap(), csv("pred-noise").unwrap());
+    let msgs = messages(&dir.join("run-pred/run.mcap"));
+    let json = |topic: &str| -> Vec<serde_json::Value> {
+        msgs[topic]
+            .iter()
+            .map(|(_, d)| serde_json::from_slice(d).unwrap())
+            .collect()
+    };
+    let (ys, xs, truth) = (
+        json("/plant/measurement"),
+        json("/observer/estimate"),
+        json("/plant/truth"),
+    );
+    // Every sample but the shutdown has its truth, with the measurement's header.
+    assert_eq!(truth.len() + 1, ys.len());
+    let q = std::f64::consts::TAU / 4096.0;
+    let mut differs = 0;
+    for ((y, x), t) in ys.iter().zip(&xs).zip(&truth) {
+        assert_eq!(y["seq"], t["seq"]);
+        assert!(t["x_1"].as_f64().is_some_and(f64::is_finite), "{t}");
+        assert!(x["x_1"].as_f64().is_some_and(f64::is_finite), "{x}");
+        if y["flags"].as_u64().unwrap() & 1 != 0 {
+            // A trial start: the state is known.
+            assert_eq!(y["y_1"], t["x_1"]);
+            continue;
+        }
+        assert!(
+            y["y_1"].is_null(),
+            "an encoder does not measure velocity: {y}"
+        );
+        let (angle, true_angle) = (y["y_0"].as_f64().unwrap(), t["x_0"].as_f64().unwrap());
+        assert!(((angle / q) - (angle / q).round()).abs() < 1e-6, "{y}");
+        assert!(plant::angle::wrap(angle - true_angle).abs() <= q / 2.0 + 1e-12);
+        differs += usize::from(angle != true_angle);
+    }
+    assert!(differs > 100, "quantised angles differ from the true ones");
+    // With full-state sensing there is no truth channel: the measurement is the truth.
+    let full = messages(&dir.join("run-known-fh/run.mcap"));
+    assert!(full.contains_key("/plant/truth"));
+    let default = dir.join("full");
+    ok(rig()
+        .args(["run", "--trials", "1", "--quiet", "--out"])
+        .arg(&default)
+        .output()
+        .unwrap());
+    assert!(!messages(&default.join("run.mcap")).contains_key("/plant/truth"));
+}
+
+#[test]
+fn a_run_with_an_observer_is_not_resumed() {
+    let dir = tmp("resume-observer");
+    ok(rig()
+        .args([
+            "run",
+            "--sensor",
+            "angle",
+            "--observer",
+            "predictive",
+            "--trials",
+            "2",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap());
+    let out = rig()
+        .args(["run", "--trials", "4", "--quiet", "--resume"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("cannot resume")
+            && err.contains("observer predictive")
+            && err.lines().count() == 1,
+        "{err}"
+    );
+    // Nothing was touched.
+    assert_eq!(
+        std::fs::read_to_string(dir.join("returns.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        3
+    );
+}
+
+#[test]
+fn latency_times_every_stage_of_every_cycle() {
+    // A short `rig latency` at 3 ms periods (the pendulum 10 × faster than real time).
+    let dir = tmp("latency");
+    let out = ok(rig()
+        .args([
+            "latency",
+            "--cycles",
+            "150",
+            "--period-ms",
+            "3",
+            "--raw-samples",
+            "500",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap());
+    let summary = String::from_utf8_lossy(&out.stdout);
+    for stage in [
+        "plant_to_observer",
+        "observer_to_agent",
+        "agent_to_plant",
+        "slack",
+    ] {
+        assert!(summary.contains(stage), "{summary}");
+    }
+    assert!(summary.contains("deadline misses") && summary.contains("raw iceoryx2"));
+    let csv = std::fs::read_to_string(dir.join("latency.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header.len(), 1 + 9 + 9 + 1, "{header:?}");
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    // Two whole trials (101 samples each), every sample a row.
+    assert_eq!(rows.len(), 202);
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let mut met = 0;
+    for r in &rows {
+        assert_eq!(r.len(), header.len());
+        if r[col("deadline_miss")] == "1" {
+            continue;
+        }
+        met += 1;
+        let v = |name: &str| r[col(name)].parse::<u64>().unwrap();
+        // The stamps are in cycle order and the stages add up.
+        assert!(v("t_sample_ns") <= v("t_measurement_publish_ns"));
+        assert!(v("t_measurement_publish_ns") <= v("t_observer_received_ns"));
+        assert!(v("t_observer_publish_ns") <= v("t_agent_received_ns"));
+        assert!(v("t_agent_publish_ns") <= v("t_action_found_ns"));
+        assert!(v("t_action_found_ns") <= v("deadline_ns"));
+        let parts: u64 = [
+            "plant",
+            "plant_to_observer",
+            "observer",
+            "observer_to_agent",
+            "agent",
+            "agent_to_plant",
+        ]
+        .iter()
+        .map(|s| v(s))
+        .sum();
+        assert_eq!(parts, v("sample_to_actuation"));
+        assert_eq!(v("sample_to_actuation") + v("slack"), 3_000_000);
+    }
+    assert!(
+        met > 150,
+        "{met} of {} cycles met their deadline",
+        rows.len()
+    );
+    for f in ["latency.png", "latency.svg", "summary.txt", "run/run.mcap"] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+}

@@ -4,6 +4,7 @@
 //! ```text
 //! plant ──Measurement──► observer ──Estimate──► agent ──Action──► plant
 //!           (rig/<run>/measurement)   (rig/<run>/estimate)   (rig/<run>/action)
+//! plant ──Truth──► supervisor only (rig/<run>/truth; angle-only sensing: ground truth)
 //! ```
 //!
 //! Every payload is `#[repr(C)]`, made of `u64`, `f64` and fixed-size arrays of them,
@@ -78,7 +79,10 @@ pub struct Measurement {
     /// `r_k = ρ(x_{k−1}, u_{k−1})`, the reward of the transition into this sample (0 at a
     /// trial start).
     pub reward: f64,
-    /// The measurement `y_k` (the full state with full-state sensing).
+    /// The measurement `y_k` (the full state with full-state sensing). Components the
+    /// sensor does not measure (an encoder's velocities) are NaN, bit for bit as the
+    /// sensor wrote them; the recording writes them as JSON `null`. At a trial start
+    /// ([`flags::START`]) `y` is the true start state: the plant has just been put there.
     pub y: [f64; MAX_X],
     /// The action the plant applied over the interval before this sample.
     pub u_applied: [f64; MAX_U],
@@ -135,6 +139,25 @@ pub struct Action {
     pub t_publish_ns: u64,
 }
 
+/// Plant → supervisor only: the true state at sample `step` — the *evaluation* channel
+/// (ground truth for observer errors and a finite horizon's terminal reward). Published
+/// only when the sensor does not measure the full state (with full-state sensing the
+/// [`Measurement`] is the truth), on its own topic [`topic::TRUTH`], which the observer
+/// and the agent never open: they see the sensor output only.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("rig.Truth.v1")]
+pub struct Truth {
+    /// The header of the [`Measurement`] of the same sample (published right after this).
+    pub header: Header,
+    /// Used components of `x`.
+    pub n_x: u64,
+    /// The true state `x_k` (angles wrapped).
+    pub x: [f64; MAX_X],
+    /// Monotonic time at which the plant sampled \[ns\].
+    pub t_sample_ns: u64,
+}
+
 /// Topics, relative to a run.
 pub mod topic {
     /// Plant → observer.
@@ -143,6 +166,8 @@ pub mod topic {
     pub const ESTIMATE: &str = "estimate";
     /// Agent → plant.
     pub const ACTION: &str = "action";
+    /// Plant → supervisor (`rig run`): ground truth, for evaluation only ([`super::Truth`]).
+    pub const TRUTH: &str = "truth";
 }
 
 /// Subscriber buffer of every service: the recorder may lag this many samples behind.
@@ -578,6 +603,7 @@ mod tests {
             40 + 3 * 8 + 8 * 8 + 4 * 8 + 24
         );
         assert_eq!(std::mem::size_of::<Action>(), 40 + 8 + 4 * 8 + 24);
+        assert_eq!(std::mem::size_of::<Truth>(), 40 + 8 + 8 * 8 + 8);
         assert_eq!(std::mem::align_of::<Measurement>(), 8);
     }
 

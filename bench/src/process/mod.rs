@@ -79,6 +79,11 @@ pub struct ProcessArgs {
     /// the system to rest at the start state) [s].
     #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
     pub reset_timeout: f64,
+    /// Plant only, realtime: write every sample's timing to this CSV file
+    /// ([`plant::CYCLES_HEADER`]: sequence number, nominal sampling instant, wake-up,
+    /// arrival of the answering action; monotonic ns) — for `rig latency`.
+    #[arg(long, value_name = "FILE")]
+    pub cycles_out: Option<PathBuf>,
     /// Agent only: write a checkpoint of the learned state at the end of every learning
     /// trial into this directory (`trial-NNNNNN.ckpt`, atomically).
     #[arg(long, value_name = "DIR")]
@@ -104,17 +109,10 @@ impl ProcessArgs {
     pub fn config(&self) -> Result<ExperimentConfig> {
         let text = std::fs::read_to_string(&self.config)
             .with_context(|| format!("{}: cannot read", self.config.display()))?;
-        let cfg = resolve(Some((&self.config, &text)), &Overrides::default())
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-        if !cfg.observer.is_default() {
-            anyhow::bail!("{}: {}", self.config.display(), OBSERVER_IN_PROCESS_ONLY);
-        }
-        Ok(cfg)
+        resolve(Some((&self.config, &text)), &Overrides::default())
+            .map_err(|e| anyhow::anyhow!("{e}"))
     }
 }
-
-/// Why the processes refuse a non-default `[observer]` section.
-pub const OBSERVER_IN_PROCESS_ONLY: &str = "`observer`: an angle sensor and observers other than pass-through run in process only (`rig learn`) so far; over the wire (`rig run`) the sensor is the full state and the observer pass-through";
 
 /// A positive, finite number of seconds as a duration, or an error naming `flag`.
 pub fn seconds(flag: &str, s: f64) -> Result<Duration> {

@@ -1,6 +1,12 @@
 //! The observer process: measurements in, state estimates out.
+//!
+//! It sees the plant's sensor output only (`Measurement.y`; with an encoder the
+//! velocities are NaN — not measured), never the ground truth, and runs the observer
+//! the configuration asks for ([`::observer::build`], as the in-process driver does).
 
-use ::observer::{Observer, PassThrough};
+use std::sync::Arc;
+
+use ::observer::Observer;
 use ::plant::Task;
 use anyhow::Result;
 use wire::{Bus, Estimate, Measurement, flags, now_ns, topic};
@@ -10,8 +16,9 @@ use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
 /// Runs the observer side of a run until the plant announces its end.
 pub fn run(args: &ProcessArgs) -> Result<()> {
     let cfg = args.config()?;
-    let task = Task::new(cfg.system);
-    let mut observer: Box<dyn Observer> = Box::new(PassThrough::new(task.state_dim()));
+    let task = Arc::new(Task::new(cfg.system));
+    let mut observer: Box<dyn Observer> =
+        ::observer::build(task, &cfg.observer, cfg.model.as_ref());
     let bus = Bus::join(&args.run_id, "observer").map_err(wire_err)?;
     let measurements = bus
         .rx::<Measurement>(topic::MEASUREMENT)

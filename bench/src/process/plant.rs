@@ -3,9 +3,10 @@
 use std::sync::Arc;
 
 use ::plant::safety::SafetyCounts;
+use ::plant::sensor::Sensor;
 use ::plant::{Plant, Task};
 use anyhow::{Result, bail};
-use wire::{Action, Bus, Header, Measurement, flags, now_ns, topic};
+use wire::{Action, Bus, Header, Measurement, Truth, flags, now_ns, topic};
 
 use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
 
@@ -15,6 +16,11 @@ use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
 /// driver's ([`super::external`]). A trial that leaves the task's operating range ends
 /// early with [`flags::END`] | [`flags::TERMINAL`]; the simulated time counts only
 /// samples run.
+///
+/// What is published is the configured sensor's output (`[observer] sensor`,
+/// [`crate::experiment::sensor`], its noise from the run seed exactly as in process); the
+/// true state stays here and, when the sensor does not measure all of it, goes out on
+/// the evaluation topic [`topic::TRUTH`], for the supervisor alone.
 pub fn run(args: &ProcessArgs) -> Result<()> {
     let cfg = args.config()?;
     let task = Arc::new(Task::new(cfg.system));
@@ -23,13 +29,23 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
     let out = bus
         .tx::<Measurement>(topic::MEASUREMENT)
         .map_err(wire_err)?;
+    let run_seed = ::agent::seed::run_seed(cfg.run.seed, args.run_index);
+    let sensor = crate::experiment::sensor(&task, &cfg.observer, run_seed);
+    let truth = match sensor {
+        Sensor::Full => None,
+        Sensor::Angle(_) => Some(bus.tx::<Truth>(topic::TRUTH).map_err(wire_err)?),
+    };
     let link = Link {
+        y: vec![0.0; task.state_dim()],
+        sensor,
+        truth,
         task: task.clone(),
         bus,
         out,
         actions,
         seq: args.first_seq,
         latencies: Vec::new(),
+        cycles: Vec::new(),
         misses: 0,
     };
     let mut runner: Box<dyn Trials> = match &args.driver {
@@ -50,6 +66,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                 plant: Plant::new(task.clone()),
                 link,
                 realtime,
+                record_cycles: args.cycles_out.is_some(),
             })
         }
     };
@@ -98,6 +115,14 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         let text: String = p.latencies.iter().map(|ns| format!("{ns}\n")).collect();
         std::fs::write(path, text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     }
+    if let Some(path) = &args.cycles_out {
+        let mut text = String::from(CYCLES_HEADER);
+        text.push('\n');
+        for c in &p.cycles {
+            text.push_str(&format!("{},{},{},{}\n", c[0], c[1], c[2], c[3]));
+        }
+        std::fs::write(path, text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    }
     Ok(())
 }
 
@@ -119,31 +144,59 @@ pub(super) struct Link {
     pub(super) task: Arc<Task>,
     pub(super) bus: Bus,
     pub(super) out: wire::Tx<Measurement>,
+    /// What the plant measures of the true state.
+    sensor: Sensor,
+    /// The last measurement `y_k`.
+    y: Vec<f64>,
+    /// Ground truth for the supervisor, when the sensor does not measure the full state.
+    truth: Option<wire::Tx<Truth>>,
     pub(super) actions: wire::Rx<Action>,
     /// The next sample's sequence number.
     pub(super) seq: u64,
     /// Publish-to-action time of every sample \[ns\].
     pub(super) latencies: Vec<u64>,
+    /// Realtime: per sample `[seq, t_sample_ns, t_woke_ns, t_action_ns]` (see
+    /// [`CYCLES_HEADER`]).
+    pub(super) cycles: Vec<[u64; 4]>,
     /// Deadlines missed so far (realtime, external driver).
     pub(super) misses: u64,
 }
 
 impl Link {
-    /// Publishes a sample; returns when it was published (monotonic ns).
+    /// Publishes a sample of the true state `x`: the ground truth first (if published),
+    /// then the sensor's measurement of `x` — at a trial start `x` itself, as in process
+    /// (the state is known there; the sensor, and its noise stream, are not used).
+    /// Returns when the measurement was published (monotonic ns).
     pub(super) fn publish(
         &mut self,
         header: Header,
         reward: f64,
-        y: &[f64],
+        x: &[f64],
         u_applied: &[f64],
         t_sample_ns: u64,
     ) -> Result<u64> {
+        let n = self.task.state_dim();
+        if header.flags & flags::START != 0 {
+            self.y.copy_from_slice(&x[..n]);
+        } else {
+            self.sensor.measure(&x[..n], &mut self.y);
+        }
+        if let Some(truth) = &self.truth {
+            truth
+                .send(Truth {
+                    header,
+                    n_x: n as u64,
+                    x: pack(&x[..n]),
+                    t_sample_ns,
+                })
+                .map_err(wire_err)?;
+        }
         let m = Measurement {
             header,
-            n_x: self.task.state_dim() as u64,
+            n_x: n as u64,
             n_u: self.task.action_dim() as u64,
             reward,
-            y: pack(y),
+            y: pack(&self.y),
             u_applied: pack(u_applied),
             t_sample_ns,
             t_publish_ns: now_ns(),
@@ -166,12 +219,20 @@ impl Link {
     }
 }
 
+/// Columns of the plant's per-sample timing file (`--cycles-out`, realtime): the sample's
+/// sequence number, its nominal sampling instant, when the plant actually woke for it,
+/// and when the plant found the action answering it (0: not within the period — a
+/// deadline miss). Monotonic ns.
+pub const CYCLES_HEADER: &str = "seq,t_sample_ns,t_woke_ns,t_action_ns";
+
 /// The simulated system, lockstep or realtime.
 struct PlantLoop {
     plant: Plant,
     link: Link,
     /// The sampling clock, in realtime timing.
     realtime: Option<Clock>,
+    /// Realtime: keep every sample's timing ([`Link::cycles`]).
+    record_cycles: bool,
 }
 
 /// Headers of one trial's samples.
@@ -284,6 +345,7 @@ impl PlantLoop {
         };
         let mut t_k = self.realtime.as_ref().expect("realtime").next_ns;
         sleep_until(t_k);
+        let mut woke = now_ns();
         self.publish(header.at(self.link.seq, 0, flags::START), 0.0, t_k)?;
         let mut ended_after = None;
         for k in 0..=steps {
@@ -294,6 +356,7 @@ impl PlantLoop {
             // shorter than a period were seen not to wake on arrival in this mode.
             let mut arrivals: Vec<(u64, Vec<f64>)> = Vec::new();
             let mut answered = false;
+            let mut t_answer = 0;
             loop {
                 let now = now_ns();
                 if now >= deadline {
@@ -312,11 +375,15 @@ impl PlantLoop {
                     if a.header.seq == waiting_for {
                         self.link.latencies.push(t_a.saturating_sub(t_k));
                         answered = true;
+                        t_answer = t_a;
                     }
                 }
             }
             if !answered {
                 self.link.misses += 1;
+            }
+            if self.record_cycles {
+                self.link.cycles.push([waiting_for, t_k, woke, t_answer]);
             }
             if let Some(skipped) = ended_after {
                 // The END sample's answer only acknowledges learning; the trial is over.
@@ -344,6 +411,7 @@ impl PlantLoop {
                     .reward(&x_k_reward_state, self.plant.applied_action()),
             );
             sleep_until(deadline);
+            woke = now_ns();
             t_k = deadline;
             let end = self.end_flags(k + 1 == steps);
             self.publish(header.at(self.link.seq, k + 1, end), r, t_k)?;
