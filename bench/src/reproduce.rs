@@ -616,7 +616,6 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
     }
     std::fs::create_dir_all(&opts.out)
         .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
-    let t_all = Instant::now();
     let optimum = crate::optimal::pendulum_optimum(&crate::optimal::OptimumOptions {
         grid: 201,
         actions: 61,
@@ -626,6 +625,7 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
     let mut runner = Runner {
         opts,
         done: BTreeMap::new(),
+        spent: Duration::ZERO,
     };
     let mut results = Vec::new();
     let wanted = |id: &str| opts.only.is_empty() || opts.only.iter().any(|o| o == id);
@@ -633,19 +633,14 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
         if !wanted(fig.id) {
             continue;
         }
-        let mut experiments = Duration::ZERO;
+        let spent = runner.spent;
         let dir = opts.out.join(fig.id);
         std::fs::create_dir_all(&dir)?;
         let mut measured = Vec::new();
         let mut curves: Vec<Vec<CurvePoint>> = Vec::new();
         let mut responses = Vec::new();
         for curve in &fig.curves {
-            let shared = runner.done.len();
             let (m, summary) = runner.run(&dir, fig.id, curve.label, &curve.cfg, None)?;
-            if runner.done.len() > shared {
-                // First run for this figure (now, or by an earlier `rig reproduce`).
-                experiments += m.wall;
-            }
             measured.push(m);
             curves.push(summary.curve);
             responses.push(summary.response);
@@ -711,14 +706,14 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
             id: fig.id.to_string(),
             measured,
             claims,
-            wall: experiments + t_plots.elapsed(),
+            wall: runner.spent - spent + t_plots.elapsed(),
         };
         results.push((result, fig));
-        write_report(&opts.out, &results, None, optimum, t_all.elapsed())?;
+        write_report(&opts.out, &results, None, optimum, runner.spent)?;
     }
     if wanted("sensitivity") {
         let s = sensitivity(&mut runner)?;
-        write_report(&opts.out, &results, Some(&s), optimum, t_all.elapsed())?;
+        write_report(&opts.out, &results, Some(&s), optimum, runner.spent)?;
     }
     Ok(results.into_iter().map(|(r, _)| r).collect())
 }
@@ -728,6 +723,9 @@ struct Runner<'a> {
     opts: &'a ReproduceOptions,
     /// Experiments already run, by configuration.
     done: BTreeMap<String, LearnSummary>,
+    /// Wall-clock time of the experiments in `done`, as measured when each ran (now or
+    /// by an earlier `rig reproduce` whose outputs are reused).
+    spent: Duration,
 }
 
 impl Runner<'_> {
@@ -759,6 +757,7 @@ impl Runner<'_> {
                     out.display()
                 );
             }
+            self.spent += s.wall;
             self.done.insert(key.clone(), s);
         }
         let summary = match self.done.get(&key) {
@@ -782,6 +781,7 @@ impl Runner<'_> {
                     &out.join("wall_s.txt"),
                     &format!("{}\n", s.wall.as_secs_f64()),
                 )?;
+                self.spent += s.wall;
                 self.done.insert(key, s.clone());
                 s
             }
@@ -861,28 +861,29 @@ fn load_finished(dir: &Path, cfg: &ExperimentConfig) -> Option<LearnSummary> {
 /// Scales a parameter of a configuration by a factor.
 type Scale = fn(&mut ExperimentConfig, f64);
 
-const PARAMETERS: [(&str, Scale); 5] = [
-    ("α_a (actor rate)", |c, f| {
+/// `(name, short name for directories, how)` of each parameter.
+const PARAMETERS: [(&str, &str, Scale); 5] = [
+    ("α_a (actor rate)", "alpha_a", |c, f| {
         if let Some(Component::Llr(l)) = &mut c.actor {
             l.alpha *= f;
         }
     }),
-    ("α_c (critic rate)", |c, f| {
+    ("α_c (critic rate)", "alpha_c", |c, f| {
         if let Component::Llr(l) = &mut c.critic {
             l.alpha *= f;
         }
     }),
-    ("K (neighbours, every memory)", |c, f| {
+    ("K (neighbours, every memory)", "K", |c, f| {
         for_each_llr(c, |l| {
             l.neighbours = ((l.neighbours as f64 * f).round() as usize).max(3)
         })
     }),
-    ("N (memory size, every memory)", |c, f| {
+    ("N (memory size, every memory)", "N", |c, f| {
         for_each_llr(c, |l| {
             l.memory = ((l.memory as f64 * f).round() as usize).max(10)
         })
     }),
-    ("σ (exploration)", |c, f| c.learning.sigma *= f),
+    ("σ (exploration)", "sigma", |c, f| c.learning.sigma *= f),
 ];
 
 /// Factors applied to each parameter (the preset is factor 1).
@@ -922,7 +923,7 @@ pub struct Sensitivity {
 
 fn sensitivity(runner: &mut Runner) -> Result<Sensitivity> {
     use agent::config::{Algo::*, ApproxKind::Llr, HorizonKind::Infinite};
-    let t0 = Instant::now();
+    let spent = runner.spent;
     let runs = runner.opts.runs.unwrap_or(10);
     let dir = runner.opts.out.join("sensitivity");
     let mut algos = Vec::new();
@@ -936,7 +937,7 @@ fn sensitivity(runner: &mut Runner) -> Result<Sensitivity> {
             Some(runs),
         )?;
         let mut params = Vec::new();
-        for (param, apply) in PARAMETERS {
+        for (param, key, apply) in PARAMETERS {
             let mut row = Vec::new();
             for f in FACTORS {
                 let mut cfg = base.clone();
@@ -945,7 +946,7 @@ fn sensitivity(runner: &mut Runner) -> Result<Sensitivity> {
                     row.push((f, None));
                     continue;
                 }
-                let label = format!("{name} {} x{f}", param.split(' ').next().unwrap_or(param));
+                let label = format!("{name} {key} x{f}");
                 let (m, _) = runner.run(&dir, "sensitivity", &label, &cfg, Some(runs))?;
                 row.push((f, Some(m)));
             }
@@ -977,7 +978,7 @@ fn sensitivity(runner: &mut Runner) -> Result<Sensitivity> {
     Ok(Sensitivity {
         runs,
         algos,
-        wall: t0.elapsed(),
+        wall: runner.spent - spent,
     })
 }
 
@@ -1035,7 +1036,8 @@ fn write_report(
     let _ = writeln!(
         s,
         "# Reproducing Grondman's thesis: figures regenerated by `rig reproduce`\n\n\
-         Machine: {} cores; total wall time so far {:.0} s. Optimal return of the pendulum \
+         Machine: {} cores. Wall time of all experiments below, as measured when they ran: \
+         {:.0} s ({:.1} min). Optimal return of the pendulum \
          swing-up from [π, 0] (finite-horizon DP on a 201² grid, its policy run on the plant; \
          `rig optimal`): **{optimum:.1}**.\n\n\
          Measures: *final greedy* = per run the mean of the last three greedy evaluations, \
@@ -1046,7 +1048,8 @@ fn write_report(
          claims compares the minutes until each curve first comes within 10 % of the lower of \
          the final levels compared (a curve that stays low reaches its own level at once).\n",
         std::thread::available_parallelism().map_or(1, |n| n.get()),
-        wall.as_secs_f64()
+        wall.as_secs_f64(),
+        wall.as_secs_f64() / 60.0
     );
     for (r, fig) in results {
         let _ = writeln!(
