@@ -357,6 +357,20 @@ impl Checkpoint {
         Self::from_bytes(&bytes).map_err(|e| CheckpointError(format!("{}: {e}", path.display())))
     }
 
+    /// Restores `agent`, built from experiment `cfg` for run `run`, to the learned state
+    /// of this checkpoint, after checking that the checkpoint belongs to that run.
+    pub fn restore(
+        &self,
+        cfg: &ExperimentConfig,
+        run: u32,
+        agent: &mut dyn crate::Agent,
+    ) -> Result<(), CheckpointError> {
+        self.check_origin(cfg, run)?;
+        let mut r = self.state.reader();
+        agent.restore(&mut r)?;
+        r.finish()
+    }
+
     /// Checks that the checkpoint belongs to run `run` of experiment `cfg`.
     pub fn check_origin(&self, cfg: &ExperimentConfig, run: u32) -> Result<(), CheckpointError> {
         let want = Origin::of(cfg, run);

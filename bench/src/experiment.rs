@@ -123,16 +123,13 @@ impl Experiment {
         run: u32,
         c: &Checkpoint,
     ) -> Result<Self, CheckpointError> {
-        c.check_origin(cfg, run)?;
         if !cfg.observer.is_default() {
             return Err(CheckpointError(
                 "a checkpoint holds the agent's state only; resuming needs the default sensor and observer".into(),
             ));
         }
         let mut e = Self::new(cfg, run);
-        let mut r = c.state.reader();
-        e.agent.restore(&mut r)?;
-        r.finish()?;
+        c.restore(cfg, run, e.agent.as_mut())?;
         e.trial = c.trial;
         e.skipped_samples = ((f64::from(c.trial) * e.task.trial_seconds - c.sim_time_s) / e.task.ts)
             .round()

@@ -22,12 +22,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
     let mut expect_trial = 1;
     if let Some(path) = &args.resume {
         let c = Checkpoint::read(path).map_err(|e| anyhow!("{e}"))?;
-        c.check_origin(&cfg, args.run_index)
-            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
-        let mut r = c.state.reader();
-        agent
-            .restore(&mut r)
-            .and_then(|()| r.finish())
+        c.restore(&cfg, args.run_index, agent.as_mut())
             .map_err(|e| anyhow!("{}: {e}", path.display()))?;
         expect_trial = u64::from(c.trial) + 1;
     }
