@@ -326,6 +326,11 @@ pub struct RunConfig {
     /// A greedy evaluation trial after every this many trials (0, or more than `trials`:
     /// none).
     pub eval_every: u32,
+    /// Sample-to-actuation delay \[ms\], applied deterministically in lockstep: over each
+    /// sample period the previous action stays in effect for this long, then the new one
+    /// (0: the thesis's simulations, the action applies at the sample instant).
+    #[serde(default)]
+    pub delay_ms: f64,
 }
 
 /// Learning parameters shared by the components.
@@ -529,6 +534,10 @@ impl ExperimentConfig {
         check_i("run.trials", self.run.trials.into(), 1, 10_000_000)?;
         check_i("run.runs", self.run.runs.into(), 1, 100_000)?;
         check_i("run.eval_every", self.run.eval_every.into(), 0, 10_000_000)?;
+        if self.run.delay_ms != 0.0 {
+            // Less than one sample period.
+            check_f("run.delay_ms", self.run.delay_ms, 0.0, task.ts * 1e3, true)?;
+        }
         let o = &self.observer;
         check_i(
             "observer.counts_per_rev",
@@ -834,6 +843,8 @@ pub struct Overrides {
     pub sensor: Option<SensorKind>,
     /// `--observer`.
     pub observer: Option<ObserverKind>,
+    /// `--delay-ms`.
+    pub delay_ms: Option<f64>,
 }
 
 /// Resolves preset ← file ← overrides into a validated configuration.
@@ -893,6 +904,9 @@ pub fn resolve(
     }
     if let Some(v) = o.seed {
         cfg.run.seed = v;
+    }
+    if let Some(v) = o.delay_ms {
+        cfg.run.delay_ms = v;
     }
     if let Some(v) = o.eval_every {
         cfg.run.eval_every = v;

@@ -275,6 +275,7 @@ pub fn preset(
             runs: if arm { 20 } else { 30 },
             seed: 1,
             eval_every: 10,
+            delay_ms: 0.0,
         },
         learning: LearningConfig {
             gamma: 0.97,
@@ -369,6 +370,7 @@ pub fn finite_horizon(
             runs: 20,
             seed: 1,
             eval_every: 10,
+            delay_ms: 0.0,
         },
         learning: LearningConfig {
             gamma: 1.0,
@@ -454,6 +456,7 @@ fn critic_only(system: SystemName, algo: Algo, approx: ApproxKind) -> Experiment
             seed: 1,
             // One greedy evaluation per sequence of the four start states (§6.4.2).
             eval_every: if arm_6_4 { 4 } else { 5 },
+            delay_ms: 0.0,
         },
         learning: LearningConfig {
             gamma: 0.97,

@@ -72,6 +72,8 @@ pub struct Experiment {
     run: u32,
     trials: u32,
     eval_every: u32,
+    /// Sample-to-actuation delay \[s\] (`run.delay_ms`).
+    delay: f64,
     trial: u32,
     /// Samples not run because trials ended early (left the operating range).
     skipped_samples: u64,
@@ -97,6 +99,7 @@ impl Experiment {
             agent,
             run,
             trials: cfg.run.trials,
+            delay: cfg.run.delay_ms * 1e-3,
             eval_every: cfg.run.eval_every,
             trial: 0,
             skipped_samples: 0,
@@ -168,7 +171,7 @@ impl Experiment {
         self.agent.start_trial(self.plant.state(), &mut u);
         let mut ret = 0.0;
         for k in 0..steps {
-            let r = self.plant.step(&u);
+            let r = self.plant.step_delayed(&u, self.delay);
             ret += r;
             self.sensor.measure(self.plant.state(), &mut self.y);
             let x = self.observer.update(&self.y, self.plant.applied_action());
@@ -226,7 +229,7 @@ impl Experiment {
         let mut out = Vec::with_capacity(self.task.steps_per_trial());
         for k in 0..self.task.steps_per_trial() {
             self.agent.greedy(k, &x, &u_prev, &mut u);
-            let reward = self.plant.step(&u);
+            let reward = self.plant.step_delayed(&u, self.delay);
             u_prev.copy_from_slice(self.plant.applied_action());
             out.push(Sample {
                 t: k as f64 * self.task.ts,

@@ -196,6 +196,7 @@ fn experiment_flags(s: &Selection) -> Vec<&'static str> {
         ("--eval-every", s.eval_every.is_some()),
         ("--sensor", s.sensor.is_some()),
         ("--observer", s.observer.is_some()),
+        ("--delay-ms", s.delay_ms.is_some()),
         ("--config", s.config.is_some()),
     ]
     .into_iter()
@@ -342,6 +343,11 @@ struct Selection {
     /// velocity gain `observer.gain`) [default: pass-through].
     #[arg(long, value_parser = ObserverKind::parse)]
     observer: Option<ObserverKind>,
+    /// Sample-to-actuation delay [ms], in [0, Ts): over each sample period the previous
+    /// action stays in effect this long, then the new one — deterministic, for delay
+    /// studies (`run.delay_ms`; lockstep only) [default: 0].
+    #[arg(long, value_name = "MS")]
+    delay_ms: Option<f64>,
     /// TOML file overriding preset values; see `rig config` for every key.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
@@ -380,6 +386,7 @@ fn resolve_selection(s: &Selection) -> Result<agent::config::ExperimentConfig, S
         eval_every: s.eval_every,
         sensor: s.sensor,
         observer: s.observer,
+        delay_ms: s.delay_ms,
     };
     resolve(s.config.as_deref().zip(text.as_deref()), &o).map_err(|e| match &e.file {
         Some(_) => e.to_string(),
@@ -486,6 +493,12 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
             let realtime = (args.timing == "realtime").then_some(args.speed);
+            if cfg.run.delay_ms != 0.0 && (realtime.is_some() || args.plant == "external") {
+                eprintln!(
+                    "error: `--delay-ms` (run.delay_ms) applies in lockstep with the simulated plant only: in real time the delays are real"
+                );
+                return ExitCode::from(2);
+            }
             let driver = if args.plant == "external" {
                 if realtime.is_some() || args.speed != 1.0 {
                     eprintln!(

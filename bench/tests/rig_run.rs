@@ -48,6 +48,50 @@ fn three_processes_reproduce_the_in_process_run_byte_for_byte() {
     }
 }
 
+/// A sample-to-actuation delay (issue 5's delay studies) is deterministic in lockstep:
+/// both drivers give the same bytes, and the delay changes what is learned.
+#[test]
+fn a_delay_is_the_same_in_both_drivers_and_changes_the_run() {
+    let dir = tmp("delay");
+    let args = |delay: &'static str| {
+        [
+            "--trials",
+            "12",
+            "--eval-every",
+            "4",
+            "--seed",
+            "2",
+            "--delay-ms",
+            delay,
+            "--quiet",
+            "--out",
+        ]
+    };
+    let delayed = learn_and_run(&dir, "-10ms", &args("10"));
+    let none = learn_and_run(&dir, "-0ms", &args("0"));
+    assert_ne!(delayed, none);
+    let config = std::fs::read_to_string(dir.join("run-10ms/config.toml")).unwrap();
+    assert!(config.contains("delay_ms = 10"), "{config}");
+    // Out of range, and realtime: one-line errors.
+    for (extra, says) in [
+        (&["--delay-ms", "30"][..], "run.delay_ms"),
+        (&["--delay-ms", "5", "--timing", "realtime"][..], "lockstep"),
+    ] {
+        let out = rig()
+            .args(["run", "--quiet", "--out"])
+            .arg(dir.join("bad"))
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains(says) && err.trim().lines().count() == 1,
+            "{err}"
+        );
+    }
+}
+
 #[test]
 fn a_second_run_records_the_same_messages_except_timing() {
     let dir = tmp("rerun");

@@ -131,6 +131,22 @@ impl Plant {
         self.reward_of_transition(r)
     }
 
+    /// One sample period with a sample-to-actuation delay of `delay` seconds
+    /// (`0 ≤ delay < Ts`): the action in effect (the previous one; zero after a reset)
+    /// stays for `delay`, then `u` for the rest of the period. The reward is that of
+    /// [`Plant::step`], `ρ(x_k, u_k)` with the action in effect at the period's end. With
+    /// `delay = 0` this is [`Plant::step`], bit for bit.
+    pub fn step_delayed(&mut self, u: &[f64], delay: f64) -> f64 {
+        if delay <= 0.0 {
+            return self.step(u);
+        }
+        let x_k = self.x.clone();
+        let u_prev = self.applied.clone();
+        self.advance(&u_prev, delay);
+        self.advance(u, self.task.ts - delay);
+        self.reward_of_transition(self.task.reward.reward(&x_k, &self.applied))
+    }
+
     /// `r`, or the operating range's penalty once the range has been left.
     pub fn reward_of_transition(&self, r: f64) -> f64 {
         self.terminated.unwrap_or(r)

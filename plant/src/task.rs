@@ -373,6 +373,35 @@ mod tests {
         );
     }
 
+    /// A delayed period applies the action in effect first, then the new one; the reward
+    /// is ρ(x_k, u_k); without delay it is `Plant::step`.
+    #[test]
+    fn a_delayed_period_applies_the_previous_action_first() {
+        let task = Arc::new(Task::pendulum());
+        // x_1 with u_0 = −3 in effect.
+        let start = || {
+            let mut p = Plant::new(task.clone());
+            p.reset(&[2.0, 1.0]);
+            p.step(&[-3.0]);
+            p
+        };
+        let x1 = start().state().to_vec();
+        let mut undelayed = start();
+        let r_now = undelayed.step(&[3.0]);
+        let mut d0 = start();
+        assert_eq!(d0.step_delayed(&[3.0], 0.0), r_now);
+        assert_eq!(d0.state(), undelayed.state(), "no delay: Plant::step");
+        let d = 0.01;
+        let mut delayed = start();
+        let r = delayed.step_delayed(&[3.0], d);
+        let mut by_hand = start();
+        by_hand.advance(&[-3.0], d);
+        by_hand.advance(&[3.0], task.ts - d);
+        assert_eq!(delayed.state(), by_hand.state());
+        assert_eq!(r, task.reward.reward(&x1, &[3.0]), "ρ(x_k, u_k)");
+        assert_ne!(delayed.state(), undelayed.state());
+    }
+
     #[test]
     fn actions_are_saturated_and_non_finite_rejected() {
         let mut plant = Plant::new(Arc::new(Task::pendulum()));

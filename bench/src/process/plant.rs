@@ -54,6 +54,9 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
             link.out
                 .wait_for_receivers(args.receivers, STARTUP, &link.bus)
                 .map_err(wire_err)?;
+            if args.timing == "realtime" && cfg.run.delay_ms != 0.0 {
+                bail!("`run.delay_ms` applies in lockstep only: in real time the delays are real");
+            }
             let realtime = (args.timing == "realtime").then(|| {
                 let period_ns = (task.ts * 1e9 / args.speed).round() as u64;
                 Clock {
@@ -67,6 +70,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                 link,
                 realtime,
                 record_cycles: args.cycles_out.is_some(),
+                delay: cfg.run.delay_ms * 1e-3,
             })
         }
     };
@@ -233,6 +237,8 @@ struct PlantLoop {
     realtime: Option<Clock>,
     /// Realtime: keep every sample's timing ([`Link::cycles`]).
     record_cycles: bool,
+    /// Lockstep: the sample-to-actuation delay \[s\] (`run.delay_ms`).
+    delay: f64,
 }
 
 /// Headers of one trial's samples.
@@ -439,7 +445,7 @@ impl Trials for PlantLoop {
         };
         let mut u = self.exchange(header.at(self.link.seq, 0, flags::START), 0.0)?;
         for k in 0..steps {
-            let r = self.plant.step(&u);
+            let r = self.plant.step_delayed(&u, self.delay);
             let end = self.end_flags(k + 1 == steps);
             u = self.exchange(header.at(self.link.seq, k + 1, end), r)?;
             if self.plant.terminated() {
