@@ -134,15 +134,13 @@ impl Experiment {
         let mut e = Self::new(cfg, run);
         c.restore(cfg, run, e.agent.as_mut())?;
         e.trial = c.trial;
-        e.skipped_samples = ((f64::from(c.trial) * e.task.trial_seconds - c.sim_time_s) / e.task.ts)
-            .round()
-            .max(0.0) as u64;
+        e.skipped_samples = e.task.skipped_samples(c.trial.into(), c.sim_time_s);
         Ok(e)
     }
 
     /// Simulated learning time so far \[s\].
     fn sim_time_s(&self) -> f64 {
-        f64::from(self.trial) * self.task.trial_seconds - self.skipped_samples as f64 * self.task.ts
+        self.task.sim_time(self.trial.into(), self.skipped_samples)
     }
 
     /// The agent (for inspection after learning).

@@ -93,8 +93,7 @@ const CAUSE_WINDOW: Duration = Duration::from_millis(100);
 /// Builds `returns.csv` rows from the plant's measurements.
 struct Returns {
     out: BufWriter<File>,
-    trial_seconds: f64,
-    ts: f64,
+    task: std::sync::Arc<plant::Task>,
     steps_per_trial: u64,
     /// Samples not run because trials ended early (left the operating range).
     skipped_samples: u64,
@@ -168,8 +167,9 @@ impl Returns {
                 self.pending_ended = true;
                 pending.ret += final_reward;
                 self.skipped_samples += self.steps_per_trial.saturating_sub(m.header.step);
-                pending.sim_time_s = f64::from(pending.trial) * self.trial_seconds
-                    - self.skipped_samples as f64 * self.ts;
+                pending.sim_time_s = self
+                    .task
+                    .sim_time(pending.trial.into(), self.skipped_samples);
             }
         }
         Ok(())
@@ -751,7 +751,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         Some(bus.rx::<Truth>(topic::TRUTH).map_err(wire_err)?)
     };
 
-    let task = plant::Task::new(cfg.system);
+    let task = std::sync::Arc::new(plant::Task::new(cfg.system));
     let (watch, driver_info) = match &opts.driver {
         Some(d) => {
             let (watch, info) = wait_for_driver(&bus, d, &task, opts.progress)?;
@@ -822,12 +822,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let (after, sim_time) = point.as_ref().map_or((0, 0.0), |p| (p.trial, p.sim_time_s));
     let returns = Returns {
         out,
-        trial_seconds: task.trial_seconds,
-        ts: task.ts,
+        task: task.clone(),
         steps_per_trial: task.steps_per_trial() as u64,
-        skipped_samples: ((f64::from(after) * task.trial_seconds - sim_time) / task.ts)
-            .round()
-            .max(0.0) as u64,
+        skipped_samples: task.skipped_samples(after.into(), sim_time),
         horizon: cfg.horizon.of(&task),
         reward: task.reward.clone(),
         pending: None,

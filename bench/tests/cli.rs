@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 mod common;
-use common::rig;
+use common::{ok, rig};
 
 fn tmp(name: &str) -> PathBuf {
     common::tmp("cli", name)
@@ -12,7 +12,7 @@ fn tmp(name: &str) -> PathBuf {
 #[test]
 fn learn_writes_its_outputs_and_the_config_repeats_the_run() {
     let dir = tmp("learn");
-    let out = rig()
+    ok(rig()
         .args([
             "learn",
             "--runs",
@@ -26,12 +26,7 @@ fn learn_writes_its_outputs_and_the_config_repeats_the_run() {
         ])
         .arg(dir.join("a"))
         .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+        .unwrap());
     let again = rig()
         .args(["learn", "--quiet", "--config"])
         .arg(dir.join("a/config.toml"))
@@ -170,7 +165,7 @@ fn sensor_and_observer_flags_are_validated_and_written_to_the_config() {
         err.contains("`observer.observer`") && err.lines().count() == 1,
         "{err}"
     );
-    let out = rig()
+    ok(rig()
         .args([
             "learn",
             "--sensor",
@@ -186,12 +181,7 @@ fn sensor_and_observer_flags_are_validated_and_written_to_the_config() {
         ])
         .arg(&dir)
         .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+        .unwrap());
     let toml = std::fs::read_to_string(dir.join("config.toml")).unwrap();
     assert!(
         toml.contains("[observer]") && toml.contains("\"predictive\""),
@@ -202,7 +192,7 @@ fn sensor_and_observer_flags_are_validated_and_written_to_the_config() {
 #[test]
 fn reproduce_writes_figures_a_report_and_checks_claims() {
     let dir = tmp("reproduce");
-    let out = rig()
+    let out = ok(rig()
         .args([
             "reproduce",
             "--only",
@@ -216,12 +206,7 @@ fn reproduce_writes_figures_a_report_and_checks_claims() {
         ])
         .arg(&dir)
         .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+        .unwrap());
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         stdout.contains("Figure 3.17:") && stdout.contains("Figure 3.22:"),
@@ -260,7 +245,7 @@ fn reproduce_writes_figures_a_report_and_checks_claims() {
 
     // The sensitivity analysis: every parameter at every factor, for both algorithms.
     let sens = dir.join("sens");
-    let out = rig()
+    ok(rig()
         .args([
             "reproduce",
             "--only",
@@ -274,12 +259,7 @@ fn reproduce_writes_figures_a_report_and_checks_claims() {
         ])
         .arg(&sens)
         .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+        .unwrap());
     let csv = std::fs::read_to_string(sens.join("sensitivity/sensitivity.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 2 * (1 + 5 * 4), "{csv}");
     let report = std::fs::read_to_string(sens.join("REPORT.md")).unwrap();

@@ -285,6 +285,20 @@ impl Task {
         (self.trial_seconds / self.ts).round() as usize
     }
 
+    /// Simulated learning time after `trials` trials of which `skipped` samples were not
+    /// run (trials that left the operating range end early) \[s\].
+    pub fn sim_time(&self, trials: u64, skipped: u64) -> f64 {
+        trials as f64 * self.trial_seconds - skipped as f64 * self.ts
+    }
+
+    /// The samples not run in the first `trials` trials, from the simulated time at their
+    /// end (the inverse of [`Task::sim_time`]; a resumed run continues from it).
+    pub fn skipped_samples(&self, trials: u64, sim_time_s: f64) -> u64 {
+        ((self.sim_time(trials, 0) - sim_time_s) / self.ts)
+            .round()
+            .max(0.0) as u64
+    }
+
     /// The action the plant applies for `u`, into `out`: clamped to the action bounds, or
     /// zero (the safe action) if a component is not finite ([`crate::safety::Supervisor`]).
     pub fn saturate(&self, u: &[f64], out: &mut [f64]) -> crate::safety::Admission {

@@ -75,18 +75,14 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         }
     };
     let eval_every = cfg.run.eval_every;
-    let (trial_seconds, task_ts) = (task.trial_seconds, task.ts);
-    let t_sim =
-        |trials: u64, skipped: usize| trials as f64 * trial_seconds - skipped as f64 * task_ts;
+    let t_sim = |trials: u64, skipped: usize| task.sim_time(trials, skipped as u64);
     // A resumed run continues after trial `--after-trial`, whose simulated time tells how
     // many samples the trials before it skipped.
     let after = u64::from(args.after_trial);
     if !(args.sim_time.is_finite() && args.sim_time >= 0.0) {
         bail!("`--sim-time` {} is not a time", args.sim_time);
     }
-    let mut skipped = ((t_sim(after, 0) - args.sim_time) / task_ts)
-        .round()
-        .max(0.0) as usize;
+    let mut skipped = task.skipped_samples(after, args.sim_time) as usize;
     for trial in after + 1..=u64::from(cfg.run.trials) {
         let x0 = task.initial_states[(trial as usize - 1) % task.initial_states.len()].clone();
         skipped += runner.trial(trial, &x0, 0, t_sim(trial - 1, skipped))?;
