@@ -221,7 +221,10 @@ pub fn build(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Box<dyn Agen
         outputs: n,
         bounds: None,
     };
-    let action_bounds = Some((task.action_low.clone(), task.action_high.clone()));
+    let action_bounds = cfg
+        .learning
+        .bounded_actor
+        .then(|| (task.action_low.clone(), task.action_high.clone()));
     let critic: Box<dyn Critic> = match (&cfg.critic, make(&cfg.critic, &state(1, None))) {
         (Component::Lstd(c), Built::Rbf(v)) => Box::new(Lstd::new(*v, c.initial_a)),
         (c, built) => Box::new(TdLambda::new(built.value_function(), c.alpha())),

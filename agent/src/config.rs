@@ -348,6 +348,16 @@ pub struct LearningConfig {
     pub explore_every: u32,
     /// MLAC: `∇_u f̂` is taken as zero within this distance of an action bound (§3.5.1).
     pub saturation_margin: f64,
+    /// The actor's outputs are saturated to the action bounds and its updates stop there
+    /// (§3.5.1, the thesis's second remedy for input saturation; default). `false`
+    /// ignores the saturation in the actor — the plant still saturates what it applies —
+    /// for §3.7's claim that ignoring it does not produce a well-performing policy.
+    #[serde(default = "yes")]
+    pub bounded_actor: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// One approximator's parameters; which kind is given by [`ExperimentConfig::approx`].

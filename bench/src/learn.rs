@@ -12,8 +12,9 @@
 //!   runs (95 % confidence interval of the mean), `greedy_curve.csv` the same for the
 //!   greedy evaluations;
 //! * `curve.png`, `curve.svg` — the learning curve in the style of the thesis's figures;
-//! * `response.csv` — `t,x_0,...,u_0,...,reward`: run 0's final greedy policy, one trial
-//!   from the task's first start state (a typical time response).
+//! * `responses.csv` — `run,t,x_0,...,u_0,...,reward`: each run's final greedy policy,
+//!   one trial from the task's first start state (typical time responses, and their
+//!   spread over runs).
 //!
 //! Every file is a pure function of the configuration: the same seed gives byte-identical
 //! files whatever the number of threads.
@@ -40,8 +41,20 @@ pub struct LearnOptions {
     pub out: PathBuf,
     /// Worker threads (default: all cores).
     pub threads: Option<usize>,
-    /// Show a progress bar on the terminal.
-    pub progress: bool,
+    /// Where progress is shown.
+    pub progress: Progress,
+}
+
+/// Where [`learn`] shows its progress.
+#[derive(Clone, Debug)]
+pub enum Progress {
+    /// Nowhere.
+    Hidden,
+    /// A bar of its own on the terminal, cleared when done.
+    Bar,
+    /// Advances a caller's bar by one per trial (e.g. one bar per `rig reproduce`
+    /// figure) and leaves it running.
+    Shared(ProgressBar),
 }
 
 /// What a `learn` call produced.
@@ -55,9 +68,9 @@ pub struct LearnSummary {
     pub greedy_curve: Vec<CurvePoint>,
     /// Wall-clock time of the experiments (excluding plots).
     pub wall: Duration,
-    /// Run 0's final greedy policy: one trial from the task's first start state (a
-    /// typical time response, written to `response.csv`).
-    pub response: Vec<Sample>,
+    /// Each run's final greedy policy: one trial from the task's first start state (the
+    /// time responses written to `responses.csv`), in run order.
+    pub responses: Vec<Vec<Sample>>,
 }
 
 /// Writes finished runs to `runs.csv` in run order.
@@ -142,17 +155,20 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
     });
 
     let (runs, trials) = (cfg.run.runs, cfg.run.trials);
-    let bar = progress_bar(
-        u64::from(runs) * u64::from(trials),
-        opts.progress,
-        "learning",
-    );
+    let bar = match &opts.progress {
+        Progress::Shared(bar) => bar.clone(),
+        own => progress_bar(
+            u64::from(runs) * u64::from(trials),
+            matches!(own, Progress::Bar),
+            "learning",
+        ),
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads.unwrap_or(0))
         .build()?;
     let t0 = Instant::now();
     let x0 = plant::Task::new(cfg.system).initial_states[0].clone();
-    let response = Mutex::new(Vec::new());
+    let responses = Mutex::new(BTreeMap::new());
     let results: Result<Vec<Vec<TrialRecord>>> = pool.install(|| {
         (0..runs)
             .into_par_iter()
@@ -163,9 +179,11 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
                     bar.inc(1);
                     records.push(r);
                 }
-                if run == 0 {
-                    *response.lock().expect("response poisoned") = exp.greedy_trajectory(&x0);
-                }
+                let response = exp.greedy_trajectory(&x0);
+                responses
+                    .lock()
+                    .expect("responses poisoned")
+                    .insert(run, response);
                 writer
                     .lock()
                     .expect("writer poisoned")
@@ -175,10 +193,16 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
             .collect()
     });
     let records: Vec<TrialRecord> = results?.into_iter().flatten().collect();
-    let response = response.into_inner().expect("response poisoned");
-    write_response(&opts.out.join("response.csv"), &response)?;
+    let responses: Vec<Vec<Sample>> = responses
+        .into_inner()
+        .expect("responses poisoned")
+        .into_values()
+        .collect();
+    write_responses(&opts.out.join("responses.csv"), &responses)?;
     let wall = t0.elapsed();
-    bar.finish_and_clear();
+    if !matches!(opts.progress, Progress::Shared(_)) {
+        bar.finish_and_clear();
+    }
     drop(writer);
 
     let (curve, greedy_curve) = curves(&records, runs as usize, trials as usize)?;
@@ -215,31 +239,63 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
         curve,
         greedy_curve,
         wall,
-        response,
+        responses,
     })
 }
 
-/// Writes a time response as `t,x_0,...,u_0,...,reward` (shortest round-trip numbers).
-fn write_response(path: &Path, samples: &[Sample]) -> Result<()> {
+/// Writes each run's time response as `run,t,x_0,...,u_0,...,reward` (shortest
+/// round-trip numbers).
+fn write_responses(path: &Path, responses: &[Vec<Sample>]) -> Result<()> {
     let mut s = String::new();
-    if let Some(first) = samples.first() {
+    if let Some(first) = responses.iter().flatten().next() {
         let cols: Vec<String> = (0..first.x.len())
             .map(|i| format!("x_{i}"))
             .chain((0..first.u.len()).map(|i| format!("u_{i}")))
             .collect();
-        s.push_str(&format!("t,{},reward\n", cols.join(",")));
+        s.push_str(&format!("run,t,{},reward\n", cols.join(",")));
     }
-    for p in samples {
-        let v: Vec<String> = std::iter::once(p.t)
-            .chain(p.x.iter().copied())
-            .chain(p.u.iter().copied())
-            .chain(std::iter::once(p.reward))
-            .map(|v| v.to_string())
-            .collect();
-        s.push_str(&v.join(","));
-        s.push('\n');
+    for (run, samples) in responses.iter().enumerate() {
+        for p in samples {
+            let v: Vec<String> = std::iter::once(p.t)
+                .chain(p.x.iter().copied())
+                .chain(p.u.iter().copied())
+                .chain(std::iter::once(p.reward))
+                .map(|v| v.to_string())
+                .collect();
+            s.push_str(&format!("{run},{}\n", v.join(",")));
+        }
     }
     write_atomic(path, &s)
+}
+
+/// Reads what [`write_responses`] wrote for `runs` runs; `None` if the file is missing,
+/// malformed or incomplete.
+pub fn read_responses(path: &Path, runs: usize) -> Option<Vec<Vec<Sample>>> {
+    let mut reader = csv::Reader::from_path(path).ok()?;
+    let n = reader
+        .headers()
+        .ok()?
+        .iter()
+        .filter(|h| h.starts_with("x_"))
+        .count();
+    let mut out = vec![Vec::new(); runs];
+    for row in reader.records() {
+        let row = row.ok()?;
+        let run: usize = row.get(0)?.parse().ok()?;
+        let v: Vec<f64> = row
+            .iter()
+            .skip(1)
+            .map(|f| f.parse().ok())
+            .collect::<Option<_>>()?;
+        let last = v.len().checked_sub(1)?;
+        out.get_mut(run)?.push(Sample {
+            t: v[0],
+            x: v.get(1..1 + n)?.to_vec(),
+            u: v.get(1 + n..last)?.to_vec(),
+            reward: v[last],
+        });
+    }
+    out.iter().all(|r| !r.is_empty()).then_some(out)
 }
 
 /// Learning and greedy curves from the records of `runs` runs of `trials` trials.

@@ -627,7 +627,11 @@ fn main() -> ExitCode {
             let opts = LearnOptions {
                 out: args.out.clone(),
                 threads: args.threads,
-                progress: !args.quiet,
+                progress: if args.quiet {
+                    rig::learn::Progress::Hidden
+                } else {
+                    rig::learn::Progress::Bar
+                },
             };
             match learn(&cfg, &opts) {
                 Ok(s) => {

@@ -13,9 +13,13 @@
 //! Measures, per curve (from `runs.csv`):
 //! * **final greedy return** — per run the mean of its last three greedy evaluations;
 //!   mean and sample standard deviation over runs;
-//! * **reaches final level** — the learning curve (mean over runs of each trial's
-//!   return), smoothed by a 10-trial moving mean, first within 10 % of its final level
-//!   (the mean over the last 10 % of trials), in simulated minutes;
+//! * **rise time t₉₀** — the simulated minutes until the learning curve (mean over runs
+//!   of each trial's return, smoothed by a 10-trial moving mean) first covers 90 % of its
+//!   improvement from the first trial (the untrained policy) to its final level (the
+//!   mean over the last 10 % of trials) — the control engineer's 10–90 % rise time read
+//!   on a learning curve, which is how the thesis reads "learns faster" off its plots;
+//!   "a learns faster than b" compares the minutes until each curve first covers 90 % of
+//!   the way from the lower of the two start levels to the lower of the two final levels;
 //! * on the pendulum, the final greedy return as a percentage of the optimum
 //!   (`optimum / final`, 100 % = optimal).
 
@@ -28,10 +32,11 @@ use agent::config::{
     Algo, ApproxKind, Component, ExperimentConfig, HorizonKind, Overrides, resolve,
 };
 use anyhow::{Context, Result, anyhow, bail};
+use indicatif::ProgressBar;
 use plant::SystemName;
 
 use crate::experiment::TrialRecord;
-use crate::learn::{LearnOptions, LearnSummary, learn, write_atomic};
+use crate::learn::{LearnOptions, LearnSummary, Progress, learn, progress_bar, write_atomic};
 use crate::report::{self, CurvePoint, Series, SeriesStyle};
 
 /// The ids `--only` takes: the figures in the thesis's order, and the sensitivity
@@ -101,11 +106,22 @@ pub struct Measured {
     pub final_greedy: f64,
     /// Its sample standard deviation over runs.
     pub final_greedy_sd: f64,
-    /// Simulated minutes until the smoothed learning curve is within 10 % of its final
-    /// level.
+    /// Rise time t₉₀: simulated minutes until the smoothed learning curve first covers
+    /// 90 % of its improvement from the first trial to its final level.
     pub reaches_min: f64,
+    /// The learning curve's start level (mean return of the first trial).
+    pub start_level: f64,
     /// The learning curve's final level (mean return over the last 10 % of trials).
     pub final_level: f64,
+    /// Learning trials (of all runs) that ended before the trial's length, having left
+    /// the operating range (§6.4.2).
+    pub ended_early: usize,
+    /// Share of the samples of the final greedy policies (one trial per run) with an
+    /// action at a bound.
+    pub at_bound: f64,
+    /// On the pendulum, per run, the swings of the final greedy policy's swing-up
+    /// ([`swings`]); empty for other systems.
+    pub swings: Vec<Option<usize>>,
     /// The smoothed learning curve: (simulated minutes, 10-trial moving mean of the mean
     /// return).
     pub smoothed: Vec<(f64, f64)>,
@@ -114,14 +130,33 @@ pub struct Measured {
 }
 
 impl Measured {
-    /// Simulated minutes until the smoothed learning curve first comes within 10 % of
-    /// `level` (from below).
+    /// Simulated minutes until the smoothed learning curve first reaches `level`.
     fn minutes_to(&self, level: f64) -> f64 {
         self.smoothed
             .iter()
-            .find(|p| p.1 >= level - 0.1 * level.abs())
+            .find(|p| p.1 >= level)
             .map_or(f64::INFINITY, |p| p.0)
     }
+}
+
+/// The level 90 % of the way from `start` to `end` (the target of a rise time t₉₀; `end`
+/// itself if the curve did not improve).
+fn rise_target(start: f64, end: f64) -> f64 {
+    end - 0.1 * (end - start).max(0.0)
+}
+
+/// The common target of curves compared for speed: 90 % of the way from the lowest start
+/// level to the lowest final level, so that a curve that stays low does not "converge"
+/// at once to its own level.
+fn common_target<'a>(curves: impl IntoIterator<Item = &'a Measured> + Clone) -> f64 {
+    let low = |f: fn(&Measured) -> f64| {
+        curves
+            .clone()
+            .into_iter()
+            .map(f)
+            .fold(f64::INFINITY, f64::min)
+    };
+    rise_target(low(|c| c.start_level), low(|c| c.final_level))
 }
 
 fn preset(
@@ -149,11 +184,11 @@ fn find<'a>(m: &'a [Measured], label: &str) -> &'a Measured {
         .expect("a curve of the figure")
 }
 
-/// `a` learns faster than `b`: its smoothed learning curve reaches the lower of the two
-/// final levels first (a curve that stays low "converges" at once to its own level).
+/// `a` learns faster than `b`: its smoothed learning curve reaches the common target
+/// ([`common_target`]) first.
 fn faster(m: &[Measured], a: &str, b: &str) -> std::result::Result<String, String> {
     let (x, y) = (find(m, a), find(m, b));
-    let level = x.final_level.min(y.final_level);
+    let level = common_target([x, y]);
     let (tx, ty) = (x.minutes_to(level), y.minutes_to(level));
     let text = format!("to the common level {level:.0}: {a} {tx:.1} min, {b} {ty:.1} min");
     if tx < ty { Ok(text) } else { Err(text) }
@@ -176,7 +211,7 @@ fn better(m: &[Measured], a: &str, b: &str) -> std::result::Result<String, Strin
 /// SAC/LLR needs at most half the simulated time SAC/RBF needs to the common level.
 fn llr_share(m: &[Measured]) -> std::result::Result<String, String> {
     let (x, y) = (find(m, "SAC/LLR"), find(m, "SAC/RBF"));
-    let level = x.final_level.min(y.final_level);
+    let level = common_target([x, y]);
     let share = x.minutes_to(level) / y.minutes_to(level);
     let text = format!(
         "to the common level {level:.0}: SAC/LLR {:.1} min, SAC/RBF {:.1} min ({:.0} %)",
@@ -185,6 +220,82 @@ fn llr_share(m: &[Measured]) -> std::result::Result<String, String> {
         100.0 * share
     );
     if share <= 0.5 { Ok(text) } else { Err(text) }
+}
+
+/// `a`'s final greedy return is higher than `b`'s by more than the 95 % margin of the
+/// difference (Welch: 1.96 standard errors).
+fn clearly_better(m: &[Measured], a: &str, b: &str) -> std::result::Result<String, String> {
+    let (x, y) = (find(m, a), find(m, b));
+    let se = (x.final_greedy_sd.powi(2) / x.runs as f64
+        + y.final_greedy_sd.powi(2) / y.runs as f64)
+        .sqrt();
+    let diff = x.final_greedy - y.final_greedy;
+    let text = format!(
+        "final greedy return {a} {:.1} ± {:.1}, {b} {:.1} ± {:.1} (difference {diff:.1}, 95 % margin {:.1})",
+        x.final_greedy,
+        x.final_greedy_sd,
+        y.final_greedy,
+        y.final_greedy_sd,
+        1.96 * se
+    );
+    if diff > 1.96 * se {
+        Ok(text)
+    } else {
+        Err(text)
+    }
+}
+
+/// The opposite of a check.
+fn not(r: std::result::Result<String, String>) -> std::result::Result<String, String> {
+    match r {
+        Ok(t) => Err(t),
+        Err(t) => Ok(t),
+    }
+}
+
+/// `a` reaches the common target ([`common_target`]) of all curves first.
+fn fastest(m: &[Measured], a: &str) -> std::result::Result<String, String> {
+    let level = common_target(m);
+    let best = find(m, a).minutes_to(level);
+    let text = format!(
+        "to the common level {level:.0}: {}",
+        m.iter()
+            .map(|c| format!("{} {:.1} min", c.label, c.minutes_to(level)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    if m.iter().all(|c| c.minutes_to(level) >= best) {
+        Ok(text)
+    } else {
+        Err(text)
+    }
+}
+
+/// How many runs' final policies swing up with how many swings, e.g.
+/// `2 swings: 12, 3 swings: 8, never upright: 0`.
+fn swing_counts(c: &Measured) -> (BTreeMap<Option<usize>, usize>, String) {
+    let mut counts = BTreeMap::new();
+    for s in &c.swings {
+        *counts.entry(*s).or_insert(0) += 1;
+    }
+    let text = counts
+        .iter()
+        .map(|(k, n)| match k {
+            Some(1) => format!("1 swing: {n}"),
+            Some(k) => format!("{k} swings: {n}"),
+            None => format!("never upright: {n}"),
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    (counts, format!("{} ({text})", c.label))
+}
+
+/// A curve with §3.7's input saturation ignored: the actor's outputs unbounded and
+/// MLAC's `∇_u f̂` not cut at the bounds (the plant still saturates).
+fn saturation_ignored(mut cfg: ExperimentConfig) -> ExperimentConfig {
+    cfg.learning.bounded_actor = false;
+    cfg.learning.saturation_margin = 0.0;
+    cfg
 }
 
 fn both(
@@ -235,6 +346,14 @@ fn figures() -> Vec<Figure> {
             curves: vec![
                 c("MLAC/RBF", preset(Pendulum, Mlac, Rbf, Infinite)),
                 c("MLAC/LLR", preset(Pendulum, Mlac, Llr, Infinite)),
+                c(
+                    "MLAC/RBF, saturation ignored",
+                    saturation_ignored(preset(Pendulum, Mlac, Rbf, Infinite)),
+                ),
+                c(
+                    "MLAC/LLR, saturation ignored",
+                    saturation_ignored(preset(Pendulum, Mlac, Llr, Infinite)),
+                ),
             ],
             thesis: &[
                 ("MLAC/RBF", "converges in over 10 min"),
@@ -243,15 +362,26 @@ fn figures() -> Vec<Figure> {
                     "converges in just over 3 min; maximum after about 2–2.5 min",
                 ),
             ],
-            claims: vec![Claim {
-                says: "LLR is far superior to RBF in learning speed and performance (§3.6.2)",
-                check: |m| {
-                    both(
-                        faster(m, "MLAC/LLR", "MLAC/RBF"),
-                        better(m, "MLAC/LLR", "MLAC/RBF"),
-                    )
+            claims: vec![
+                Claim {
+                    says: "LLR is far superior to RBF in learning speed and performance (§3.6.2)",
+                    check: |m| {
+                        both(
+                            faster(m, "MLAC/LLR", "MLAC/RBF"),
+                            better(m, "MLAC/LLR", "MLAC/RBF"),
+                        )
+                    },
                 },
-            }],
+                Claim {
+                    says: "input saturation must be dealt with when learning a process model: simply ignoring it does not produce a well-performing policy (§3.7; ignored = actor outputs unbounded and ∇_u f̂ not cut at the bounds)",
+                    check: |m| {
+                        both(
+                            clearly_better(m, "MLAC/RBF", "MLAC/RBF, saturation ignored"),
+                            clearly_better(m, "MLAC/LLR", "MLAC/LLR, saturation ignored"),
+                        )
+                    },
+                },
+            ],
         },
         Figure {
             id: "3.22",
@@ -311,24 +441,45 @@ fn figures() -> Vec<Figure> {
                 },
                 Claim {
                     says: "model learning speeds learning up: MLAC/LLR learns fastest of all (§3.7)",
+                    check: |m| fastest(m, "MLAC/LLR"),
+                },
+                Claim {
+                    says: "with RBFs, MLAC and RMAC do not learn faster than SAC (§3.7)",
                     check: |m| {
-                        let level = m
+                        both(
+                            not(faster(m, "MLAC/RBF", "SAC/RBF")),
+                            not(faster(m, "RMAC/RBF", "SAC/RBF")),
+                        )
+                    },
+                },
+                Claim {
+                    says: "the LLR versions of SAC and MLAC end much better than their RBF counterparts (§3.7)",
+                    check: |m| {
+                        both(
+                            better(m, "SAC/LLR", "SAC/RBF"),
+                            better(m, "MLAC/LLR", "MLAC/RBF"),
+                        )
+                    },
+                },
+                Claim {
+                    says: "RMAC/LLR does not reach the best solution; RMAC is the only method that ends better with RBFs (§3.7)",
+                    check: |m| {
+                        let best = m
                             .iter()
-                            .map(|c| c.final_level)
-                            .fold(f64::INFINITY, f64::min);
-                        let best = find(m, "MLAC/LLR").minutes_to(level);
+                            .max_by(|a, b| a.final_greedy.total_cmp(&b.final_greedy))
+                            .expect("curves");
                         let text = format!(
-                            "to the lowest final level {level:.0}: {}",
-                            m.iter()
-                                .map(|c| format!("{} {:.1} min", c.label, c.minutes_to(level)))
-                                .collect::<Vec<_>>()
-                                .join(", ")
+                            "best final greedy return: {} {:.1}",
+                            best.label, best.final_greedy
                         );
-                        if m.iter().all(|c| c.minutes_to(level) >= best) {
-                            Ok(text)
-                        } else {
-                            Err(text)
-                        }
+                        both(
+                            if best.label == "RMAC/LLR" {
+                                Err(text)
+                            } else {
+                                Ok(text)
+                            },
+                            better(m, "RMAC/RBF", "RMAC/LLR"),
+                        )
                     },
                 },
             ],
@@ -444,6 +595,10 @@ fn figures() -> Vec<Figure> {
                 c("VGBP-LLR", preset(Pendulum, Vgbp, Llr, Infinite)),
                 c("VGBP-LSTD", preset(Pendulum, Vgbp, Lstd, Infinite)),
                 c("SARSA", preset(Pendulum, Sarsa, Rbf, Infinite)),
+                c(
+                    "VGBP-RBF (TD, per sample)",
+                    preset(Pendulum, Vgbp, Rbf, Infinite),
+                ),
             ],
             thesis: &[
                 ("MLAC/LLR", "converges in about 9 min"),
@@ -476,6 +631,29 @@ fn figures() -> Vec<Figure> {
                         )
                     },
                 },
+                Claim {
+                    says: "VGBP-LSTD achieved the highest learning speed (§6.5)",
+                    check: |m| fastest(m, "VGBP-LSTD"),
+                },
+                Claim {
+                    says: "VGBP's final policy is less stable: it needed two or three swings to get the pendulum upright, the other algorithms the same number each time (§6.5; swings of each run's final greedy policy)",
+                    check: |m| {
+                        let distinct = |label| swing_counts(find(m, label));
+                        let (vgbp, v_text) = distinct("VGBP-LSTD");
+                        let (mlac, m_text) = distinct("MLAC/LLR");
+                        let (sarsa, s_text) = distinct("SARSA");
+                        let text = format!("{v_text}; {m_text}; {s_text}");
+                        if vgbp.len() > mlac.len().max(sarsa.len()) {
+                            Ok(text)
+                        } else {
+                            Err(text)
+                        }
+                    },
+                },
+                Claim {
+                    says: "updating the critic at the end of a trial performs better than updating it at each sample (§6.5; checked against VGBP with a per-sample TD(λ) critic on the same RBF grid — a per-sample LSTD was not run)",
+                    check: |m| better(m, "VGBP-LSTD", "VGBP-RBF (TD, per sample)"),
+                },
             ],
         },
         Figure {
@@ -486,39 +664,80 @@ fn figures() -> Vec<Figure> {
                 "VGBP-LSTD",
                 "a proper policy in a short time; a low minimum bound from runs leaving the range",
             )],
-            claims: vec![Claim {
-                says: "VGBP finds a proper policy in a short amount of time (§6.4.2)",
-                check: |m| {
-                    let v = &m[0];
-                    let text = format!(
-                        "final greedy return {:.0} ± {:.0}; the learning curve reaches its final level after {:.1} min",
-                        v.final_greedy, v.final_greedy_sd, v.reaches_min
-                    );
-                    if v.reaches_min < 10.0 {
-                        Ok(text)
-                    } else {
-                        Err(text)
-                    }
+            claims: vec![
+                Claim {
+                    says: "VGBP tends to explore unseen states, including bad terminal states (§6.4.2)",
+                    check: |m| {
+                        let v = &m[0];
+                        let text = format!(
+                            "{} of {} learning trials left the operating range",
+                            v.ended_early,
+                            v.runs * v.trials
+                        );
+                        if v.ended_early > 0 {
+                            Ok(text)
+                        } else {
+                            Err(text)
+                        }
+                    },
                 },
-            }],
+                Claim {
+                    says: "where extreme actions are required for large parts of the state space, the maximum action is taken (§6.5; at least half the samples of the final policies at a bound)",
+                    check: |m| {
+                        let v = &m[0];
+                        let text = format!(
+                            "{:.0} % of the final greedy policies' samples at an action bound",
+                            100.0 * v.at_bound
+                        );
+                        if v.at_bound >= 0.5 {
+                            Ok(text)
+                        } else {
+                            Err(text)
+                        }
+                    },
+                },
+                Claim {
+                    says: "VGBP finds a proper policy in a short amount of time (§6.4.2)",
+                    check: |m| {
+                        let v = &m[0];
+                        let text = format!(
+                            "final greedy return {:.0} ± {:.0}; rise time t₉₀ {:.1} min",
+                            v.final_greedy, v.final_greedy_sd, v.reaches_min
+                        );
+                        if v.reaches_min < 10.0 {
+                            Ok(text)
+                        } else {
+                            Err(text)
+                        }
+                    },
+                },
+            ],
         },
     ]
 }
 
-/// The measures of one experiment's records.
-fn measure(
-    label: &str,
-    records: &[TrialRecord],
-    runs: usize,
-    trials: usize,
-    wall: Duration,
-) -> Result<Measured> {
+/// The measures of one experiment of `cfg`.
+fn measure(label: &str, cfg: &ExperimentConfig, summary: &LearnSummary) -> Result<Measured> {
+    let (records, runs, trials) = (
+        &summary.records,
+        cfg.run.runs as usize,
+        cfg.run.trials as usize,
+    );
+    let task = plant::Task::new(cfg.system);
+    let mut ended_early = 0;
     let mut per_run: BTreeMap<u32, Vec<f64>> = BTreeMap::new();
     let mut by_trial: BTreeMap<u32, (f64, f64, usize)> = BTreeMap::new();
+    let mut skipped = (u32::MAX, 0);
     for r in records {
         if let Some(g) = r.greedy {
             per_run.entry(r.run).or_default().push(g);
         }
+        // Samples not run grow in a trial that left the operating range (§6.4.2).
+        let now = task.skipped_samples(r.trial.into(), r.sim_time_s);
+        if now > if skipped.0 == r.run { skipped.1 } else { 0 } {
+            ended_early += 1;
+        }
+        skipped = (r.run, now);
         let e = by_trial.entry(r.trial).or_insert((0.0, 0.0, 0));
         e.0 += r.ret;
         e.1 += r.sim_time_s;
@@ -557,9 +776,11 @@ fn measure(
         .collect();
     let tail = &mean[mean.len() - (mean.len() / 10).max(1)..];
     let final_level = tail.iter().sum::<f64>() / tail.len() as f64;
+    let start_level = mean[0];
+    let target = rise_target(start_level, final_level);
     let reach = smooth
         .iter()
-        .position(|v| (v - final_level).abs() <= 0.1 * final_level.abs())
+        .position(|v| *v >= target)
         .unwrap_or(smooth.len() - 1);
     Ok(Measured {
         label: label.to_string(),
@@ -568,14 +789,56 @@ fn measure(
         final_greedy,
         final_greedy_sd,
         reaches_min: minutes[reach],
+        start_level,
         final_level,
+        ended_early,
+        at_bound: {
+            let samples = summary.responses.iter().flatten();
+            let n = samples.clone().count().max(1);
+            let hits = samples
+                .filter(|s| {
+                    s.u.iter().enumerate().any(|(j, &u)| {
+                        let (lo, hi) = (task.action_low[j], task.action_high[j]);
+                        u <= lo + 1e-3 * (hi - lo) || u >= hi - 1e-3 * (hi - lo)
+                    })
+                })
+                .count();
+            hits as f64 / n as f64
+        },
+        swings: if cfg.system == SystemName::Pendulum {
+            summary.responses.iter().map(|r| swings(r)).collect()
+        } else {
+            Vec::new()
+        },
         smoothed: minutes
             .iter()
             .copied()
             .zip(smooth.iter().copied())
             .collect(),
-        wall,
+        wall: summary.wall,
     })
+}
+
+/// Swings of a pendulum swing-up (§6.5: VGBP "needed two or three swings to get the
+/// pendulum upright"): the reversals of the direction of rotation (sign changes of φ̇)
+/// before the pendulum first comes within 0.3 rad of upright (φ = 0); `None` if it never
+/// does in the trial.
+fn swings(response: &[crate::experiment::Sample]) -> Option<usize> {
+    let mut reversals = 0;
+    let mut direction = 0.0;
+    for s in response {
+        if s.x[0].abs() < 0.3 {
+            return Some(reversals);
+        }
+        let d = s.x[1].signum();
+        if s.x[1] != 0.0 && d != direction {
+            if direction != 0.0 {
+                reversals += 1;
+            }
+            direction = d;
+        }
+    }
+    None
 }
 
 fn slug(label: &str) -> String {
@@ -626,6 +889,7 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
         opts,
         done: BTreeMap::new(),
         spent: Duration::ZERO,
+        bar: ProgressBar::hidden(),
     };
     let mut results = Vec::new();
     let wanted = |id: &str| opts.only.is_empty() || opts.only.iter().any(|o| o == id);
@@ -634,6 +898,7 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
             continue;
         }
         let spent = runner.spent;
+        runner.start(fig.id, fig.curves.iter().map(|c| &c.cfg), None);
         let dir = opts.out.join(fig.id);
         std::fs::create_dir_all(&dir)?;
         let mut measured = Vec::new();
@@ -643,14 +908,14 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
             let (m, summary) = runner.run(&dir, fig.id, curve.label, &curve.cfg, None)?;
             measured.push(m);
             curves.push(summary.curve);
-            responses.push(summary.response);
+            responses.push(summary.responses);
         }
         let t_plots = Instant::now();
         let labelled: Vec<(&str, &[crate::experiment::Sample])> = fig
             .curves
             .iter()
             .zip(&responses)
-            .map(|(c, r)| (c.label, &r[..]))
+            .map(|(c, r)| (c.label, &r[0][..]))
             .collect();
         report::plot_responses(
             &dir.join("response.png"),
@@ -710,6 +975,7 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
         };
         results.push((result, fig));
         write_report(&opts.out, &results, None, optimum, runner.spent)?;
+        runner.bar.finish_and_clear();
     }
     if wanted("sensitivity") {
         let s = sensitivity(&mut runner)?;
@@ -726,9 +992,30 @@ struct Runner<'a> {
     /// Wall-clock time of the experiments in `done`, as measured when each ran (now or
     /// by an earlier `rig reproduce` whose outputs are reused).
     spent: Duration,
+    /// The current figure's progress bar (trials of its experiments).
+    bar: ProgressBar,
 }
 
 impl Runner<'_> {
+    /// Starts the progress bar of a figure (or of the sensitivity analysis) whose
+    /// experiments are `cfgs`, with runs overridden by `runs` if given.
+    fn start<'c>(
+        &mut self,
+        id: &str,
+        cfgs: impl IntoIterator<Item = &'c ExperimentConfig>,
+        runs: Option<u32>,
+    ) {
+        let len = cfgs
+            .into_iter()
+            .map(|c| {
+                u64::from(runs.or(self.opts.runs).unwrap_or(c.run.runs))
+                    * u64::from(self.opts.trials.unwrap_or(c.run.trials))
+            })
+            .sum();
+        self.bar.finish_and_clear();
+        self.bar = progress_bar(len, self.opts.progress, id);
+    }
+
     /// Runs `cfg` (with the options' runs and trials, or `runs` if given) into
     /// `dir/<label>`, unless an identical experiment ran before; returns its measures.
     fn run(
@@ -751,30 +1038,30 @@ impl Runner<'_> {
         if !self.done.contains_key(&key)
             && let Some(s) = load_finished(&out, &cfg)
         {
-            if self.opts.progress {
-                eprintln!(
-                    "{id} {label}: reusing the finished experiment in {}",
-                    out.display()
-                );
-            }
+            self.bar.println(format!(
+                "{id} {label}: reusing the finished experiment in {}",
+                out.display()
+            ));
             self.spent += s.wall;
             self.done.insert(key.clone(), s);
         }
         let summary = match self.done.get(&key) {
-            Some(s) => s.clone(),
+            Some(s) => {
+                self.bar
+                    .inc(u64::from(cfg.run.runs) * u64::from(cfg.run.trials));
+                s.clone()
+            }
             None => {
-                if self.opts.progress {
-                    eprintln!(
-                        "{id} {label}: {} runs × {} trials",
-                        cfg.run.runs, cfg.run.trials
-                    );
-                }
+                self.bar.println(format!(
+                    "{id} {label}: {} runs × {} trials",
+                    cfg.run.runs, cfg.run.trials
+                ));
                 let s = learn(
                     &cfg,
                     &LearnOptions {
                         out: out.clone(),
                         threads: None,
-                        progress: self.opts.progress,
+                        progress: Progress::Shared(self.bar.clone()),
                     },
                 )?;
                 write_atomic(
@@ -786,19 +1073,13 @@ impl Runner<'_> {
                 s
             }
         };
-        let m = measure(
-            label,
-            &summary.records,
-            cfg.run.runs as usize,
-            cfg.run.trials as usize,
-            summary.wall,
-        )?;
+        let m = measure(label, &cfg, &summary)?;
         Ok((m, summary))
     }
 }
 
 /// The outputs of a finished experiment of `cfg` in `dir` (written by an earlier
-/// `rig reproduce`: the same `config.toml`, every row of `runs.csv`, `response.csv` and
+/// `rig reproduce`: the same `config.toml`, every row of `runs.csv`, `responses.csv` and
 /// `wall_s.txt`), or `None`.
 fn load_finished(dir: &Path, cfg: &ExperimentConfig) -> Option<LearnSummary> {
     if std::fs::read_to_string(dir.join("config.toml")).ok()? != cfg.to_toml() {
@@ -826,34 +1107,13 @@ fn load_finished(dir: &Path, cfg: &ExperimentConfig) -> Option<LearnSummary> {
         return None;
     }
     let (curve, greedy_curve) = crate::learn::curves(&records, runs, trials).ok()?;
-    let mut response = Vec::new();
-    let mut reader = csv::Reader::from_path(dir.join("response.csv")).ok()?;
-    let n = reader
-        .headers()
-        .ok()?
-        .iter()
-        .filter(|h| h.starts_with("x_"))
-        .count();
-    for row in reader.records() {
-        let v: Vec<f64> = row
-            .ok()?
-            .iter()
-            .map(|f| f.parse().ok())
-            .collect::<Option<_>>()?;
-        let last = v.len().checked_sub(1)?;
-        response.push(crate::experiment::Sample {
-            t: v[0],
-            x: v.get(1..1 + n)?.to_vec(),
-            u: v.get(1 + n..last)?.to_vec(),
-            reward: v[last],
-        });
-    }
+    let responses = crate::learn::read_responses(&dir.join("responses.csv"), runs)?;
     Some(LearnSummary {
         records,
         curve,
         greedy_curve,
         wall: Duration::from_secs_f64(wall),
-        response,
+        responses,
     })
 }
 
@@ -921,41 +1181,58 @@ pub struct Sensitivity {
     pub wall: Duration,
 }
 
+/// `base` with a parameter scaled by `f`; `None` where scaling changes nothing (e.g. a
+/// rounded K) or makes an invalid configuration.
+fn varied(base: &ExperimentConfig, apply: Scale, f: f64) -> Option<ExperimentConfig> {
+    let mut cfg = base.clone();
+    apply(&mut cfg, f);
+    (cfg != *base && cfg.validate().is_ok()).then_some(cfg)
+}
+
 fn sensitivity(runner: &mut Runner) -> Result<Sensitivity> {
     use agent::config::{Algo::*, ApproxKind::Llr, HorizonKind::Infinite};
     let spent = runner.spent;
     let runs = runner.opts.runs.unwrap_or(10);
     let dir = runner.opts.out.join("sensitivity");
+    let algorithms = [("SAC/LLR", Sac), ("MLAC/LLR", Mlac)];
+    let bases = algorithms.map(|(_, algo)| preset(SystemName::Pendulum, algo, Llr, Infinite));
+    let experiments: Vec<ExperimentConfig> = bases
+        .iter()
+        .flat_map(|base| {
+            let varied = PARAMETERS
+                .iter()
+                .flat_map(|&(_, _, apply)| FACTORS.map(|f| varied(base, apply, f)));
+            std::iter::once(base.clone()).chain(varied.flatten())
+        })
+        .collect();
+    runner.start("sensitivity", &experiments, Some(runs));
     let mut algos = Vec::new();
-    for (name, algo) in [("SAC/LLR", Sac), ("MLAC/LLR", Mlac)] {
-        let base = preset(SystemName::Pendulum, algo, Llr, Infinite);
+    for ((name, _), base) in algorithms.into_iter().zip(&bases) {
         let (at_preset, _) = runner.run(
             &dir,
             "sensitivity",
             &format!("{name} preset"),
-            &base,
+            base,
             Some(runs),
         )?;
         let mut params = Vec::new();
         for (param, key, apply) in PARAMETERS {
             let mut row = Vec::new();
             for f in FACTORS {
-                let mut cfg = base.clone();
-                apply(&mut cfg, f);
-                if cfg == base || cfg.validate().is_err() {
-                    row.push((f, None));
-                    continue;
-                }
-                let label = format!("{name} {key} x{f}");
-                let (m, _) = runner.run(&dir, "sensitivity", &label, &cfg, Some(runs))?;
-                row.push((f, Some(m)));
+                let m = match varied(base, apply, f) {
+                    Some(cfg) => {
+                        let label = format!("{name} {key} x{f}");
+                        Some(runner.run(&dir, "sensitivity", &label, &cfg, Some(runs))?.0)
+                    }
+                    None => None,
+                };
+                row.push((f, m));
             }
             params.push((param.to_string(), row));
         }
         algos.push((name.to_string(), at_preset, params));
     }
-    let mut csv =
-        String::from("algo,parameter,factor,final_greedy_mean,final_greedy_sd,reaches_final_min\n");
+    let mut csv = String::from("algo,parameter,factor,final_greedy_mean,final_greedy_sd,t90_min\n");
     for (name, p, params) in &algos {
         let _ = writeln!(
             csv,
@@ -975,6 +1252,36 @@ fn sensitivity(runner: &mut Runner) -> Result<Sensitivity> {
         }
     }
     write_atomic(&dir.join("sensitivity.csv"), &csv)?;
+    let sweeps: Vec<(&str, Vec<report::Sweep>)> = algos
+        .iter()
+        .map(|(name, preset, params)| {
+            let sweeps = params
+                .iter()
+                .map(|(param, row)| {
+                    let mut points: Vec<(f64, f64, f64)> = row
+                        .iter()
+                        .filter_map(|(f, m)| {
+                            m.as_ref().map(|m| (*f, m.final_greedy, m.reaches_min))
+                        })
+                        .chain([(1.0, preset.final_greedy, preset.reaches_min)])
+                        .collect();
+                    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+                    report::Sweep {
+                        // The symbol, without the explanation in brackets.
+                        parameter: param.split(" (").next().unwrap_or(param),
+                        points,
+                    }
+                })
+                .collect();
+            (name.as_str(), sweeps)
+        })
+        .collect();
+    report::plot_sensitivity(
+        &dir.join("sensitivity.png"),
+        &dir.join("sensitivity.svg"),
+        &format!("Sensitivity: final greedy return and t₉₀ ({runs} runs per point)"),
+        &sweeps,
+    )?;
     Ok(Sensitivity {
         runs,
         algos,
@@ -1002,7 +1309,7 @@ impl Sensitivity {
 
 fn write_summary(path: &Path, m: &[Measured], optimum: Option<f64>) -> Result<()> {
     let mut s = String::from(
-        "curve,runs,trials,final_greedy_mean,final_greedy_sd,final_level,reaches_final_min,percent_of_optimal,wall_s\n",
+        "curve,runs,trials,final_greedy_mean,final_greedy_sd,final_level,t90_min,percent_of_optimal,wall_s\n",
     );
     for c in m {
         let pct = optimum.map_or(String::new(), |o| {
@@ -1042,11 +1349,13 @@ fn write_report(
          `rig optimal`): **{optimum:.1}**.\n\n\
          Measures: *final greedy* = per run the mean of the last three greedy evaluations, \
          mean ± sample sd over runs; *final level* = the learning curve's (mean over runs of \
-         each trial's return, with exploration) mean over the last 10 % of trials; *reaches* \
-         = simulated minutes until the learning curve (10-trial moving mean) is within 10 % \
-         of its final level; *% of optimal* = optimum / final greedy. \"Faster\" in the \
-         claims compares the minutes until each curve first comes within 10 % of the lower of \
-         the final levels compared (a curve that stays low reaches its own level at once).\n",
+         each trial's return, with exploration) mean over the last 10 % of trials; *t₉₀* \
+         = rise time: simulated minutes until the learning curve (10-trial moving mean) first \
+         covers 90 % of its improvement from the first trial to its final level; *% of \
+         optimal* = optimum / final greedy. \"Faster\" in the claims compares the minutes \
+         until each curve first covers 90 % of the way from the lowest start level to the \
+         lowest final level of the curves compared (so that a curve that stays low does not \
+         \"converge\" at once).\n",
         std::thread::available_parallelism().map_or(1, |n| n.get()),
         wall.as_secs_f64(),
         wall.as_secs_f64() / 60.0
@@ -1064,7 +1373,7 @@ fn write_report(
         );
         let _ = writeln!(
             s,
-            "| curve | runs × trials | final greedy | final level | reaches [min] | % of optimal | thesis says |\n|---|---|---|---|---|---|---|"
+            "| curve | runs × trials | final greedy | final level | t₉₀ [min] | % of optimal | thesis says |\n|---|---|---|---|---|---|---|"
         );
         let pendulum = fig.curves[0].cfg.system == SystemName::Pendulum
             && fig.curves[0].cfg.horizon == HorizonKind::Infinite;
@@ -1117,8 +1426,7 @@ fn write_sensitivity(s: &mut String, sens: &Sensitivity) {
         "## Sensitivity analysis (SAC/LLR and MLAC/LLR, pendulum)\n\n\
          Each main parameter scaled by {} around the preset (K and N in every LLR memory), \
          {} runs per variation, final greedy return (mean of each run's last three \
-         evaluations) and, in brackets, the minutes until the learning curve is within 10 % \
-         of its final level. Wall time {:.0} s; data in `sensitivity/sensitivity.csv`.\n",
+         evaluations) and, in brackets, the rise time t₉₀ in simulated minutes. Wall time {:.0} s; data in `sensitivity/sensitivity.csv`.\n\n![sensitivity](sensitivity/sensitivity.png)\n",
         FACTORS.map(|f| format!("×{f}")).join(", "),
         sens.runs,
         sens.wall.as_secs_f64()
@@ -1159,4 +1467,58 @@ fn write_sensitivity(s: &mut String, sens: &Sensitivity) {
         s,
         "\nMost robust (the better worst case over these variations): **{robust}**.\n"
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiment::Sample;
+
+    fn response(states: &[(f64, f64)]) -> Vec<Sample> {
+        states
+            .iter()
+            .enumerate()
+            .map(|(k, &(phi, omega))| Sample {
+                t: 0.03 * k as f64,
+                x: vec![phi, omega],
+                u: vec![0.0],
+                reward: 0.0,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn swings_count_the_reversals_before_the_pendulum_is_up() {
+        // Pushed one way, back through the bottom (1), back again (2) and up.
+        let two = response(&[
+            (3.1, 0.0),
+            (2.8, -3.0),
+            (2.5, -1.0),
+            (2.6, 2.0),
+            (3.0, 4.0),
+            (-2.9, 5.0),
+            (-2.5, 0.5),
+            (-2.8, -1.0),
+            (2.0, -6.0),
+            (0.2, -3.0),
+        ]);
+        assert_eq!(swings(&two), Some(2));
+        // Straight up without a reversal.
+        assert_eq!(
+            swings(&response(&[(3.0, 0.0), (1.0, -5.0), (0.1, -1.0)])),
+            Some(0)
+        );
+        // Never within 0.3 rad of upright.
+        assert_eq!(
+            swings(&response(&[(3.0, 0.0), (2.0, 1.0), (0.4, 2.0)])),
+            None
+        );
+    }
+
+    #[test]
+    fn the_rise_time_target_is_ninety_percent_of_the_improvement() {
+        assert_eq!(rise_target(-4000.0, -1000.0), -1300.0);
+        // No improvement: the final level itself.
+        assert_eq!(rise_target(-1000.0, -2000.0), -2000.0);
+    }
 }

@@ -224,7 +224,8 @@ fn reproduce_writes_figures_a_report_and_checks_claims() {
         }
     }
     let summary = std::fs::read_to_string(dir.join("3.17/summary.csv")).unwrap();
-    assert_eq!(summary.lines().count(), 3, "{summary}");
+    // MLAC/RBF, MLAC/LLR and both with the input saturation ignored (§3.7).
+    assert_eq!(summary.lines().count(), 5, "{summary}");
     assert!(
         summary
             .lines()
@@ -239,9 +240,18 @@ fn reproduce_writes_figures_a_report_and_checks_claims() {
     // Every claim is marked one way or the other, with the numbers behind it.
     let marked =
         report.matches("**confirmed**").count() + report.matches("**not confirmed**").count();
-    assert_eq!(marked, 3, "{report}");
-    // Each experiment's own outputs are there.
+    assert_eq!(marked, 4, "{report}");
+    assert!(report.contains("| t₉₀ [min] |"), "{report}");
+    // Each experiment's own outputs are there, with every run's final time response.
     assert!(dir.join("3.17/mlac-llr/runs.csv").is_file());
+    let responses = std::fs::read_to_string(dir.join("3.17/mlac-llr/responses.csv")).unwrap();
+    for run in ["0,", "1,"] {
+        assert_eq!(
+            responses.lines().filter(|l| l.starts_with(run)).count(),
+            100,
+            "one 3 s trial of run {run}"
+        );
+    }
 
     // The sensitivity analysis: every parameter at every factor, for both algorithms.
     let sens = dir.join("sens");
@@ -262,6 +272,8 @@ fn reproduce_writes_figures_a_report_and_checks_claims() {
         .unwrap());
     let csv = std::fs::read_to_string(sens.join("sensitivity/sensitivity.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 2 * (1 + 5 * 4), "{csv}");
+    assert!(sens.join("sensitivity/sensitivity.png").is_file());
+    assert!(sens.join("sensitivity/sensitivity.svg").is_file());
     let report = std::fs::read_to_string(sens.join("REPORT.md")).unwrap();
     assert!(
         report.contains("| σ (exploration) |") && report.contains("Most robust"),

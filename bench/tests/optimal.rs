@@ -9,7 +9,7 @@ use std::sync::{Arc, OnceLock};
 
 use agent::config::{Algo, ApproxKind, Overrides, resolve};
 use plant::{Plant, Task};
-use rig::learn::{LearnOptions, learn};
+use rig::learn::{LearnOptions, Progress, learn};
 use rig::optimal::{Optimum, OptimumOptions, pendulum_optimum};
 
 fn optimum(grid: usize, actions: usize) -> Optimum {
@@ -123,7 +123,7 @@ fn no_learner_beats_the_optimum() {
             &LearnOptions {
                 out: out.clone(),
                 threads: None,
-                progress: false,
+                progress: Progress::Hidden,
             },
         )
         .expect("learn");

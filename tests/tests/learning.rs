@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use agent::config::{Algo, ApproxKind, ExperimentConfig, HorizonKind, Overrides, resolve};
-use rig::learn::{LearnOptions, learn};
+use rig::learn::{LearnOptions, Progress, learn};
 
 fn config(algo: Algo, approx: ApproxKind, runs: u32, trials: u32, seed: u64) -> ExperimentConfig {
     config_with(HorizonKind::Infinite, algo, approx, runs, trials, seed)
@@ -45,7 +45,7 @@ fn run(cfg: &ExperimentConfig, name: &str, threads: usize) -> (PathBuf, String) 
         &LearnOptions {
             out: out.clone(),
             threads: Some(threads),
-            progress: false,
+            progress: Progress::Hidden,
         },
     )
     .expect("learn");
@@ -165,7 +165,7 @@ fn learn_in(name: &str, cfg: &ExperimentConfig) -> rig::learn::LearnSummary {
     let options = LearnOptions {
         out: out_dir(name),
         threads: Some(2),
-        progress: false,
+        progress: Progress::Hidden,
     };
     learn(cfg, &options).unwrap()
 }

@@ -12,11 +12,14 @@
 //! - [`plot`] draws one or more curves in that style into a PNG and an SVG
 //!   ([`plot_curves`]).
 //! - [`response`] draws time responses of learned policies ([`plot_responses`]).
+//! - [`sensitivity`] draws a parameter-sensitivity analysis ([`plot_sensitivity`]).
 
 pub mod curve;
 pub mod plot;
 pub mod response;
+pub mod sensitivity;
 
 pub use curve::{CurvePoint, curve, write_curve_csv};
 pub use plot::{Series, SeriesStyle, plot_curves};
 pub use response::plot_responses;
+pub use sensitivity::{Sweep, plot_sensitivity};

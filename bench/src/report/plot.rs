@@ -50,7 +50,7 @@ const RANGE_ALPHA: f64 = 0.15;
 /// Opacity of the 95 % confidence band.
 const CI_ALPHA: f64 = 0.35;
 /// Width in pixels of a legend key.
-const KEY_WIDTH: i32 = 24;
+pub(super) const KEY_WIDTH: i32 = 24;
 /// Colour of the reference line and of the legend keys that explain the bands.
 const NEUTRAL: RGBColor = RGBColor(90, 90, 90);
 
@@ -93,13 +93,25 @@ pub fn plot_curves(
     series: &[Series],
     reference: Option<(&str, f64)>,
 ) -> Result<()> {
-    let plot = Plot::new(title, series, reference)?;
+    render(png, svg, &Plot::new(title, series, reference)?)
+}
+
+/// A picture that draws itself the same way on any plotters backend.
+pub(super) trait Drawing {
+    /// Draws the picture on `root`.
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>
+    where
+        DB::ErrorType: 'static;
+}
+
+/// Draws `picture` into a PNG and an SVG image of [`PLOT_SIZE`].
+pub(super) fn render(png: &Path, svg: &Path, picture: &impl Drawing) -> Result<()> {
     register_fonts()?;
-    let png_area = BitMapBackend::new(png, PLOT_SIZE).into_drawing_area();
-    plot.draw(png_area)
+    picture
+        .draw(BitMapBackend::new(png, PLOT_SIZE).into_drawing_area())
         .with_context(|| format!("writing {}", png.display()))?;
-    let svg_area = SVGBackend::new(svg, PLOT_SIZE).into_drawing_area();
-    plot.draw(svg_area)
+    picture
+        .draw(SVGBackend::new(svg, PLOT_SIZE).into_drawing_area())
         .with_context(|| format!("writing {}", svg.display()))
 }
 
@@ -185,8 +197,10 @@ impl<'s, 'a> Plot<'s, 'a> {
             y: y.padded(0.05),
         })
     }
+}
 
-    /// Draws the plot onto `root` and presents it; used for every backend.
+impl Drawing for Plot<'_, '_> {
+    /// Draws the plot onto `root` and presents it.
     fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>
     where
         DB::ErrorType: 'static,
@@ -387,21 +401,46 @@ pub fn plot_histograms(
         })
         .collect();
     let top = counts.iter().flatten().copied().max().unwrap_or(1).max(1) as f64 * 2.0;
-    register_fonts()?;
-    #[allow(clippy::too_many_arguments)]
-    fn render<DB: DrawingBackend>(
-        root: DrawingArea<DB, Shift>,
-        title: &str,
-        x_label: &str,
-        series: &[Histogram],
-        counts: &[Vec<u64>],
-        x_max: f64,
-        width: f64,
-        top: f64,
-    ) -> Result<()>
+    render(
+        png,
+        svg,
+        &Histograms {
+            title,
+            x_label,
+            series,
+            counts: &counts,
+            x_max,
+            width,
+            top,
+        },
+    )
+}
+
+/// [`plot_histograms`]' input with the bin counts.
+struct Histograms<'a> {
+    title: &'a str,
+    x_label: &'a str,
+    series: &'a [Histogram<'a>],
+    counts: &'a [Vec<u64>],
+    x_max: f64,
+    width: f64,
+    top: f64,
+}
+
+impl Drawing for Histograms<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>
     where
         DB::ErrorType: 'static,
     {
+        let Histograms {
+            title,
+            x_label,
+            series,
+            counts,
+            x_max,
+            width,
+            top,
+        } = *self;
         root.fill(&WHITE)?;
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 26))
@@ -442,28 +481,6 @@ pub fn plot_histograms(
         root.present()?;
         Ok(())
     }
-    render(
-        BitMapBackend::new(png, PLOT_SIZE).into_drawing_area(),
-        title,
-        x_label,
-        series,
-        &counts,
-        x_max,
-        width,
-        top,
-    )
-    .with_context(|| format!("writing {}", png.display()))?;
-    render(
-        SVGBackend::new(svg, PLOT_SIZE).into_drawing_area(),
-        title,
-        x_label,
-        series,
-        &counts,
-        x_max,
-        width,
-        top,
-    )
-    .with_context(|| format!("writing {}", svg.display()))
 }
 
 #[cfg(test)]
