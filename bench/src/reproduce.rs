@@ -997,6 +997,15 @@ struct Runner<'a> {
 }
 
 impl Runner<'_> {
+    /// A progress line: above the bar on a terminal, on stderr otherwise (a log).
+    fn say(&self, line: String) {
+        match (self.opts.progress, self.bar.is_hidden()) {
+            (false, _) => {}
+            (true, true) => eprintln!("{line}"),
+            (true, false) => self.bar.println(line),
+        }
+    }
+
     /// Starts the progress bar of a figure (or of the sensitivity analysis) whose
     /// experiments are `cfgs`, with runs overridden by `runs` if given.
     fn start<'c>(
@@ -1038,7 +1047,7 @@ impl Runner<'_> {
         if !self.done.contains_key(&key)
             && let Some(s) = load_finished(&out, &cfg)
         {
-            self.bar.println(format!(
+            self.say(format!(
                 "{id} {label}: reusing the finished experiment in {}",
                 out.display()
             ));
@@ -1052,7 +1061,7 @@ impl Runner<'_> {
                 s.clone()
             }
             None => {
-                self.bar.println(format!(
+                self.say(format!(
                     "{id} {label}: {} runs × {} trials",
                     cfg.run.runs, cfg.run.trials
                 ));
