@@ -91,6 +91,9 @@ struct Figure {
     /// The thesis's numbers for the table, per curve label.
     thesis: &'static [(&'static str, &'static str)],
     claims: Vec<Claim>,
+    /// One sentence on agreement, or the reason for a difference, written for the run
+    /// committed in `docs/reproduction` (seed 1; another seed may read differently).
+    discussion: &'static str,
 }
 
 /// What was measured for one curve.
@@ -106,6 +109,10 @@ pub struct Measured {
     pub final_greedy: f64,
     /// Its sample standard deviation over runs.
     pub final_greedy_sd: f64,
+    /// The median over runs of each run's final greedy return.
+    pub final_greedy_median: f64,
+    /// The worst run's final greedy return.
+    pub final_greedy_worst: f64,
     /// Rise time t₉₀: simulated minutes until the smoothed learning curve first covers
     /// 90 % of its improvement from the first trial to its final level.
     pub reaches_min: f64,
@@ -318,6 +325,7 @@ fn figures() -> Vec<Figure> {
         Figure {
             id: "3.12",
             title: "Figure 3.12: SAC with tile coding, RBF and LLR (pendulum)",
+            discussion: "Agrees on the final level (all three within a few per cent of each other) and on the learning dips of tile coding and RBFs in the first minute (Figure 3.10); SAC/LLR has no dip, leads for the first two minutes and its rise time matches the thesis's \"about 3 min\", but tile coding reaches the common level just as early, so LLR is \"on top\" only in the early phase.",
             curves: vec![
                 c("SAC/tiles", preset(Pendulum, Sac, Tiles, Infinite)),
                 c("SAC/RBF", preset(Pendulum, Sac, Rbf, Infinite)),
@@ -343,6 +351,7 @@ fn figures() -> Vec<Figure> {
         Figure {
             id: "3.17",
             title: "Figure 3.17: MLAC with RBF and LLR (pendulum)",
+            discussion: "Agrees: MLAC/LLR converges in less than half MLAC/RBF's time and ends better; ignoring the input saturation ruins MLAC/LLR, as §3.7 warns, while MLAC/RBF is hardly affected (why was not investigated), so the claim holds for LLR only.",
             curves: vec![
                 c("MLAC/RBF", preset(Pendulum, Mlac, Rbf, Infinite)),
                 c("MLAC/LLR", preset(Pendulum, Mlac, Llr, Infinite)),
@@ -386,6 +395,7 @@ fn figures() -> Vec<Figure> {
         Figure {
             id: "3.22",
             title: "Figure 3.22: RMAC with RBF and LLR (pendulum)",
+            discussion: "Agrees: RMAC/LLR is the faster of the two and ends worse, with a much larger spread (a few runs end in a poor policy), as §3.6.3 describes.",
             curves: vec![
                 c("RMAC/RBF", preset(Pendulum, Rmac, Rbf, Infinite)),
                 c("RMAC/LLR", preset(Pendulum, Rmac, Llr, Infinite)),
@@ -408,6 +418,7 @@ fn figures() -> Vec<Figure> {
         Figure {
             id: "3.23",
             title: "Figure 3.23: SAC, MLAC and RMAC with RBF and LLR (pendulum)",
+            discussion: "Partly agrees: LLR speeds up every algorithm and MLAC/LLR learns fastest of all, but our RBF versions end as well as (SAC) or nearly as well as (MLAC) the LLR ones where the thesis found LLR clearly better at the end, and RMAC/LLR is not faster than SAC/LLR.",
             curves: vec![
                 c("SAC/RBF", preset(Pendulum, Sac, Rbf, Infinite)),
                 c("SAC/LLR", preset(Pendulum, Sac, Llr, Infinite)),
@@ -487,6 +498,7 @@ fn figures() -> Vec<Figure> {
         Figure {
             id: "4.4",
             title: "Figure 4.4: SAC-FH, MLAC-FH and RMAC-FH (pendulum, finite horizon)",
+            discussion: "The means are ordered as in Table 4.1 (SAC-FH worst) and MLAC-FH learns fastest, but our spread is larger: the medians are ordered as the thesis's means and close to them, while three or four runs per learner end in a poorer policy (see the worst runs) — runs the thesis's table does not show.",
             curves: vec![
                 c("SAC-FH", preset(Pendulum, Sac, Rbf, Finite)),
                 c("MLAC-FH", preset(Pendulum, Mlac, Rbf, Finite)),
@@ -513,6 +525,7 @@ fn figures() -> Vec<Figure> {
         Figure {
             id: "5.5",
             title: "Figure 5.5: two-link arm, Case I (vertical, damping injection)",
+            discussion: "Agrees on the order of learning speed; SAC/RBF ends best by the mean, as the thesis says, but only because one MLAC/LLR run degrades late (its worst run): MLAC/LLR's median run ends better than SAC/RBF's.",
             curves: vec![
                 c("SAC/RBF", preset(ArmVertical, Sac, Rbf, Infinite)),
                 c("SAC/LLR", preset(ArmVertical, Sac, Llr, Infinite)),
@@ -551,6 +564,7 @@ fn figures() -> Vec<Figure> {
         Figure {
             id: "5.9",
             title: "Figure 5.9: two-link arm, Case II (horizontal, reaching)",
+            discussion: "Agrees on the order of learning speed; in final return MLAC/LLR beats SAC/RBF too (the thesis has it slightly behind): within the 600 trials about half of the SAC/RBF runs have not yet learned to reach the reference (wide spread, poor median), while its best runs end ahead of MLAC/LLR's.",
             curves: vec![
                 c("SAC/RBF", preset(ArmHorizontal, Sac, Rbf, Infinite)),
                 c("SAC/LLR", preset(ArmHorizontal, Sac, Llr, Infinite)),
@@ -590,6 +604,7 @@ fn figures() -> Vec<Figure> {
         Figure {
             id: "6.1",
             title: "Figure 6.1: MLAC, VGBP-LLR, VGBP-LSTD and SARSA (pendulum)",
+            discussion: "See the claims: VGBP-LSTD learns fastest as in the thesis; the thesis's ordering of final returns (MLAC best, then SARSA, then VGBP-LLR) is compared in the table.",
             curves: vec![
                 c("MLAC/LLR", mlac_chapter6()),
                 c("VGBP-LLR", preset(Pendulum, Vgbp, Llr, Infinite)),
@@ -659,6 +674,7 @@ fn figures() -> Vec<Figure> {
         Figure {
             id: "6.5",
             title: "Figure 6.5: VGBP-LSTD on the 2-DOF manipulator (§6.4.2)",
+            discussion: "Agrees qualitatively: VGBP-LSTD takes the extreme actions the thesis describes, leaves the operating range in many early trials and settles within minutes; the thesis gives no numbers to compare the final return with.",
             curves: vec![c("VGBP-LSTD", preset(Arm64, Vgbp, Lstd, Infinite))],
             thesis: &[(
                 "VGBP-LSTD",
@@ -766,6 +782,9 @@ fn measure(label: &str, cfg: &ExperimentConfig, summary: &LearnSummary) -> Resul
     } else {
         0.0
     };
+    let mut sorted = finals.clone();
+    sorted.sort_by(f64::total_cmp);
+    let final_greedy_median = (sorted[(sorted.len() - 1) / 2] + sorted[sorted.len() / 2]) / 2.0;
     let mean: Vec<f64> = by_trial.values().map(|v| v.0 / v.2 as f64).collect();
     let minutes: Vec<f64> = by_trial.values().map(|v| v.1 / v.2 as f64 / 60.0).collect();
     let smooth: Vec<f64> = (0..mean.len())
@@ -788,6 +807,8 @@ fn measure(label: &str, cfg: &ExperimentConfig, summary: &LearnSummary) -> Resul
         trials,
         final_greedy,
         final_greedy_sd,
+        final_greedy_median,
+        final_greedy_worst: sorted[0],
         reaches_min: minutes[reach],
         start_level,
         final_level,
@@ -1318,7 +1339,7 @@ impl Sensitivity {
 
 fn write_summary(path: &Path, m: &[Measured], optimum: Option<f64>) -> Result<()> {
     let mut s = String::from(
-        "curve,runs,trials,final_greedy_mean,final_greedy_sd,final_level,t90_min,percent_of_optimal,wall_s\n",
+        "curve,runs,trials,final_greedy_mean,final_greedy_sd,final_greedy_median,final_greedy_worst,final_level,t90_min,percent_of_optimal,wall_s\n",
     );
     for c in m {
         let pct = optimum.map_or(String::new(), |o| {
@@ -1326,12 +1347,14 @@ fn write_summary(path: &Path, m: &[Measured], optimum: Option<f64>) -> Result<()
         });
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{:.1}",
+            "{},{},{},{},{},{},{},{},{},{},{:.1}",
             c.label,
             c.runs,
             c.trials,
             c.final_greedy,
             c.final_greedy_sd,
+            c.final_greedy_median,
+            c.final_greedy_worst,
             c.final_level,
             c.reaches_min,
             pct,
@@ -1357,7 +1380,7 @@ fn write_report(
          swing-up from [π, 0] (finite-horizon DP on a 201² grid, its policy run on the plant; \
          `rig optimal`): **{optimum:.1}**.\n\n\
          Measures: *final greedy* = per run the mean of the last three greedy evaluations, \
-         mean ± sample sd over runs; *final level* = the learning curve's (mean over runs of \
+         mean ± sample sd over runs; *median [worst]* = their median and the worst run's; *final level* = the learning curve's (mean over runs of \
          each trial's return, with exploration) mean over the last 10 % of trials; *t₉₀* \
          = rise time: simulated minutes until the learning curve (10-trial moving mean) first \
          covers 90 % of its improvement from the first trial to its final level; *% of \
@@ -1382,7 +1405,7 @@ fn write_report(
         );
         let _ = writeln!(
             s,
-            "| curve | runs × trials | final greedy | final level | t₉₀ [min] | % of optimal | thesis says |\n|---|---|---|---|---|---|---|"
+            "| curve | runs × trials | final greedy | median [worst] | final level | t₉₀ [min] | % of optimal | thesis says |\n|---|---|---|---|---|---|---|---|"
         );
         let pendulum = fig.curves[0].cfg.system == SystemName::Pendulum
             && fig.curves[0].cfg.horizon == HorizonKind::Infinite;
@@ -1399,12 +1422,14 @@ fn write_report(
             };
             let _ = writeln!(
                 s,
-                "| {} | {} × {} | {:.1} ± {:.1} | {:.0} | {:.1} | {} | {} |",
+                "| {} | {} × {} | {:.1} ± {:.1} | {:.0} [{:.0}] | {:.0} | {:.1} | {} | {} |",
                 m.label,
                 m.runs,
                 m.trials,
                 m.final_greedy,
                 m.final_greedy_sd,
+                m.final_greedy_median,
+                m.final_greedy_worst,
                 m.final_level,
                 m.reaches_min,
                 pct,
@@ -1420,7 +1445,11 @@ fn write_report(
                 if *ok { "confirmed" } else { "not confirmed" }
             );
         }
-        let _ = writeln!(s);
+        let _ = writeln!(
+            s,
+            "\n*Discussion (written for the committed run, seed 1):* {}\n",
+            fig.discussion
+        );
     }
     if let Some(sens) = sensitivity {
         write_sensitivity(&mut s, sens);
