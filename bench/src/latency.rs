@@ -57,6 +57,8 @@ pub struct LatencyOptions {
     pub observer: ObserverKind,
     /// Raw ping-pong round trips for the baseline.
     pub raw_samples: usize,
+    /// The plant's spin before each sampling instant \[µs\] (`rig plant --spin-us`).
+    pub spin_us: u64,
     /// Print the summary.
     pub verbose: bool,
 }
@@ -96,6 +98,8 @@ pub struct LatencyReport {
     pub cycles: usize,
     /// Cycles whose action did not arrive within the period.
     pub misses: usize,
+    /// The plant's spin before each sampling instant \[µs\].
+    pub spin_us: u64,
     /// Raw round trips \[µs\].
     pub raw_rtt: Stats,
     /// Per stage ([`STAGES`]), over the cycles that met their deadline \[µs\].
@@ -118,9 +122,10 @@ impl LatencyReport {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "rig latency: {} cycles at {:.3} ms, angle sensor; deadline misses: {}",
+            "rig latency: {} cycles at {:.3} ms, angle sensor, plant spins {} µs; deadline misses: {}",
             self.cycles,
             self.period_ns as f64 * 1e-6,
+            self.spin_us,
             self.misses
         );
         let _ = writeln!(
@@ -218,6 +223,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
             driver: None,
             resume: false,
             cycles_out: Some(cycles_path.clone()),
+            spin_us: opts.spin_us,
         },
     )?;
 
@@ -321,6 +327,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
         period_ns,
         cycles,
         misses,
+        spin_us: opts.spin_us,
         raw_rtt,
         stages,
     };

@@ -117,6 +117,11 @@ struct LatencyArgs {
     /// Raw ping-pong round trips for the baseline.
     #[arg(long, default_value_t = 20_000)]
     raw_samples: usize,
+    /// The plant spins (a busy core) instead of sleeping for the last this many µs before
+    /// each sampling instant (`rig plant --spin-us`); larger values trade CPU for less
+    /// sample-instant jitter.
+    #[arg(long, value_name = "US", default_value_t = rig::process::SPIN_US)]
+    spin_us: u64,
     /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
     /// until one misses a deadline; writes DIR/sweep.csv and names the fastest period
     /// sustained for `--cycles` cycles without a miss.
@@ -162,6 +167,11 @@ struct RunArgs {
     /// sample period takes 3 ms).
     #[arg(long, default_value_t = 1.0)]
     speed: f64,
+    /// Realtime only: the plant spins (a busy core) instead of sleeping for the last
+    /// this many µs before each sampling instant, so that the instant does not depend on
+    /// the operating system's wake-up latency.
+    #[arg(long, value_name = "US", default_value_t = rig::process::SPIN_US)]
+    spin_us: u64,
     /// `sim`: the plant process simulates the system. `external`: a driver someone else
     /// started (docs/driver.md; e.g. examples/python_driver/driver.py) is the system and
     /// the clock; `rig run` waits for it, and the plant process resets it before each
@@ -418,6 +428,7 @@ fn main() -> ExitCode {
                 out: args.out.clone(),
                 observer: args.observer,
                 raw_samples: args.raw_samples,
+                spin_us: args.spin_us,
                 verbose: true,
             };
             let done = if args.sweep {
@@ -528,6 +539,7 @@ fn main() -> ExitCode {
                 realtime,
                 driver,
                 cycles_out: None,
+                spin_us: args.spin_us,
             };
             match run(&cfg, &opts) {
                 Ok(s) => {

@@ -58,6 +58,9 @@ pub struct RunOptions {
     /// Realtime, simulated plant: the plant writes every sample's timing to this file
     /// (`rig plant --cycles-out`, for `rig latency`).
     pub cycles_out: Option<PathBuf>,
+    /// Realtime, simulated plant: the plant spins this long before each sampling instant
+    /// instead of sleeping \[µs\] (`rig plant --spin-us`).
+    pub spin_us: u64,
 }
 
 /// An external driver in place of the simulated plant (`rig run --plant external`).
@@ -853,6 +856,8 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
             "realtime".into(),
             "--speed".into(),
             speed.to_string(),
+            "--spin-us".into(),
+            opts.spin_us.to_string(),
         ],
     };
     let first_seq = point.as_ref().map_or(0, |p| p.first_seq);

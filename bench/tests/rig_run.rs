@@ -726,12 +726,15 @@ fn latency_times_every_stage_of_every_cycle() {
             "3",
             "--raw-samples",
             "500",
+            "--spin-us",
+            "500",
             "--out",
         ])
         .arg(&dir)
         .output()
         .unwrap());
     let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(summary.contains("plant spins 500 µs"), "{summary}");
     for stage in [
         "plant_to_observer",
         "observer_to_agent",

@@ -27,6 +27,8 @@ use ::agent::config::{ExperimentConfig, Overrides, resolve};
 use anyhow::{Context, Result};
 use clap::Args;
 
+/// The realtime plant's default spin before each sampling instant \[µs\] (`--spin-us`).
+pub const SPIN_US: u64 = 100;
 /// How long a process waits for a message before deciding a peer has died.
 pub const SILENCE: Duration = Duration::from_secs(10);
 /// How long a process waits for its peers to connect at start.
@@ -59,6 +61,11 @@ pub struct ProcessArgs {
     /// Plant only, realtime: how many times faster than real time (Ts / speed per sample).
     #[arg(long, default_value_t = 1.0)]
     pub speed: f64,
+    /// Plant only, realtime: wait the last this many µs before each sampling instant by
+    /// spinning instead of sleeping — a busy core for a sampling instant that does not
+    /// depend on how late the operating system wakes the process.
+    #[arg(long, value_name = "US", default_value_t = SPIN_US)]
+    pub spin_us: u64,
     /// Agent only: answer every estimate with a zero action, without learning (for loop
     /// benchmarks).
     #[arg(long)]

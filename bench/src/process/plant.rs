@@ -63,6 +63,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                     period_ns,
                     next_ns: now_ns() + period_ns,
                     speed: args.speed,
+                    spin_ns: args.spin_us * 1000,
                 }
             });
             Box::new(PlantLoop {
@@ -266,18 +267,22 @@ struct Clock {
     period_ns: u64,
     next_ns: u64,
     speed: f64,
+    /// How long before each instant the plant spins instead of sleeping \[ns\].
+    spin_ns: u64,
 }
 
-/// Sleeps (then spins the last 100 µs) until monotonic time `t_ns`.
-fn sleep_until(t_ns: u64) {
+/// Sleeps, then spins the last `spin_ns`, until monotonic time `t_ns`: the sleep may
+/// overshoot (the operating system's wake-up latency, on a virtual machine up to
+/// milliseconds), the spin does not.
+fn sleep_until(t_ns: u64, spin_ns: u64) {
     loop {
         let now = now_ns();
         if now >= t_ns {
             return;
         }
         let left = t_ns - now;
-        if left > 200_000 {
-            std::thread::sleep(std::time::Duration::from_nanos(left - 100_000));
+        if left > spin_ns + 100_000 {
+            std::thread::sleep(std::time::Duration::from_nanos(left - spin_ns));
         } else {
             std::hint::spin_loop();
         }
@@ -333,9 +338,9 @@ impl PlantLoop {
     /// end on, until an action arrives.
     fn realtime_trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<usize> {
         let steps = self.link.task.steps_per_trial();
-        let (period_ns, speed) = {
+        let (period_ns, speed, spin_ns) = {
             let c = self.realtime.as_ref().expect("realtime");
-            (c.period_ns, c.speed)
+            (c.period_ns, c.speed, c.spin_ns)
         };
         self.plant.reset(x0);
         let mut u_hold = vec![0.0; self.link.task.action_dim()];
@@ -346,7 +351,7 @@ impl PlantLoop {
             ts: self.link.task.ts,
         };
         let mut t_k = self.realtime.as_ref().expect("realtime").next_ns;
-        sleep_until(t_k);
+        sleep_until(t_k, spin_ns);
         let mut woke = now_ns();
         self.publish(header.at(self.link.seq, 0, flags::START), 0.0, t_k)?;
         let mut ended_after = None;
@@ -412,7 +417,7 @@ impl PlantLoop {
                     .reward
                     .reward(&x_k_reward_state, self.plant.applied_action()),
             );
-            sleep_until(deadline);
+            sleep_until(deadline, spin_ns);
             woke = now_ns();
             t_k = deadline;
             let end = self.end_flags(k + 1 == steps);
