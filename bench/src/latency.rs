@@ -59,6 +59,9 @@ pub struct LatencyOptions {
     pub raw_samples: usize,
     /// The plant's spin before each sampling instant \[µs\] (`rig plant --spin-us`).
     pub spin_us: u64,
+    /// The three processes (and the raw ping-pong's two) under `SCHED_FIFO` at this
+    /// priority (`--rt-priority`).
+    pub rt_priority: Option<u8>,
     /// Print the summary.
     pub verbose: bool,
 }
@@ -100,6 +103,8 @@ pub struct LatencyReport {
     pub misses: usize,
     /// The plant's spin before each sampling instant \[µs\].
     pub spin_us: u64,
+    /// The real-time priority the processes ran at, if any.
+    pub rt_priority: Option<u8>,
     /// Raw round trips \[µs\].
     pub raw_rtt: Stats,
     /// Per stage ([`STAGES`]), over the cycles that met their deadline \[µs\].
@@ -122,10 +127,14 @@ impl LatencyReport {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "rig latency: {} cycles at {:.3} ms, angle sensor, plant spins {} µs; deadline misses: {}",
+            "rig latency: {} cycles at {:.3} ms, angle sensor, plant spins {} µs, {}; deadline misses: {}",
             self.cycles,
             self.period_ns as f64 * 1e-6,
             self.spin_us,
+            self.rt_priority
+                .map_or("ordinary scheduling".to_string(), |p| format!(
+                    "SCHED_FIFO {p}"
+                )),
             self.misses
         );
         let _ = writeln!(
@@ -194,6 +203,8 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     std::fs::create_dir_all(&opts.out)
         .with_context(|| format!("cannot create {}", opts.out.display()))?;
     let exe = std::env::current_exe().context("cannot find the rig executable")?;
+    // The baseline under the same policy: the ping-pong's partner process inherits it.
+    crate::process::set_rt_priority(opts.rt_priority)?;
     let mut raw = raw_round_trips(&exe, &opts.out, opts.raw_samples)?;
     let raw_rtt = Stats::of(&mut raw);
 
@@ -224,6 +235,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
             resume: false,
             cycles_out: Some(cycles_path.clone()),
             spin_us: opts.spin_us,
+            rt_priority: opts.rt_priority,
         },
     )?;
 
@@ -328,6 +340,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
         cycles,
         misses,
         spin_us: opts.spin_us,
+        rt_priority: opts.rt_priority,
         raw_rtt,
         stages,
     };

@@ -122,6 +122,11 @@ struct LatencyArgs {
     /// sample-instant jitter.
     #[arg(long, value_name = "US", default_value_t = rig::process::SPIN_US)]
     spin_us: u64,
+    /// Run the processes under the real-time scheduling policy SCHED_FIFO at this
+    /// priority (1–99), ahead of all ordinary work on the machine; needs root,
+    /// CAP_SYS_NICE or an rtprio limit.
+    #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
+    rt_priority: Option<u8>,
     /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
     /// until one misses a deadline; writes DIR/sweep.csv and names the fastest period
     /// sustained for `--cycles` cycles without a miss.
@@ -172,6 +177,11 @@ struct RunArgs {
     /// the operating system's wake-up latency.
     #[arg(long, value_name = "US", default_value_t = rig::process::SPIN_US)]
     spin_us: u64,
+    /// Run the processes under the real-time scheduling policy SCHED_FIFO at this
+    /// priority (1–99), ahead of all ordinary work on the machine; needs root,
+    /// CAP_SYS_NICE or an rtprio limit.
+    #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
+    rt_priority: Option<u8>,
     /// `sim`: the plant process simulates the system. `external`: a driver someone else
     /// started (docs/driver.md; e.g. examples/python_driver/driver.py) is the system and
     /// the clock; `rig run` waits for it, and the plant process resets it before each
@@ -429,6 +439,7 @@ fn main() -> ExitCode {
                 observer: args.observer,
                 raw_samples: args.raw_samples,
                 spin_us: args.spin_us,
+                rt_priority: args.rt_priority,
                 verbose: true,
             };
             let done = if args.sweep {
@@ -540,6 +551,7 @@ fn main() -> ExitCode {
                 driver,
                 cycles_out: None,
                 spin_us: args.spin_us,
+                rt_priority: args.rt_priority,
             };
             match run(&cfg, &opts) {
                 Ok(s) => {

@@ -61,6 +61,8 @@ pub struct RunOptions {
     /// Realtime, simulated plant: the plant spins this long before each sampling instant
     /// instead of sleeping \[µs\] (`rig plant --spin-us`).
     pub spin_us: u64,
+    /// Run the three processes under `SCHED_FIFO` at this priority (`--rt-priority`).
+    pub rt_priority: Option<u8>,
 }
 
 /// An external driver in place of the simulated plant (`rig run --plant external`).
@@ -887,6 +889,14 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         ]);
     }
     role_args.insert("agent", agent_args);
+    if let Some(p) = opts.rt_priority {
+        for role in ["agent", "observer", "plant"] {
+            role_args
+                .entry(role)
+                .or_default()
+                .extend(["--rt-priority".to_string(), p.to_string()]);
+        }
+    }
     for role in ["agent", "observer", "plant"] {
         let log = opts.out.join(format!("{role}.log"));
         let log_file =

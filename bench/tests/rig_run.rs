@@ -789,3 +789,42 @@ fn latency_times_every_stage_of_every_cycle() {
         assert!(dir.join(f).exists(), "{f}");
     }
 }
+
+#[test]
+fn latency_runs_under_a_real_time_priority_or_says_why_not() {
+    let dir = tmp("latency-rt");
+    let out = rig()
+        .args([
+            "latency",
+            "--cycles",
+            "50",
+            "--period-ms",
+            "3",
+            "--raw-samples",
+            "200",
+            "--rt-priority",
+            "5",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if out.status.success() {
+        // Root, CAP_SYS_NICE or an rtprio limit: every process ran under SCHED_FIFO.
+        assert!(stdout.contains("SCHED_FIFO 5"), "{stdout}");
+    } else {
+        assert!(
+            stderr.contains("SCHED_FIFO") && stderr.contains("rtprio"),
+            "{stderr}"
+        );
+    }
+    let bad = rig()
+        .args(["latency", "--rt-priority", "0", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("1..=99"));
+}

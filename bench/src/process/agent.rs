@@ -10,6 +10,7 @@ use crate::resume::CheckpointWriter;
 
 /// Runs the agent side of a run until the plant announces its end.
 pub fn run(args: &ProcessArgs) -> Result<()> {
+    super::set_rt_priority(args.rt_priority)?;
     let cfg = args.config()?;
     let task = Task::new(cfg.system);
     let mut agent = ::agent::build(

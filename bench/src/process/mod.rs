@@ -66,6 +66,11 @@ pub struct ProcessArgs {
     /// depend on how late the operating system wakes the process.
     #[arg(long, value_name = "US", default_value_t = SPIN_US)]
     pub spin_us: u64,
+    /// Run this process under the real-time scheduling policy `SCHED_FIFO` at this
+    /// priority (1–99), ahead of every ordinary process on the machine; needs root,
+    /// `CAP_SYS_NICE` or an `rtprio` limit (limits.conf).
+    #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
+    pub rt_priority: Option<u8>,
     /// Agent only: answer every estimate with a zero action, without learning (for loop
     /// benchmarks).
     #[arg(long)]
@@ -119,6 +124,27 @@ impl ProcessArgs {
         resolve(Some((&self.config, &text)), &Overrides::default())
             .map_err(|e| anyhow::anyhow!("{e}"))
     }
+}
+
+/// Puts this process under `SCHED_FIFO` at `priority` (`--rt-priority`); nothing for
+/// `None`. A control loop's usual remedy against being preempted by other work on the
+/// machine (measured in the README, "Latency budget").
+pub fn set_rt_priority(priority: Option<u8>) -> Result<()> {
+    let Some(p) = priority else {
+        return Ok(());
+    };
+    let param = libc::sched_param {
+        sched_priority: i32::from(p),
+    };
+    // SAFETY: `sched_setscheduler` reads the parameter struct for this process (pid 0)
+    // and has no other effect on memory.
+    if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } != 0 {
+        anyhow::bail!(
+            "cannot run under SCHED_FIFO at --rt-priority {p}: {} (needs root, CAP_SYS_NICE or an rtprio limit in /etc/security/limits.conf)",
+            std::io::Error::last_os_error()
+        );
+    }
+    Ok(())
 }
 
 /// A positive, finite number of seconds as a duration, or an error naming `flag`.

@@ -15,6 +15,7 @@ use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
 
 /// Runs the observer side of a run until the plant announces its end.
 pub fn run(args: &ProcessArgs) -> Result<()> {
+    super::set_rt_priority(args.rt_priority)?;
     let cfg = args.config()?;
     let task = Arc::new(Task::new(cfg.system));
     let mut observer: Box<dyn Observer> =

@@ -22,6 +22,7 @@ use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
 /// true state stays here and, when the sensor does not measure all of it, goes out on
 /// the evaluation topic [`topic::TRUTH`], for the supervisor alone.
 pub fn run(args: &ProcessArgs) -> Result<()> {
+    super::set_rt_priority(args.rt_priority)?;
     let cfg = args.config()?;
     let task = Arc::new(Task::new(cfg.system));
     let bus = Bus::join(&args.run_id, "plant").map_err(wire_err)?;
