@@ -4,7 +4,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use agent::config::{
-    Algo, ApproxKind, Choice, HorizonKind, ObserverKind, Overrides, SensorKind, resolve,
+    Algo, ApproxKind, Choice, HorizonKind, ObserverKind, ObserverMode, Overrides, SensorKind,
+    resolve,
 };
 use clap::{Args, Parser, Subcommand};
 use plant::{SystemName, Task};
@@ -197,6 +198,9 @@ fn experiment_flags(s: &Selection) -> Vec<&'static str> {
         ("--sensor", s.sensor.is_some()),
         ("--observer", s.observer.is_some()),
         ("--delay-ms", s.delay_ms.is_some()),
+        ("--delay-from", s.delay_from.is_some()),
+        ("--delay-column", s.delay_column.is_some()),
+        ("--observer-mode", s.observer_mode.is_some()),
         ("--config", s.config.is_some()),
     ]
     .into_iter()
@@ -346,8 +350,27 @@ struct Selection {
     /// Sample-to-actuation delay [ms], in [0, Ts): over each sample period the previous
     /// action stays in effect this long, then the new one — deterministic, for delay
     /// studies (`run.delay_ms`; lockstep only) [default: 0].
-    #[arg(long, value_name = "MS")]
+    #[arg(long, value_name = "MS", conflicts_with = "delay_from")]
     delay_ms: Option<f64>,
+    /// A recorded distribution of sample-to-actuation delays: a CSV file (header row, one
+    /// delay per row) — e.g. `rig latency`'s latency.csv or a real driver's recording.
+    /// Each sample's delay is drawn from it with the run seed (its own stream) and applied
+    /// as `--delay-ms` is; every value must be in [0, Ts) (`run.delay_from`; lockstep
+    /// only; exclusive with `--delay-ms`).
+    #[arg(long, value_name = "FILE")]
+    delay_from: Option<PathBuf>,
+    /// The column of `--delay-from` holding the delays; the unit is the name's suffix
+    /// (_s, _ms, _us, _ns; latency.csv's sample_to_actuation is ns) (`run.delay_column`)
+    /// [default: delay_ms, else sample_to_actuation].
+    #[arg(long, value_name = "NAME", requires = "delay_from")]
+    delay_column: Option<String>,
+    /// Timing: direct (the agent acts on x̂_k; its action takes effect within the interval,
+    /// after the delay) or predictive (the agent acts on the observer's prediction
+    /// x̂_{k+1|k}; its action is applied at the next sample instant, so a delay below Ts
+    /// does not reach the plant; needs `--observer predictive`) (`observer.mode`)
+    /// [default: direct].
+    #[arg(long, value_parser = ObserverMode::parse)]
+    observer_mode: Option<ObserverMode>,
     /// TOML file overriding preset values; see `rig config` for every key.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
@@ -387,6 +410,15 @@ fn resolve_selection(s: &Selection) -> Result<agent::config::ExperimentConfig, S
         sensor: s.sensor,
         observer: s.observer,
         delay_ms: s.delay_ms,
+        // An absolute path, so that the processes of `rig run` and the recorded
+        // configuration find the file wherever they run.
+        delay_from: s
+            .delay_from
+            .as_ref()
+            .map(|p| std::path::absolute(p).unwrap_or_else(|_| p.clone()))
+            .map(|p| p.display().to_string()),
+        delay_column: s.delay_column.clone(),
+        observer_mode: s.observer_mode,
     };
     resolve(s.config.as_deref().zip(text.as_deref()), &o).map_err(|e| match &e.file {
         Some(_) => e.to_string(),
@@ -493,9 +525,10 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
             let realtime = (args.timing == "realtime").then_some(args.speed);
-            if cfg.run.delay_ms != 0.0 && (realtime.is_some() || args.plant == "external") {
+            let delayed = cfg.run.delay_ms != 0.0 || !cfg.run.delay_from.is_empty();
+            if delayed && (realtime.is_some() || args.plant == "external") {
                 eprintln!(
-                    "error: `--delay-ms` (run.delay_ms) applies in lockstep with the simulated plant only: in real time the delays are real"
+                    "error: `--delay-ms`/`--delay-from` (run.delay_ms, run.delay_from) apply in lockstep with the simulated plant only: in real time the delays are real"
                 );
                 return ExitCode::from(2);
             }

@@ -2,6 +2,7 @@
 
 use std::sync::Arc;
 
+use ::plant::delay::Actuator;
 use ::plant::safety::SafetyCounts;
 use ::plant::sensor::Sensor;
 use ::plant::{Plant, Task};
@@ -44,6 +45,8 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         out,
         actions,
         seq: args.first_seq,
+        u_next: vec![f64::NAN; task.action_dim()],
+        delay_s: 0.0,
         latencies: Vec::new(),
         cycles: Vec::new(),
         misses: 0,
@@ -54,8 +57,12 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
             link.out
                 .wait_for_receivers(args.receivers, STARTUP, &link.bus)
                 .map_err(wire_err)?;
-            if args.timing == "realtime" && cfg.run.delay_ms != 0.0 {
-                bail!("`run.delay_ms` applies in lockstep only: in real time the delays are real");
+            if args.timing == "realtime"
+                && (cfg.run.delay_ms != 0.0 || !cfg.run.delay_from.is_empty())
+            {
+                bail!(
+                    "`run.delay_ms`/`run.delay_from` apply in lockstep only: in real time the delays are real"
+                );
             }
             let realtime = (args.timing == "realtime").then(|| {
                 let period_ns = (task.ts * 1e9 / args.speed).round() as u64;
@@ -70,7 +77,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                 link,
                 realtime,
                 record_cycles: args.cycles_out.is_some(),
-                delay: cfg.run.delay_ms * 1e-3,
+                actuator: crate::experiment::actuator(&task, &cfg, run_seed),
             })
         }
     };
@@ -153,6 +160,10 @@ pub(super) struct Link {
     pub(super) actions: wire::Rx<Action>,
     /// The next sample's sequence number.
     pub(super) seq: u64,
+    /// What the next measurement reports as [`Measurement::u_next`] (NaN: not known).
+    u_next: Vec<f64>,
+    /// What the next measurement reports as [`Measurement::delay_s`].
+    delay_s: f64,
     /// Publish-to-action time of every sample \[ns\].
     pub(super) latencies: Vec<u64>,
     /// Realtime: per sample `[seq, t_sample_ns, t_woke_ns, t_action_ns]` (see
@@ -198,6 +209,8 @@ impl Link {
             reward,
             y: pack(&self.y),
             u_applied: pack(u_applied),
+            u_next: pack(&self.u_next),
+            delay_s: self.delay_s,
             t_sample_ns,
             t_publish_ns: now_ns(),
             deadline_misses: self.misses,
@@ -233,8 +246,8 @@ struct PlantLoop {
     realtime: Option<Clock>,
     /// Realtime: keep every sample's timing ([`Link::cycles`]).
     record_cycles: bool,
-    /// Lockstep: the sample-to-actuation delay \[s\] (`run.delay_ms`).
-    delay: f64,
+    /// Lockstep: when actions take effect (timing, delays).
+    actuator: Actuator,
 }
 
 /// Headers of one trial's samples.
@@ -288,6 +301,15 @@ impl PlantLoop {
     /// Publishes the current sample and waits for the action that answers it.
     fn exchange(&mut self, header: Header, reward: f64) -> Result<Vec<f64>> {
         let l = &mut self.link;
+        match self.actuator.next_action() {
+            Some(u) => l.u_next.copy_from_slice(u),
+            None => l.u_next.fill(f64::NAN),
+        }
+        l.delay_s = if header.flags & flags::START != 0 {
+            0.0
+        } else {
+            self.actuator.last_delay()
+        };
         let t_publish_ns = l.publish(
             header,
             reward,
@@ -433,6 +455,7 @@ impl Trials for PlantLoop {
         let task = self.link.task.clone();
         let steps = task.steps_per_trial();
         self.plant.reset(x0);
+        self.actuator.reset();
         let header = TrialHeader {
             trial,
             mode,
@@ -441,7 +464,7 @@ impl Trials for PlantLoop {
         };
         let mut u = self.exchange(header.at(self.link.seq, 0, flags::START), 0.0)?;
         for k in 0..steps {
-            let r = self.plant.step_delayed(&u, self.delay);
+            let r = self.actuator.interval(&mut self.plant, &u);
             let end = self.end_flags(k + 1 == steps);
             u = self.exchange(header.at(self.link.seq, k + 1, end), r)?;
             if self.plant.terminated() {
