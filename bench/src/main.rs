@@ -53,6 +53,14 @@ enum Command {
     /// a raw iceoryx2 ping-pong measured in the same run. Writes DIR/latency.csv (one row
     /// per cycle), DIR/summary.txt, a histogram (DIR/latency.png, .svg) and DIR/run/.
     Latency(LatencyArgs),
+    /// How a sample-to-actuation delay hurts learning and how much predictive timing
+    /// recovers: VGBP-LSTD and MLAC/LLR on the pendulum with angle-only sensing and the
+    /// predictive estimator, direct vs predictive timing (`--observer-mode`), injected
+    /// delays 0, 5, 10, 20 ms. Writes DIR/cells.csv (final greedy return per cell: mean,
+    /// sd, 95 % CI), DIR/final_return.png/.svg, DIR/curves-*.png/.svg, DIR/summary.txt
+    /// (the table and the acceptance checks at 10 ms, one-sided Welch t-test) and each
+    /// cell's `rig learn` output.
+    DelayStudy(DelayStudyArgs),
     /// The echo side of `rig bench-loop`'s raw ping-pong.
     #[command(hide = true)]
     Pong {
@@ -89,6 +97,28 @@ struct ReproduceArgs {
     #[arg(long, value_name = "DIR", default_value = "out/reproduce")]
     out: PathBuf,
     /// No progress bars.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(Args)]
+struct DelayStudyArgs {
+    /// Runs per cell.
+    #[arg(long, default_value_t = 10)]
+    runs: u32,
+    /// Trials per run [default: the presets'; VGBP-LSTD 200, MLAC/LLR 400].
+    #[arg(long)]
+    trials: Option<u32>,
+    /// Injected delays [ms], each in [0, Ts = 30) (comma-separated).
+    #[arg(long, value_name = "MS", value_delimiter = ',', default_values_t = rig::delay_study::DELAYS_MS)]
+    delays: Vec<f64>,
+    /// Worker threads [default: one per core].
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "out/delay-study")]
+    out: PathBuf,
+    /// No per-cell lines and no summary.
     #[arg(long)]
     quiet: bool,
 }
@@ -443,6 +473,31 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+        Command::DelayStudy(args) => {
+            let opts = rig::delay_study::DelayStudyOptions {
+                runs: args.runs,
+                trials: args.trials,
+                delays_ms: args.delays.clone(),
+                out: args.out.clone(),
+                threads: args.threads,
+                verbose: !args.quiet,
+            };
+            match rig::delay_study::delay_study(&opts) {
+                Ok(_) => {
+                    if !args.quiet {
+                        println!(
+                            "wrote {}/{{cells.csv, summary.txt, final_return.png, final_return.svg, curves-*.png, curves-*.svg, */}}",
+                            args.out.display()
+                        );
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
         Command::Latency(args) => {
             let opts = rig::latency::LatencyOptions {
                 cycles: args.cycles,
