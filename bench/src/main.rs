@@ -145,6 +145,11 @@ struct LatencyArgs {
     /// State observer on the angle encoder: finite-difference or predictive.
     #[arg(long, default_value = "predictive", value_parser = ObserverKind::parse)]
     observer: ObserverKind,
+    /// Timing: predictive (the plant applies the action answering sample k at the next
+    /// sample instant t_{k+1}; a deadline miss when it has not arrived by then; needs
+    /// `--observer predictive`) or direct (applied when it arrives, within the interval).
+    #[arg(long, default_value = "predictive", value_parser = ObserverMode::parse)]
+    observer_mode: ObserverMode,
     /// Raw ping-pong round trips for the baseline.
     #[arg(long, default_value_t = 20_000)]
     raw_samples: usize,
@@ -504,6 +509,7 @@ fn main() -> ExitCode {
                 period_ms: args.period_ms,
                 out: args.out.clone(),
                 observer: args.observer,
+                mode: args.observer_mode,
                 raw_samples: args.raw_samples,
                 verbose: true,
             };

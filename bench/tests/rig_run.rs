@@ -839,6 +839,24 @@ fn latency_times_every_stage_of_every_cycle() {
         .output()
         .unwrap());
     let summary = String::from_utf8_lossy(&out.stdout);
+    // Predictive timing (the default): the action the plant announces at a sample
+    // instant is the one it applies over the interval after it.
+    let msgs = messages(&dir.join("run/run.mcap"));
+    let values = |key: &str| -> Vec<f64> {
+        field(&msgs, "/plant/measurement", key)
+            .into_iter()
+            .map(|(_, v)| v)
+            .collect()
+    };
+    let (next, applied, steps) = (values("u_next_0"), values("u_applied_0"), values("step"));
+    let mut pipelined = 0;
+    for k in 0..next.len() - 1 {
+        if steps[k + 1] == steps[k] + 1.0 {
+            assert_eq!(next[k].clamp(-3.0, 3.0), applied[k + 1], "sample {k}");
+            pipelined += 1;
+        }
+    }
+    assert!(pipelined >= 200, "{pipelined}");
     for stage in [
         "plant_to_observer",
         "observer_to_agent",

@@ -73,6 +73,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                 }
             });
             Box::new(PlantLoop {
+                pipelined: cfg.observer.mode == ::agent::config::ObserverMode::Predictive,
                 plant: Plant::new(task.clone()),
                 link,
                 realtime,
@@ -248,6 +249,9 @@ struct PlantLoop {
     record_cycles: bool,
     /// Lockstep: when actions take effect (timing, delays).
     actuator: Actuator,
+    /// Predictive timing (`observer.mode`): in real time, the action that answers sample
+    /// `k` is applied at `t_{k+1}` for the whole interval.
+    pipelined: bool,
 }
 
 /// Headers of one trial's samples.
@@ -346,10 +350,12 @@ impl PlantLoop {
         )
     }
 
-    /// One trial in real time: the plant samples at absolute deadlines; every action that
-    /// arrives within an interval is applied from its arrival on (the previous one held
-    /// until then); an interval in which the action for its sample did not arrive is a
-    /// missed deadline. The reward of an interval is `ρ(x_k, u)` with the action in effect
+    /// One trial in real time: the plant samples at absolute deadlines; in direct timing
+    /// every action that arrives within an interval is applied from its arrival on (the
+    /// previous one held until then); in predictive timing the last action that arrived
+    /// within an interval is applied at the next sample instant, for the whole next
+    /// interval (none arrived: the previous one is held). An interval in which the action
+    /// for its sample did not arrive is a missed deadline. The reward of an interval is `ρ(x_k, u)` with the action in effect
     /// at its end. An interval without any action trips the plant's watchdog
     /// ([`plant::safety::Supervisor::period`]): zero from its
     /// end on, until an action arrives.
@@ -361,6 +367,11 @@ impl PlantLoop {
         };
         self.plant.reset(x0);
         let mut u_hold = vec![0.0; self.link.task.action_dim()];
+        // Predictive timing: the action applied from the coming sample instant on.
+        let mut pending: Option<Vec<f64>> = None;
+        if self.pipelined {
+            self.link.u_next.clone_from(&u_hold);
+        }
         let header = TrialHeader {
             trial,
             mode,
@@ -418,15 +429,28 @@ impl PlantLoop {
             let sim = |dt_ns: u64| dt_ns as f64 * 1e-9 * speed;
             let mut t = t_k;
             let x_k_reward_state = self.plant.state().to_vec();
-            for (t_a, u) in &arrivals {
-                self.plant.advance(&u_hold, sim(t_a - t));
-                u_hold.clone_from(u);
-                t = *t_a;
+            if self.pipelined {
+                if let Some(u) = pending.take() {
+                    u_hold = u;
+                }
+                pending = arrivals.last().map(|(_, u)| u.clone());
+            } else {
+                for (t_a, u) in &arrivals {
+                    self.plant.advance(&u_hold, sim(t_a - t));
+                    u_hold.clone_from(u);
+                    t = *t_a;
+                }
             }
             self.plant.advance(&u_hold, sim(deadline - t));
             if self.plant.safety().period(!arrivals.is_empty()) {
                 // No action for a whole period: the safe action from this instant on.
                 u_hold.fill(0.0);
+                pending = None;
+            }
+            if self.pipelined {
+                self.link
+                    .u_next
+                    .clone_from(pending.as_ref().unwrap_or(&u_hold));
             }
             let r = self.plant.reward_of_transition(
                 self.link
