@@ -1304,4 +1304,47 @@ mod tests {
         let e = bad("[observer]\nfilter = 1.0\n", &none);
         assert!(e.contains("`observer.filter`"), "{e}");
     }
+
+    #[test]
+    fn timing_and_delay_keys_resolve_round_trip_and_are_checked() {
+        let text =
+            "[observer]\nsensor = \"angle\"\nobserver = \"predictive\"\nmode = \"predictive\"\n";
+        let c = resolve(Some((Path::new("t.toml"), text)), &Overrides::default()).unwrap();
+        assert_eq!(c.observer.mode, ObserverMode::Predictive);
+        let again = resolve(
+            Some((Path::new("c.toml"), &c.to_toml())),
+            &Overrides::default(),
+        );
+        assert_eq!(again.unwrap(), c);
+        let bad = |text: &str| {
+            resolve(Some((Path::new("t.toml"), text)), &Overrides::default())
+                .unwrap_err()
+                .to_string()
+        };
+        let e = bad("[observer]\nmode = \"predictive\"\n");
+        assert!(
+            e.contains("`observer.mode`") && e.contains("predictive"),
+            "{e}"
+        );
+        let e = bad("[observer]\nmode = \"late\"\n");
+        assert!(
+            e.contains("`observer.mode`") && e.contains("direct, predictive"),
+            "{e}"
+        );
+        let csv = std::env::temp_dir().join(format!("cfg-delays-{}.csv", std::process::id()));
+        std::fs::write(&csv, "delay_ms\n1\n2\n").unwrap();
+        let from = format!("[run]\ndelay_from = {:?}\n", csv.display().to_string());
+        let c = resolve(Some((Path::new("t.toml"), &from)), &Overrides::default()).unwrap();
+        assert!(c.to_toml().contains("delay_from"));
+        let e = bad(&format!("{from}delay_ms = 3.0\n"));
+        assert!(
+            e.contains("`run.delay_from`") && e.contains("exclusive"),
+            "{e}"
+        );
+        let e = bad("[run]\ndelay_column = \"x_ms\"\n");
+        assert!(e.contains("`run.delay_column`"), "{e}");
+        // The default configuration does not mention the optional keys.
+        let plain = resolve(None, &Overrides::default()).unwrap().to_toml();
+        assert!(!plain.contains("delay_from") && !plain.contains("\nmode ="));
+    }
 }

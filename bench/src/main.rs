@@ -4,8 +4,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use agent::config::{
-    Algo, ApproxKind, Choice, HorizonKind, ObserverKind, ObserverMode, Overrides, SensorKind,
-    resolve,
+    Algo, ApproxKind, Choice, HorizonKind, ObserverKind, ObserverMode, ObserverModel, Overrides,
+    SensorKind, resolve,
 };
 use clap::{Args, Parser, Subcommand};
 use plant::{SystemName, Task};
@@ -112,6 +112,10 @@ struct DelayStudyArgs {
     /// Injected delays [ms], each in [0, Ts = 30) (comma-separated).
     #[arg(long, value_name = "MS", value_delimiter = ',', default_values_t = rig::delay_study::DELAYS_MS)]
     delays: Vec<f64>,
+    /// The predictive estimator's process model: learned (LLR, online) or known (the
+    /// plant's dynamics — the reference for a perfect prediction) (`observer.model`).
+    #[arg(long, default_value = "learned", value_parser = ObserverModel::parse)]
+    observer_model: ObserverModel,
     /// Worker threads [default: one per core].
     #[arg(long)]
     threads: Option<usize>,
@@ -483,6 +487,7 @@ fn main() -> ExitCode {
                 runs: args.runs,
                 trials: args.trials,
                 delays_ms: args.delays.clone(),
+                model: args.observer_model,
                 out: args.out.clone(),
                 threads: args.threads,
                 verbose: !args.quiet,

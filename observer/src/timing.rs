@@ -229,3 +229,74 @@ impl Front {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::predictive::{Predictive, PredictiveModel};
+    use plant::SystemName;
+
+    fn front(predictive: bool) -> (Arc<Task>, Front) {
+        let task = Arc::new(Task::new(SystemName::Pendulum));
+        let o = Box::new(Predictive::new(task.clone(), PredictiveModel::Known, 1.0));
+        (task.clone(), Front::new(task, o, predictive))
+    }
+
+    fn sample<'a>(
+        step: usize,
+        end: bool,
+        terminal: bool,
+        y: &'a [f64],
+        u: &'a [f64],
+    ) -> Sample<'a> {
+        Sample {
+            step,
+            start: step == 0,
+            end,
+            terminal,
+            y,
+            reward: -7.0,
+            u_applied: u,
+            u_next: u,
+        }
+    }
+
+    /// Predictive timing: the agent starts in x̂_{1|0}, its last transition is learned at
+    /// sample N − 1, the plant's last sample only closes the trial; rewards are ρ(x̂_k, u_k).
+    #[test]
+    fn predictive_calls_over_a_trial() {
+        let (task, mut f) = front(true);
+        let n = task.steps_per_trial();
+        let (x0, u) = ([1.0, 0.0], [2.0]);
+        let t = f.sample(&sample(0, false, false, &x0, &[0.0]));
+        assert_eq!((t.call, t.step), (Call::Start, 1));
+        // x̂_{1|0} = f(x_0, 0): 1 rad from upright, the pendulum falls away from it.
+        assert!(t.x[1] > 0.0 && t.x[0] > 1.0, "{:?}", t.x);
+        for k in 1..n {
+            let t = f.sample(&sample(k, false, false, &x0, &u));
+            let want = if k + 1 == n { Call::Last } else { Call::Learn };
+            assert_eq!((t.call, t.step), (want, k + 1));
+            assert_ne!(t.reward, -7.0);
+        }
+        let t = f.sample(&sample(n, true, false, &x0, &u));
+        assert_eq!(t.call, Call::Hold);
+        // A terminal sample before the end closes the agent's pending transition.
+        f.sample(&sample(0, false, false, &x0, &[0.0]));
+        let t = f.sample(&sample(1, true, true, &x0, &u));
+        assert_eq!((t.call, t.reward), (Call::Terminal, -7.0));
+    }
+
+    /// Direct timing: the agent acts on x̂_k and learns the plant's reward.
+    #[test]
+    fn direct_calls_over_a_trial() {
+        let (task, mut f) = front(false);
+        let n = task.steps_per_trial();
+        let (x0, u) = ([1.0, 0.0], [2.0]);
+        let t = f.sample(&sample(0, false, false, &x0, &[0.0]));
+        assert_eq!((t.call, t.step, t.x), (Call::Start, 0, &x0[..]));
+        let t = f.sample(&sample(1, false, false, &x0, &u));
+        assert_eq!((t.call, t.reward, t.u_prev), (Call::Learn, -7.0, &u[..]));
+        let t = f.sample(&sample(n, true, false, &x0, &u));
+        assert_eq!(t.call, Call::Last);
+    }
+}
