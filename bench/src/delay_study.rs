@@ -277,6 +277,7 @@ fn write_outputs(opts: &DelayStudyOptions, cells: &[Cell]) -> Result<()> {
             label,
             points,
             dashed: i % 2 == 1,
+            colour: i / 2,
         })
         .collect();
     plot_points(

@@ -149,12 +149,8 @@ fn predictive_timing_and_recorded_delays_over_the_wire_reproduce_rig_learn() {
     // The recording says what was applied when: the delay of every interval (one of the
     // recorded values) and, in predictive timing, the action applied from each sample on.
     let msgs = messages(&dir.join("run-from/run.mcap"));
-    let values = |topic: &str, key: &str| -> Vec<f64> {
-        field(&msgs, topic, key)
-            .into_iter()
-            .map(|(_, v)| v)
-            .collect()
-    };
+    let values =
+        |topic: &str, key: &str| -> Vec<f64> { field(&msgs, topic, key).into_values().collect() };
     let drawn = values("/plant/measurement", "delay_s");
     assert!(
         drawn
@@ -165,8 +161,7 @@ fn predictive_timing_and_recorded_delays_over_the_wire_reproduce_rig_learn() {
     let msgs = messages(&dir.join("run-pred/run.mcap"));
     let values = |key: &str| -> Vec<f64> {
         field(&msgs, "/plant/measurement", key)
-            .into_iter()
-            .map(|(_, v)| v)
+            .into_values()
             .collect()
     };
     let (next, applied, steps) = (values("u_next_0"), values("u_applied_0"), values("step"));
@@ -844,8 +839,7 @@ fn latency_times_every_stage_of_every_cycle() {
     let msgs = messages(&dir.join("run/run.mcap"));
     let values = |key: &str| -> Vec<f64> {
         field(&msgs, "/plant/measurement", key)
-            .into_iter()
-            .map(|(_, v)| v)
+            .into_values()
             .collect()
     };
     let (next, applied, steps) = (values("u_next_0"), values("u_applied_0"), values("step"));

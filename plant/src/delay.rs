@@ -37,7 +37,7 @@ pub enum Delays {
         /// The recorded delays \[s\], each in `[0, Ts)`.
         values: Arc<Vec<f64>>,
         /// The run's delay stream.
-        rng: ChaCha8Rng,
+        rng: Box<ChaCha8Rng>,
     },
 }
 
@@ -52,11 +52,14 @@ impl Delays {
         assert!(!values.is_empty());
         let mut rng = ChaCha8Rng::seed_from_u64(run_seed);
         rng.set_stream(STREAM);
-        Delays::Recorded { values, rng }
+        Delays::Recorded {
+            values,
+            rng: Box::new(rng),
+        }
     }
 
     /// The next sample's delay \[s\].
-    pub fn next(&mut self) -> f64 {
+    pub fn draw(&mut self) -> f64 {
         match self {
             Delays::Fixed(d) => *d,
             Delays::Recorded { values, rng } => values[rng.random_range(0..values.len())],
@@ -188,7 +191,7 @@ impl Actuator {
     /// interval and holds `u` for the next. Returns the interval's reward
     /// ([`Plant::step`]). One delay is drawn per interval in both timings.
     pub fn interval(&mut self, plant: &mut Plant, u: &[f64]) -> f64 {
-        self.last_delay = self.delays.next();
+        self.last_delay = self.delays.draw();
         match &mut self.pipelined {
             None => plant.step_delayed(u, self.last_delay),
             Some(held) => {
@@ -242,7 +245,7 @@ mod tests {
         let v = Arc::new(vec![0.0, 0.001, 0.002, 0.003]);
         let draw = |seed| {
             let mut d = Delays::recorded(v.clone(), seed);
-            (0..20).map(|_| d.next()).collect::<Vec<_>>()
+            (0..20).map(|_| d.draw()).collect::<Vec<_>>()
         };
         assert_eq!(draw(1), draw(1));
         assert_ne!(draw(1), draw(2));

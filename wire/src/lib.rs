@@ -614,9 +614,10 @@ mod tests {
     fn layouts_are_fixed() {
         // Changing a layout must change the type name's version: these sizes pin them.
         assert_eq!(std::mem::size_of::<Header>(), 40);
+        // v3: + u_next, delay_s.
         assert_eq!(
             std::mem::size_of::<Measurement>(),
-            40 + 3 * 8 + 8 * 8 + 4 * 8 + 24
+            40 + 3 * 8 + 8 * 8 + 2 * 4 * 8 + 8 + 24
         );
         assert_eq!(
             std::mem::size_of::<Estimate>(),
