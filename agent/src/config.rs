@@ -160,6 +160,28 @@ impl ObserverModel {
     pub const ALL: [ObserverModel; 2] = [ObserverModel::Learned, ObserverModel::Known];
 }
 
+/// When the agent acts, relative to the sample it acts on (thesis §6.4.1; DESIGN.md "The
+/// observer and the latency budget"; [`observer::timing`](../../observer/timing/index.html)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ObserverMode {
+    /// The agent acts on `x̂_k`; its action takes effect within the interval
+    /// `[t_k, t_{k+1})`, as soon as it is computed and transported (`run.delay_ms` /
+    /// `run.delay_from` after `t_k`; 0: at `t_k`, the thesis's simulations).
+    #[default]
+    Direct,
+    /// The agent acts on the one-step prediction `x̂_{k+1|k} = f̂(x̂_k, u_k)`; its action
+    /// is applied at `t_{k+1}`, for the whole next interval (a one-sample action
+    /// pipeline, §6.4.1's physical setup): a delay below `Ts` does not reach the plant.
+    /// Needs `observer = "predictive"` (the model) and an infinite horizon.
+    Predictive,
+}
+
+impl ObserverMode {
+    /// Both modes, for help texts and validation messages.
+    pub const ALL: [ObserverMode; 2] = [ObserverMode::Direct, ObserverMode::Predictive];
+}
+
 /// Sensor and state observer (`[observer]`); the defaults — full state, pass-through —
 /// are the thesis's simulations, and a configuration with them is written without this
 /// section.
@@ -180,6 +202,10 @@ pub struct ObserverConfig {
     pub filter: f64,
     /// Predictive: velocity gain `l` on the angle innovation, in [0, 2).
     pub gain: f64,
+    /// Timing: the agent acts on `x̂_k` (direct) or on `x̂_{k+1|k}` with its action applied
+    /// at the next sample instant (predictive).
+    #[serde(default)]
+    pub mode: ObserverMode,
 }
 
 impl Default for ObserverConfig {
@@ -192,6 +218,7 @@ impl Default for ObserverConfig {
             model: ObserverModel::Learned,
             filter: 0.0,
             gain: 1.0,
+            mode: ObserverMode::Direct,
         }
     }
 }
@@ -254,6 +281,7 @@ names!(HorizonKind, Infinite => "infinite", Finite => "finite");
 names!(SensorKind, Full => "full", Angle => "angle");
 names!(ObserverKind, PassThrough => "pass-through", FiniteDifference => "finite-difference", Predictive => "predictive");
 names!(ObserverModel, Learned => "learned", Known => "known");
+names!(ObserverMode, Direct => "direct", Predictive => "predictive");
 
 /// A complete experiment.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -331,6 +359,17 @@ pub struct RunConfig {
     /// (0: the thesis's simulations, the action applies at the sample instant).
     #[serde(default)]
     pub delay_ms: f64,
+    /// A recorded distribution of sample-to-actuation delays: a CSV file, one delay per
+    /// row in column `delay_column`; each sample's delay is drawn from it (uniformly, from
+    /// the run seed's stream [`plant::delay::STREAM`]) and applied as `delay_ms` is.
+    /// Empty: none. Exclusive with `delay_ms`.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub delay_from: String,
+    /// The column of `delay_from` holding the delays; its unit is its name's suffix
+    /// (`_s`, `_ms`, `_us`, `_ns`; `sample_to_actuation` of `rig latency`'s latency.csv is
+    /// ns). Empty: `delay_ms`, else `sample_to_actuation`, whichever the file has.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub delay_column: String,
 }
 
 /// Learning parameters shared by the components.
@@ -537,6 +576,27 @@ fn check_len(key: &str, len: usize, want: usize, what: &str) -> Result<(), Confi
 }
 
 impl ExperimentConfig {
+    /// The sample-to-actuation delays of a run with seed `run_seed`: `run.delay_from`'s
+    /// recorded distribution, else the fixed `run.delay_ms` ([`plant::delay::Delays`]).
+    /// The error names the file, column, row and allowed range.
+    pub fn delays_for_run(
+        &self,
+        task: &Task,
+        run_seed: u64,
+    ) -> Result<plant::delay::Delays, String> {
+        if self.run.delay_from.is_empty() {
+            return Ok(plant::delay::Delays::fixed(self.run.delay_ms * 1e-3));
+        }
+        Ok(plant::delay::Delays::recorded(self.delays(task)?, run_seed))
+    }
+
+    /// `run.delay_from`'s delays \[s\].
+    fn delays(&self, task: &Task) -> Result<std::sync::Arc<Vec<f64>>, String> {
+        let column = (!self.run.delay_column.is_empty()).then_some(self.run.delay_column.as_str());
+        plant::delay::read_csv(Path::new(&self.run.delay_from), column, task.ts)
+            .map(std::sync::Arc::new)
+    }
+
     /// Checks every value against its allowed range and the system's dimensions.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let task = Task::new(self.system);
@@ -547,6 +607,20 @@ impl ExperimentConfig {
         if self.run.delay_ms != 0.0 {
             // Less than one sample period.
             check_f("run.delay_ms", self.run.delay_ms, 0.0, task.ts * 1e3, true)?;
+        }
+        if !self.run.delay_from.is_empty() {
+            if self.run.delay_ms != 0.0 {
+                return Err(err(
+                    "run.delay_from",
+                    "is exclusive with run.delay_ms (--delay-from, --delay-ms): give one of them",
+                ));
+            }
+            self.delays(&task).map_err(|e| err("run.delay_from", e))?;
+        } else if !self.run.delay_column.is_empty() {
+            return Err(err(
+                "run.delay_column",
+                "needs run.delay_from (--delay-from), the file it is a column of",
+            ));
         }
         let o = &self.observer;
         check_i(
@@ -567,6 +641,23 @@ impl ExperimentConfig {
                 "observer.gain",
                 format!("{} is out of range: must be a number in [0, 2)", o.gain),
             ));
+        }
+        if o.mode == ObserverMode::Predictive {
+            if o.observer != ObserverKind::Predictive {
+                return Err(err(
+                    "observer.mode",
+                    format!(
+                        "\"predictive\" needs observer = \"predictive\" (its process model predicts x̂_{{k+1|k}}), not \"{}\"",
+                        o.observer
+                    ),
+                ));
+            }
+            if self.horizon == HorizonKind::Finite {
+                return Err(err(
+                    "observer.mode",
+                    "\"predictive\" needs an infinite horizon (a finite-horizon agent's time index would be one sample off the plant's)",
+                ));
+            }
         }
         if o.sensor == SensorKind::Angle && o.observer == ObserverKind::PassThrough {
             return Err(err(
@@ -855,6 +946,12 @@ pub struct Overrides {
     pub observer: Option<ObserverKind>,
     /// `--delay-ms`.
     pub delay_ms: Option<f64>,
+    /// `--delay-from`.
+    pub delay_from: Option<String>,
+    /// `--delay-column`.
+    pub delay_column: Option<String>,
+    /// `--observer-mode`.
+    pub observer_mode: Option<ObserverMode>,
 }
 
 /// Resolves preset ← file ← overrides into a validated configuration.
@@ -897,6 +994,13 @@ pub fn resolve(
     merged.entry("observer").or_insert_with(|| {
         toml::Value::Table(toml::Table::try_from(ObserverConfig::default()).expect("serialises"))
     });
+    // So are the optional keys of `[run]`.
+    if let Some(toml::Value::Table(run)) = merged.get_mut("run") {
+        for key in ["delay_from", "delay_column"] {
+            run.entry(key)
+                .or_insert_with(|| toml::Value::String(String::new()));
+        }
+    }
     merge(&mut merged, user, "").map_err(with_file)?;
     check_observer_choices(&merged).map_err(with_file)?;
     let mut cfg: ExperimentConfig = toml::Value::Table(merged)
@@ -917,6 +1021,15 @@ pub fn resolve(
     }
     if let Some(v) = o.delay_ms {
         cfg.run.delay_ms = v;
+    }
+    if let Some(v) = &o.delay_from {
+        cfg.run.delay_from.clone_from(v);
+    }
+    if let Some(v) = &o.delay_column {
+        cfg.run.delay_column.clone_from(v);
+    }
+    if let Some(v) = o.observer_mode {
+        cfg.observer.mode = v;
     }
     if let Some(v) = o.eval_every {
         cfg.run.eval_every = v;
@@ -952,7 +1065,8 @@ fn check_observer_choices(merged: &toml::Table) -> Result<(), ConfigError> {
     }
     one::<SensorKind>(o, "sensor")?;
     one::<ObserverKind>(o, "observer")?;
-    one::<ObserverModel>(o, "model")
+    one::<ObserverModel>(o, "model")?;
+    one::<ObserverMode>(o, "mode")
 }
 
 /// The value of a choice key: the command line's, else the file's spelling, else
@@ -1199,5 +1313,48 @@ mod tests {
         );
         let e = bad("[observer]\nfilter = 1.0\n", &none);
         assert!(e.contains("`observer.filter`"), "{e}");
+    }
+
+    #[test]
+    fn timing_and_delay_keys_resolve_round_trip_and_are_checked() {
+        let text =
+            "[observer]\nsensor = \"angle\"\nobserver = \"predictive\"\nmode = \"predictive\"\n";
+        let c = resolve(Some((Path::new("t.toml"), text)), &Overrides::default()).unwrap();
+        assert_eq!(c.observer.mode, ObserverMode::Predictive);
+        let again = resolve(
+            Some((Path::new("c.toml"), &c.to_toml())),
+            &Overrides::default(),
+        );
+        assert_eq!(again.unwrap(), c);
+        let bad = |text: &str| {
+            resolve(Some((Path::new("t.toml"), text)), &Overrides::default())
+                .unwrap_err()
+                .to_string()
+        };
+        let e = bad("[observer]\nmode = \"predictive\"\n");
+        assert!(
+            e.contains("`observer.mode`") && e.contains("predictive"),
+            "{e}"
+        );
+        let e = bad("[observer]\nmode = \"late\"\n");
+        assert!(
+            e.contains("`observer.mode`") && e.contains("direct, predictive"),
+            "{e}"
+        );
+        let csv = std::env::temp_dir().join(format!("cfg-delays-{}.csv", std::process::id()));
+        std::fs::write(&csv, "delay_ms\n1\n2\n").unwrap();
+        let from = format!("[run]\ndelay_from = {:?}\n", csv.display().to_string());
+        let c = resolve(Some((Path::new("t.toml"), &from)), &Overrides::default()).unwrap();
+        assert!(c.to_toml().contains("delay_from"));
+        let e = bad(&format!("{from}delay_ms = 3.0\n"));
+        assert!(
+            e.contains("`run.delay_from`") && e.contains("exclusive"),
+            "{e}"
+        );
+        let e = bad("[run]\ndelay_column = \"x_ms\"\n");
+        assert!(e.contains("`run.delay_column`"), "{e}");
+        // The default configuration does not mention the optional keys.
+        let plain = resolve(None, &Overrides::default()).unwrap().to_toml();
+        assert!(!plain.contains("delay_from") && !plain.contains("\nmode ="));
     }
 }

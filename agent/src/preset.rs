@@ -276,6 +276,8 @@ pub fn preset(
             seed: 1,
             eval_every: 10,
             delay_ms: 0.0,
+            delay_from: String::new(),
+            delay_column: String::new(),
         },
         learning: LearningConfig {
             gamma: 0.97,
@@ -372,6 +374,8 @@ pub fn finite_horizon(
             seed: 1,
             eval_every: 10,
             delay_ms: 0.0,
+            delay_from: String::new(),
+            delay_column: String::new(),
         },
         learning: LearningConfig {
             gamma: 1.0,
@@ -459,6 +463,8 @@ fn critic_only(system: SystemName, algo: Algo, approx: ApproxKind) -> Experiment
             // One greedy evaluation per sequence of the four start states (§6.4.2).
             eval_every: if arm_6_4 { 4 } else { 5 },
             delay_ms: 0.0,
+            delay_from: String::new(),
+            delay_column: String::new(),
         },
         learning: LearningConfig {
             gamma: 0.97,

@@ -16,6 +16,12 @@
 //! agent acts on the observer's estimate. At a trial start the state is known (the plant
 //! has just been put there), so the observer and the agent start from it.
 //!
+//! When the agent's action takes effect and what it acts on is the timing
+//! (`observer.mode`, [`observer::timing`]): direct — on `x̂_k`, applied after the
+//! sample-to-actuation delay (`run.delay_ms`, or drawn from `run.delay_from`) within the
+//! interval — or predictive — on `x̂_{k+1|k}`, applied at the next sample instant
+//! ([`plant::delay::Actuator`]).
+//!
 //! With a finite horizon (Chapter 4) a trial's return also counts the terminal reward of
 //! the state it ends in, `τ_N(x_N) + Σ_k ρ(x_k, u_k)` (Eq. 4.1).
 
@@ -24,9 +30,10 @@ use std::sync::Arc;
 use agent::Agent;
 use agent::checkpoint::{Checkpoint, CheckpointError, Origin, Snapshot};
 use agent::config::ExperimentConfig;
-use agent::config::{ObserverConfig, SensorKind};
+use agent::config::{ObserverConfig, ObserverMode, SensorKind};
 use agent::horizon::Horizon;
-use observer::Observer;
+use observer::timing::{Front, Sample as AtSample, act};
+use plant::delay::Actuator;
 use plant::sensor::Sensor;
 use plant::{Plant, Task};
 
@@ -64,7 +71,10 @@ pub struct Experiment {
     sensor: Sensor,
     /// The sensor's last measurement `y_k`.
     y: Vec<f64>,
-    observer: Box<dyn Observer>,
+    /// The observer in its timing.
+    front: Front,
+    /// When actions take effect (timing, delays).
+    actuator: Actuator,
     agent: Box<dyn Agent>,
     horizon: Horizon,
     /// Which experiment and run this is (for checkpoints).
@@ -72,8 +82,6 @@ pub struct Experiment {
     run: u32,
     trials: u32,
     eval_every: u32,
-    /// Sample-to-actuation delay \[s\] (`run.delay_ms`).
-    delay: f64,
     trial: u32,
     /// Samples not run because trials ended early (left the operating range).
     skipped_samples: u64,
@@ -92,14 +100,14 @@ impl Experiment {
             plant: Plant::new(task.clone()),
             sensor,
             y: vec![0.0; task.state_dim()],
-            observer: observer::build(task.clone(), o, cfg.model.as_ref()),
+            front: front(&task, cfg),
+            actuator: actuator(&task, cfg, run_seed),
             horizon: cfg.horizon.of(&task),
             origin: Origin::of(cfg, run),
             task,
             agent,
             run,
             trials: cfg.run.trials,
-            delay: cfg.run.delay_ms * 1e-3,
             eval_every: cfg.run.eval_every,
             trial: 0,
             skipped_samples: 0,
@@ -131,6 +139,7 @@ impl Experiment {
                 "a checkpoint holds the agent's state only; resuming needs the default sensor and observer".into(),
             ));
         }
+        resumable_delays(cfg).map_err(CheckpointError)?;
         let mut e = Self::new(cfg, run);
         c.restore(cfg, run, e.agent.as_mut())?;
         e.trial = c.trial;
@@ -164,23 +173,16 @@ impl Experiment {
         let mut u = vec![0.0; self.task.action_dim()];
         // The agent starts from the plant's state as measured (angles wrapped), exactly as
         // it does over the wire.
-        self.plant.reset(&x0);
-        self.observer.reset(self.plant.state());
-        self.agent.start_trial(self.plant.state(), &mut u);
+        self.start(&x0, false, &mut u);
         let mut ret = 0.0;
         for k in 0..steps {
-            let r = self.plant.step_delayed(&u, self.delay);
+            let r = self.actuator.interval(&mut self.plant, &u);
             ret += r;
-            self.sensor.measure(self.plant.state(), &mut self.y);
-            let x = self.observer.update(&self.y, self.plant.applied_action());
-            if self.plant.terminated() {
-                self.agent.learn_terminal(r, x);
+            let terminated = self.sample(k, r, false, &mut u);
+            if terminated {
                 self.skipped_samples += (steps - k - 1) as u64;
                 break;
             }
-            let last = k + 1 == steps;
-            self.agent
-                .learn(r, x, if last { None } else { Some(&mut u) });
         }
         ret += self.final_reward();
         self.trial += 1;
@@ -193,6 +195,44 @@ impl Experiment {
             ret,
             greedy,
         })
+    }
+
+    /// A trial's start: the plant is put at `x0`, the observer and the agent start from it
+    /// (the state is known there); the agent's first action into `u`.
+    fn start(&mut self, x0: &[f64], greedy: bool, u: &mut [f64]) {
+        self.plant.reset(x0);
+        self.actuator.reset();
+        let t = self.front.sample(&AtSample {
+            step: 0,
+            start: true,
+            end: false,
+            terminal: false,
+            y: self.plant.state(),
+            reward: 0.0,
+            u_applied: self.plant.applied_action(),
+            u_next: self.actuator.next_action().unwrap_or(&[]),
+        });
+        act(self.agent.as_mut(), greedy, &t, u);
+    }
+
+    /// Sample `k + 1` after interval `k` (reward `r`): measure, estimate, let the agent act
+    /// (learn, unless `greedy`), its answer into `u`. Returns whether the trial ended by
+    /// leaving the operating range.
+    fn sample(&mut self, k: usize, r: f64, greedy: bool, u: &mut [f64]) -> bool {
+        self.sensor.measure(self.plant.state(), &mut self.y);
+        let terminal = self.plant.terminated();
+        let t = self.front.sample(&AtSample {
+            step: k + 1,
+            start: false,
+            end: terminal || k + 1 == self.task.steps_per_trial(),
+            terminal,
+            y: &self.y,
+            reward: r,
+            u_applied: self.plant.applied_action(),
+            u_next: self.actuator.next_action().unwrap_or(&[]),
+        });
+        act(self.agent.as_mut(), greedy, &t, u);
+        terminal
     }
 
     /// `τ_N(x_N)` of the plant's state after a finite horizon's last sample (Eq. 4.1); 0
@@ -219,29 +259,66 @@ impl Experiment {
     /// One greedy trial from `x0`: the time response of the current policy (until the
     /// trial's end or until the system leaves its operating range).
     pub fn greedy_trajectory(&mut self, x0: &[f64]) -> Vec<Sample> {
-        let m = self.task.action_dim();
-        let (mut u, mut u_prev) = (vec![0.0; m], vec![0.0; m]);
-        self.plant.reset(x0);
-        self.observer.reset(self.plant.state());
-        let mut x = self.plant.state().to_vec();
-        let mut out = Vec::with_capacity(self.task.steps_per_trial());
-        for k in 0..self.task.steps_per_trial() {
-            self.agent.greedy(k, &x, &u_prev, &mut u);
-            let reward = self.plant.step_delayed(&u, self.delay);
-            u_prev.copy_from_slice(self.plant.applied_action());
+        let steps = self.task.steps_per_trial();
+        let mut u = vec![0.0; self.task.action_dim()];
+        self.start(x0, true, &mut u);
+        let mut acted_on = self.front_state();
+        let mut out = Vec::with_capacity(steps);
+        for k in 0..steps {
+            let reward = self.actuator.interval(&mut self.plant, &u);
             out.push(Sample {
                 t: k as f64 * self.task.ts,
-                x: x.clone(),
-                u: u_prev.clone(),
+                x: acted_on.clone(),
+                u: self.plant.applied_action().to_vec(),
                 reward,
             });
-            self.sensor.measure(self.plant.state(), &mut self.y);
-            x.copy_from_slice(self.observer.update(&self.y, &u_prev));
-            if self.plant.terminated() {
+            if self.sample(k, reward, true, &mut u) {
                 break;
             }
+            acted_on = self.front_state();
         }
         out
+    }
+
+    /// The state the agent last acted on.
+    fn front_state(&self) -> Vec<f64> {
+        self.front.acted_on().to_vec()
+    }
+}
+
+/// The observer `cfg` asks for on `task`, in the configured timing.
+pub fn front(task: &Arc<Task>, cfg: &ExperimentConfig) -> Front {
+    let o = &cfg.observer;
+    Front::new(
+        task.clone(),
+        observer::build(task.clone(), o, cfg.model.as_ref()),
+        o.mode == ObserverMode::Predictive,
+    )
+}
+
+/// The actuation of run seed `run_seed` of `cfg`: its timing and its delays (a validated
+/// configuration's delay file has been read once already).
+pub fn actuator(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Actuator {
+    let delays = cfg
+        .delays_for_run(task, run_seed)
+        .unwrap_or_else(|e| panic!("run.delay_from: {e}"));
+    Actuator::new(
+        task.action_dim(),
+        cfg.observer.mode == ObserverMode::Predictive,
+        delays,
+    )
+}
+
+/// A run with delays drawn from `run.delay_from` cannot be resumed: a checkpoint does not
+/// hold where the delay stream stands.
+pub fn resumable_delays(cfg: &ExperimentConfig) -> Result<(), String> {
+    if cfg.run.delay_from.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "cannot resume a run with run.delay_from = {:?}: checkpoints do not hold where its delay stream stands; start a new run",
+            cfg.run.delay_from
+        ))
     }
 }
 
@@ -250,7 +327,9 @@ impl Experiment {
 pub struct Sample {
     /// Time since the trial start \[s\].
     pub t: f64,
-    /// State estimate the action was computed from.
+    /// The state the agent acted on at this sample: direct timing `x̂_k`, from which the
+    /// applied action was computed; predictive timing `x̂_{k+1|k}`, for the next interval's
+    /// action (the applied one was computed a sample earlier).
     pub x: Vec<f64>,
     /// Applied action.
     pub u: Vec<f64>,

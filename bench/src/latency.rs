@@ -23,7 +23,9 @@
 //! agent               agent published − agent received
 //! agent→plant         plant found the action − agent published (the plant polls every
 //!                     20 µs in realtime, so this hop includes up to one poll interval)
-//! sample→actuation    plant found the action − t_k (the action is applied from then on)
+//! sample→actuation    plant found the action − t_k (direct timing: the action is applied
+//!                     from then on; predictive timing: it is applied at t_{k+1}, so this
+//!                     is the budget used of the one-sample pipeline)
 //! slack               t_k + period − plant found the action
 //! ```
 //!
@@ -36,7 +38,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use agent::config::{ObserverKind, Overrides, SensorKind};
+use agent::config::{ObserverKind, ObserverMode, Overrides, SensorKind};
 use anyhow::{Context, Result, anyhow, bail};
 
 use crate::learn::write_atomic;
@@ -55,6 +57,9 @@ pub struct LatencyOptions {
     pub out: PathBuf,
     /// The observer (the sensor is the angle encoder).
     pub observer: ObserverKind,
+    /// The timing: direct (an action is applied when it arrives) or predictive (at the
+    /// next sample instant; `observer` must be predictive).
+    pub mode: ObserverMode,
     /// Raw ping-pong round trips for the baseline.
     pub raw_samples: usize,
     /// The plant's spin before each sampling instant \[µs\] (`rig plant --spin-us`).
@@ -213,6 +218,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
         &Overrides {
             sensor: Some(SensorKind::Angle),
             observer: Some(opts.observer),
+            observer_mode: Some(opts.mode),
             eval_every: Some(0),
             ..Default::default()
         },

@@ -298,6 +298,30 @@ pub fn read_responses(path: &Path, runs: usize) -> Option<Vec<Vec<Sample>>> {
     out.iter().all(|r| !r.is_empty()).then_some(out)
 }
 
+/// The greedy evaluations a run's final policy is judged by (the thesis's figures end on
+/// them): the mean of the last this many.
+pub const LAST_EVALUATIONS: usize = 3;
+
+/// Per run, the mean of its last [`LAST_EVALUATIONS`] greedy evaluations.
+pub fn final_greedy(records: &[TrialRecord], runs: u32) -> Result<Vec<f64>> {
+    (0..runs)
+        .map(|run| {
+            let g: Vec<f64> = records
+                .iter()
+                .filter(|r| r.run == run)
+                .filter_map(|r| r.greedy)
+                .collect();
+            let last = &g[g.len().saturating_sub(LAST_EVALUATIONS)..];
+            if last.is_empty() {
+                return Err(anyhow::anyhow!(
+                    "run {run} has no greedy evaluation (more trials than run.eval_every needed)"
+                ));
+            }
+            Ok(last.iter().sum::<f64>() / last.len() as f64)
+        })
+        .collect()
+}
+
 /// Learning and greedy curves from the records of `runs` runs of `trials` trials.
 pub fn curves(
     records: &[TrialRecord],

@@ -3,6 +3,7 @@
 //! reports — learning-curve statistics and plots
 //! ([`report`]).
 
+pub mod delay_study;
 pub mod driver;
 pub mod experiment;
 pub mod latency;

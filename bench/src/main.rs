@@ -4,7 +4,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use agent::config::{
-    Algo, ApproxKind, Choice, HorizonKind, ObserverKind, Overrides, SensorKind, resolve,
+    Algo, ApproxKind, Choice, HorizonKind, ObserverKind, ObserverMode, ObserverModel, Overrides,
+    SensorKind, resolve,
 };
 use clap::{Args, Parser, Subcommand};
 use plant::{SystemName, Task};
@@ -52,6 +53,14 @@ enum Command {
     /// a raw iceoryx2 ping-pong measured in the same run. Writes DIR/latency.csv (one row
     /// per cycle), DIR/summary.txt, a histogram (DIR/latency.png, .svg) and DIR/run/.
     Latency(LatencyArgs),
+    /// How a sample-to-actuation delay hurts learning and how much predictive timing
+    /// recovers: VGBP-LSTD and MLAC/LLR on the pendulum with angle-only sensing and the
+    /// predictive estimator, direct vs predictive timing (`--observer-mode`), injected
+    /// delays 0, 5, 10, 20 ms. Writes DIR/cells.csv (final greedy return per cell: mean,
+    /// sd, 95 % CI), DIR/final_return.png/.svg, DIR/curves-*.png/.svg, DIR/summary.txt
+    /// (the table and the acceptance checks at 10 ms, one-sided Welch t-test) and each
+    /// cell's `rig learn` output.
+    DelayStudy(DelayStudyArgs),
     /// The echo side of `rig bench-loop`'s raw ping-pong.
     #[command(hide = true)]
     Pong {
@@ -93,6 +102,32 @@ struct ReproduceArgs {
 }
 
 #[derive(Args)]
+struct DelayStudyArgs {
+    /// Runs per cell.
+    #[arg(long, default_value_t = 10)]
+    runs: u32,
+    /// Trials per run [default: the presets'; VGBP-LSTD 200, MLAC/LLR 400].
+    #[arg(long)]
+    trials: Option<u32>,
+    /// Injected delays [ms], each in [0, Ts = 30) (comma-separated).
+    #[arg(long, value_name = "MS", value_delimiter = ',', default_values_t = rig::delay_study::DELAYS_MS)]
+    delays: Vec<f64>,
+    /// The predictive estimator's process model: learned (LLR, online) or known (the
+    /// plant's dynamics — the reference for a perfect prediction) (`observer.model`).
+    #[arg(long, default_value = "learned", value_parser = ObserverModel::parse)]
+    observer_model: ObserverModel,
+    /// Worker threads [default: one per core].
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "out/delay-study")]
+    out: PathBuf,
+    /// No per-cell lines and no summary.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(Args)]
 struct BenchLoopArgs {
     /// Samples to time in each measurement (after 1000 / one trial of warm-up).
     #[arg(long, default_value_t = 20_000)]
@@ -114,6 +149,11 @@ struct LatencyArgs {
     /// State observer on the angle encoder: finite-difference or predictive.
     #[arg(long, default_value = "predictive", value_parser = ObserverKind::parse)]
     observer: ObserverKind,
+    /// Timing: predictive (the plant applies the action answering sample k at the next
+    /// sample instant t_{k+1}; a deadline miss when it has not arrived by then; needs
+    /// `--observer predictive`) or direct (applied when it arrives, within the interval).
+    #[arg(long, default_value = "predictive", value_parser = ObserverMode::parse)]
+    observer_mode: ObserverMode,
     /// Raw ping-pong round trips for the baseline.
     #[arg(long, default_value_t = 20_000)]
     raw_samples: usize,
@@ -217,6 +257,9 @@ fn experiment_flags(s: &Selection) -> Vec<&'static str> {
         ("--sensor", s.sensor.is_some()),
         ("--observer", s.observer.is_some()),
         ("--delay-ms", s.delay_ms.is_some()),
+        ("--delay-from", s.delay_from.is_some()),
+        ("--delay-column", s.delay_column.is_some()),
+        ("--observer-mode", s.observer_mode.is_some()),
         ("--config", s.config.is_some()),
     ]
     .into_iter()
@@ -366,8 +409,27 @@ struct Selection {
     /// Sample-to-actuation delay [ms], in [0, Ts): over each sample period the previous
     /// action stays in effect this long, then the new one — deterministic, for delay
     /// studies (`run.delay_ms`; lockstep only) [default: 0].
-    #[arg(long, value_name = "MS")]
+    #[arg(long, value_name = "MS", conflicts_with = "delay_from")]
     delay_ms: Option<f64>,
+    /// A recorded distribution of sample-to-actuation delays: a CSV file (header row, one
+    /// delay per row) — e.g. `rig latency`'s latency.csv or a real driver's recording.
+    /// Each sample's delay is drawn from it with the run seed (its own stream) and applied
+    /// as `--delay-ms` is; every value must be in [0, Ts) (`run.delay_from`; lockstep
+    /// only; exclusive with `--delay-ms`).
+    #[arg(long, value_name = "FILE")]
+    delay_from: Option<PathBuf>,
+    /// The column of `--delay-from` holding the delays; the unit is the name's suffix
+    /// (_s, _ms, _us, _ns; latency.csv's sample_to_actuation is ns) (`run.delay_column`)
+    /// [default: delay_ms, else sample_to_actuation].
+    #[arg(long, value_name = "NAME", requires = "delay_from")]
+    delay_column: Option<String>,
+    /// Timing: direct (the agent acts on x̂_k; its action takes effect within the interval,
+    /// after the delay) or predictive (the agent acts on the observer's prediction
+    /// x̂_{k+1|k}; its action is applied at the next sample instant, so a delay below Ts
+    /// does not reach the plant; needs `--observer predictive`) (`observer.mode`)
+    /// [default: direct].
+    #[arg(long, value_parser = ObserverMode::parse)]
+    observer_mode: Option<ObserverMode>,
     /// TOML file overriding preset values; see `rig config` for every key.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
@@ -407,6 +469,15 @@ fn resolve_selection(s: &Selection) -> Result<agent::config::ExperimentConfig, S
         sensor: s.sensor,
         observer: s.observer,
         delay_ms: s.delay_ms,
+        // An absolute path, so that the processes of `rig run` and the recorded
+        // configuration find the file wherever they run.
+        delay_from: s
+            .delay_from
+            .as_ref()
+            .map(|p| std::path::absolute(p).unwrap_or_else(|_| p.clone()))
+            .map(|p| p.display().to_string()),
+        delay_column: s.delay_column.clone(),
+        observer_mode: s.observer_mode,
     };
     resolve(s.config.as_deref().zip(text.as_deref()), &o).map_err(|e| match &e.file {
         Some(_) => e.to_string(),
@@ -431,12 +502,39 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+        Command::DelayStudy(args) => {
+            let opts = rig::delay_study::DelayStudyOptions {
+                runs: args.runs,
+                trials: args.trials,
+                delays_ms: args.delays.clone(),
+                model: args.observer_model,
+                out: args.out.clone(),
+                threads: args.threads,
+                verbose: !args.quiet,
+            };
+            match rig::delay_study::delay_study(&opts) {
+                Ok(_) => {
+                    if !args.quiet {
+                        println!(
+                            "wrote {}/{{cells.csv, summary.txt, final_return.png, final_return.svg, curves-*.png, curves-*.svg, */}}",
+                            args.out.display()
+                        );
+                    }
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
         Command::Latency(args) => {
             let opts = rig::latency::LatencyOptions {
                 cycles: args.cycles,
                 period_ms: args.period_ms,
                 out: args.out.clone(),
                 observer: args.observer,
+                mode: args.observer_mode,
                 raw_samples: args.raw_samples,
                 spin_us: args.spin_us,
                 rt_priority: args.rt_priority,
@@ -515,9 +613,10 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
             let realtime = (args.timing == "realtime").then_some(args.speed);
-            if cfg.run.delay_ms != 0.0 && (realtime.is_some() || args.plant == "external") {
+            let delayed = cfg.run.delay_ms != 0.0 || !cfg.run.delay_from.is_empty();
+            if delayed && (realtime.is_some() || args.plant == "external") {
                 eprintln!(
-                    "error: `--delay-ms` (run.delay_ms) applies in lockstep with the simulated plant only: in real time the delays are real"
+                    "error: `--delay-ms`/`--delay-from` (run.delay_ms, run.delay_from) apply in lockstep with the simulated plant only: in real time the delays are real"
                 );
                 return ExitCode::from(2);
             }

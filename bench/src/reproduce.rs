@@ -741,13 +741,9 @@ fn measure(label: &str, cfg: &ExperimentConfig, summary: &LearnSummary) -> Resul
     );
     let task = plant::Task::new(cfg.system);
     let mut ended_early = 0;
-    let mut per_run: BTreeMap<u32, Vec<f64>> = BTreeMap::new();
     let mut by_trial: BTreeMap<u32, (f64, f64, usize)> = BTreeMap::new();
     let mut skipped = (u32::MAX, 0);
     for r in records {
-        if let Some(g) = r.greedy {
-            per_run.entry(r.run).or_default().push(g);
-        }
         // Samples not run grow in a trial that left the operating range (§6.4.2).
         let now = task.skipped_samples(r.trial.into(), r.sim_time_s);
         if now > if skipped.0 == r.run { skipped.1 } else { 0 } {
@@ -759,17 +755,8 @@ fn measure(label: &str, cfg: &ExperimentConfig, summary: &LearnSummary) -> Resul
         e.1 += r.sim_time_s;
         e.2 += 1;
     }
-    let finals: Vec<f64> = per_run
-        .values()
-        .filter(|g| !g.is_empty())
-        .map(|g| {
-            let last = &g[g.len().saturating_sub(3)..];
-            last.iter().sum::<f64>() / last.len() as f64
-        })
-        .collect();
-    if finals.is_empty() {
-        bail!("{label}: no greedy evaluations");
-    }
+    let finals =
+        crate::learn::final_greedy(records, runs as u32).with_context(|| label.to_string())?;
     let n = finals.len() as f64;
     let final_greedy = finals.iter().sum::<f64>() / n;
     let final_greedy_sd = if finals.len() > 1 {

@@ -327,6 +327,8 @@ pub fn prepare(out: &Path, cfg: &ExperimentConfig) -> Result<ResumePoint> {
             cfg.observer.observer
         );
     }
+    crate::experiment::resumable_delays(cfg)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", out.join("config.toml").display()))?;
     let mut notes = Vec::new();
     let rows = read_returns(&out.join("returns.csv"))?;
     let done = rows.len() as u32;

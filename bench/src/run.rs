@@ -253,10 +253,13 @@ impl Recording {
                 Field::array("u_applied", m, FieldKind::Number),
             ]
         };
+        let mut measured = state("y");
+        measured.push(Field::array("u_next", m, FieldKind::Number));
+        measured.push(vec![Field::number("delay_s")]);
         let measurement = rec.channel(
             "/plant/measurement",
             "rig.Measurement",
-            &header_fields(state("y")),
+            &header_fields(measured),
         )?;
         let estimate = rec.channel(
             "/observer/estimate",
@@ -344,6 +347,8 @@ impl Recording {
         self.nums(&[msg.reward]);
         self.nums(&msg.y[..self.n]);
         self.nums(&msg.u_applied[..self.m]);
+        self.nums(&msg.u_next[..self.m]);
+        self.nums(&[msg.delay_s]);
         self.write(
             self.measurement,
             t,

@@ -93,6 +93,108 @@ fn a_delay_is_the_same_in_both_drivers_and_changes_the_run() {
 }
 
 #[test]
+fn predictive_timing_and_recorded_delays_over_the_wire_reproduce_rig_learn() {
+    // Predictive timing (`observer.mode`): the agent acts on the observer's prediction and
+    // its action is applied at the next sample instant; `rig run` gives the numbers of
+    // `rig learn`, byte for byte — with the learned and the known model, with a recorded
+    // delay distribution, and in direct timing with that distribution.
+    let dir = tmp("timing");
+    let delays = dir.join("delays.csv");
+    std::fs::write(&delays, "seq,delay_ms\n0,2.5\n1,\n2,11\n3,19.5\n").unwrap();
+    let delays = delays.to_str().unwrap();
+    let known = dir.join("known.toml");
+    std::fs::write(&known, "[observer]\nmodel = \"known\"\n").unwrap();
+    let known = known.to_str().unwrap();
+    let base = [
+        "--sensor",
+        "angle",
+        "--observer",
+        "predictive",
+        "--seed",
+        "3",
+        "--trials",
+        "8",
+        "--eval-every",
+        "4",
+    ];
+    fn join<'b>(base: &[&'b str], extra: &[&'b str]) -> Vec<&'b str> {
+        let mut a = base.to_vec();
+        a.extend_from_slice(extra);
+        a.extend(["--quiet", "--out"]);
+        a
+    }
+    let with = |extra: &[&str]| -> Vec<String> {
+        join(&base, extra).into_iter().map(String::from).collect()
+    };
+    let learn_and_run = |tag: &str, args: Vec<String>| {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        learn_and_run(&dir, tag, &args)
+    };
+    let p = &["--observer-mode", "predictive"][..];
+    let pred = learn_and_run("-pred", with(p));
+    let mut p10 = p.to_vec();
+    p10.extend(["--delay-ms", "10"]);
+    // A delay below Ts does not reach the plant in predictive timing.
+    assert_eq!(learn_and_run("-pred-10ms", with(&p10)), pred);
+    let mut pk = p.to_vec();
+    pk.extend(["--config", known]);
+    assert_ne!(learn_and_run("-pred-known", with(&pk)), pred);
+    let direct = learn_and_run("-direct", with(&[]));
+    assert_ne!(direct, pred);
+    let recorded = learn_and_run("-from", with(&["--delay-from", delays]));
+    assert_ne!(recorded, direct);
+    let mut pf = p.to_vec();
+    pf.extend(["--delay-from", delays]);
+    assert_eq!(learn_and_run("-pred-from", with(&pf)), pred);
+    // The recording says what was applied when: the delay of every interval (one of the
+    // recorded values) and, in predictive timing, the action applied from each sample on.
+    let msgs = messages(&dir.join("run-from/run.mcap"));
+    let values =
+        |topic: &str, key: &str| -> Vec<f64> { field(&msgs, topic, key).into_values().collect() };
+    let drawn = values("/plant/measurement", "delay_s");
+    assert!(
+        drawn
+            .iter()
+            .all(|d| [0.0, 0.0025, 0.011, 0.0195].contains(d))
+    );
+    assert!(drawn.iter().filter(|d| **d > 0.0).count() > drawn.len() / 2);
+    let msgs = messages(&dir.join("run-pred/run.mcap"));
+    let values = |key: &str| -> Vec<f64> {
+        field(&msgs, "/plant/measurement", key)
+            .into_values()
+            .collect()
+    };
+    let (next, applied, steps) = (values("u_next_0"), values("u_applied_0"), values("step"));
+    assert!(next.iter().any(|u| *u != 0.0));
+    // The action held at sample k is the one applied over the interval after it (within
+    // a trial, where the bounds do not clip it).
+    for k in 0..next.len() - 1 {
+        if steps[k + 1] == steps[k] + 1.0 && next[k].abs() < 3.0 {
+            assert_eq!(next[k], applied[k + 1], "sample {k}");
+        }
+    }
+    // Exclusive flags and a bad file: one-line errors naming the key.
+    for (extra, says) in [
+        (
+            &["--delay-from", delays, "--delay-ms", "3"][..],
+            "--delay-ms",
+        ),
+        (&["--observer-mode", "predictive"][..], "observer.mode"),
+        (&["--delay-from", "/nonexistent.csv"][..], "run.delay_from"),
+    ] {
+        let out = rig()
+            .args(["run", "--quiet", "--out"])
+            .arg(dir.join("bad"))
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{err}");
+    }
+}
+
+#[test]
 fn a_second_run_records_the_same_messages_except_timing() {
     let dir = tmp("rerun");
     let args = ["--trials", "6", "--eval-every", "3", "--quiet", "--out"];
@@ -735,6 +837,23 @@ fn latency_times_every_stage_of_every_cycle() {
         .unwrap());
     let summary = String::from_utf8_lossy(&out.stdout);
     assert!(summary.contains("plant spins 500 µs"), "{summary}");
+    // Predictive timing (the default): the action the plant announces at a sample
+    // instant is the one it applies over the interval after it.
+    let msgs = messages(&dir.join("run/run.mcap"));
+    let values = |key: &str| -> Vec<f64> {
+        field(&msgs, "/plant/measurement", key)
+            .into_values()
+            .collect()
+    };
+    let (next, applied, steps) = (values("u_next_0"), values("u_applied_0"), values("step"));
+    let mut pipelined = 0;
+    for k in 0..next.len() - 1 {
+        if steps[k + 1] == steps[k] + 1.0 {
+            assert_eq!(next[k].clamp(-3.0, 3.0), applied[k + 1], "sample {k}");
+            pipelined += 1;
+        }
+    }
+    assert!(pipelined >= 200, "{pipelined}");
     for stage in [
         "plant_to_observer",
         "observer_to_agent",

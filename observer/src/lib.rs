@@ -8,11 +8,14 @@
 //! * [`Predictive`] — angle-only measurement with a model-predicted state: the process
 //!   model (learned online by LLR from the observer's own estimates, or the plant's known
 //!   dynamics) predicts `x̂_{k+1|k}`, and the measured angle corrects it.
+//! * [`timing`] — what the agent acts on and learns from, in direct or predictive timing
+//!   (shared by `rig learn` and the observer process of `rig run`).
 //! * [`build`] — the observer an [`agent::config::ObserverConfig`] asks for.
 //!
 //! Observers are plain step functions; they know nothing about processes or transport.
 
 pub mod predictive;
+pub mod timing;
 
 pub use predictive::{Predictive, PredictiveModel};
 
@@ -29,6 +32,12 @@ pub trait Observer: Send {
     /// Updates with the measurement `y_k` (and the action applied over the last
     /// interval) and returns `x̂_k`.
     fn update(&mut self, y: &[f64], u_applied: &[f64]) -> &[f64];
+    /// The one-step prediction `x̂_{k+1|k} = f̂(x̂_k, u_k)` from the current estimate and
+    /// the action `u_k` applied over the coming interval, if this observer has a process
+    /// model (predictive timing, [`timing`]); it does not change the estimate.
+    fn predict_next(&mut self, _u: &[f64]) -> Option<&[f64]> {
+        None
+    }
 }
 
 /// Full-state measurement: `x̂_k = y_k`.

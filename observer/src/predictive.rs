@@ -267,6 +267,17 @@ impl Observer for Predictive {
         self.x.copy_from_slice(&next[..n]);
         &self.x
     }
+
+    /// `x̂_{k+1|k}` exactly as the next [`Observer::update`] predicts it (the same model,
+    /// the action made safe the same way).
+    fn predict_next(&mut self, u: &[f64]) -> Option<&[f64]> {
+        let mut safe = [0.0; plant::MAX_ACTION];
+        for (s, &a) in safe.iter_mut().zip(u) {
+            *s = if a.is_finite() { a } else { 0.0 };
+        }
+        self.predict(&safe[..u.len()]);
+        Some(&self.predicted)
+    }
 }
 
 #[cfg(test)]

@@ -8,6 +8,8 @@
 //! * [`sensor::Sensor`] — what is measured: the full state or encoder angles.
 //! * [`task::Task`] — everything an experiment needs to know about a system: dynamics,
 //!   sampling time, action bounds, reward, start states, trial length.
+//! * [`delay`] — sample-to-actuation delays (fixed or recorded) and when an action takes
+//!   effect (direct or one-sample pipeline).
 //! * [`Plant`] — the step function: saturate the action, integrate one sample period,
 //!   wrap the angles.
 //! * [`safety`] — the plant side's safety pieces (saturation, operating range, the
@@ -17,6 +19,7 @@
 //! whatever the caller sends; non-finite actions replaced by the safe action (zero).
 
 pub mod angle;
+pub mod delay;
 pub mod double_integrator;
 pub mod pendulum;
 pub mod reward;

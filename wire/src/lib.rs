@@ -45,6 +45,12 @@ pub mod flags {
     /// With [`END`]: the trial ended early because the state left the operating range
     /// (§6.4.2); the state is terminal, its value zero.
     pub const TERMINAL: u64 = 16;
+    /// Observer → agent, predictive timing: the agent's last transition of the trial;
+    /// learn it, no action follows.
+    pub const LAST: u64 = 32;
+    /// Observer → agent, predictive timing: nothing to learn or act on (the agent's
+    /// trial is already closed); acknowledge.
+    pub const HOLD: u64 = 64;
 }
 
 /// Header fields shared by all messages.
@@ -68,7 +74,7 @@ pub struct Header {
 /// Plant → observer: what the sensor measured at sample `step`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("rig.Measurement.v2")]
+#[type_name("rig.Measurement.v3")]
 pub struct Measurement {
     /// Sample identification.
     pub header: Header,
@@ -86,6 +92,16 @@ pub struct Measurement {
     pub y: [f64; MAX_X],
     /// The action the plant applied over the interval before this sample.
     pub u_applied: [f64; MAX_U],
+    /// The action the plant applies from this sample on, as the agent sent it: in
+    /// predictive timing (`observer.mode`) the one that arrived for it a sample ahead (zero
+    /// at a trial start); NaN in direct timing, where it is not known at the sample
+    /// instant (the recording writes `null`).
+    pub u_next: [f64; MAX_U],
+    /// The sample-to-actuation delay drawn for the interval before this sample \[s\]
+    /// (`run.delay_ms` / `run.delay_from`, lockstep; in predictive timing the action
+    /// arrived this long after its sample and was held until this one). 0 at a trial
+    /// start and in real time.
+    pub delay_s: f64,
     /// Monotonic time at which the plant sampled \[ns\].
     pub t_sample_ns: u64,
     /// Monotonic time at which the plant published \[ns\].
@@ -95,7 +111,9 @@ pub struct Measurement {
     pub deadline_misses: u64,
 }
 
-/// Observer → agent: the state estimate `x̂_k`.
+/// Observer → agent: the state the agent acts on — the estimate `x̂_k` in direct timing,
+/// the prediction `x̂_{k+1|k}` in predictive timing — and the agent call it makes
+/// (`observer::timing`; the flags [`flags::LAST`] and [`flags::HOLD`]).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
 #[type_name("rig.Estimate.v1")]
@@ -106,11 +124,13 @@ pub struct Estimate {
     pub n_x: u64,
     /// Used components of `u_applied`.
     pub n_u: u64,
-    /// Copied from the measurement.
+    /// The reward the agent learns: the measurement's in direct timing; in predictive
+    /// timing `ρ(x̂_k, u_k)` from the estimate (the range penalty on a terminal sample).
     pub reward: f64,
-    /// The estimate `x̂_k`.
+    /// What the agent acts on: `x̂_k` (direct) or `x̂_{k+1|k}` (predictive).
     pub x: [f64; MAX_X],
-    /// Copied from the measurement.
+    /// The action in effect over the interval `x` starts (direct: the measurement's
+    /// `u_applied`; predictive: its `u_next`, made safe as the plant makes it).
     pub u_applied: [f64; MAX_U],
     /// The plant's sample time \[ns\].
     pub t_sample_ns: u64,
@@ -594,9 +614,10 @@ mod tests {
     fn layouts_are_fixed() {
         // Changing a layout must change the type name's version: these sizes pin them.
         assert_eq!(std::mem::size_of::<Header>(), 40);
+        // v3: + u_next, delay_s.
         assert_eq!(
             std::mem::size_of::<Measurement>(),
-            40 + 3 * 8 + 8 * 8 + 4 * 8 + 24
+            40 + 3 * 8 + 8 * 8 + 2 * 4 * 8 + 8 + 24
         );
         assert_eq!(
             std::mem::size_of::<Estimate>(),

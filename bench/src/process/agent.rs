@@ -1,6 +1,8 @@
 //! The agent process: state estimates in, actions out; learns as it goes.
 
 use ::agent::checkpoint::{Checkpoint, Origin, Snapshot};
+use ::agent::config::ObserverMode;
+use ::observer::timing::{Call, ToAgent, act};
 use ::plant::Task;
 use anyhow::{Result, anyhow, bail};
 use wire::{Action, Bus, Estimate, flags, now_ns, topic};
@@ -38,6 +40,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
     out.wait_for_receivers(args.receivers, STARTUP, &bus)
         .map_err(wire_err)?;
     let m = task.action_dim();
+    let predictive = cfg.observer.mode == ObserverMode::Predictive;
     loop {
         let e = estimates
             .recv(&bus, STARTUP.max(SILENCE))
@@ -47,11 +50,9 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         let x = &e.x[..e.n_x as usize];
         let mut u = vec![0.0; m];
         if f & flags::SHUTDOWN == 0 && !args.trivial {
-            if f & flags::GREEDY != 0 {
-                if f & flags::END == 0 {
-                    agent.greedy(e.header.step as usize, x, &e.u_applied[..m], &mut u);
-                }
-            } else if f & flags::START != 0 {
+            let call = super::observer::call_of(f);
+            let greedy = f & flags::GREEDY != 0;
+            if !greedy && call == Call::Start {
                 if e.header.trial != expect_trial {
                     bail!(
                         "the plant started trial {} where trial {expect_trial} was due (a resumed agent continues after its checkpoint's trial)",
@@ -59,13 +60,17 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                     );
                 }
                 expect_trial += 1;
-                agent.start_trial(x, &mut u);
-            } else if f & flags::END != 0 {
-                if f & flags::TERMINAL != 0 {
-                    agent.learn_terminal(e.reward, x);
-                } else {
-                    agent.learn(e.reward, x, None);
-                }
+            }
+            let t = ToAgent {
+                call,
+                reward: e.reward,
+                x,
+                u_prev: &e.u_applied[..m],
+                // The sample the action applies at: the next in predictive timing.
+                step: e.header.step as usize + usize::from(predictive),
+            };
+            act(agent.as_mut(), greedy, &t, &mut u);
+            if !greedy && f & flags::END != 0 {
                 // The trial's learning is complete: checkpoint it before acknowledging.
                 if let Some(w) = &mut checkpoints {
                     let mut state = Snapshot::default();
@@ -77,8 +82,6 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                         state,
                     })?;
                 }
-            } else {
-                agent.learn(e.reward, x, Some(&mut u));
             }
         }
         let a = Action {

@@ -6,20 +6,46 @@
 
 use std::sync::Arc;
 
-use ::observer::Observer;
+use ::observer::timing::{Call, Sample};
 use ::plant::Task;
 use anyhow::Result;
 use wire::{Bus, Estimate, Measurement, flags, now_ns, topic};
 
 use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
 
+/// The [`flags`] an estimate carries for agent call `call`: the measurement's, plus
+/// [`flags::LAST`] / [`flags::HOLD`] where predictive timing makes the agent's trial end
+/// before the plant's.
+pub fn call_flags(measured: u64, call: Call) -> u64 {
+    measured
+        | match call {
+            Call::Last if measured & flags::END == 0 => flags::LAST,
+            Call::Hold => flags::HOLD,
+            _ => 0,
+        }
+}
+
+/// The agent call an estimate's [`flags`] ask for (the inverse of [`call_flags`]).
+pub fn call_of(f: u64) -> Call {
+    if f & flags::START != 0 {
+        Call::Start
+    } else if f & flags::HOLD != 0 {
+        Call::Hold
+    } else if f & flags::TERMINAL != 0 {
+        Call::Terminal
+    } else if f & (flags::END | flags::LAST) != 0 {
+        Call::Last
+    } else {
+        Call::Learn
+    }
+}
+
 /// Runs the observer side of a run until the plant announces its end.
 pub fn run(args: &ProcessArgs) -> Result<()> {
     super::set_rt_priority(args.rt_priority)?;
     let cfg = args.config()?;
     let task = Arc::new(Task::new(cfg.system));
-    let mut observer: Box<dyn Observer> =
-        ::observer::build(task, &cfg.observer, cfg.model.as_ref());
+    let mut front = crate::experiment::front(&task, &cfg);
     let bus = Bus::join(&args.run_id, "observer").map_err(wire_err)?;
     let measurements = bus
         .rx::<Measurement>(topic::MEASUREMENT)
@@ -33,27 +59,36 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
             .map_err(wire_err)?;
         let t_received_ns = now_ns();
         let (n, nu) = (m.n_x as usize, m.n_u as usize);
-        let x: Vec<f64> = if m.header.flags & flags::SHUTDOWN != 0 {
-            Vec::new()
-        } else if m.header.flags & flags::START != 0 {
-            observer.reset(&m.y[..n]);
-            m.y[..n].to_vec()
-        } else {
-            observer.update(&m.y[..n], &m.u_applied[..nu]).to_vec()
-        };
-        let e = Estimate {
+        let f = m.header.flags;
+        let mut e = Estimate {
             header: m.header,
             n_x: m.n_x,
             n_u: m.n_u,
             reward: m.reward,
-            x: pack(&x),
             u_applied: m.u_applied,
             t_sample_ns: m.t_sample_ns,
             t_received_ns,
-            t_publish_ns: now_ns(),
+            ..Estimate::default()
         };
+        if f & flags::SHUTDOWN == 0 {
+            let t = front.sample(&Sample {
+                step: m.header.step as usize,
+                start: f & flags::START != 0,
+                end: f & flags::END != 0,
+                terminal: f & flags::TERMINAL != 0,
+                y: &m.y[..n],
+                reward: m.reward,
+                u_applied: &m.u_applied[..nu],
+                u_next: &m.u_next[..nu],
+            });
+            e.header.flags = call_flags(f, t.call);
+            e.reward = t.reward;
+            e.x = pack(t.x);
+            e.u_applied = pack(t.u_prev);
+        }
+        e.t_publish_ns = now_ns();
         out.send(e).map_err(wire_err)?;
-        if m.header.flags & flags::SHUTDOWN != 0 {
+        if f & flags::SHUTDOWN != 0 {
             return Ok(());
         }
     }

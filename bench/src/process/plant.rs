@@ -2,6 +2,7 @@
 
 use std::sync::Arc;
 
+use ::plant::delay::Actuator;
 use ::plant::safety::SafetyCounts;
 use ::plant::sensor::Sensor;
 use ::plant::{Plant, Task};
@@ -45,6 +46,8 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         out,
         actions,
         seq: args.first_seq,
+        u_next: vec![f64::NAN; task.action_dim()],
+        delay_s: 0.0,
         latencies: Vec::new(),
         cycles: Vec::new(),
         misses: 0,
@@ -55,8 +58,12 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
             link.out
                 .wait_for_receivers(args.receivers, STARTUP, &link.bus)
                 .map_err(wire_err)?;
-            if args.timing == "realtime" && cfg.run.delay_ms != 0.0 {
-                bail!("`run.delay_ms` applies in lockstep only: in real time the delays are real");
+            if args.timing == "realtime"
+                && (cfg.run.delay_ms != 0.0 || !cfg.run.delay_from.is_empty())
+            {
+                bail!(
+                    "`run.delay_ms`/`run.delay_from` apply in lockstep only: in real time the delays are real"
+                );
             }
             let realtime = (args.timing == "realtime").then(|| {
                 let period_ns = (task.ts * 1e9 / args.speed).round() as u64;
@@ -68,11 +75,12 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                 }
             });
             Box::new(PlantLoop {
+                pipelined: cfg.observer.mode == ::agent::config::ObserverMode::Predictive,
                 plant: Plant::new(task.clone()),
                 link,
                 realtime,
                 record_cycles: args.cycles_out.is_some(),
-                delay: cfg.run.delay_ms * 1e-3,
+                actuator: crate::experiment::actuator(&task, &cfg, run_seed),
             })
         }
     };
@@ -155,6 +163,10 @@ pub(super) struct Link {
     pub(super) actions: wire::Rx<Action>,
     /// The next sample's sequence number.
     pub(super) seq: u64,
+    /// What the next measurement reports as [`Measurement::u_next`] (NaN: not known).
+    u_next: Vec<f64>,
+    /// What the next measurement reports as [`Measurement::delay_s`].
+    delay_s: f64,
     /// Publish-to-action time of every sample \[ns\].
     pub(super) latencies: Vec<u64>,
     /// Realtime: per sample `[seq, t_sample_ns, t_woke_ns, t_action_ns]` (see
@@ -200,6 +212,8 @@ impl Link {
             reward,
             y: pack(&self.y),
             u_applied: pack(u_applied),
+            u_next: pack(&self.u_next),
+            delay_s: self.delay_s,
             t_sample_ns,
             t_publish_ns: now_ns(),
             deadline_misses: self.misses,
@@ -235,8 +249,11 @@ struct PlantLoop {
     realtime: Option<Clock>,
     /// Realtime: keep every sample's timing ([`Link::cycles`]).
     record_cycles: bool,
-    /// Lockstep: the sample-to-actuation delay \[s\] (`run.delay_ms`).
-    delay: f64,
+    /// Lockstep: when actions take effect (timing, delays).
+    actuator: Actuator,
+    /// Predictive timing (`observer.mode`): in real time, the action that answers sample
+    /// `k` is applied at `t_{k+1}` for the whole interval.
+    pipelined: bool,
 }
 
 /// Headers of one trial's samples.
@@ -294,6 +311,15 @@ impl PlantLoop {
     /// Publishes the current sample and waits for the action that answers it.
     fn exchange(&mut self, header: Header, reward: f64) -> Result<Vec<f64>> {
         let l = &mut self.link;
+        match self.actuator.next_action() {
+            Some(u) => l.u_next.copy_from_slice(u),
+            None => l.u_next.fill(f64::NAN),
+        }
+        l.delay_s = if header.flags & flags::START != 0 {
+            0.0
+        } else {
+            self.actuator.last_delay()
+        };
         let t_publish_ns = l.publish(
             header,
             reward,
@@ -330,10 +356,12 @@ impl PlantLoop {
         )
     }
 
-    /// One trial in real time: the plant samples at absolute deadlines; every action that
-    /// arrives within an interval is applied from its arrival on (the previous one held
-    /// until then); an interval in which the action for its sample did not arrive is a
-    /// missed deadline. The reward of an interval is `ρ(x_k, u)` with the action in effect
+    /// One trial in real time: the plant samples at absolute deadlines; in direct timing
+    /// every action that arrives within an interval is applied from its arrival on (the
+    /// previous one held until then); in predictive timing the last action that arrived
+    /// within an interval is applied at the next sample instant, for the whole next
+    /// interval (none arrived: the previous one is held). An interval in which the action
+    /// for its sample did not arrive is a missed deadline. The reward of an interval is `ρ(x_k, u)` with the action in effect
     /// at its end. An interval without any action trips the plant's watchdog
     /// ([`plant::safety::Supervisor::period`]): zero from its
     /// end on, until an action arrives.
@@ -345,6 +373,11 @@ impl PlantLoop {
         };
         self.plant.reset(x0);
         let mut u_hold = vec![0.0; self.link.task.action_dim()];
+        // Predictive timing: the action applied from the coming sample instant on.
+        let mut pending: Option<Vec<f64>> = None;
+        if self.pipelined {
+            self.link.u_next.clone_from(&u_hold);
+        }
         let header = TrialHeader {
             trial,
             mode,
@@ -402,15 +435,28 @@ impl PlantLoop {
             let sim = |dt_ns: u64| dt_ns as f64 * 1e-9 * speed;
             let mut t = t_k;
             let x_k_reward_state = self.plant.state().to_vec();
-            for (t_a, u) in &arrivals {
-                self.plant.advance(&u_hold, sim(t_a - t));
-                u_hold.clone_from(u);
-                t = *t_a;
+            if self.pipelined {
+                if let Some(u) = pending.take() {
+                    u_hold = u;
+                }
+                pending = arrivals.last().map(|(_, u)| u.clone());
+            } else {
+                for (t_a, u) in &arrivals {
+                    self.plant.advance(&u_hold, sim(t_a - t));
+                    u_hold.clone_from(u);
+                    t = *t_a;
+                }
             }
             self.plant.advance(&u_hold, sim(deadline - t));
             if self.plant.safety().period(!arrivals.is_empty()) {
                 // No action for a whole period: the safe action from this instant on.
                 u_hold.fill(0.0);
+                pending = None;
+            }
+            if self.pipelined {
+                self.link
+                    .u_next
+                    .clone_from(pending.as_ref().unwrap_or(&u_hold));
             }
             let r = self.plant.reward_of_transition(
                 self.link
@@ -439,6 +485,7 @@ impl Trials for PlantLoop {
         let task = self.link.task.clone();
         let steps = task.steps_per_trial();
         self.plant.reset(x0);
+        self.actuator.reset();
         let header = TrialHeader {
             trial,
             mode,
@@ -447,7 +494,7 @@ impl Trials for PlantLoop {
         };
         let mut u = self.exchange(header.at(self.link.seq, 0, flags::START), 0.0)?;
         for k in 0..steps {
-            let r = self.plant.step_delayed(&u, self.delay);
+            let r = self.actuator.interval(&mut self.plant, &u);
             let end = self.end_flags(k + 1 == steps);
             u = self.exchange(header.at(self.link.seq, k + 1, end), r)?;
             if self.plant.terminated() {
