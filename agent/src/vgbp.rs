@@ -11,11 +11,15 @@
 //! ```
 //!
 //! with `β_u = ∂f̂/∂u` the input matrix of the local affine process model (Eq. 6.12),
-//! fitted around `(x, u = 0)`: Eq. 6.9 writes the state change as `∂f̂/∂u · u`, a
-//! linearisation at `u = 0`. (Linearising at the previous action instead, as RMAC's
-//! inversion does, was measured worse: `rig learn --algo vgbp --approx lstd`, 4 runs,
-//! last greedy evaluations about −1250 with spikes to −2000, against −1055 with every
-//! run within 60 of the mean.) Exploration and
+//! fitted to the model samples nearest to the state: "obtain X and Y from M^P for
+//! x_{k+1}" (line 12) comes before the action is known, so an LLR model's neighbours
+//! are chosen by the state alone ([`ProcessModel::predict_near_state`]). They were
+//! chosen nearest to `(x, u = 0)` before, and where the policy had given `u = 0` (all
+//! of the first trial, `∂V/∂x` being zero then) the neighbours all had `u = 0`: no
+//! slope along `u`, `β_u = 0`, so Eq. 6.21 gave `u = 0` again — in greedy evaluations
+//! the pendulum stayed at the bottom (return −4935) until those samples left the model's
+//! memory, 25 trials later (VGBP-LSTD, 20 runs: one run for trials 5–25, and the same
+//! trap behind many of the spikes of the plain Eq. 6.21). Exploration and
 //! saturation (Eq. 6.11, lines 15–16) are the shared loop's. The model learns every
 //! transition (line 10); the critic is any [`crate::critic::Critic`] — LSTD(λ) on RBFs,
 //! RBF with TD(λ), or LLR.
@@ -80,7 +84,11 @@ impl Vgbp {
         u: &mut [f64],
     ) {
         let (n, m) = (self.info.n(), self.info.m());
-        let p = self.model.predict(x, u_lin);
+        let p = if at_prediction {
+            self.model.predict(x, u_lin)
+        } else {
+            self.model.predict_near_state(x, u_lin)
+        };
         let at = if at_prediction { &p.x_next[..n] } else { x };
         let (mut v, mut dv) = ([0.0], [0.0; MAX_STATE]);
         critic.value_and_jacobian(at, &mut v, &mut dv[..n]);
@@ -88,6 +96,7 @@ impl Vgbp {
             let g: f64 = (0..n).map(|i| dv[i] * p.du[i * m + j]).sum();
             u[j] = 0.5 * self.gamma * g / self.info.reward.p[j];
         }
+
         self.info.saturate(u);
     }
 }
