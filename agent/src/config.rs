@@ -304,6 +304,10 @@ pub struct VgbpConfig {
     /// the action of Eq. 6.21 and the look-ahead.
     #[serde(default)]
     pub grid: u32,
+    /// Fit Eq. 6.21's process model at `(x, u = 0)` rather than at the state `x`
+    /// (Algorithm 7 line 12, the default `false`).
+    #[serde(default)]
+    pub fit_at_zero_action: bool,
 }
 
 /// SARSA's discrete actions and exploration (§6.4.1, Eq. 6.22).
