@@ -267,12 +267,16 @@ pub fn build(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Box<dyn Agen
             let (a, alpha) = actor(n, None);
             Box::new(Rmac::new(info.clone(), a, model(), alpha))
         }
-        Algo::Vgbp => Box::new(Vgbp::new(
-            info.clone(),
-            model(),
-            l.gamma,
-            cfg.vgbp.as_ref().map_or(0, |v| v.lookahead),
-        )),
+        Algo::Vgbp => Box::new(
+            Vgbp::new(
+                info.clone(),
+                model(),
+                l.gamma,
+                cfg.vgbp.as_ref().map_or(0, |v| v.lookahead),
+            )
+            .with_action_grid(cfg.vgbp.as_ref().map_or(0, |v| v.grid))
+            .with_fit_at_zero_action(cfg.vgbp.as_ref().is_some_and(|v| v.fit_at_zero_action)),
+        ),
         Algo::Sarsa => unreachable!("built above"),
     };
     Box::new(ActorCritic::new(

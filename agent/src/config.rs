@@ -327,6 +327,15 @@ pub struct VgbpConfig {
     /// Re-evaluations of the value gradient at the predicted next state (0: Eq. 6.21 as
     /// the thesis has it).
     pub lookahead: u32,
+    /// Action levels per component at which the right-hand side of Eq. 6.6 is searched
+    /// (with the model affine in `u`, Eq. 6.9, and `V` not linearised); 0: no search,
+    /// the action of Eq. 6.21 and the look-ahead.
+    #[serde(default)]
+    pub grid: u32,
+    /// Fit Eq. 6.21's process model at `(x, u = 0)` rather than at the state `x`
+    /// (Algorithm 7 line 12, the default `false`).
+    #[serde(default)]
+    pub fit_at_zero_action: bool,
 }
 
 /// SARSA's discrete actions and exploration (§6.4.1, Eq. 6.22).
@@ -777,7 +786,18 @@ impl ExperimentConfig {
                     format!("{a} is not vgbp: remove the [vgbp] section"),
                 ));
             }
-            (Some(v), _) => check_i("vgbp.lookahead", v.lookahead.into(), 0, 100)?,
+            (Some(v), _) => {
+                check_i("vgbp.lookahead", v.lookahead.into(), 0, 100)?;
+                if v.grid == 1 || v.grid > 1001 {
+                    return Err(err(
+                        "vgbp.grid",
+                        format!(
+                            "{} is out of range: must be 0 (no search) or an integer in 2..=1001",
+                            v.grid
+                        ),
+                    ));
+                }
+            }
             (None, _) => {}
         }
         if self.algo == Algo::Vgbp && task.reward.p.iter().any(|&p| p <= 0.0) {

@@ -63,12 +63,32 @@ impl ProcessModel {
     /// `f̂(x, u)` and `∂f̂/∂u`; `x` may carry time `k` after the state, and the prediction
     /// then carries `k + 1`.
     pub fn predict(&self, x: &[f64], u: &[f64]) -> Prediction {
+        self.predict_with(x, u, false)
+    }
+
+    /// As [`Self::predict`], with an LLR model's neighbours chosen by the state alone,
+    /// whatever `u`: "obtain X and Y from M^P for x_{k+1}" (Algorithm 7, line 12), before
+    /// the action is known. Queried at one action instead (say `u = 0`), the neighbours
+    /// all share that action wherever the policy has given it — as the first trial's
+    /// does everywhere, `∂V/∂x` being zero — the local fit has no slope along `u`
+    /// (`∂f̂/∂u = 0`, the smallest-norm solution of §3.5.2), and Eq. 6.21 answers `u = 0`
+    /// again: the greedy policy can stay at the start state until those samples leave
+    /// the memory.
+    pub fn predict_near_state(&self, x: &[f64], u: &[f64]) -> Prediction {
+        self.predict_with(x, u, true)
+    }
+
+    fn predict_with(&self, x: &[f64], u: &[f64], near_state: bool) -> Prediction {
         let (n, m) = (self.n(), u.len());
         let xu = self.input(x, u);
         let mut dx = [0.0; MAX_OUT];
         let mut jac = [0.0; MAX_OUT * MAX_IN];
-        self.f
-            .value_and_jacobian(&xu[..n + m], &mut dx[..n], &mut jac[..n * (n + m)]);
+        let (y, j) = (&mut dx[..n], &mut jac[..n * (n + m)]);
+        if near_state {
+            self.f.value_and_jacobian_near(&xu[..n + m], n, y, j);
+        } else {
+            self.f.value_and_jacobian(&xu[..n + m], y, j);
+        }
         let mut p = Prediction {
             x_next: [0.0; MAX_STATE],
             du: [0.0; MAX_STATE * MAX_ACTION],
@@ -124,6 +144,8 @@ impl Persist for ProcessModel {
 
 #[cfg(test)]
 mod tests {
+    use super::ProcessModel;
+    use crate::approx::llr::{Eviction, Llr, LlrParams, Search};
     use crate::testing;
 
     /// Given `(x, k)` the model predicts from the state part and advances time by one.
@@ -134,5 +156,34 @@ mod tests {
         assert_eq!((p.x_next[0], p.x_next[1], p.du[0]), (0.7, 0.0, 0.5));
         let p = model.predict(&[0.2, 3.0], &[1.0]);
         assert_eq!((p.x_next[0], p.x_next[1], p.du[0]), (0.7, 4.0, 0.5));
+    }
+
+    /// An LLR model of `x' = x + 0.5 u` whose samples near `x = 0.3` were all taken with
+    /// `u = 0` but one, taken with `u = 2` (as after a first trial in which the policy gave
+    /// `u = 0` and exploration acted once). Queried at `(x, u = 0)` its neighbours (K = 3)
+    /// are the `u = 0` samples and `∂f̂/∂u = 0`, so VGBP's Eq. 6.21 would give `u = 0`
+    /// again; with the neighbours chosen by the state (Algorithm 7 line 12)
+    /// `∂f̂/∂u = 0.5`, the true input gain.
+    #[test]
+    fn near_the_state_the_input_gain_is_found() {
+        let llr = Llr::new(&LlrParams {
+            memory: 10,
+            neighbours: 3,
+            weights: vec![1.0, 1.0],
+            periodic: vec![false, false],
+            outputs: 1,
+            bounds: None,
+            eviction: Eviction::Oldest,
+            search: Search::KdTree,
+            clip_to_neighbours: false,
+        });
+        let mut model = ProcessModel::new(Box::new(llr), vec![false], 0.0);
+        for (x, u) in [(0.31, 0.0), (0.29, 0.0), (0.3, 2.0), (0.3, 0.0)] {
+            model.learn(&[x], &[u], &[x + 0.5 * u]);
+        }
+        assert_eq!(model.predict(&[0.3], &[0.0]).du[0], 0.0);
+        let p = model.predict_near_state(&[0.3], &[0.0]);
+        assert!((p.du[0] - 0.5).abs() < 1e-6, "∂f̂/∂u = {}", p.du[0]);
+        assert!((p.x_next[0] - 0.3).abs() < 1e-6);
     }
 }

@@ -161,7 +161,9 @@ fn vgbp_with_an_exact_quadratic_critic_is_the_lqr() {
     let critic = Quadratic(s);
     let info = TaskInfo::of(&task);
     let lookahead = Vgbp::new(info.clone(), learned_model(&task), GAMMA, 20);
-    let first_order = Vgbp::new(info, learned_model(&task), GAMMA, 0);
+    let first_order = Vgbp::new(info.clone(), learned_model(&task), GAMMA, 0);
+    // The search of Eq. 6.6 (model affine in u, V itself) maximises the same quadratic.
+    let searched = Vgbp::new(info, learned_model(&task), GAMMA, 0).with_action_grid(61);
     // Eq. 6.21 with the exact B: u = γ P⁻¹ Bᵀ(−Sx)… as a gain, γ P⁻¹ BᵀS.
     let k_thesis = [
         GAMMA / p * (b[0] * s[0][0] + b[1] * s[1][0]),
@@ -182,6 +184,12 @@ fn vgbp_with_an_exact_quadratic_critic_is_the_lqr() {
         assert!(
             (u[0] - lqr).abs() <= 0.01 * lqr.abs(),
             "x = {x:?}: VGBP {} vs LQR {lqr} (K = {k:?})",
+            u[0]
+        );
+        searched.act(&x, &[0.0], &critic, &mut u);
+        assert!(
+            (u[0] - lqr).abs() <= 0.01 * lqr.abs(),
+            "x = {x:?}: VGBP with search {} vs LQR {lqr}",
             u[0]
         );
         let thesis = -(k_thesis[0] * x[0] + k_thesis[1] * x[1]);

@@ -696,6 +696,33 @@ impl Differentiable for Llr {
         y.copy_from_slice(&local.y[..self.m]);
         jac.copy_from_slice(&local.jac[..self.m * self.n]);
     }
+
+    /// The K samples nearest to `x[..lead]` (scaled distance over those inputs only,
+    /// found by a scan of the memory), and the affine fit to them over all inputs.
+    fn value_and_jacobian_near(&self, x: &[f64], lead: usize, y: &mut [f64], jac: &mut [f64]) {
+        if lead >= self.n {
+            return self.value_and_jacobian(x, y, jac);
+        }
+        let q = self.scale(x);
+        let mut all: Vec<Candidate> = (0..self.len as u32)
+            .map(|slot| Candidate {
+                d2: dist2(&self.coords(slot)[..lead], &q[..lead], &self.period[..lead]),
+                seq: self.seq[slot as usize],
+                slot,
+            })
+            .collect();
+        let k = self.k.min(all.len());
+        if k > 0 && k < all.len() {
+            all.select_nth_unstable_by(k - 1, |a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
+        }
+        let mut fit = Fit {
+            y: [0.0; MAX_OUT],
+            jac: [0.0; MAX_OUT * MAX_DIM],
+        };
+        self.fit_local(&q, &all[..k], &mut fit);
+        y.copy_from_slice(&fit.y[..self.m]);
+        jac.copy_from_slice(&fit.jac[..self.m * self.n]);
+    }
 }
 
 impl Traced for Llr {
@@ -855,6 +882,46 @@ mod tests {
             .collect();
         all.sort_by(|a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
         all.iter().take(llr.k).map(|c| c.slot).collect()
+    }
+
+    /// `y = x + 2u`, stored as a process model stores (rate 0). Three samples at `u = 0` surround the query `(0.3, 0)`, one at
+    /// `u = 2` shares its state. Nearest to `(0.3, 0)` in `(x, u)` are the three at
+    /// `u = 0`: no slope along `u`. Nearest to `x = 0.3` alone (`lead = 1`) are the
+    /// samples at `x = 0.3` (both), `0.31` and `0.29`: the exact `∂y/∂u = 2`, `∂y/∂x = 1`.
+    #[test]
+    fn near_chooses_the_neighbours_by_the_leading_inputs() {
+        let mut llr = Llr::new(&params(2, 1, 10, 4));
+        for xu in [
+            [0.3, 0.0],
+            [0.31, 0.0],
+            [0.29, 0.0],
+            [0.3, 2.0],
+            [0.5, -2.0],
+        ] {
+            llr.fit(&xu, &[xu[0] + 2.0 * xu[1]], 0.0);
+        }
+        let mut llr3 = Llr::new(&params(2, 1, 10, 3));
+        for xu in [[0.3, 0.0], [0.31, 0.0], [0.29, 0.0], [0.3, 2.0]] {
+            llr3.fit(&xu, &[xu[0] + 2.0 * xu[1]], 0.0);
+        }
+        let (mut y, mut jac) = ([0.0], [0.0; 2]);
+        llr3.value_and_jacobian(&[0.3, 0.0], &mut y, &mut jac);
+        assert_eq!(jac[1], 0.0, "all three neighbours at u = 0");
+        llr.value_and_jacobian_near(&[0.3, 0.0], 1, &mut y, &mut jac);
+        // Exact up to the ridge (relative 2·10⁻⁵ on the small spread along x).
+        assert!(
+            (jac[0] - 1.0).abs() < 1e-4 && (jac[1] - 2.0).abs() < 1e-6,
+            "{jac:?}"
+        );
+        assert!((y[0] - 0.3).abs() < 1e-6);
+        // The action of the query moves the prediction along the fit, not the neighbours.
+        llr.value_and_jacobian_near(&[0.3, 1.0], 1, &mut y, &mut jac);
+        assert!((y[0] - 2.3).abs() < 1e-6 && (jac[1] - 2.0).abs() < 1e-6);
+        // With all inputs leading it is the ordinary query.
+        let (mut y2, mut jac2) = ([0.0], [0.0; 2]);
+        llr.value_and_jacobian_near(&[0.3, 1.0], 2, &mut y, &mut jac);
+        llr.value_and_jacobian(&[0.3, 1.0], &mut y2, &mut jac2);
+        assert_eq!((y, jac), (y2, jac2));
     }
 
     #[test]

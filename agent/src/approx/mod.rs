@@ -50,6 +50,16 @@ pub trait Approximator: Send + crate::checkpoint::Persist {
 pub trait Differentiable: Approximator {
     /// Writes `f(x)` into `y` and `∂f/∂x` into `jac` (row-major, `m × n`).
     fn value_and_jacobian(&self, x: &[f64], y: &mut [f64], jac: &mut [f64]);
+
+    /// As [`Self::value_and_jacobian`], with the local model chosen by the first `lead`
+    /// inputs only: a memory-based approximator (LLR) takes the neighbours nearest to
+    /// `x[..lead]` whatever the remaining inputs — VGBP's process model "for `x_{k+1}`"
+    /// before the action is known (Algorithm 7, line 12). A parametric approximator has
+    /// no neighbours to choose and evaluates at `x`.
+    fn value_and_jacobian_near(&self, x: &[f64], lead: usize, y: &mut [f64], jac: &mut [f64]) {
+        let _ = lead;
+        self.value_and_jacobian(x, y, jac);
+    }
 }
 
 /// A scalar approximator with eligibility traces: the critic of Template 2.1.
