@@ -17,6 +17,7 @@ use std::sync::OnceLock;
 
 use anyhow::{Context, Result, bail, ensure};
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, RGBColor, register_font};
@@ -199,6 +200,39 @@ impl<'s, 'a> Plot<'s, 'a> {
     }
 }
 
+/// A chart in the house style on `root`: caption, axis descriptions, tick labels to the
+/// span's precision, a light mesh; drawn, ready for series.
+fn styled_chart<'a, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    (x_label, y_label): (&str, &str),
+    x: Range<f64>,
+    y: Range<f64>,
+) -> Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>>
+where
+    DB::ErrorType: 'static,
+{
+    let (x_span, y_span) = (x.end - x.start, y.end - y.start);
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, ("sans-serif", 26))
+        .margin(15)
+        .x_label_area_size(50)
+        .y_label_area_size(80)
+        .build_cartesian_2d(x, y)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .axis_desc_style(("sans-serif", 20))
+        .label_style(("sans-serif", 16))
+        .x_label_formatter(&|v| tick_label(*v, x_span))
+        .y_label_formatter(&|v| tick_label(*v, y_span))
+        .light_line_style(WHITE.mix(0.0))
+        .bold_line_style(BLACK.mix(0.08))
+        .draw()?;
+    Ok(chart)
+}
+
 impl Drawing for Plot<'_, '_> {
     /// Draws the plot onto `root` and presents it.
     fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>
@@ -206,24 +240,13 @@ impl Drawing for Plot<'_, '_> {
         DB::ErrorType: 'static,
     {
         root.fill(&WHITE)?;
-        let (x_span, y_span) = (self.x.end - self.x.start, self.y.end - self.y.start);
-        let mut chart = ChartBuilder::on(&root)
-            .caption(self.title, ("sans-serif", 26))
-            .margin(15)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d(self.x.clone(), self.y.clone())?;
-        chart
-            .configure_mesh()
-            .x_desc(X_LABEL)
-            .y_desc(Y_LABEL)
-            .axis_desc_style(("sans-serif", 20))
-            .label_style(("sans-serif", 16))
-            .x_label_formatter(&|v| tick_label(*v, x_span))
-            .y_label_formatter(&|v| tick_label(*v, y_span))
-            .light_line_style(WHITE.mix(0.0))
-            .bold_line_style(BLACK.mix(0.08))
-            .draw()?;
+        let mut chart = styled_chart(
+            &root,
+            self.title,
+            (X_LABEL, Y_LABEL),
+            self.x.clone(),
+            self.y.clone(),
+        )?;
 
         let mut any_band = false;
         // Shaded bands first, so that no band hides another series' mean line.
@@ -552,24 +575,8 @@ impl Drawing for Points<'_> {
         } = *self;
         let (x, y) = (self.x.clone(), self.y.clone());
         root.fill(&WHITE)?;
-        let (x_span, y_span) = (x.end - x.start, y.end - y.start);
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 26))
-            .margin(15)
-            .x_label_area_size(50)
-            .y_label_area_size(80)
-            .build_cartesian_2d(x, y)?;
-        chart
-            .configure_mesh()
-            .x_desc(x_label)
-            .y_desc(y_label)
-            .axis_desc_style(("sans-serif", 20))
-            .label_style(("sans-serif", 16))
-            .x_label_formatter(&|v| tick_label(*v, x_span))
-            .y_label_formatter(&|v| tick_label(*v, y_span))
-            .light_line_style(WHITE.mix(0.0))
-            .bold_line_style(BLACK.mix(0.08))
-            .draw()?;
+        let x_span = x.end - x.start;
+        let mut chart = styled_chart(&root, title, (x_label, y_label), x, y)?;
         // Offset the error bars of the series a little so that they do not hide each other.
         let shift = 0.006 * x_span;
         let mid = (series.len() as f64 - 1.0) / 2.0;
