@@ -287,7 +287,6 @@ mod tests {
     use crate::approx::Approximator;
     use crate::horizon::Horizon;
     use crate::testing;
-    use plant::QuadraticReward;
 
     /// `V(x) = −s x²`.
     struct Quadratic(f64);
@@ -320,19 +319,12 @@ mod tests {
         }
     }
 
+    /// The tiny task of [`crate::testing::info`] with `P = 2` and an infinite horizon.
     fn info(bound: f64) -> TaskInfo {
-        TaskInfo {
-            action_low: vec![-bound],
-            action_high: vec![bound],
-            angle_mask: vec![false],
-            reward: QuadraticReward {
-                q: vec![1.0],
-                p: vec![2.0],
-                reference: vec![0.0],
-                angle_mask: vec![false],
-            },
-            horizon: Horizon::Infinite,
-        }
+        let mut info = crate::testing::info(bound);
+        info.reward.p = vec![2.0];
+        info.horizon = Horizon::Infinite;
+        info
     }
 
     /// `x' = x + b u`, `ρ = −x² − p u²`, `V = −s x²`: Eq. 6.21 takes `∂V/∂x` at `x`,

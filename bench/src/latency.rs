@@ -357,15 +357,10 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     }
 
     // Histograms of the hops and compute stages, up to the largest p99.9 among them.
-    let shown = [
-        "jitter",
-        "plant_to_observer",
-        "observer",
-        "observer_to_agent",
-        "agent",
-        "agent_to_plant",
-        "sample_to_actuation",
-    ];
+    let shown: Vec<&str> = STAGES
+        .into_iter()
+        .filter(|s| !matches!(*s, "plant" | "slack"))
+        .collect();
     let values: Vec<(&str, Vec<f64>)> = shown
         .iter()
         .filter_map(|name| {

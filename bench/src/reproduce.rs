@@ -1060,16 +1060,28 @@ impl Runner<'_> {
         let len = cfgs
             .into_iter()
             .map(|c| {
-                u64::from(runs.or(self.opts.runs).unwrap_or(c.run.runs))
-                    * u64::from(self.opts.trials.unwrap_or(c.run.trials))
+                let c = self.as_run(c, runs);
+                u64::from(c.run.runs) * u64::from(c.run.trials)
             })
             .sum();
         self.bar.finish_and_clear();
         self.bar = progress_bar(len, self.opts.progress, id);
     }
 
-    /// Runs `cfg` (with the options' runs and trials, or `runs` if given) into
-    /// `dir/<label>`, unless an identical experiment ran before; returns its measures.
+    /// `cfg` as it is run: with the options' runs and trials, or `runs` if given.
+    fn as_run(&self, cfg: &ExperimentConfig, runs: Option<u32>) -> ExperimentConfig {
+        let mut cfg = cfg.clone();
+        if let Some(r) = runs.or(self.opts.runs) {
+            cfg.run.runs = r;
+        }
+        if let Some(t) = self.opts.trials {
+            cfg.run.trials = t;
+        }
+        cfg
+    }
+
+    /// Runs `cfg` ([`Self::as_run`]) into `dir/<label>`, unless an identical experiment
+    /// ran before; returns its measures.
     fn run(
         &mut self,
         dir: &Path,
@@ -1078,13 +1090,7 @@ impl Runner<'_> {
         cfg: &ExperimentConfig,
         runs: Option<u32>,
     ) -> Result<(Measured, LearnSummary)> {
-        let mut cfg = cfg.clone();
-        if let Some(r) = runs.or(self.opts.runs) {
-            cfg.run.runs = r;
-        }
-        if let Some(t) = self.opts.trials {
-            cfg.run.trials = t;
-        }
+        let cfg = self.as_run(cfg, runs);
         let key = cfg.to_toml();
         let out = dir.join(slug(label));
         if !self.done.contains_key(&key)

@@ -25,6 +25,21 @@ fn messages(mcap_path: &Path) -> BTreeMap<String, Vec<(u64, Vec<u8>)>> {
     out
 }
 
+/// `rig run --quiet --out DIR/bad EXTRA…` fails with an error that names `says`; its
+/// stderr.
+fn run_error(dir: &std::path::Path, extra: &[&str], says: &str) -> String {
+    let out = rig()
+        .args(["run", "--quiet", "--out"])
+        .arg(dir.join("bad"))
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(err.contains(says), "{err}");
+    err
+}
+
 #[test]
 fn three_processes_reproduce_the_in_process_run_byte_for_byte() {
     let dir = tmp("ident");
@@ -77,18 +92,7 @@ fn a_delay_is_the_same_in_both_drivers_and_changes_the_run() {
         (&["--delay-ms", "30"][..], "run.delay_ms"),
         (&["--delay-ms", "5", "--timing", "realtime"][..], "lockstep"),
     ] {
-        let out = rig()
-            .args(["run", "--quiet", "--out"])
-            .arg(dir.join("bad"))
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(!out.status.success());
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            err.contains(says) && err.trim().lines().count() == 1,
-            "{err}"
-        );
+        assert_eq!(run_error(&dir, extra, says).trim().lines().count(), 1);
     }
 }
 
@@ -182,15 +186,7 @@ fn predictive_timing_and_recorded_delays_over_the_wire_reproduce_rig_learn() {
         (&["--observer-mode", "predictive"][..], "observer.mode"),
         (&["--delay-from", "/nonexistent.csv"][..], "run.delay_from"),
     ] {
-        let out = rig()
-            .args(["run", "--quiet", "--out"])
-            .arg(dir.join("bad"))
-            .args(extra)
-            .output()
-            .unwrap();
-        assert!(!out.status.success());
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.contains(says), "{err}");
+        run_error(&dir, extra, says);
     }
 }
 
@@ -885,17 +881,8 @@ fn latency_times_every_stage_of_every_cycle() {
         assert!(v("t_observer_publish_ns") <= v("t_agent_received_ns"));
         assert!(v("t_agent_publish_ns") <= v("t_action_found_ns"));
         assert!(v("t_action_found_ns") <= v("deadline_ns"));
-        let parts: u64 = [
-            "plant",
-            "plant_to_observer",
-            "observer",
-            "observer_to_agent",
-            "agent",
-            "agent_to_plant",
-        ]
-        .iter()
-        .map(|s| v(s))
-        .sum();
+        // plant … agent_to_plant: the stages between the wake-up and the action found.
+        let parts: u64 = rig::latency::STAGES[1..7].iter().map(|s| v(s)).sum();
         assert_eq!(parts, v("sample_to_actuation"));
         assert_eq!(v("sample_to_actuation") + v("slack"), 3_000_000);
     }
