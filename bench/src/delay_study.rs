@@ -13,7 +13,8 @@
 //! interval of the mean (Student's t).
 //!
 //! Outputs in `DIR`:
-//! * `cells.csv` — `algo,approx,mode,delay_ms,runs,mean,sd,ci_low,ci_high`;
+//! * `cells.csv` — `algo,approx,mode,delay_ms,runs,mean,sd,ci_low,ci_high,velocity_error`
+//!   (the last: how far the velocity the agent acted on was from the truth, [`Cell`]);
 //! * `final_return.png` / `.svg` — final greedy return against the delay, direct and
 //!   predictive per learner, with 95 % CIs;
 //! * `curves-ALGO-APPROX.png` / `.svg` — the greedy learning curves (means) of every cell
@@ -22,7 +23,10 @@
 //!   better than direct (one-sided Welch t-test, p < 0.05; whether the CIs overlap is
 //!   reported too), and does each learner learn the swing-up in predictive timing (mean
 //!   final greedy return ≥ [`SWING_UP`])?
-//! * `ALGO-APPROX/MODE-Dms/` — each cell's `rig learn` output.
+//! * `ALGO-APPROX/direct-Dms/`, `ALGO-APPROX/predictive/` — each cell's `rig learn`
+//!   output. Predictive timing applies an action at the next sample instant, so a delay
+//!   below `Ts` never reaches the plant: its cell is run once (no delay) and stands for
+//!   every delay.
 //!
 //! `--observer-model known` runs the same study with the plant's own dynamics as the
 //! estimator's model: the reference for what a perfect one-step prediction recovers.
@@ -121,6 +125,10 @@ pub struct Cell {
     pub finals: Vec<f64>,
     /// Their statistics.
     pub stats: Stats,
+    /// How far the velocity the agent acted on was from the truth, RMSE over the learning
+    /// trials, mean over runs \[rad/s\] (`observer.csv` of `rig learn`): the estimate
+    /// `x̂_k` in direct timing, the one-step prediction `x̂_{k+1|k}` in predictive timing.
+    pub velocity_error: f64,
     /// The greedy learning curve.
     pub greedy_curve: Vec<CurvePoint>,
 }
@@ -137,6 +145,18 @@ pub fn welch(a: &Stats, b: &Stats) -> Option<(f64, f64, f64)> {
     Some((t, df, p))
 }
 
+/// The mean over runs of the velocity components' RMSE (the second half of the state).
+fn velocity_error(acted_on_rmse: &[Vec<f64>]) -> f64 {
+    let per_run: Vec<f64> = acted_on_rmse
+        .iter()
+        .map(|r| {
+            let v = &r[r.len() / 2..];
+            v.iter().sum::<f64>() / v.len().max(1) as f64
+        })
+        .collect();
+    per_run.iter().sum::<f64>() / per_run.len().max(1) as f64
+}
+
 /// The spelling of a delay in directory names and tables.
 fn ms(d: f64) -> String {
     format!("{d}")
@@ -149,8 +169,26 @@ pub fn delay_study(opts: &DelayStudyOptions) -> Result<Vec<Cell>> {
     // One bar for the whole study, grown by each cell's trials as it starts.
     let bar = progress_bar(0, opts.verbose, "delay study");
     for (algo, approx) in LEARNERS {
+        // Predictive timing applies each action at the next sample instant, so a delay
+        // below Ts never reaches the plant (tests/rig_run.rs checks the runs are equal):
+        // its cell is run once, with no delay, and stands for every delay.
+        let mut predictive: Option<Cell> = None;
         for mode in ObserverMode::ALL {
             for &delay_ms in &opts.delays_ms {
+                if let Some(p) = predictive
+                    .as_ref()
+                    .filter(|_| mode == ObserverMode::Predictive)
+                {
+                    cells.push(Cell {
+                        delay_ms,
+                        ..p.clone()
+                    });
+                    continue;
+                }
+                let (run_delay, dir) = match mode {
+                    ObserverMode::Predictive => (0.0, format!("{mode}")),
+                    ObserverMode::Direct => (delay_ms, format!("{mode}-{}ms", ms(delay_ms))),
+                };
                 let o = Overrides {
                     algo: Some(algo),
                     approx: Some(approx),
@@ -159,15 +197,12 @@ pub fn delay_study(opts: &DelayStudyOptions) -> Result<Vec<Cell>> {
                     sensor: Some(SensorKind::Angle),
                     observer: Some(ObserverKind::Predictive),
                     observer_mode: Some(mode),
-                    delay_ms: Some(delay_ms),
+                    delay_ms: Some(run_delay),
                     ..Overrides::default()
                 };
                 let mut cfg = resolve(None, &o).map_err(|e| anyhow!("{e}"))?;
                 cfg.observer.model = opts.model;
-                let dir = opts
-                    .out
-                    .join(format!("{algo}-{approx}"))
-                    .join(format!("{mode}-{}ms", ms(delay_ms)));
+                let dir = opts.out.join(format!("{algo}-{approx}")).join(dir);
                 bar.inc_length(u64::from(cfg.run.runs) * u64::from(cfg.run.trials));
                 let s = learn(
                     &cfg,
@@ -179,10 +214,14 @@ pub fn delay_study(opts: &DelayStudyOptions) -> Result<Vec<Cell>> {
                 )?;
                 let finals = final_greedy(&s.records, cfg.run.runs)?;
                 let stats = Stats::of(&finals)?;
+                let velocity_error = velocity_error(&s.acted_on_rmse);
                 if opts.verbose {
+                    let when = match mode {
+                        ObserverMode::Predictive => "any delay".to_string(),
+                        ObserverMode::Direct => format!("{} ms", ms(delay_ms)),
+                    };
                     bar.suspend(|| println!(
-                        "{algo}/{approx} {mode:>10} {:>4} ms: final greedy {:8.1} [95% CI {:.1} … {:.1}] ({} runs × {} trials, {:.1} s)",
-                        ms(delay_ms),
+                        "{algo}/{approx} {mode:>10} {when:>9}: final greedy {:8.1} [95% CI {:.1} … {:.1}], acted-on velocity error {velocity_error:.3} rad/s ({} runs × {} trials, {:.1} s)",
                         stats.mean,
                         stats.ci.0,
                         stats.ci.1,
@@ -191,15 +230,20 @@ pub fn delay_study(opts: &DelayStudyOptions) -> Result<Vec<Cell>> {
                         s.wall.as_secs_f64()
                     ));
                 }
-                cells.push(Cell {
+                let cell = Cell {
                     algo,
                     approx,
                     mode,
                     delay_ms,
                     finals,
                     stats,
+                    velocity_error,
                     greedy_curve: s.greedy_curve,
-                });
+                };
+                if mode == ObserverMode::Predictive {
+                    predictive = Some(cell.clone());
+                }
+                cells.push(cell);
             }
         }
     }
@@ -210,12 +254,13 @@ pub fn delay_study(opts: &DelayStudyOptions) -> Result<Vec<Cell>> {
 
 /// `cells.csv`, the plots and `summary.txt`.
 fn write_outputs(opts: &DelayStudyOptions, cells: &[Cell]) -> Result<()> {
-    let mut csv = String::from("algo,approx,mode,delay_ms,runs,mean,sd,ci_low,ci_high\n");
+    let mut csv =
+        String::from("algo,approx,mode,delay_ms,runs,mean,sd,ci_low,ci_high,velocity_error\n");
     for c in cells {
         let s = &c.stats;
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{}",
             c.algo,
             c.approx,
             c.mode,
@@ -224,7 +269,8 @@ fn write_outputs(opts: &DelayStudyOptions, cells: &[Cell]) -> Result<()> {
             s.mean,
             s.sd,
             s.ci.0,
-            s.ci.1
+            s.ci.1,
+            c.velocity_error
         );
     }
     write_atomic(&opts.out.join("cells.csv"), &csv)?;
@@ -319,25 +365,26 @@ fn write_outputs(opts: &DelayStudyOptions, cells: &[Cell]) -> Result<()> {
 /// The table and the acceptance checks.
 pub fn summary(model: ObserverModel, cells: &[Cell]) -> String {
     let mut s = format!(
-        "Final greedy return (per run: mean of its last {LAST_EVALUATIONS} greedy evaluations), pendulum, angle-only sensing, predictive estimator with the {model} model\n\n",
+        "Final greedy return (per run: mean of its last {LAST_EVALUATIONS} greedy evaluations), pendulum, angle-only sensing, predictive estimator with the {model} model; v_err: RMSE of the velocity the agent acted on against the truth (x̂_k direct, x̂_(k+1|k) predictive), mean over runs; predictive timing is run once and stands for every delay < Ts\n\n",
     );
     let _ = writeln!(
         s,
-        "{:<10} {:<10} {:>8} {:>5} {:>9} {:>8} {:>21}",
-        "learner", "timing", "delay_ms", "runs", "mean", "sd", "95% CI"
+        "{:<10} {:<10} {:>8} {:>5} {:>9} {:>8} {:>21} {:>13}",
+        "learner", "timing", "delay_ms", "runs", "mean", "sd", "95% CI", "v_err [rad/s]"
     );
     for c in cells {
         let st = &c.stats;
         let _ = writeln!(
             s,
-            "{:<10} {:<10} {:>8} {:>5} {:>9.1} {:>8.1} {:>21}",
+            "{:<10} {:<10} {:>8} {:>5} {:>9.1} {:>8.1} {:>21} {:>13.3}",
             format!("{}/{}", c.algo, c.approx),
             c.mode.as_str(),
             ms(c.delay_ms),
             st.n,
             st.mean,
             st.sd,
-            format!("[{:.1}, {:.1}]", st.ci.0, st.ci.1)
+            format!("[{:.1}, {:.1}]", st.ci.0, st.ci.1),
+            c.velocity_error
         );
     }
     let cell = |algo, mode, d: f64| {

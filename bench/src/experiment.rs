@@ -85,6 +85,38 @@ pub struct Experiment {
     trial: u32,
     /// Samples not run because trials ended early (left the operating range).
     skipped_samples: u64,
+    /// How far what the agent acted on was from the truth (learning trials).
+    acted_on_error: ActedOnError,
+}
+
+/// Root-mean-square error, per state component, of the states the agent acted on against
+/// the true states they stand for: `x̂_k − x_k` in direct timing, the prediction
+/// `x̂_{k+1|k} − x_{k+1}` in predictive timing (angle errors wrapped).
+#[derive(Clone, Debug, Default)]
+pub struct ActedOnError {
+    sum_sq: Vec<f64>,
+    samples: u64,
+}
+
+impl ActedOnError {
+    fn add(&mut self, task: &Task, acted_on: &[f64], truth: &[f64]) {
+        self.sum_sq.resize(truth.len(), 0.0);
+        for (i, (&a, &t)) in acted_on.iter().zip(truth).enumerate() {
+            let e = if task.angle_mask[i] {
+                plant::angle::wrap(a - t)
+            } else {
+                a - t
+            };
+            self.sum_sq[i] += e * e;
+        }
+        self.samples += 1;
+    }
+
+    /// The RMSE of each state component (empty before the first sample).
+    pub fn rmse(&self) -> Vec<f64> {
+        let n = self.samples.max(1) as f64;
+        self.sum_sq.iter().map(|s| (s / n).sqrt()).collect()
+    }
 }
 
 impl Experiment {
@@ -111,6 +143,7 @@ impl Experiment {
             eval_every: cfg.run.eval_every,
             trial: 0,
             skipped_samples: 0,
+            acted_on_error: ActedOnError::default(),
         }
     }
 
@@ -152,6 +185,12 @@ impl Experiment {
         self.task.sim_time(self.trial.into(), self.skipped_samples)
     }
 
+    /// How far the states the agent acted on in the learning trials so far were from the
+    /// truth.
+    pub fn acted_on_error(&self) -> &ActedOnError {
+        &self.acted_on_error
+    }
+
     /// The agent (for inspection after learning).
     pub fn agent(&self) -> &dyn Agent {
         self.agent.as_ref()
@@ -175,10 +214,21 @@ impl Experiment {
         // it does over the wire.
         self.start(&x0, false, &mut u);
         let mut ret = 0.0;
+        let predictive = self.front.is_predictive();
         for k in 0..steps {
+            let acted_on = self.front_state();
             let r = self.actuator.interval(&mut self.plant, &u);
             ret += r;
+            if predictive {
+                // x̂_{k+1|k} against x_{k+1}.
+                (self.acted_on_error).add(&self.task, &acted_on, self.plant.state());
+            }
             let terminated = self.sample(k, r, false, &mut u);
+            if !predictive && k + 1 < steps {
+                // x̂_{k+1} against x_{k+1}.
+                let x = self.front.acted_on();
+                (self.acted_on_error).add(&self.task, x, self.plant.state());
+            }
             if terminated {
                 self.skipped_samples += (steps - k - 1) as u64;
                 break;

@@ -14,7 +14,11 @@
 //! * `curve.png`, `curve.svg` — the learning curve in the style of the thesis's figures;
 //! * `responses.csv` — `run,t,x_0,...,u_0,...,reward`: each run's final greedy policy,
 //!   one trial from the task's first start state (typical time responses, and their
-//!   spread over runs).
+//!   spread over runs);
+//! * `observer.csv` — `run,x_0,...`: with a sensor or observer other than the default, how
+//!   far the states each run's agent acted on in its learning trials were from the truth
+//!   (RMSE per state component, [`crate::experiment::ActedOnError`]: the estimate `x̂_k`
+//!   in direct timing, the one-step prediction `x̂_{k+1|k}` in predictive timing).
 //!
 //! Every file is a pure function of the configuration: the same seed gives byte-identical
 //! files whatever the number of threads.
@@ -71,6 +75,9 @@ pub struct LearnSummary {
     /// Each run's final greedy policy: one trial from the task's first start state (the
     /// time responses written to `responses.csv`), in run order.
     pub responses: Vec<Vec<Sample>>,
+    /// Each run's [`crate::experiment::ActedOnError`] RMSE per state component, in run
+    /// order (empty for an experiment `rig reproduce` read back instead of running).
+    pub acted_on_rmse: Vec<Vec<f64>>,
 }
 
 /// Writes finished runs to `runs.csv` in run order.
@@ -179,11 +186,12 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
                     bar.inc(1);
                     records.push(r);
                 }
+                let acted_on = exp.acted_on_error().rmse();
                 let response = exp.greedy_trajectory(&x0);
                 responses
                     .lock()
                     .expect("responses poisoned")
-                    .insert(run, response);
+                    .insert(run, (response, acted_on));
                 writer
                     .lock()
                     .expect("writer poisoned")
@@ -193,12 +201,15 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
             .collect()
     });
     let records: Vec<TrialRecord> = results?.into_iter().flatten().collect();
-    let responses: Vec<Vec<Sample>> = responses
+    let (responses, acted_on_rmse): (Vec<Vec<Sample>>, Vec<Vec<f64>>) = responses
         .into_inner()
         .expect("responses poisoned")
         .into_values()
-        .collect();
+        .unzip();
     write_responses(&opts.out.join("responses.csv"), &responses)?;
+    if !cfg.observer.is_default() {
+        write_acted_on(&opts.out.join("observer.csv"), &acted_on_rmse)?;
+    }
     let wall = t0.elapsed();
     if !matches!(opts.progress, Progress::Shared(_)) {
         bar.finish_and_clear();
@@ -240,7 +251,25 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
         greedy_curve,
         wall,
         responses,
+        acted_on_rmse,
     })
+}
+
+/// Writes each run's acted-on error as `run,x_0,...` (shortest round-trip numbers).
+fn write_acted_on(path: &Path, rmse: &[Vec<f64>]) -> Result<()> {
+    let n = rmse.first().map_or(0, Vec::len);
+    let mut text = String::from("run");
+    for i in 0..n {
+        text += &format!(",x_{i}");
+    }
+    for (run, r) in rmse.iter().enumerate() {
+        text += &format!("\n{run}");
+        for v in r {
+            text += &format!(",{v}");
+        }
+    }
+    text.push('\n');
+    write_atomic(path, &text)
 }
 
 /// Writes each run's time response as `run,t,x_0,...,u_0,...,reward` (shortest

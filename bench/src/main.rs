@@ -163,8 +163,9 @@ struct LatencyArgs {
     #[arg(long, value_name = "US", default_value_t = rig::process::SPIN_US)]
     spin_us: u64,
     /// Run the processes under the real-time scheduling policy SCHED_FIFO at this
-    /// priority (1–99), ahead of all ordinary work on the machine; needs root,
-    /// CAP_SYS_NICE or an rtprio limit.
+    /// priority (1–99; the plant, the clock, one above the observer and the agent), ahead
+    /// of all ordinary work on the machine, their memory locked (mlockall); needs root,
+    /// CAP_SYS_NICE and CAP_IPC_LOCK, or rtprio and memlock limits.
     #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
     rt_priority: Option<u8>,
     /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
@@ -218,8 +219,9 @@ struct RunArgs {
     #[arg(long, value_name = "US", default_value_t = rig::process::SPIN_US)]
     spin_us: u64,
     /// Run the processes under the real-time scheduling policy SCHED_FIFO at this
-    /// priority (1–99), ahead of all ordinary work on the machine; needs root,
-    /// CAP_SYS_NICE or an rtprio limit.
+    /// priority (1–99; the plant, the clock, one above the observer and the agent), ahead
+    /// of all ordinary work on the machine, their memory locked (mlockall); needs root,
+    /// CAP_SYS_NICE and CAP_IPC_LOCK, or rtprio and memlock limits.
     #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
     rt_priority: Option<u8>,
     /// `sim`: the plant process simulates the system. `external`: a driver someone else

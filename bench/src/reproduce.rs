@@ -1172,6 +1172,8 @@ fn load_finished(dir: &Path, cfg: &ExperimentConfig) -> Option<LearnSummary> {
         greedy_curve,
         wall: Duration::from_secs_f64(wall),
         responses,
+        // rig reproduce's experiments use the default sensor and observer (exact).
+        acted_on_rmse: Vec::new(),
     })
 }
 

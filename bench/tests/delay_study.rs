@@ -30,11 +30,13 @@ fn a_small_delay_study_writes_consistent_outputs() {
         "final_return.svg",
         "curves-vgbp-lstd.png",
         "curves-mlac-llr.svg",
-        "mlac-llr/predictive-10ms/runs.csv",
+        "mlac-llr/predictive/runs.csv",
+        "mlac-llr/predictive/observer.csv",
         "vgbp-lstd/direct-0ms/config.toml",
     ] {
         assert!(dir.join(f).is_file(), "{f}");
     }
+    assert!(!dir.join("mlac-llr/predictive-10ms").exists());
     let csv = std::fs::read_to_string(dir.join("cells.csv")).unwrap();
     let rows: Vec<Vec<&str>> = csv
         .lines()
@@ -47,9 +49,11 @@ fn a_small_delay_study_writes_consistent_outputs() {
         assert_eq!(r[4], "2");
         let v: Vec<f64> = r[5..].iter().map(|x| x.parse().unwrap()).collect();
         assert!(v[2] <= v[0] && v[0] <= v[3], "{r:?}");
+        // The velocity the agent acted on is estimated, not measured: it has an error.
+        assert!(v[4] > 0.0 && v[4].is_finite(), "{r:?}");
     }
-    // A delay below Ts does not reach the plant in predictive timing: its cells agree
-    // across delays; in direct timing it changes the run.
+    // A delay below Ts does not reach the plant in predictive timing: one run stands for
+    // every delay; in direct timing it changes the run.
     let cell = |learner: &str, mode: &str, d: &str| {
         rows.iter()
             .find(|r| r[0] == learner && r[2] == mode && r[3] == d)

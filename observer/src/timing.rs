@@ -151,6 +151,11 @@ impl Front {
         }
     }
 
+    /// Whether the timing is predictive (the agent acts on `x̂_{k+1|k}`).
+    pub fn is_predictive(&self) -> bool {
+        self.predictive
+    }
+
     /// The state the agent was last given to act on.
     pub fn acted_on(&self) -> &[f64] {
         &self.x

@@ -18,12 +18,12 @@
 //!
 //! ```text
 //! noise         finite difference   FD filtered a=0.3   predictive learned   predictive known
-//! 0             0.6288 / 0.2784     1.0858 / 0.4819     0.2768 / 0.0932      0.0138 / 0.0140
-//! 0.002 rad     0.6383 / 0.2990     1.0889 / 0.4874     0.3051 / 0.1585      0.0924 / 0.1005
+//! 0             0.6288 / 0.2784     1.0858 / 0.4819     0.2946 / 0.0686      0.0138 / 0.0140
+//! 0.002 rad     0.6383 / 0.2990     1.0889 / 0.4874     0.3149 / 0.1446      0.0924 / 0.1005
 //! ```
 //!
 //! One-step prediction error `x̂_{k|k−1} − x_k` (RMSE, last trial): learned model velocity
-//! 0.270 rad/s, angle 0.0054 rad (noise 0; 0.281 rad/s, 0.0065 rad with noise); known
+//! 0.198 rad/s, angle 0.0041 rad (noise 0; 0.208 rad/s, 0.0056 rad with noise); known
 //! model 0.014 rad/s, 0.0007 rad (0.102 rad/s, 0.0047 rad). The test fails if the learned
 //! predictive observer is not better than the better finite difference, or the known model
 //! not better than the learned one, over all trials or over the last.

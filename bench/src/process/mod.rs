@@ -67,8 +67,9 @@ pub struct ProcessArgs {
     #[arg(long, value_name = "US", default_value_t = SPIN_US)]
     pub spin_us: u64,
     /// Run this process under the real-time scheduling policy `SCHED_FIFO` at this
-    /// priority (1–99), ahead of every ordinary process on the machine; needs root,
-    /// `CAP_SYS_NICE` or an `rtprio` limit (limits.conf).
+    /// priority (1–99; the plant, the clock, one above), ahead of every ordinary process
+    /// on the machine, its memory locked; needs root, `CAP_SYS_NICE` and `CAP_IPC_LOCK`,
+    /// or `rtprio` and `memlock` limits (limits.conf).
     #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
     pub rt_priority: Option<u8>,
     /// Agent only: answer every estimate with a zero action, without learning (for loop
@@ -126,9 +127,10 @@ impl ProcessArgs {
     }
 }
 
-/// Puts this process under `SCHED_FIFO` at `priority` (`--rt-priority`); nothing for
-/// `None`. A control loop's usual remedy against being preempted by other work on the
-/// machine (measured in the README, "Latency budget").
+/// Puts this process under `SCHED_FIFO` at `priority` (`--rt-priority`) and locks its
+/// memory (`mlockall`, no page faults in the loop); nothing for `None`. A control loop's
+/// usual remedy against being preempted by other work on the machine (measured in the
+/// README, "Latency budget").
 pub fn set_rt_priority(priority: Option<u8>) -> Result<()> {
     let Some(p) = priority else {
         return Ok(());
@@ -141,6 +143,14 @@ pub fn set_rt_priority(priority: Option<u8>) -> Result<()> {
     if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } != 0 {
         anyhow::bail!(
             "cannot run under SCHED_FIFO at --rt-priority {p}: {} (needs root, CAP_SYS_NICE or an rtprio limit in /etc/security/limits.conf)",
+            std::io::Error::last_os_error()
+        );
+    }
+    // No page fault in the loop: every page mapped now and later stays in memory.
+    // SAFETY: `mlockall` takes flags only.
+    if unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } != 0 {
+        anyhow::bail!(
+            "cannot lock this process's memory (mlockall) for --rt-priority {p}: {} (needs root, CAP_IPC_LOCK or a memlock limit in /etc/security/limits.conf)",
             std::io::Error::last_os_error()
         );
     }

@@ -23,7 +23,9 @@ use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
 /// true state stays here and, when the sensor does not measure all of it, goes out on
 /// the evaluation topic [`topic::TRUTH`], for the supervisor alone.
 pub fn run(args: &ProcessArgs) -> Result<()> {
-    super::set_rt_priority(args.rt_priority)?;
+    // The clock one level above the observer and the agent: its sampling instant is not
+    // held up by their compute on the same core.
+    super::set_rt_priority(args.rt_priority.map(|p| p.saturating_add(1).min(99)))?;
     let cfg = args.config()?;
     let task = Arc::new(Task::new(cfg.system));
     let bus = Bus::join(&args.run_id, "plant").map_err(wire_err)?;
