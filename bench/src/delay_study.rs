@@ -410,7 +410,12 @@ pub fn summary(model: ObserverModel, cells: &[Cell]) -> String {
         let overlap = p.stats.ci.0 <= d.stats.ci.1 && d.stats.ci.0 <= p.stats.ci.1;
         let verdict = match welch(&p.stats, &d.stats) {
             Some((t, df, pv)) => format!(
-                "t = {t:.2}, df = {df:.1}, p = {pv:.3} → {}",
+                "t = {t:.2}, df = {df:.1}, p {} → {}",
+                if pv < 0.001 {
+                    "< 0.001".to_string()
+                } else {
+                    format!("= {pv:.3}")
+                },
                 if pv < 0.05 { "HOLDS" } else { "does NOT hold" }
             ),
             None => "no test (fewer than 2 runs or no spread)".into(),

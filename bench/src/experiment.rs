@@ -248,21 +248,32 @@ impl Experiment {
     }
 
     /// A trial's start: the plant is put at `x0`, the observer and the agent start from it
-    /// (the state is known there); the agent's first action into `u`.
+    /// (the state is known there); the agent's first action into `u`. In predictive timing
+    /// that answer is the first interval's action `u_0`, and the agent, told so, answers
+    /// `u_1` into `u` ([`observer::timing`], trial start).
     fn start(&mut self, x0: &[f64], greedy: bool, u: &mut [f64]) {
         self.plant.reset(x0);
         self.actuator.reset();
-        let t = self.front.sample(&AtSample {
-            step: 0,
-            start: true,
-            end: false,
-            terminal: false,
-            y: self.plant.state(),
-            reward: 0.0,
-            u_applied: self.plant.applied_action(),
-            u_next: self.actuator.next_action().unwrap_or(&[]),
-        });
-        act(self.agent.as_mut(), greedy, &t, u);
+        for primed in [false, true] {
+            if primed {
+                if !self.front.is_predictive() {
+                    return;
+                }
+                self.actuator.prime(u);
+            }
+            let t = self.front.sample(&AtSample {
+                step: 0,
+                start: !primed,
+                primed,
+                end: false,
+                terminal: false,
+                y: self.plant.state(),
+                reward: 0.0,
+                u_applied: self.plant.applied_action(),
+                u_next: self.actuator.next_action().unwrap_or(&[]),
+            });
+            act(self.agent.as_mut(), greedy, &t, u);
+        }
     }
 
     /// Sample `k + 1` after interval `k` (reward `r`): measure, estimate, let the agent act
@@ -274,6 +285,7 @@ impl Experiment {
         let t = self.front.sample(&AtSample {
             step: k + 1,
             start: false,
+            primed: false,
             end: terminal || k + 1 == self.task.steps_per_trial(),
             terminal,
             y: &self.y,

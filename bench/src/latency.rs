@@ -67,6 +67,9 @@ pub struct LatencyOptions {
     /// The three processes (and the raw ping-pong's two) under `SCHED_FIFO` at this
     /// priority (`--rt-priority`).
     pub rt_priority: Option<u8>,
+    /// The plant alone on the last CPU, the rest on the others; the ping-pong's echo on
+    /// the plant's CPU, its other end on the others (`--pin-cpus`).
+    pub pin_cpus: bool,
     /// Print the summary.
     pub verbose: bool,
 }
@@ -110,6 +113,8 @@ pub struct LatencyReport {
     pub spin_us: u64,
     /// The real-time priority the processes ran at, if any.
     pub rt_priority: Option<u8>,
+    /// Whether the plant had a CPU of its own (`--pin-cpus`).
+    pub pin_cpus: bool,
     /// Raw round trips \[µs\].
     pub raw_rtt: Stats,
     /// Per stage ([`STAGES`]), over the cycles that met their deadline \[µs\].
@@ -132,7 +137,7 @@ impl LatencyReport {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "rig latency: {} cycles at {:.3} ms, angle sensor, plant spins {} µs, {}; deadline misses: {}",
+            "rig latency: {} cycles at {:.3} ms, angle sensor, plant spins {} µs, {}{}; deadline misses: {}",
             self.cycles,
             self.period_ns as f64 * 1e-6,
             self.spin_us,
@@ -140,6 +145,11 @@ impl LatencyReport {
                 .map_or("ordinary scheduling".to_string(), |p| format!(
                     "SCHED_FIFO {p}"
                 )),
+            if self.pin_cpus {
+                ", plant pinned to its own CPU"
+            } else {
+                ""
+            },
             self.misses
         );
         let _ = writeln!(
@@ -210,7 +220,10 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     let exe = std::env::current_exe().context("cannot find the rig executable")?;
     // The baseline under the same policy: the ping-pong's partner process inherits it.
     crate::process::set_rt_priority(opts.rt_priority)?;
-    let mut raw = raw_round_trips(&exe, &opts.out, opts.raw_samples)?;
+    if opts.pin_cpus {
+        crate::process::pin(crate::process::Cpus::Rest)?;
+    }
+    let mut raw = raw_round_trips(&exe, &opts.out, opts.raw_samples, opts.pin_cpus)?;
     let raw_rtt = Stats::of(&mut raw);
 
     let mut cfg = agent::config::resolve(
@@ -242,6 +255,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
             cycles_out: Some(cycles_path.clone()),
             spin_us: opts.spin_us,
             rt_priority: opts.rt_priority,
+            pin_cpus: opts.pin_cpus,
         },
     )?;
 
@@ -347,6 +361,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
         misses,
         spin_us: opts.spin_us,
         rt_priority: opts.rt_priority,
+        pin_cpus: opts.pin_cpus,
         raw_rtt,
         stages,
     };

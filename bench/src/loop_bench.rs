@@ -102,8 +102,11 @@ fn spawn(exe: &Path, args: &[&str], log: &Path) -> Result<Child> {
 }
 
 /// The echo side of the raw baseline: returns every message on `pong` until a message
-/// with `seq == u64::MAX`.
-pub fn pong(run_id: &str) -> Result<()> {
+/// with `seq == u64::MAX`; pinned to the plant's CPU with `pin_cpus`.
+pub fn pong(run_id: &str, pin_cpus: bool) -> Result<()> {
+    if pin_cpus {
+        crate::process::pin(crate::process::Cpus::Clock)?;
+    }
     let bus = Bus::join(run_id, "pong").map_err(wire_err)?;
     let rx = bus.rx::<Measurement>("ping").map_err(wire_err)?;
     let tx = bus.tx::<Measurement>("pong").map_err(wire_err)?;
@@ -119,17 +122,17 @@ pub fn pong(run_id: &str) -> Result<()> {
 }
 
 /// `samples` raw round trips (after 1000 of warm-up) between this process and a `rig
-/// pong` child \[ns\].
-pub fn raw_round_trips(exe: &Path, out: &Path, samples: usize) -> Result<Vec<u64>> {
+/// pong` child \[ns\] (pinned to the plant's CPU with `pin_cpus`).
+pub fn raw_round_trips(exe: &Path, out: &Path, samples: usize, pin_cpus: bool) -> Result<Vec<u64>> {
     let run_id = format!("raw{}", std::process::id());
     let bus = Bus::join(&run_id, "ping").map_err(wire_err)?;
     let rx = bus.rx::<Measurement>("pong").map_err(wire_err)?;
     let tx = bus.tx::<Measurement>("ping").map_err(wire_err)?;
-    let mut kids = Kill(vec![spawn(
-        exe,
-        &["pong", "--run-id", &run_id],
-        &out.join("pong.log"),
-    )?]);
+    let mut args = vec!["pong", "--run-id", &run_id];
+    if pin_cpus {
+        args.push("--pin-cpus");
+    }
+    let mut kids = Kill(vec![spawn(exe, &args, &out.join("pong.log"))?]);
     tx.wait_for_receivers(1, Duration::from_secs(30), &bus)
         .map_err(wire_err)?;
     let warmup = 1000;
@@ -210,7 +213,7 @@ fn lockstep_steps(exe: &Path, out: &Path, samples: usize) -> Result<Vec<u64>> {
 pub fn bench_loop(out: &PathBuf, samples: usize) -> Result<LoopReport> {
     std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
     let exe = std::env::current_exe().context("cannot find the rig executable")?;
-    let mut raw = raw_round_trips(&exe, out, samples)?;
+    let mut raw = raw_round_trips(&exe, out, samples, false)?;
     let mut steps = lockstep_steps(&exe, out, samples)?;
     let report = LoopReport {
         raw_rtt: Stats::of(&mut raw),

@@ -67,6 +67,9 @@ enum Command {
         /// Run id of the ping-pong.
         #[arg(long)]
         run_id: String,
+        /// Pin to the last CPU (the plant's under `--pin-cpus`).
+        #[arg(long)]
+        pin_cpus: bool,
     },
     /// Regenerate the thesis's learning-curve figures (3.12, 3.17, 3.22, 3.23, 4.4, 5.5,
     /// 5.9, 6.1, 6.5) from the presets with the thesis's numbers of runs, and write
@@ -168,6 +171,11 @@ struct LatencyArgs {
     /// CAP_SYS_NICE and CAP_IPC_LOCK, or rtprio and memlock limits.
     #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
     rt_priority: Option<u8>,
+    /// Pin the plant (the clock) alone on the last CPU and the observer, the agent and
+    /// the recorder on the others, so that the rig's own work does not disturb the
+    /// sampling instants (sched_setaffinity; needs at least two CPUs).
+    #[arg(long)]
+    pin_cpus: bool,
     /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
     /// until one misses a deadline; writes DIR/sweep.csv and names the fastest period
     /// sustained for `--cycles` cycles without a miss.
@@ -224,6 +232,11 @@ struct RunArgs {
     /// CAP_SYS_NICE and CAP_IPC_LOCK, or rtprio and memlock limits.
     #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
     rt_priority: Option<u8>,
+    /// Pin the plant (the clock) alone on the last CPU and the observer, the agent and
+    /// the recorder on the others, so that the rig's own work does not disturb the
+    /// sampling instants (sched_setaffinity; needs at least two CPUs).
+    #[arg(long)]
+    pin_cpus: bool,
     /// `sim`: the plant process simulates the system. `external`: a driver someone else
     /// started (docs/driver.md; e.g. examples/python_driver/driver.py) is the system and
     /// the clock; `rig run` waits for it, and the plant process resets it before each
@@ -497,7 +510,7 @@ fn main() -> ExitCode {
         }
     };
     match cli.command {
-        Command::Pong { run_id } => match rig::loop_bench::pong(&run_id) {
+        Command::Pong { run_id, pin_cpus } => match rig::loop_bench::pong(&run_id, pin_cpus) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {e:#}");
@@ -540,6 +553,7 @@ fn main() -> ExitCode {
                 raw_samples: args.raw_samples,
                 spin_us: args.spin_us,
                 rt_priority: args.rt_priority,
+                pin_cpus: args.pin_cpus,
                 verbose: true,
             };
             let done = if args.sweep {
@@ -653,6 +667,7 @@ fn main() -> ExitCode {
                 cycles_out: None,
                 spin_us: args.spin_us,
                 rt_priority: args.rt_priority,
+                pin_cpus: args.pin_cpus,
             };
             match run(&cfg, &opts) {
                 Ok(s) => {

@@ -63,6 +63,9 @@ pub struct RunOptions {
     pub spin_us: u64,
     /// Run the three processes under `SCHED_FIFO` at this priority (`--rt-priority`).
     pub rt_priority: Option<u8>,
+    /// Pin the plant alone on the last CPU, the other processes (and this one) on the
+    /// rest (`--pin-cpus`).
+    pub pin_cpus: bool,
 }
 
 /// An external driver in place of the simulated plant (`rig run --plant external`).
@@ -894,6 +897,15 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         ]);
     }
     role_args.insert("agent", agent_args);
+    if opts.pin_cpus {
+        crate::process::pin(crate::process::Cpus::Rest)?;
+        for role in ["agent", "observer", "plant"] {
+            role_args
+                .entry(role)
+                .or_default()
+                .push("--pin-cpus".to_string());
+        }
+    }
     if let Some(p) = opts.rt_priority {
         for role in ["agent", "observer", "plant"] {
             role_args

@@ -19,13 +19,15 @@
 //! prediction and its answer `u_{k+1}` is applied at `t_{k+1}` — a delay below `Ts` does
 //! not reach the plant. The choices at the edges:
 //!
-//! * **Trial start.** The plant has just been put at `x_0` and no action has been
-//!   computed from any sample yet, so the first interval holds the safe action, zero (as
-//!   after a reset in direct timing with a delay). The agent starts its trial in
-//!   `x̂_{1|0} = f̂(x_0, 0)` and its first action is `u_1`; a trial has `N − 1` agent
-//!   transitions against direct timing's `N`. (Computing `u_0` from `x_0` instead would
-//!   need an action with zero latency at `t_0` — exactly what this mode avoids — and a
-//!   second exchange before the first interval.)
+//! * **Trial start.** The plant has just been put at `x_0` and the system rests there
+//!   until the trial's clock starts, so the first action can be computed from the known
+//!   start state without a deadline: the plant reports `x_0` ([`Sample::start`]), the
+//!   agent starts its trial there and answers `u_0`, which the plant holds for the first
+//!   interval; then the plant reports `x_0` again with `u_0` as the action it will apply
+//!   ([`Sample::primed`]) and the agent learns `(x_0, u_0) → x̂_{1|0}` and answers `u_1`.
+//!   A trial has `N` agent transitions, as in direct timing. (With zero held over the
+//!   first interval instead, every swing-up starts one sample late: about −45 of final
+//!   return on the pendulum, the reward of one more sample at the bottom.)
 //! * **Transitions and reward.** The agent's transition is
 //!   `(x̂_{k|k−1}, u_k) → x̂_{k+1|k}`. The plant's reward `ρ(x_k, u_k)` (Eq. 3.16: the state
 //!   *before* the interval and the action applied over it) is not known when `u_{k+1}` must
@@ -60,6 +62,9 @@ pub struct Sample<'a> {
     pub step: usize,
     /// The trial's start: `y` is the known start state `x_0`.
     pub start: bool,
+    /// Predictive timing, right after the start: `y` is `x_0` again and `u_next` the first
+    /// interval's action, the answer to the start sample.
+    pub primed: bool,
     /// The trial's last sample (its `N`-th, or the one that left the operating range).
     pub end: bool,
     /// The state has left the operating range (with `end`).
@@ -169,10 +174,23 @@ impl Front {
         // The action applied from t_k, made safe as the plant does.
         self.task.saturate(s.u_next, &mut self.u);
         let mut reward = s.reward;
-        let call = if s.start {
+        if s.start {
+            // The start state is known: the agent acts on it (u_0).
             self.observer.reset(s.y);
             self.closed = false;
-            Call::Start
+            self.x.copy_from_slice(s.y);
+            return ToAgent {
+                call: Call::Start,
+                reward,
+                x: &self.x,
+                u_prev: &self.u,
+                step: 0,
+            };
+        }
+        let call = if s.primed {
+            // (x_0, u_0) → x̂_{1|0}: self.x still holds x_0.
+            reward = self.task.reward.reward(&self.x, &self.u);
+            Call::Learn
         } else {
             let x_k = self.observer.update(s.y, s.u_applied);
             if self.closed || (s.end && !s.terminal) {
@@ -257,6 +275,7 @@ mod tests {
         Sample {
             step,
             start: step == 0,
+            primed: false,
             end,
             terminal,
             y,
@@ -266,17 +285,39 @@ mod tests {
         }
     }
 
-    /// Predictive timing: the agent starts in x̂_{1|0}, its last transition is learned at
+    /// Predictive timing: the agent starts in x_0 (its answer is the first interval's
+    /// action u_0), then learns (x_0, u_0) → x̂_{1|0}; its last transition is learned at
     /// sample N − 1, the plant's last sample only closes the trial; rewards are ρ(x̂_k, u_k).
     #[test]
     fn predictive_calls_over_a_trial() {
         let (task, mut f) = front(true);
         let n = task.steps_per_trial();
-        let (x0, u) = ([1.0, 0.0], [2.0]);
+        let (x0, u0, u) = ([1.0, 0.0], [-3.0], [2.0]);
         let t = f.sample(&sample(0, false, false, &x0, &[0.0]));
-        assert_eq!((t.call, t.step), (Call::Start, 1));
-        // x̂_{1|0} = f(x_0, 0): 1 rad from upright, the pendulum falls away from it.
+        assert_eq!((t.call, t.step, t.x), (Call::Start, 0, &x0[..]));
+        let primed = Sample {
+            primed: true,
+            start: false,
+            ..sample(0, false, false, &x0, &u0)
+        };
+        let t = f.sample(&primed);
+        assert_eq!((t.call, t.step, t.u_prev), (Call::Learn, 1, &u0[..]));
+        assert_eq!(t.reward, task.reward.reward(&x0, &u0));
+        // x̂_{1|0} = f(x_0, −3): 1 rad from upright, still falling away from it.
         assert!(t.x[1] > 0.0 && t.x[0] > 1.0, "{:?}", t.x);
+        let mut free = Front::new(
+            task.clone(),
+            Box::new(Predictive::new(task.clone(), PredictiveModel::Known, 1.0)),
+            true,
+        );
+        free.sample(&sample(0, false, false, &x0, &[0.0]));
+        let pushed = t.x[1];
+        let t = free.sample(&Sample {
+            primed: true,
+            start: false,
+            ..sample(0, false, false, &x0, &[0.0])
+        });
+        assert!(t.x[1] > pushed, "u_0 = −3 V slows the fall");
         for k in 1..n {
             let t = f.sample(&sample(k, false, false, &x0, &u));
             let want = if k + 1 == n { Call::Last } else { Call::Learn };
@@ -287,6 +328,11 @@ mod tests {
         assert_eq!(t.call, Call::Hold);
         // A terminal sample before the end closes the agent's pending transition.
         f.sample(&sample(0, false, false, &x0, &[0.0]));
+        f.sample(&Sample {
+            primed: true,
+            start: false,
+            ..sample(0, false, false, &x0, &u0)
+        });
         let t = f.sample(&sample(1, true, true, &x0, &u));
         assert_eq!((t.call, t.reward), (Call::Terminal, -7.0));
     }

@@ -166,11 +166,20 @@ impl Actuator {
         }
     }
 
-    /// A trial starts: predictive timing holds the safe action (zero) for the first
-    /// interval — no action has been computed from any sample yet.
+    /// A trial starts: predictive timing holds the safe action (zero) until
+    /// [`Actuator::prime`] gives the first interval's.
     pub fn reset(&mut self) {
         if let Some(p) = &mut self.pipelined {
             p.fill(0.0);
+        }
+    }
+
+    /// Predictive timing: `u_0`, the first interval's action — computed from the known
+    /// start state before the trial's first interval — is applied over that interval.
+    /// Nothing in direct timing.
+    pub fn prime(&mut self, u0: &[f64]) {
+        if let Some(p) = &mut self.pipelined {
+            p.copy_from_slice(u0);
         }
     }
 

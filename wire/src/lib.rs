@@ -51,6 +51,11 @@ pub mod flags {
     /// Observer → agent, predictive timing: nothing to learn or act on (the agent's
     /// trial is already closed); acknowledge.
     pub const HOLD: u64 = 64;
+    /// Plant → observer, predictive timing: the start state again, right after the
+    /// [`START`] exchange and before the trial's first interval, with `u_next` now the
+    /// answer to [`START`] — the first interval's action `u_0`, computed from the known
+    /// start state. The agent learns `(x_0, u_0) → x̂_{1|0}` and answers `u_1`.
+    pub const PRIMED: u64 = 128;
 }
 
 /// Header fields shared by all messages.

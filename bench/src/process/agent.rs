@@ -13,6 +13,9 @@ use crate::resume::CheckpointWriter;
 /// Runs the agent side of a run until the plant announces its end.
 pub fn run(args: &ProcessArgs) -> Result<()> {
     super::set_rt_priority(args.rt_priority)?;
+    if args.pin_cpus {
+        super::pin(super::Cpus::Rest)?;
+    }
     let cfg = args.config()?;
     let task = Task::new(cfg.system);
     let mut agent = ::agent::build(
@@ -66,8 +69,9 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                 reward: e.reward,
                 x,
                 u_prev: &e.u_applied[..m],
-                // The sample the action applies at: the next in predictive timing.
-                step: e.header.step as usize + usize::from(predictive),
+                // The sample the action applies at: the next in predictive timing (but the
+                // answer to the start state, u_0, applies at the start).
+                step: e.header.step as usize + usize::from(predictive && call != Call::Start),
             };
             act(agent.as_mut(), greedy, &t, &mut u);
             if !greedy && f & flags::END != 0 {

@@ -12,6 +12,10 @@
 //! agent:    Estimate ─► start_trial / learn / greedy    ─► Action (an acknowledgement at END)
 //! ```
 //!
+//! In predictive timing the start takes two exchanges before the first interval:
+//! `Measurement{START}` (the agent's answer is `u_0`) and `Measurement{PRIMED}` (`x_0`
+//! again, `u_next = u_0`; the answer is `u_1`), [`observer::timing`].
+//!
 //! Trials, greedy evaluation trials and the end of the run are the plant's to decide and
 //! announce ([`wire::flags`]).
 
@@ -72,6 +76,10 @@ pub struct ProcessArgs {
     /// or `rtprio` and `memlock` limits (limits.conf).
     #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
     pub rt_priority: Option<u8>,
+    /// Pin this process: the plant alone on the last CPU, the observer and the agent on
+    /// the others — the clock's sampling instants undisturbed by the rig's own work.
+    #[arg(long)]
+    pub pin_cpus: bool,
     /// Agent only: answer every estimate with a zero action, without learning (for loop
     /// benchmarks).
     #[arg(long)]
@@ -151,6 +159,50 @@ pub fn set_rt_priority(priority: Option<u8>) -> Result<()> {
     if unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } != 0 {
         anyhow::bail!(
             "cannot lock this process's memory (mlockall) for --rt-priority {p}: {} (needs root, CAP_IPC_LOCK or a memlock limit in /etc/security/limits.conf)",
+            std::io::Error::last_os_error()
+        );
+    }
+    Ok(())
+}
+
+/// Where `--pin-cpus` puts a process.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cpus {
+    /// The last CPU: the plant, the clock (and the echo side of `rig latency`'s raw
+    /// ping-pong, so that the baseline crosses cores as plant → observer does).
+    Clock,
+    /// Every other CPU: the observer, the agent and the recording supervisor.
+    Rest,
+}
+
+/// Pins this process to `cpus` (`--pin-cpus`, `sched_setaffinity`): the clock gets a CPU
+/// that none of the rig's other work runs on (measured in the README, "Latency budget").
+pub fn pin(cpus: Cpus) -> Result<()> {
+    // SAFETY: `sysconf` reads a system constant.
+    let online = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) };
+    if online < 2 {
+        anyhow::bail!("--pin-cpus needs at least two CPUs; {online} are online");
+    }
+    let last = online as usize - 1;
+    let range = match cpus {
+        Cpus::Clock => last..last + 1,
+        Cpus::Rest => 0..last,
+    };
+    // SAFETY: `cpu_set_t` is plain data (all zeros: the empty set); `CPU_SET` writes a bit
+    // of it for CPUs below `CPU_SETSIZE`; `sched_setaffinity` reads the set for this
+    // process (pid 0).
+    let ok = unsafe {
+        let mut set: libc::cpu_set_t = std::mem::zeroed();
+        for c in range.clone() {
+            libc::CPU_SET(c, &mut set);
+        }
+        libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set) == 0
+    };
+    if !ok {
+        anyhow::bail!(
+            "cannot pin this process to CPUs {}–{} (--pin-cpus): {}",
+            range.start,
+            range.end - 1,
             std::io::Error::last_os_error()
         );
     }

@@ -43,6 +43,9 @@ pub fn call_of(f: u64) -> Call {
 /// Runs the observer side of a run until the plant announces its end.
 pub fn run(args: &ProcessArgs) -> Result<()> {
     super::set_rt_priority(args.rt_priority)?;
+    if args.pin_cpus {
+        super::pin(super::Cpus::Rest)?;
+    }
     let cfg = args.config()?;
     let task = Arc::new(Task::new(cfg.system));
     let mut front = crate::experiment::front(&task, &cfg);
@@ -74,6 +77,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
             let t = front.sample(&Sample {
                 step: m.header.step as usize,
                 start: f & flags::START != 0,
+                primed: f & flags::PRIMED != 0,
                 end: f & flags::END != 0,
                 terminal: f & flags::TERMINAL != 0,
                 y: &m.y[..n],

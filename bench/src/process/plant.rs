@@ -26,6 +26,9 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
     // The clock one level above the observer and the agent: its sampling instant is not
     // held up by their compute on the same core.
     super::set_rt_priority(args.rt_priority.map(|p| p.saturating_add(1).min(99)))?;
+    if args.pin_cpus {
+        super::pin(super::Cpus::Clock)?;
+    }
     let cfg = args.config()?;
     let task = Arc::new(Task::new(cfg.system));
     let bus = Bus::join(&args.run_id, "plant").map_err(wire_err)?;
@@ -55,6 +58,9 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         misses: 0,
     };
     let mut runner: Box<dyn Trials> = match &args.driver {
+        Some(_) if cfg.observer.mode == ::agent::config::ObserverMode::Predictive => bail!(
+            "predictive timing (`observer.mode = \"predictive\"`) needs the simulated plant: an external driver applies each action as it arrives (use `--observer-mode direct`)"
+        ),
         Some(id) => Box::new(super::external::Bridge::connect(link, id, args)?),
         None => {
             link.out
@@ -317,7 +323,7 @@ impl PlantLoop {
             Some(u) => l.u_next.copy_from_slice(u),
             None => l.u_next.fill(f64::NAN),
         }
-        l.delay_s = if header.flags & flags::START != 0 {
+        l.delay_s = if header.flags & (flags::START | flags::PRIMED) != 0 {
             0.0
         } else {
             self.actuator.last_delay()
@@ -386,17 +392,38 @@ impl PlantLoop {
             t0,
             ts: self.link.task.ts,
         };
+        let mut first = flags::START;
+        if self.pipelined {
+            // The first interval's action u_0 from the known start state, before the clock
+            // starts (observer::timing, trial start); the start instant moves on by one
+            // period for it.
+            let h = header.at(self.link.seq, 0, flags::START);
+            self.publish(h, 0.0, now_ns())?;
+            let a = self
+                .link
+                .actions
+                .recv(&self.link.bus, SILENCE)
+                .map_err(wire_err)?;
+            Link::check_answer(&a, h.seq)?;
+            u_hold = a.u[..self.link.task.action_dim()].to_vec();
+            self.link.u_next.clone_from(&u_hold);
+            let c = self.realtime.as_mut().expect("realtime");
+            c.next_ns = c.next_ns.max(now_ns()) + c.period_ns;
+            first = flags::PRIMED;
+        }
         let mut t_k = self.realtime.as_ref().expect("realtime").next_ns;
         sleep_until(t_k, spin_ns);
         let mut woke = now_ns();
-        self.publish(header.at(self.link.seq, 0, flags::START), 0.0, t_k)?;
+        self.publish(header.at(self.link.seq, 0, first), 0.0, t_k)?;
         let mut ended_after = None;
         for k in 0..=steps {
             let waiting_for = self.link.seq - 1;
             let deadline = t_k + period_ns;
             // Collect the actions arriving in [t_k, deadline). The plant owns the clock and
             // polls (every 20 µs) rather than blocking on the event service: blocking waits
-            // shorter than a period were seen not to wake on arrival in this mode.
+            // shorter than a period were seen not to wake on arrival in this mode. In the
+            // last `spin_ns` before the deadline it polls without sleeping, so that the
+            // next sampling instant does not depend on when the operating system wakes it.
             let mut arrivals: Vec<(u64, Vec<f64>)> = Vec::new();
             let mut answered = false;
             let mut t_answer = 0;
@@ -406,10 +433,15 @@ impl PlantLoop {
                     break;
                 }
                 let Some(a) = self.link.actions.try_recv().map_err(wire_err)? else {
-                    std::thread::sleep(
-                        std::time::Duration::from_micros(20)
-                            .min(std::time::Duration::from_nanos(deadline - now)),
-                    );
+                    let left = deadline - now;
+                    if left > spin_ns {
+                        std::thread::sleep(
+                            std::time::Duration::from_micros(20)
+                                .min(std::time::Duration::from_nanos(left - spin_ns)),
+                        );
+                    } else {
+                        std::hint::spin_loop();
+                    }
                     continue;
                 };
                 {
@@ -495,6 +527,12 @@ impl Trials for PlantLoop {
             ts: task.ts,
         };
         let mut u = self.exchange(header.at(self.link.seq, 0, flags::START), 0.0)?;
+        if self.pipelined {
+            // The answer to the start state is the first interval's action u_0; told so,
+            // the agent answers u_1 (observer::timing, trial start).
+            self.actuator.prime(&u);
+            u = self.exchange(header.at(self.link.seq, 0, flags::PRIMED), 0.0)?;
+        }
         for k in 0..steps {
             let r = self.actuator.interval(&mut self.plant, &u);
             let end = self.end_flags(k + 1 == steps);
