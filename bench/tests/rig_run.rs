@@ -896,10 +896,10 @@ fn latency_times_every_stage_of_every_cycle() {
     }
 }
 
-#[test]
-fn latency_pins_the_plant_to_a_cpu_of_its_own_or_says_why_not() {
-    let dir = tmp("latency-pin");
-    let out = rig()
+/// `rig latency` for 50 cycles at 3 ms with 200 raw round trips and `extra`, into
+/// `tmp(name)`.
+fn short_latency(name: &str, extra: &[&str]) -> std::process::Output {
+    rig()
         .args([
             "latency",
             "--cycles",
@@ -908,12 +908,17 @@ fn latency_pins_the_plant_to_a_cpu_of_its_own_or_says_why_not() {
             "3",
             "--raw-samples",
             "200",
-            "--pin-cpus",
-            "--out",
         ])
-        .arg(&dir)
+        .args(extra)
+        .arg("--out")
+        .arg(tmp(name))
         .output()
-        .unwrap();
+        .unwrap()
+}
+
+#[test]
+fn latency_pins_the_plant_to_a_cpu_of_its_own_or_says_why_not() {
+    let out = short_latency("latency-pin", &["--pin-cpus"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
     let cpus = std::thread::available_parallelism().map_or(1, usize::from);
@@ -928,22 +933,7 @@ fn latency_pins_the_plant_to_a_cpu_of_its_own_or_says_why_not() {
 #[test]
 fn latency_runs_under_a_real_time_priority_or_says_why_not() {
     let dir = tmp("latency-rt");
-    let out = rig()
-        .args([
-            "latency",
-            "--cycles",
-            "50",
-            "--period-ms",
-            "3",
-            "--raw-samples",
-            "200",
-            "--rt-priority",
-            "5",
-            "--out",
-        ])
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = short_latency("latency-rt", &["--rt-priority", "5"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
     if out.status.success() {
