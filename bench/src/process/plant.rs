@@ -399,11 +399,17 @@ impl PlantLoop {
             // period for it.
             let h = header.at(self.link.seq, 0, flags::START);
             self.publish(h, 0.0, now_ns())?;
-            let a = self
-                .link
-                .actions
-                .recv(&self.link.bus, SILENCE)
-                .map_err(wire_err)?;
+            let a = loop {
+                let a = self
+                    .link
+                    .actions
+                    .recv(&self.link.bus, SILENCE)
+                    .map_err(wire_err)?;
+                // A late answer to the last trial's final sample is stale here: skip it.
+                if a.header.seq >= h.seq {
+                    break a;
+                }
+            };
             Link::check_answer(&a, h.seq)?;
             u_hold = a.u[..self.link.task.action_dim()].to_vec();
             self.link.u_next.clone_from(&u_hold);
