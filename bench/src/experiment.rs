@@ -221,13 +221,14 @@ impl Experiment {
             ret += r;
             if predictive {
                 // x̂_{k+1|k} against x_{k+1}.
-                (self.acted_on_error).add(&self.task, &acted_on, self.plant.state());
+                self.acted_on_error
+                    .add(&self.task, &acted_on, self.plant.state());
             }
             let terminated = self.sample(k, r, false, &mut u);
             if !predictive && k + 1 < steps {
                 // x̂_{k+1} against x_{k+1}.
                 let x = self.front.acted_on();
-                (self.acted_on_error).add(&self.task, x, self.plant.state());
+                self.acted_on_error.add(&self.task, x, self.plant.state());
             }
             if terminated {
                 self.skipped_samples += (steps - k - 1) as u64;
@@ -254,26 +255,28 @@ impl Experiment {
     fn start(&mut self, x0: &[f64], greedy: bool, u: &mut [f64]) {
         self.plant.reset(x0);
         self.actuator.reset();
-        for primed in [false, true] {
-            if primed {
-                if !self.front.is_predictive() {
-                    return;
-                }
-                self.actuator.prime(u);
-            }
-            let t = self.front.sample(&AtSample {
-                step: 0,
-                start: !primed,
-                primed,
-                end: false,
-                terminal: false,
-                y: self.plant.state(),
-                reward: 0.0,
-                u_applied: self.plant.applied_action(),
-                u_next: self.actuator.next_action().unwrap_or(&[]),
-            });
-            act(self.agent.as_mut(), greedy, &t, u);
+        self.start_sample(false, greedy, u);
+        if self.front.is_predictive() {
+            self.actuator.prime(u);
+            self.start_sample(true, greedy, u);
         }
+    }
+
+    /// The start state as a sample — the trial's start, or (`primed`, predictive timing)
+    /// the start again with the first interval's action — and the agent's answer into `u`.
+    fn start_sample(&mut self, primed: bool, greedy: bool, u: &mut [f64]) {
+        let t = self.front.sample(&AtSample {
+            step: 0,
+            start: !primed,
+            primed,
+            end: false,
+            terminal: false,
+            y: self.plant.state(),
+            reward: 0.0,
+            u_applied: self.plant.applied_action(),
+            u_next: self.actuator.next_action().unwrap_or(&[]),
+        });
+        act(self.agent.as_mut(), greedy, &t, u);
     }
 
     /// Sample `k + 1` after interval `k` (reward `r`): measure, estimate, let the agent act
