@@ -215,6 +215,12 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     if opts.cycles == 0 {
         bail!("`--cycles` must be at least 1");
     }
+    if opts.mode == ObserverMode::Predictive && opts.observer != ObserverKind::Predictive {
+        bail!(
+            "`--observer-mode predictive` (rig latency's default) needs `--observer predictive` (its process model predicts x̂_(k+1|k)); with `--observer {}` add `--observer-mode direct`",
+            opts.observer
+        );
+    }
     std::fs::create_dir_all(&opts.out)
         .with_context(|| format!("cannot create {}", opts.out.display()))?;
     let exe = std::env::current_exe().context("cannot find the rig executable")?;

@@ -187,6 +187,19 @@ fn sensor_and_observer_flags_are_validated_and_written_to_the_config() {
         toml.contains("[observer]") && toml.contains("\"predictive\""),
         "{toml}"
     );
+    // rig latency's default timing is predictive: a finite-difference observer is told
+    // which flags fit, before anything runs.
+    let out = rig()
+        .args(["latency", "--observer", "finite-difference", "--out"])
+        .arg(dir.join("latency"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--observer-mode direct") && err.lines().count() == 1,
+        "{err}"
+    );
 }
 
 #[test]
