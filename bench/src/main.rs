@@ -160,9 +160,24 @@ struct LatencyArgs {
     /// Raw ping-pong round trips for the baseline.
     #[arg(long, default_value_t = 20_000)]
     raw_samples: usize,
-    /// The plant spins (a busy core) instead of sleeping for the last this many µs before
-    /// each sampling instant (`rig plant --spin-us`); larger values trade CPU for less
-    /// sample-instant jitter.
+    #[command(flatten)]
+    realtime_flags: RealtimeFlags,
+    /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
+    /// until one misses a deadline; writes DIR/sweep.csv and names the fastest period
+    /// sustained for `--cycles` cycles without a miss.
+    #[arg(long)]
+    sweep: bool,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "out/latency")]
+    out: PathBuf,
+}
+
+/// How the realtime loop is scheduled (`rig run`, `rig latency`).
+#[derive(Args)]
+struct RealtimeFlags {
+    /// Realtime: the plant spins (a busy core) instead of sleeping for the last this many
+    /// µs before each sampling instant, so that the instant does not depend on the
+    /// operating system's wake-up latency; larger values trade CPU for less jitter.
     #[arg(long, value_name = "US", default_value_t = rig::process::SPIN_US)]
     spin_us: u64,
     /// Run the processes under the real-time scheduling policy SCHED_FIFO at this
@@ -176,14 +191,6 @@ struct LatencyArgs {
     /// sampling instants (sched_setaffinity; needs at least two CPUs).
     #[arg(long)]
     pin_cpus: bool,
-    /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
-    /// until one misses a deadline; writes DIR/sweep.csv and names the fastest period
-    /// sustained for `--cycles` cycles without a miss.
-    #[arg(long)]
-    sweep: bool,
-    /// Output directory.
-    #[arg(long, value_name = "DIR", default_value = "out/latency")]
-    out: PathBuf,
 }
 
 #[derive(Args)]
@@ -221,22 +228,8 @@ struct RunArgs {
     /// sample period takes 3 ms).
     #[arg(long, default_value_t = 1.0)]
     speed: f64,
-    /// Realtime only: the plant spins (a busy core) instead of sleeping for the last
-    /// this many µs before each sampling instant, so that the instant does not depend on
-    /// the operating system's wake-up latency.
-    #[arg(long, value_name = "US", default_value_t = rig::process::SPIN_US)]
-    spin_us: u64,
-    /// Run the processes under the real-time scheduling policy SCHED_FIFO at this
-    /// priority (1–99; the plant, the clock, one above the observer and the agent), ahead
-    /// of all ordinary work on the machine, their memory locked (mlockall); needs root,
-    /// CAP_SYS_NICE and CAP_IPC_LOCK, or rtprio and memlock limits.
-    #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
-    rt_priority: Option<u8>,
-    /// Pin the plant (the clock) alone on the last CPU and the observer, the agent and
-    /// the recorder on the others, so that the rig's own work does not disturb the
-    /// sampling instants (sched_setaffinity; needs at least two CPUs).
-    #[arg(long)]
-    pin_cpus: bool,
+    #[command(flatten)]
+    realtime_flags: RealtimeFlags,
     /// `sim`: the plant process simulates the system. `external`: a driver someone else
     /// started (docs/driver.md; e.g. examples/python_driver/driver.py) is the system and
     /// the clock; `rig run` waits for it, and the plant process resets it before each
@@ -551,9 +544,9 @@ fn main() -> ExitCode {
                 observer: args.observer,
                 mode: args.observer_mode,
                 raw_samples: args.raw_samples,
-                spin_us: args.spin_us,
-                rt_priority: args.rt_priority,
-                pin_cpus: args.pin_cpus,
+                spin_us: args.realtime_flags.spin_us,
+                rt_priority: args.realtime_flags.rt_priority,
+                pin_cpus: args.realtime_flags.pin_cpus,
                 verbose: true,
             };
             let done = if args.sweep {
@@ -665,9 +658,9 @@ fn main() -> ExitCode {
                 realtime,
                 driver,
                 cycles_out: None,
-                spin_us: args.spin_us,
-                rt_priority: args.rt_priority,
-                pin_cpus: args.pin_cpus,
+                spin_us: args.realtime_flags.spin_us,
+                rt_priority: args.realtime_flags.rt_priority,
+                pin_cpus: args.realtime_flags.pin_cpus,
             };
             match run(&cfg, &opts) {
                 Ok(s) => {
