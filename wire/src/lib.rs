@@ -575,6 +575,44 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
         }
     }
 
+    /// Waits until a message may have arrived or until monotonic time `t_ns`, whichever
+    /// comes first; [`Rx::try_recv`] then tells which. Unlike [`Rx::recv_timeout`]
+    /// (the socket's receive timeout, in whole scheduler ticks) the deadline is kept to
+    /// the high-resolution timer's precision: `ppoll(2)` on the listener's socket, whose
+    /// pending wake-ups are then cleared. A signal ends the wait early.
+    pub fn wait_until(&self, t_ns: u64) -> Result<(), Error> {
+        let left = t_ns.saturating_sub(now_ns());
+        if left == 0 {
+            return Ok(());
+        }
+        let timeout = libc::timespec {
+            tv_sec: (left / 1_000_000_000) as libc::time_t,
+            tv_nsec: (left % 1_000_000_000) as libc::c_long,
+        };
+        let mut fd = libc::pollfd {
+            // SAFETY: the descriptor is the listener's own and outlives the call.
+            fd: unsafe { self.listener.file_descriptor().native_handle() },
+            events: libc::POLLIN,
+            revents: 0,
+        };
+        // SAFETY: one valid pollfd, a valid timeout, no signal mask change.
+        let ready = unsafe { libc::ppoll(&mut fd, 1, &timeout, std::ptr::null()) };
+        if ready < 0 {
+            let e = std::io::Error::last_os_error();
+            return match e.kind() {
+                std::io::ErrorKind::Interrupted => Ok(()),
+                _ => Err(e.into()),
+            };
+        }
+        if ready > 0 {
+            match self.listener.try_wait(|_| {}) {
+                Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) | Ok(_) => {}
+                Err(e) => return Err(e.into()),
+            }
+        }
+        Ok(())
+    }
+
     /// The next message, waiting as long as it takes; errors on Ctrl-C, when a process
     /// of the run has stopped or died (checked every 100 ms of waiting), or when no
     /// message arrives for `silence`.

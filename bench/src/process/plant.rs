@@ -264,6 +264,26 @@ struct PlantLoop {
     pipelined: bool,
 }
 
+/// The actions that arrived within one realtime interval, with their arrival times.
+#[derive(Default)]
+struct Arrivals {
+    /// `(t_arrival_ns, u)` in order of arrival.
+    list: Vec<(u64, Vec<f64>)>,
+    /// When the answer to the interval's sample arrived.
+    answered: Option<u64>,
+}
+
+impl Arrivals {
+    /// Notes action `a`, arrived at `t_a`; it answers the interval's sample if its
+    /// sequence number is `waiting_for`.
+    fn push(&mut self, a: &Action, t_a: u64, waiting_for: u64, task: &Task) {
+        self.list.push((t_a, a.u[..task.action_dim()].to_vec()));
+        if a.header.seq == waiting_for {
+            self.answered = Some(t_a);
+        }
+    }
+}
+
 /// Headers of one trial's samples.
 pub(super) struct TrialHeader {
     pub(super) trial: u64,
@@ -296,6 +316,12 @@ struct Clock {
     /// How long before each instant the plant spins instead of sleeping \[ns\].
     spin_ns: u64,
 }
+
+/// The last stretch before a sampling instant in which the realtime plant only reads the
+/// clock: no transport call, whose duration varies, runs into the instant. An action
+/// that arrives within it is found after the instant — for the answer, a deadline miss
+/// \[ns\].
+const APPROACH_NS: u64 = 20_000;
 
 /// Sleeps, then spins the last `spin_ns`, until monotonic time `t_ns`: the sleep may
 /// overshoot (the operating system's wake-up latency, on a virtual machine up to
@@ -417,52 +443,72 @@ impl PlantLoop {
             c.next_ns = c.next_ns.max(now_ns()) + c.period_ns;
             first = flags::PRIMED;
         }
+        // Room for the trial's timing records now, before the clock runs: a vector that
+        // grows within the loop copies itself at a sampling instant.
+        self.link.latencies.reserve(steps + 2);
+        if self.record_cycles {
+            self.link.cycles.reserve(steps + 2);
+        }
         let mut t_k = self.realtime.as_ref().expect("realtime").next_ns;
         sleep_until(t_k, spin_ns);
         let mut woke = now_ns();
         self.publish(header.at(self.link.seq, 0, first), 0.0, t_k)?;
         let mut ended_after = None;
+        // An action received only after the instant it was waited for.
+        let mut late: Option<(u64, Action)> = None;
         for k in 0..=steps {
             let waiting_for = self.link.seq - 1;
             let deadline = t_k + period_ns;
-            // Collect the actions arriving in [t_k, deadline). The plant owns the clock and
-            // polls (every 20 µs) rather than blocking on the event service: blocking waits
-            // shorter than a period were seen not to wake on arrival in this mode. In the
-            // last `spin_ns` before the deadline it polls without sleeping, so that the
-            // next sampling instant does not depend on when the operating system wakes it.
-            let mut arrivals: Vec<(u64, Vec<f64>)> = Vec::new();
-            let mut answered = false;
-            let mut t_answer = 0;
+            // Collect the actions arriving in [t_k, deadline). The plant waits for them
+            // (`Rx::wait_until`: woken by an arrival, or at `spin_ns` before the deadline,
+            // to the high-resolution timer's precision); in those last `spin_ns` it polls
+            // without sleeping, and in the last `APPROACH_NS` it only reads the clock, so
+            // that the next sampling instant depends neither on when the operating system
+            // wakes it nor on the transport.
+            let mut arrivals = Arrivals::default();
+            if let Some((t_a, a)) = late.take() {
+                arrivals.push(&a, t_a.min(deadline), waiting_for, &self.link.task);
+            }
             loop {
                 let now = now_ns();
-                if now >= deadline {
+                if now + APPROACH_NS >= deadline {
                     break;
                 }
                 let Some(a) = self.link.actions.try_recv().map_err(wire_err)? else {
                     let left = deadline - now;
                     if left > spin_ns {
-                        std::thread::sleep(
-                            std::time::Duration::from_micros(20)
-                                .min(std::time::Duration::from_nanos(left - spin_ns)),
-                        );
+                        self.link
+                            .actions
+                            .wait_until(deadline - spin_ns)
+                            .map_err(wire_err)?;
                     } else {
                         std::hint::spin_loop();
                     }
                     continue;
                 };
-                {
-                    let t_a = now_ns().min(deadline);
-                    arrivals.push((t_a, a.u[..self.link.task.action_dim()].to_vec()));
-                    if a.header.seq == waiting_for {
-                        self.link.latencies.push(t_a.saturating_sub(t_k));
-                        answered = true;
-                        t_answer = t_a;
-                    }
+                let t_a = now_ns();
+                if t_a >= deadline {
+                    // Received across the instant (the call was held up): the next
+                    // interval's.
+                    late = Some((t_a, a));
+                    break;
                 }
+                arrivals.push(&a, t_a, waiting_for, &self.link.task);
             }
-            if !answered {
-                self.link.misses += 1;
+            while now_ns() < deadline {
+                std::hint::spin_loop();
             }
+            let woke_next = now_ns();
+            let t_answer = match arrivals.answered {
+                Some(t_a) => {
+                    self.link.latencies.push(t_a.saturating_sub(t_k));
+                    t_a
+                }
+                None => {
+                    self.link.misses += 1;
+                    0
+                }
+            };
             if self.record_cycles {
                 self.link.cycles.push([waiting_for, t_k, woke, t_answer]);
             }
@@ -479,16 +525,16 @@ impl PlantLoop {
                 if let Some(u) = pending.take() {
                     u_hold = u;
                 }
-                pending = arrivals.last().map(|(_, u)| u.clone());
+                pending = arrivals.list.last().map(|(_, u)| u.clone());
             } else {
-                for (t_a, u) in &arrivals {
+                for (t_a, u) in &arrivals.list {
                     self.plant.advance(&u_hold, sim(t_a - t));
                     u_hold.clone_from(u);
                     t = *t_a;
                 }
             }
             self.plant.advance(&u_hold, sim(deadline - t));
-            if self.plant.safety().period(!arrivals.is_empty()) {
+            if self.plant.safety().period(!arrivals.list.is_empty()) {
                 // No action for a whole period: the safe action from this instant on.
                 u_hold.fill(0.0);
                 pending = None;
@@ -504,8 +550,7 @@ impl PlantLoop {
                     .reward
                     .reward(&x_k_reward_state, self.plant.applied_action()),
             );
-            sleep_until(deadline, spin_ns);
-            woke = now_ns();
+            woke = woke_next;
             t_k = deadline;
             let end = self.end_flags(k + 1 == steps);
             self.publish(header.at(self.link.seq, k + 1, end), r, t_k)?;
