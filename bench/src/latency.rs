@@ -21,8 +21,9 @@
 //! observer            observer published − observer received
 //! observer→agent      agent received − observer published
 //! agent               agent published − agent received
-//! agent→plant         plant found the action − agent published (the plant polls every
-//!                     20 µs in realtime, so this hop includes up to one poll interval)
+//! agent→plant         plant found the action − agent published (the plant waits on the
+//!                     action topic's event and wakes on arrival, so this hop includes a
+//!                     wake-up, as the raw hop does)
 //! sample→actuation    plant found the action − t_k (direct timing: the action is applied
 //!                     from then on; predictive timing: it is applied at t_{k+1}, so this
 //!                     is the budget used of the one-sample pipeline)
@@ -30,7 +31,9 @@
 //! ```
 //!
 //! A cycle whose action did not arrive within the period is a deadline miss (its later
-//! stages are left empty in `latency.csv`). Outputs: `DIR/latency.csv` (one row per
+//! stages are left empty in `latency.csv`). The summary also reports what the machine
+//! did meanwhile ([`MachineLoad`]: load average, the hypervisor's steal time, interrupts
+//! on the plant's CPU), to tell the rig's outliers from the machine's. Outputs: `DIR/latency.csv` (one row per
 //! cycle: the timestamps, then every stage in ns), `DIR/summary.txt` (what is printed),
 //! `DIR/latency.png` / `.svg` (histograms of the stages).
 
@@ -119,6 +122,89 @@ pub struct LatencyReport {
     pub raw_rtt: Stats,
     /// Per stage ([`STAGES`]), over the cycles that met their deadline \[µs\].
     pub stages: Vec<(&'static str, Stats)>,
+    /// What the machine did meanwhile (Linux `/proc`; `None` elsewhere).
+    pub machine: Option<MachineLoad>,
+}
+
+/// The machine's own counters over the rig's run, to tell the rig's outliers from the
+/// machine's: time the hypervisor ran something else on the virtual CPUs (steal), and the
+/// interrupts taken by the plant's CPU.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MachineLoad {
+    /// 1-minute load average when the run started.
+    pub load_avg: f64,
+    /// Steal time over the run, all CPUs \[ms\].
+    pub steal_ms: f64,
+    /// The CPU the plant ran on (the last one when pinned), if known.
+    pub plant_cpu: Option<usize>,
+    /// Interrupts the plant's CPU took over the run (all CPUs' when not pinned).
+    pub interrupts: u64,
+}
+
+/// Counters of `/proc/stat`, `/proc/interrupts` and `/proc/loadavg` at one moment.
+struct Counters {
+    load_avg: f64,
+    /// Steal, in clock ticks (`USER_HZ`).
+    steal_ticks: u64,
+    /// Interrupts per CPU since boot.
+    interrupts: Vec<u64>,
+}
+
+impl Counters {
+    /// The counters now; `None` where `/proc` does not have them.
+    fn read() -> Option<Self> {
+        let stat = std::fs::read_to_string("/proc/stat").ok()?;
+        // cpu  user nice system idle iowait irq softirq steal ...
+        let steal_ticks = stat
+            .lines()
+            .next()?
+            .split_whitespace()
+            .nth(8)?
+            .parse()
+            .ok()?;
+        let irq = std::fs::read_to_string("/proc/interrupts").ok()?;
+        let mut lines = irq.lines();
+        let ncpu = lines.next()?.split_whitespace().count();
+        let mut interrupts = vec![0u64; ncpu];
+        for line in lines {
+            let counts = line.split_whitespace().skip(1).take(ncpu);
+            for (total, c) in interrupts.iter_mut().zip(counts) {
+                match c.parse::<u64>() {
+                    Ok(c) => *total += c,
+                    Err(_) => break,
+                }
+            }
+        }
+        let load_avg = std::fs::read_to_string("/proc/loadavg")
+            .ok()?
+            .split_whitespace()
+            .next()?
+            .parse()
+            .ok()?;
+        Some(Self {
+            load_avg,
+            steal_ticks,
+            interrupts,
+        })
+    }
+
+    /// What changed from `self` to `after`; the plant's CPU is the last one if pinned.
+    fn until(&self, after: &Self, pinned: bool) -> MachineLoad {
+        // SAFETY: sysconf has no preconditions.
+        let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) }.max(1) as f64;
+        let plant_cpu = pinned.then(|| after.interrupts.len().saturating_sub(1));
+        let delta = |i: usize| after.interrupts[i].saturating_sub(self.interrupts[i]);
+        let interrupts = match plant_cpu {
+            Some(c) => delta(c),
+            None => (0..after.interrupts.len()).map(delta).sum(),
+        };
+        MachineLoad {
+            load_avg: self.load_avg,
+            steal_ms: after.steal_ticks.saturating_sub(self.steal_ticks) as f64 * 1e3 / hz,
+            plant_cpu,
+            interrupts,
+        }
+    }
 }
 
 impl LatencyReport {
@@ -160,6 +246,19 @@ impl LatencyReport {
             self.raw_rtt.p99,
             self.raw_hop_p50()
         );
+        if let Some(m) = &self.machine {
+            let cpu = m
+                .plant_cpu
+                .map_or("all CPUs".to_string(), |c| format!("the plant's CPU {c}"));
+            let _ = writeln!(
+                s,
+                "machine during the run: load average {:.2} at the start, guest steal {:.0} ms, {} interrupts on {cpu} ({:.1} per cycle)",
+                m.load_avg,
+                m.steal_ms,
+                m.interrupts,
+                m.interrupts as f64 / self.cycles.max(1) as f64
+            );
+        }
         let _ = writeln!(
             s,
             "{:<20} {:>9} {:>9} {:>9} {:>9} {:>9}  {:>10}",
@@ -249,6 +348,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     let speed = task.ts / (opts.period_ms * 1e-3);
     let run_dir = opts.out.join("run");
     let cycles_path = run_dir.join("plant_cycles.csv");
+    let before = Counters::read();
     run(
         &cfg,
         &RunOptions {
@@ -264,6 +364,9 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
             pin_cpus: opts.pin_cpus,
         },
     )?;
+    let machine = before
+        .zip(Counters::read())
+        .map(|(b, a)| b.until(&a, opts.pin_cpus));
 
     let bytes = std::fs::read(run_dir.join("run.mcap"))?;
     let mut msgs: BTreeMap<String, Vec<Vec<u8>>> = BTreeMap::new();
@@ -370,6 +473,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
         pin_cpus: opts.pin_cpus,
         raw_rtt,
         stages,
+        machine,
     };
     let summary = report.summary();
     write_atomic(&opts.out.join("summary.txt"), &summary)?;
