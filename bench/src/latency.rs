@@ -46,6 +46,7 @@ use anyhow::{Context, Result, anyhow, bail};
 
 use crate::learn::write_atomic;
 use crate::loop_bench::{Stats, raw_round_trips};
+use crate::process::Scheduling;
 use crate::report::plot::{Histogram, plot_histograms};
 use crate::run::{RunOptions, run};
 
@@ -65,14 +66,9 @@ pub struct LatencyOptions {
     pub mode: ObserverMode,
     /// Raw ping-pong round trips for the baseline.
     pub raw_samples: usize,
-    /// The plant's spin before each sampling instant \[µs\] (`rig plant --spin-us`).
-    pub spin_us: u64,
-    /// The three processes (and the raw ping-pong's two) under `SCHED_FIFO` at this
-    /// priority (`--rt-priority`).
-    pub rt_priority: Option<u8>,
-    /// The plant alone on the last CPU, the rest on the others; the ping-pong's echo on
-    /// the plant's CPU, its other end on the others (`--pin-cpus`).
-    pub pin_cpus: bool,
+    /// How the three processes (and the raw ping-pong's two, with the echo on the
+    /// plant's CPU when pinned) are scheduled.
+    pub scheduling: Scheduling,
     /// Print the summary.
     pub verbose: bool,
 }
@@ -112,12 +108,8 @@ pub struct LatencyReport {
     pub cycles: usize,
     /// Cycles whose action did not arrive within the period.
     pub misses: usize,
-    /// The plant's spin before each sampling instant \[µs\].
-    pub spin_us: u64,
-    /// The real-time priority the processes ran at, if any.
-    pub rt_priority: Option<u8>,
-    /// Whether the plant had a CPU of its own (`--pin-cpus`).
-    pub pin_cpus: bool,
+    /// How the processes were scheduled.
+    pub scheduling: Scheduling,
     /// Raw round trips \[µs\].
     pub raw_rtt: Stats,
     /// Per stage ([`STAGES`]), over the cycles that met their deadline \[µs\].
@@ -226,12 +218,13 @@ impl LatencyReport {
             "rig latency: {} cycles at {:.3} ms, angle sensor, plant spins {} µs, {}{}; deadline misses: {}",
             self.cycles,
             self.period_ns as f64 * 1e-6,
-            self.spin_us,
-            self.rt_priority
+            self.scheduling.spin_us,
+            self.scheduling
+                .rt_priority
                 .map_or("ordinary scheduling".to_string(), |p| format!(
                     "SCHED_FIFO {p}"
                 )),
-            if self.pin_cpus {
+            if self.scheduling.pin_cpus {
                 ", plant pinned to its own CPU"
             } else {
                 ""
@@ -324,11 +317,11 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
         .with_context(|| format!("cannot create {}", opts.out.display()))?;
     let exe = std::env::current_exe().context("cannot find the rig executable")?;
     // The baseline under the same policy: the ping-pong's partner process inherits it.
-    crate::process::set_rt_priority(opts.rt_priority)?;
-    if opts.pin_cpus {
+    crate::process::set_rt_priority(opts.scheduling.rt_priority)?;
+    if opts.scheduling.pin_cpus {
         crate::process::pin(crate::process::Cpus::Rest)?;
     }
-    let mut raw = raw_round_trips(&exe, &opts.out, opts.raw_samples, opts.pin_cpus)?;
+    let mut raw = raw_round_trips(&exe, &opts.out, opts.raw_samples, opts.scheduling.pin_cpus)?;
     let raw_rtt = Stats::of(&mut raw);
 
     let mut cfg = agent::config::resolve(
@@ -359,14 +352,12 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
             driver: None,
             resume: false,
             cycles_out: Some(cycles_path.clone()),
-            spin_us: opts.spin_us,
-            rt_priority: opts.rt_priority,
-            pin_cpus: opts.pin_cpus,
+            scheduling: opts.scheduling,
         },
     )?;
     let machine = before
         .zip(Counters::read())
-        .map(|(b, a)| b.until(&a, opts.pin_cpus));
+        .map(|(b, a)| b.until(&a, opts.scheduling.pin_cpus));
 
     let bytes = std::fs::read(run_dir.join("run.mcap"))?;
     let mut msgs: BTreeMap<String, Vec<Vec<u8>>> = BTreeMap::new();
@@ -468,9 +459,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
         period_ns,
         cycles,
         misses,
-        spin_us: opts.spin_us,
-        rt_priority: opts.rt_priority,
-        pin_cpus: opts.pin_cpus,
+        scheduling: opts.scheduling,
         raw_rtt,
         stages,
         machine,
@@ -587,4 +576,48 @@ pub fn sweep(opts: &LatencyOptions, factor: f64) -> Result<Vec<SweepPoint>> {
         period = (period / factor * 1000.0).round() / 1000.0;
     }
     Ok(points)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn machine_counters_are_read_and_differenced() {
+        if !cfg!(target_os = "linux") {
+            return;
+        }
+        let now = Counters::read().expect("/proc/stat, /proc/interrupts, /proc/loadavg");
+        // SAFETY: sysconf has no preconditions.
+        let online = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) } as usize;
+        assert_eq!(now.interrupts.len(), online);
+        assert!(
+            now.interrupts.iter().all(|&n| n > 0),
+            "{:?}",
+            now.interrupts
+        );
+        assert!(now.load_avg >= 0.0);
+        let later = Counters {
+            load_avg: 9.0,
+            steal_ticks: now.steal_ticks + 3,
+            interrupts: now
+                .interrupts
+                .iter()
+                .enumerate()
+                .map(|(i, n)| n + 10 * (i as u64 + 1))
+                .collect(),
+        };
+        let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) } as f64;
+        let pinned = now.until(&later, true);
+        assert_eq!(pinned.load_avg, now.load_avg);
+        assert!((pinned.steal_ms - 3e3 / hz).abs() < 1e-9);
+        assert_eq!(pinned.plant_cpu, Some(online - 1));
+        assert_eq!(pinned.interrupts, 10 * online as u64);
+        let all = now.until(&later, false);
+        assert_eq!(all.plant_cpu, None);
+        assert_eq!(
+            all.interrupts,
+            (1..=online as u64).map(|i| 10 * i).sum::<u64>()
+        );
+    }
 }

@@ -161,7 +161,7 @@ struct LatencyArgs {
     #[arg(long, default_value_t = 20_000)]
     raw_samples: usize,
     #[command(flatten)]
-    realtime_flags: RealtimeFlags,
+    scheduling: rig::process::Scheduling,
     /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
     /// until one misses a deadline; writes DIR/sweep.csv and names the fastest period
     /// sustained for `--cycles` cycles without a miss.
@@ -170,27 +170,6 @@ struct LatencyArgs {
     /// Output directory.
     #[arg(long, value_name = "DIR", default_value = "out/latency")]
     out: PathBuf,
-}
-
-/// How the realtime loop is scheduled (`rig run`, `rig latency`).
-#[derive(Args)]
-struct RealtimeFlags {
-    /// Realtime: the plant spins (a busy core) instead of sleeping for the last this many
-    /// µs before each sampling instant, so that the instant does not depend on the
-    /// operating system's wake-up latency; larger values trade CPU for less jitter.
-    #[arg(long, value_name = "US", default_value_t = rig::process::SPIN_US)]
-    spin_us: u64,
-    /// Run the processes under the real-time scheduling policy SCHED_FIFO at this
-    /// priority (1–99; the plant, the clock, one above the observer and the agent), ahead
-    /// of all ordinary work on the machine, their memory locked (mlockall); needs root,
-    /// CAP_SYS_NICE and CAP_IPC_LOCK, or rtprio and memlock limits.
-    #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
-    rt_priority: Option<u8>,
-    /// Pin the plant (the clock) alone on the last CPU and the observer, the agent and
-    /// the recorder on the others, so that the rig's own work does not disturb the
-    /// sampling instants (sched_setaffinity; needs at least two CPUs).
-    #[arg(long)]
-    pin_cpus: bool,
 }
 
 #[derive(Args)]
@@ -229,7 +208,7 @@ struct RunArgs {
     #[arg(long, default_value_t = 1.0)]
     speed: f64,
     #[command(flatten)]
-    realtime_flags: RealtimeFlags,
+    scheduling: rig::process::Scheduling,
     /// `sim`: the plant process simulates the system. `external`: a driver someone else
     /// started (docs/driver.md; e.g. examples/python_driver/driver.py) is the system and
     /// the clock; `rig run` waits for it, and the plant process resets it before each
@@ -544,9 +523,7 @@ fn main() -> ExitCode {
                 observer: args.observer,
                 mode: args.observer_mode,
                 raw_samples: args.raw_samples,
-                spin_us: args.realtime_flags.spin_us,
-                rt_priority: args.realtime_flags.rt_priority,
-                pin_cpus: args.realtime_flags.pin_cpus,
+                scheduling: args.scheduling,
                 verbose: true,
             };
             let done = if args.sweep {
@@ -658,9 +635,7 @@ fn main() -> ExitCode {
                 realtime,
                 driver,
                 cycles_out: None,
-                spin_us: args.realtime_flags.spin_us,
-                rt_priority: args.realtime_flags.rt_priority,
-                pin_cpus: args.realtime_flags.pin_cpus,
+                scheduling: args.scheduling,
             };
             match run(&cfg, &opts) {
                 Ok(s) => {

@@ -35,7 +35,7 @@ use wire::{Action, Bus, Estimate, Header, Measurement, Truth, flags, topic};
 
 use crate::experiment::TrialRecord;
 use crate::learn::{RUNS_HEADER, progress_bar, write_atomic, write_row};
-use crate::process::wire_err;
+use crate::process::{Scheduling, wire_err};
 use crate::record::{ChannelId, Field, FieldKind, Recorder, Value};
 use crate::resume::{self, ResumePoint};
 
@@ -58,14 +58,9 @@ pub struct RunOptions {
     /// Realtime, simulated plant: the plant writes every sample's timing to this file
     /// (`rig plant --cycles-out`, for `rig latency`).
     pub cycles_out: Option<PathBuf>,
-    /// Realtime, simulated plant: the plant spins this long before each sampling instant
-    /// instead of sleeping \[µs\] (`rig plant --spin-us`).
-    pub spin_us: u64,
-    /// Run the three processes under `SCHED_FIFO` at this priority (`--rt-priority`).
-    pub rt_priority: Option<u8>,
-    /// Pin the plant alone on the last CPU, the other processes (and this one) on the
-    /// rest (`--pin-cpus`).
-    pub pin_cpus: bool,
+    /// How the three processes are scheduled (`--spin-us`: realtime, simulated plant
+    /// only; `--pin-cpus` also pins this process with the observer and the agent).
+    pub scheduling: Scheduling,
 }
 
 /// An external driver in place of the simulated plant (`rig run --plant external`).
@@ -867,7 +862,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
             "--speed".into(),
             speed.to_string(),
             "--spin-us".into(),
-            opts.spin_us.to_string(),
+            opts.scheduling.spin_us.to_string(),
         ],
     };
     let first_seq = point.as_ref().map_or(0, |p| p.first_seq);
@@ -897,22 +892,14 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         ]);
     }
     role_args.insert("agent", agent_args);
-    if opts.pin_cpus {
+    if opts.scheduling.pin_cpus {
         crate::process::pin(crate::process::Cpus::Rest)?;
-        for role in ["agent", "observer", "plant"] {
-            role_args
-                .entry(role)
-                .or_default()
-                .push("--pin-cpus".to_string());
-        }
     }
-    if let Some(p) = opts.rt_priority {
-        for role in ["agent", "observer", "plant"] {
-            role_args
-                .entry(role)
-                .or_default()
-                .extend(["--rt-priority".to_string(), p.to_string()]);
-        }
+    for role in ["agent", "observer", "plant"] {
+        role_args
+            .entry(role)
+            .or_default()
+            .extend(opts.scheduling.process_args());
     }
     for role in ["agent", "observer", "plant"] {
         let log = opts.out.join(format!("{role}.log"));

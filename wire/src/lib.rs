@@ -697,4 +697,44 @@ mod tests {
         assert!(rx.try_recv().unwrap().is_none());
         assert!(Bus::join("bad id/..", "x").is_err());
     }
+
+    #[test]
+    fn wait_until_keeps_its_deadline_and_wakes_on_arrival() {
+        let run = format!("waittest{}", std::process::id());
+        let bus = Bus::join(&run, "test").unwrap();
+        let rx = bus.rx::<Action>(topic::ACTION).unwrap();
+        // Nothing sent: returns at the deadline — not a scheduler tick later, as a socket
+        // receive timeout would (generous bounds: a shared machine).
+        for wait_us in [300, 3_000] {
+            let t0 = now_ns();
+            rx.wait_until(t0 + wait_us * 1000).unwrap();
+            let waited = now_ns() - t0;
+            assert!(waited >= wait_us * 1000, "woke after {waited} ns");
+            assert!(
+                waited < wait_us * 1000 + 2_000_000,
+                "woke after {waited} ns"
+            );
+            assert!(rx.try_recv().unwrap().is_none());
+        }
+        // A message sent from another thread 20 ms into a 2 s wait ends it.
+        let sender = std::thread::spawn(move || {
+            let bus = Bus::join(&run, "sender").unwrap();
+            let tx = bus.tx::<Action>(topic::ACTION).unwrap();
+            std::thread::sleep(Duration::from_millis(20));
+            let mut a = Action::default();
+            a.header.seq = 9;
+            tx.send(a).unwrap();
+            std::thread::sleep(Duration::from_millis(200));
+        });
+        let t0 = now_ns();
+        let mut got = None;
+        while got.is_none() && now_ns() < t0 + 2_000_000_000 {
+            rx.wait_until(t0 + 2_000_000_000).unwrap();
+            got = rx.try_recv().unwrap();
+        }
+        let waited = now_ns() - t0;
+        assert_eq!(got.map(|a| a.header.seq), Some(9));
+        assert!(waited < 1_000_000_000, "woke {waited} ns after the start");
+        sender.join().unwrap();
+    }
 }

@@ -12,8 +12,8 @@ use crate::resume::CheckpointWriter;
 
 /// Runs the agent side of a run until the plant announces its end.
 pub fn run(args: &ProcessArgs) -> Result<()> {
-    super::set_rt_priority(args.rt_priority)?;
-    if args.pin_cpus {
+    super::set_rt_priority(args.scheduling.rt_priority)?;
+    if args.scheduling.pin_cpus {
         super::pin(super::Cpus::Rest)?;
     }
     let cfg = args.config()?;

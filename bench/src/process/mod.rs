@@ -38,6 +38,54 @@ pub const SILENCE: Duration = Duration::from_secs(10);
 /// How long a process waits for its peers to connect at start.
 pub const STARTUP: Duration = Duration::from_secs(30);
 
+/// How the realtime loop is scheduled: flags of `rig run`, `rig latency` and of each
+/// process (which `rig run` passes on, [`Scheduling::process_args`]).
+#[derive(Args, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Scheduling {
+    /// Realtime: the plant spins (a busy core) instead of sleeping for the last this many
+    /// µs before each sampling instant, so that the instant does not depend on the
+    /// operating system's wake-up latency; larger values trade CPU for less jitter.
+    #[arg(long, value_name = "US", default_value_t = SPIN_US)]
+    pub spin_us: u64,
+    /// Run the processes under the real-time scheduling policy SCHED_FIFO at this
+    /// priority (1–99; the plant, the clock, one above the observer and the agent), ahead
+    /// of all ordinary work on the machine, their memory locked (mlockall); needs root,
+    /// CAP_SYS_NICE and CAP_IPC_LOCK, or rtprio and memlock limits.
+    #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
+    pub rt_priority: Option<u8>,
+    /// Pin the plant (the clock) alone on the last CPU and the observer, the agent and
+    /// the recorder on the others, so that the rig's own work does not disturb the
+    /// sampling instants (sched_setaffinity; needs at least two CPUs).
+    #[arg(long)]
+    pub pin_cpus: bool,
+}
+
+impl Default for Scheduling {
+    /// Ordinary scheduling, unpinned, the default spin.
+    fn default() -> Self {
+        Self {
+            spin_us: SPIN_US,
+            rt_priority: None,
+            pin_cpus: false,
+        }
+    }
+}
+
+impl Scheduling {
+    /// The flags that give a process this scheduling (`--spin-us` is the plant's only,
+    /// see [`ProcessArgs`]).
+    pub fn process_args(&self) -> Vec<String> {
+        let mut args = Vec::new();
+        if self.pin_cpus {
+            args.push("--pin-cpus".to_string());
+        }
+        if let Some(p) = self.rt_priority {
+            args.extend(["--rt-priority".to_string(), p.to_string()]);
+        }
+        args
+    }
+}
+
 /// Command-line arguments every process takes.
 #[derive(Args, Debug, Clone)]
 pub struct ProcessArgs {
@@ -65,21 +113,9 @@ pub struct ProcessArgs {
     /// Plant only, realtime: how many times faster than real time (Ts / speed per sample).
     #[arg(long, default_value_t = 1.0)]
     pub speed: f64,
-    /// Plant only, realtime: wait the last this many µs before each sampling instant by
-    /// spinning instead of sleeping — a busy core for a sampling instant that does not
-    /// depend on how late the operating system wakes the process.
-    #[arg(long, value_name = "US", default_value_t = SPIN_US)]
-    pub spin_us: u64,
-    /// Run this process under the real-time scheduling policy `SCHED_FIFO` at this
-    /// priority (1–99; the plant, the clock, one above), ahead of every ordinary process
-    /// on the machine, its memory locked; needs root, `CAP_SYS_NICE` and `CAP_IPC_LOCK`,
-    /// or `rtprio` and `memlock` limits (limits.conf).
-    #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
-    pub rt_priority: Option<u8>,
-    /// Pin this process: the plant alone on the last CPU, the observer and the agent on
-    /// the others — the clock's sampling instants undisturbed by the rig's own work.
-    #[arg(long)]
-    pub pin_cpus: bool,
+    /// How the realtime loop is scheduled.
+    #[command(flatten)]
+    pub scheduling: Scheduling,
     /// Agent only: answer every estimate with a zero action, without learning (for loop
     /// benchmarks).
     #[arg(long)]

@@ -25,8 +25,12 @@ use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
 pub fn run(args: &ProcessArgs) -> Result<()> {
     // The clock one level above the observer and the agent: its sampling instant is not
     // held up by their compute on the same core.
-    super::set_rt_priority(args.rt_priority.map(|p| p.saturating_add(1).min(99)))?;
-    if args.pin_cpus {
+    super::set_rt_priority(
+        args.scheduling
+            .rt_priority
+            .map(|p| p.saturating_add(1).min(99)),
+    )?;
+    if args.scheduling.pin_cpus {
         super::pin(super::Cpus::Clock)?;
     }
     let cfg = args.config()?;
@@ -79,7 +83,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                     period_ns,
                     next_ns: now_ns() + period_ns,
                     speed: args.speed,
-                    spin_ns: args.spin_us * 1000,
+                    spin_ns: args.scheduling.spin_us * 1000,
                 }
             });
             Box::new(PlantLoop {
