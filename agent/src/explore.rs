@@ -8,12 +8,19 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-/// Stream ids of the random streams derived from a run seed.
+/// Stream ids of the random streams derived from a run seed: each its own, so that no
+/// two uses of randomness in a run draw the same numbers.
 pub mod stream {
     /// The agent's exploration noise.
     pub const EXPLORATION: u64 = 1;
     /// The plant's sensor noise (an angle encoder with `noise_std > 0`).
     pub const SENSOR_NOISE: u64 = plant::sensor::NOISE_STREAM;
+    /// The sample-to-actuation delays drawn from a recorded distribution.
+    pub const DELAYS: u64 = plant::delay::STREAM;
+    /// SARSA's ε-greedy draws (until session 7 it was 2, the sensor noise's stream).
+    pub const SARSA: u64 = 4;
+    /// All of them.
+    pub const ALL: [u64; 4] = [EXPLORATION, SENSOR_NOISE, DELAYS, SARSA];
 }
 
 /// Gaussian exploration, every `every`-th step of a trial.
@@ -80,6 +87,15 @@ impl crate::checkpoint::Persist for Exploration {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_random_stream_has_its_own_id() {
+        let mut ids = stream::ALL.to_vec();
+        ids.sort_unstable();
+        ids.dedup();
+        assert_eq!(ids.len(), stream::ALL.len(), "{:?}", stream::ALL);
+        assert!(stream::ALL.contains(&crate::sarsa::STREAM));
+    }
 
     #[test]
     fn explores_every_third_step_reproducibly() {

@@ -25,8 +25,8 @@ use crate::Agent;
 use crate::approx::Approximator;
 use crate::approx::rbf::Rbf;
 
-/// Stream id of SARSA's ε-greedy draws (see [`crate::explore::stream`]).
-pub const STREAM: u64 = 2;
+/// Stream id of SARSA's ε-greedy draws.
+pub const STREAM: u64 = crate::explore::stream::SARSA;
 
 /// ε-greedy schedule of Eq. 6.22.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -23,8 +23,8 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::Plant;
 
-/// Stream id of the delay stream derived from a run seed (exploration is 1, sensor noise
-/// [`crate::sensor::NOISE_STREAM`] 2).
+/// Stream id of the delay stream derived from a run seed (the list of all:
+/// `agent::explore::stream`).
 pub const STREAM: u64 = 3;
 
 /// The sample-to-actuation delay of each sample \[s\].

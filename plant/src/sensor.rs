@@ -21,8 +21,8 @@ use rand_distr::{Distribution, StandardNormal};
 
 use crate::angle::wrap;
 
-/// Stream id of the sensor-noise stream derived from a run seed (the agent's exploration
-/// is stream 1).
+/// Stream id of the sensor-noise stream derived from a run seed (the list of all:
+/// `agent::explore::stream`).
 pub const NOISE_STREAM: u64 = 2;
 
 /// A sensor model.

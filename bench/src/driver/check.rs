@@ -140,6 +140,29 @@ fn vector(v: &[f64]) -> String {
 }
 
 /// Percentile `p` (0..=1) of sorted values.
+/// Each sample's lateness against a regular grid placed at the earliest sample, sorted
+/// \[ns\]; `stamps` are `(seq, t_sample_ns)` in order, at least two. The grid's period is
+/// the median of the sample-to-sample periods, so that one late sample is one outlier: the
+/// mean from the first to the last sample would tilt the grid when either of those is the
+/// late one (a first sample 12 ms late spread 0–12 ms of "lateness" over all the others).
+fn lateness(stamps: &[(u64, u64)]) -> Vec<f64> {
+    let mut steps: Vec<f64> = stamps
+        .windows(2)
+        .map(|w| (w[1].1 - w[0].1) as f64 / (w[1].0 - w[0].0) as f64)
+        .collect();
+    steps.sort_by(f64::total_cmp);
+    let grid = percentile(&steps, 0.5);
+    let (seq0, t0) = stamps[0];
+    let offsets: Vec<f64> = stamps
+        .iter()
+        .map(|&(seq, t)| (t - t0) as f64 - (seq - seq0) as f64 * grid)
+        .collect();
+    let earliest = offsets.iter().copied().fold(f64::INFINITY, f64::min);
+    let mut late: Vec<f64> = offsets.iter().map(|o| o - earliest).collect();
+    late.sort_by(f64::total_cmp);
+    late
+}
+
 fn percentile(sorted: &[f64], p: f64) -> f64 {
     if sorted.is_empty() {
         return f64::NAN;
@@ -341,17 +364,11 @@ impl Session<'_> {
         let (first, last) = (samples[0].0, samples[samples.len() - 1].0);
         let periods = (last.seq - first.seq) as f64;
         let mean = (last.t_sample_ns - first.t_sample_ns) as f64 / periods;
-        // Jitter: each sample's distance from a regular grid of the measured mean period,
-        // placed at the earliest sample (so one late sample is one outlier).
-        let offsets: Vec<f64> = samples
+        let stamps: Vec<(u64, u64)> = samples
             .iter()
-            .map(|(s, _)| {
-                (s.t_sample_ns - first.t_sample_ns) as f64 - (s.seq - first.seq) as f64 * mean
-            })
+            .map(|(s, _)| (s.seq, s.t_sample_ns))
             .collect();
-        let earliest = offsets.iter().copied().fold(f64::INFINITY, f64::min);
-        let mut jitter: Vec<f64> = offsets.iter().map(|o| o - earliest).collect();
-        jitter.sort_by(f64::total_cmp);
+        let jitter = lateness(&stamps);
         let (p50, p99, max) = (
             percentile(&jitter, 0.5),
             percentile(&jitter, 0.99),
@@ -558,5 +575,42 @@ impl Session<'_> {
             "NaN, +inf, -inf and n_u = 0, each after a valid action: zero applied, each counted as rejected".to_string(),
         );
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 167 samples on a 30 ms grid, sample `late` delayed by 12 ms.
+    fn grid_with_late(late: usize) -> Vec<(u64, u64)> {
+        (0..167u64)
+            .map(|k| {
+                let delay = if k as usize == late { 12_000_000 } else { 0 };
+                (k, 1_000_000_000 + k * 30_000_000 + delay)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn one_late_sample_is_one_outlier_wherever_it_is() {
+        for late in [0, 80, 166] {
+            let l = lateness(&grid_with_late(late));
+            assert_eq!(l.len(), 167);
+            assert!(percentile(&l, 0.99).abs() < 1.0, "late {late}: {l:?}");
+            assert!((l[166] - 12e6).abs() < 1.0, "late {late}: max {}", l[166]);
+        }
+    }
+
+    #[test]
+    fn lateness_follows_a_jittered_clock() {
+        // Every third sample 2 ms late, a missed period at 50.
+        let stamps: Vec<(u64, u64)> = (0..100u64)
+            .filter(|&k| k != 50)
+            .map(|k| (k, k * 30_000_000 + if k % 3 == 0 { 2_000_000 } else { 0 }))
+            .collect();
+        let l = lateness(&stamps);
+        assert!(percentile(&l, 0.5).abs() < 1.0);
+        assert!((percentile(&l, 0.99) - 2e6).abs() < 1.0);
     }
 }
