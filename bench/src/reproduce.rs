@@ -1126,6 +1126,7 @@ impl Runner<'_> {
                     &out.join("wall_s.txt"),
                     &format!("{}\n", s.wall.as_secs_f64()),
                 )?;
+                write_atomic(&out.join("build.txt"), &format!("{}\n", build_id()))?;
                 self.spent += s.wall;
                 self.done.insert(key, s.clone());
                 s
@@ -1136,11 +1137,28 @@ impl Runner<'_> {
     }
 }
 
+/// The identity of this build of `rig`: a hash of its executable (the outputs of an
+/// experiment depend on the code as much as on its configuration).
+fn build_id() -> &'static str {
+    static ID: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    ID.get_or_init(|| {
+        use std::hash::{Hash, Hasher};
+        let bytes = std::env::current_exe()
+            .and_then(std::fs::read)
+            .unwrap_or_default();
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        bytes.hash(&mut h);
+        format!("{:016x}-{}", h.finish(), bytes.len())
+    })
+}
+
 /// The outputs of a finished experiment of `cfg` in `dir` (written by an earlier
-/// `rig reproduce`: the same `config.toml`, every row of `runs.csv`, `responses.csv` and
-/// `wall_s.txt`), or `None`.
+/// `rig reproduce` of this build: the same `config.toml` and `build.txt`, every row of
+/// `runs.csv`, `responses.csv` and `wall_s.txt`), or `None`.
 fn load_finished(dir: &Path, cfg: &ExperimentConfig) -> Option<LearnSummary> {
-    if std::fs::read_to_string(dir.join("config.toml")).ok()? != cfg.to_toml() {
+    if std::fs::read_to_string(dir.join("config.toml")).ok()? != cfg.to_toml()
+        || std::fs::read_to_string(dir.join("build.txt")).ok()?.trim() != build_id()
+    {
         return None;
     }
     let wall: f64 = std::fs::read_to_string(dir.join("wall_s.txt"))

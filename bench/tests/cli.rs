@@ -266,6 +266,30 @@ fn reproduce_writes_figures_a_report_and_checks_claims() {
         );
     }
 
+    // Run again into the same directory: the finished experiments of this build are
+    // reused; one whose `build.txt` names another build of rig is run again.
+    std::fs::write(dir.join("3.17/mlac-llr/build.txt"), "another build\n").unwrap();
+    let again = ok(rig()
+        .args([
+            "reproduce",
+            "--only",
+            "3.17",
+            "--runs",
+            "2",
+            "--trials",
+            "30",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap());
+    let log = String::from_utf8_lossy(&again.stderr);
+    assert!(log.contains("3.17 MLAC/RBF: reusing"), "{log}");
+    assert!(
+        log.contains("3.17 MLAC/LLR: 2 runs × 30 trials") && !log.contains("MLAC/LLR: reusing"),
+        "{log}"
+    );
+
     // The sensitivity analysis: every parameter at every factor, for both algorithms.
     let sens = dir.join("sens");
     ok(rig()
