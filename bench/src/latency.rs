@@ -180,11 +180,12 @@ impl Counters {
         })
     }
 
-    /// What changed from `self` to `after`; the plant's CPU is the last one if pinned.
-    fn until(&self, after: &Self, pinned: bool) -> MachineLoad {
+    /// What changed from `self` to `after`, with the interrupts of `plant_cpu` (all
+    /// CPUs' if `None`: the plant was not pinned).
+    fn until(&self, after: &Self, plant_cpu: Option<usize>) -> MachineLoad {
         // SAFETY: sysconf has no preconditions.
         let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) }.max(1) as f64;
-        let plant_cpu = pinned.then(|| after.interrupts.len().saturating_sub(1));
+        let plant_cpu = plant_cpu.filter(|&c| c < after.interrupts.len());
         let delta = |i: usize| after.interrupts[i].saturating_sub(self.interrupts[i]);
         let interrupts = match plant_cpu {
             Some(c) => delta(c),
@@ -357,7 +358,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     )?;
     let machine = before
         .zip(Counters::read())
-        .map(|(b, a)| b.until(&a, opts.scheduling.pin_cpus));
+        .map(|(b, a)| b.until(&a, opts.scheduling.pin_cpus.then(crate::process::clock_cpu)));
 
     let bytes = std::fs::read(run_dir.join("run.mcap"))?;
     let mut msgs: BTreeMap<String, Vec<Vec<u8>>> = BTreeMap::new();
@@ -608,12 +609,12 @@ mod tests {
                 .collect(),
         };
         let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) } as f64;
-        let pinned = now.until(&later, true);
+        let pinned = now.until(&later, Some(crate::process::clock_cpu()));
         assert_eq!(pinned.load_avg, now.load_avg);
         assert!((pinned.steal_ms - 3e3 / hz).abs() < 1e-9);
         assert_eq!(pinned.plant_cpu, Some(online - 1));
         assert_eq!(pinned.interrupts, 10 * online as u64);
-        let all = now.until(&later, false);
+        let all = now.until(&later, None);
         assert_eq!(all.plant_cpu, None);
         assert_eq!(
             all.interrupts,

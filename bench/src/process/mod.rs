@@ -60,17 +60,6 @@ pub struct Scheduling {
     pub pin_cpus: bool,
 }
 
-impl Default for Scheduling {
-    /// Ordinary scheduling, unpinned, the default spin.
-    fn default() -> Self {
-        Self {
-            spin_us: SPIN_US,
-            rt_priority: None,
-            pin_cpus: false,
-        }
-    }
-}
-
 impl Scheduling {
     /// The flags that give a process this scheduling (`--spin-us` is the plant's only,
     /// see [`ProcessArgs`]).
@@ -211,15 +200,23 @@ pub enum Cpus {
     Rest,
 }
 
+/// The CPU `--pin-cpus` gives the plant (the clock): the last one online.
+pub fn clock_cpu() -> usize {
+    // SAFETY: `sysconf` reads a system constant.
+    let online = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) };
+    online.max(1) as usize - 1
+}
+
 /// Pins this process to `cpus` (`--pin-cpus`, `sched_setaffinity`): the clock gets a CPU
 /// that none of the rig's other work runs on (measured in the README, "Latency budget").
 pub fn pin(cpus: Cpus) -> Result<()> {
-    // SAFETY: `sysconf` reads a system constant.
-    let online = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) };
-    if online < 2 {
-        anyhow::bail!("--pin-cpus needs at least two CPUs; {online} are online");
+    let last = clock_cpu();
+    if last < 1 {
+        anyhow::bail!(
+            "--pin-cpus needs at least two CPUs; {} are online",
+            last + 1
+        );
     }
-    let last = online as usize - 1;
     let range = match cpus {
         Cpus::Clock => last..last + 1,
         Cpus::Rest => 0..last,
