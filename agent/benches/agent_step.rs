@@ -8,12 +8,17 @@
 //! * `llr_query/*` — one LLR query (value and Jacobian) plus one insertion, on a full
 //!   memory of 2000 samples, K = 25: the dynamic k-d tree against a partial-selection
 //!   scan of the whole memory.
+//! * `rbf/*` — one evaluation of a scalar normalised RBF network (`value`, and `value`
+//!   with the Jacobian) at random inputs: the 20 × 20 grid of the VGBP-LSTD and SARSA
+//!   critics (§6.4.1; VGBP's search of Eq. 6.6 makes about 100 `value` calls per step)
+//!   and the 9 × 9 × 9 grid of the finite-horizon critics (§4.4).
 
 use std::hint::black_box;
 use std::sync::Arc;
 
 use agent::Agent;
 use agent::approx::llr::{Eviction, Llr, LlrParams, Search};
+use agent::approx::rbf::{Rbf, RbfParams};
 use agent::approx::{Approximator, Differentiable};
 use agent::config::{Overrides, resolve};
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
@@ -130,12 +135,56 @@ fn llr_query(c: &mut Criterion) {
     g.finish();
 }
 
+fn rbf(c: &mut Criterion) {
+    let mut g = c.benchmark_group("rbf");
+    for centres in [vec![20usize, 20], vec![9, 9, 9]] {
+        let n = centres.len();
+        let name = centres
+            .iter()
+            .map(|c| c.to_string())
+            .collect::<Vec<_>>()
+            .join("x");
+        let mut rbf = Rbf::new(&RbfParams {
+            range: vec![(-3.0, 3.0); n],
+            periodic: (0..n).map(|j| j == 0).collect(),
+            centres,
+            intersection: 0.5,
+            outputs: 1,
+            initial: 0.0,
+            bounds: None,
+        });
+        let mut rng = ChaCha8Rng::seed_from_u64(12);
+        for t in rbf.parameters_mut() {
+            *t = rng.random_range(-1.0..1.0);
+        }
+        let inputs: Vec<Vec<f64>> = (0..1024)
+            .map(|_| (0..n).map(|_| rng.random_range(-3.5..3.5)).collect())
+            .collect();
+        let (mut y, mut jac, mut k) = ([0.0], vec![0.0; n], 0usize);
+        g.bench_function(BenchmarkId::new("value", &name), |b| {
+            b.iter(|| {
+                k = (k + 1) % inputs.len();
+                rbf.value(black_box(&inputs[k]), &mut y);
+                y[0]
+            })
+        });
+        g.bench_function(BenchmarkId::new("value_and_jacobian", &name), |b| {
+            b.iter(|| {
+                k = (k + 1) % inputs.len();
+                rbf.value_and_jacobian(black_box(&inputs[k]), &mut y, &mut jac);
+                y[0] + jac[0]
+            })
+        });
+    }
+    g.finish();
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default()
         .sample_size(50)
         .measurement_time(std::time::Duration::from_secs(4))
         .warm_up_time(std::time::Duration::from_secs(1));
-    targets = agent_step, llr_query
+    targets = agent_step, llr_query, rbf
 }
 criterion_main!(benches);

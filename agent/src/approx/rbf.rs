@@ -52,7 +52,6 @@ pub struct RbfParams {
 pub struct Rbf {
     n: usize,
     m: usize,
-    counts: Vec<usize>,
     centres: Vec<Vec<f64>>,
     /// Diagonal of `B⁻¹`.
     inv_b: Vec<f64>,
@@ -63,12 +62,63 @@ pub struct Rbf {
     trace: Vec<f64>,
 }
 
-/// Per-axis factors of one evaluation.
+/// Per-axis factors of one evaluation, every axis's centres side by side.
 struct Axes {
-    /// `g[j][i]`: one-dimensional Gaussian of axis `j` at centre `i`.
-    g: Vec<Vec<f64>>,
+    n: usize,
+    /// Axis `j`'s centres are at `off[j]..off[j + 1]` of `g` and `r`.
+    off: [usize; MAX_IN + 1],
+    /// One-dimensional Gaussian of each axis at each of its centres.
+    g: Vec<f64>,
     /// `B⁻¹ (x − c)` per axis and centre.
-    r: Vec<Vec<f64>>,
+    r: Vec<f64>,
+    /// `Σⱼ φ̃ⱼ = Π_axes Σ_i g[i]` (guarded against underflow far outside the grid).
+    norm: f64,
+}
+
+impl Axes {
+    /// Axis `j`'s Gaussians.
+    fn g(&self, j: usize) -> &[f64] {
+        &self.g[self.off[j]..self.off[j + 1]]
+    }
+
+    /// Axis `j`'s `B⁻¹ (x − c)`.
+    fn r(&self, j: usize) -> &[f64] {
+        &self.r[self.off[j]..self.off[j + 1]]
+    }
+
+    /// Calls `visit(i, φᵢ, index of centre i along each axis)` for every basis function
+    /// in grid order (the last axis fastest). `φ̃ᵢ` is the product of the axes' factors
+    /// in axis order; the product over all axes but the last is formed once per row.
+    fn for_each(&self, mut visit: impl FnMut(usize, f64, &[usize])) {
+        let (n, last) = (self.n, self.n - 1);
+        let row = self.g(last);
+        let mut idx = [0usize; MAX_IN];
+        let mut i = 0;
+        loop {
+            let mut prefix = 1.0;
+            for j in 0..last {
+                prefix *= self.g[self.off[j] + idx[j]];
+            }
+            for (k, &g) in row.iter().enumerate() {
+                idx[last] = k;
+                visit(i, prefix * g / self.norm, &idx[..n]);
+                i += 1;
+            }
+            // The next row: advance the other axes' indices, the last but one fastest.
+            let mut j = last;
+            loop {
+                if j == 0 {
+                    return;
+                }
+                j -= 1;
+                idx[j] += 1;
+                if idx[j] < self.off[j + 1] - self.off[j] {
+                    break;
+                }
+                idx[j] = 0;
+            }
+        }
+    }
 }
 
 impl Rbf {
@@ -80,12 +130,16 @@ impl Rbf {
         let n = p.centres.len();
         assert!((1..=MAX_IN).contains(&n) && p.range.len() == n && p.periodic.len() == n);
         assert!(p.intersection > 0.0 && p.intersection < 1.0);
+        assert!(
+            p.centres.iter().all(|&c| c >= 1),
+            "at least one centre per axis"
+        );
         let mut centres = Vec::new();
         let mut inv_b = Vec::new();
         let mut period = Vec::new();
         for j in 0..n {
             let (lo, hi) = p.range[j];
-            let c = p.centres[j].max(1);
+            let c = p.centres[j];
             let (spacing, cs): (f64, Vec<f64>) = if p.periodic[j] {
                 let d = (hi - lo) / c as f64;
                 (d, (0..c).map(|i| lo + i as f64 * d).collect())
@@ -104,7 +158,6 @@ impl Rbf {
         Self {
             n,
             m: p.outputs,
-            counts: p.centres.clone(),
             centres,
             inv_b,
             period,
@@ -142,55 +195,37 @@ impl Rbf {
     }
 
     fn axes(&self, x: &[f64]) -> Axes {
-        let mut g = Vec::with_capacity(self.n);
-        let mut r = Vec::with_capacity(self.n);
-        for ((cs, &xj), (&p, &inv_b)) in self
-            .centres
-            .iter()
-            .zip(x)
-            .zip(self.period.iter().zip(&self.inv_b))
-        {
-            let (gj, rj): (Vec<f64>, Vec<f64>) = cs
-                .iter()
-                .map(|&c| {
-                    let mut d = xj - c;
-                    if p > 0.0 {
-                        d -= p * (d / p).round();
-                    }
-                    ((-0.5 * d * d * inv_b).exp(), d * inv_b)
-                })
-                .unzip();
-            g.push(gj);
-            r.push(rj);
+        let total: usize = self.centres.iter().map(Vec::len).sum();
+        let (mut g, mut r) = (Vec::with_capacity(total), Vec::with_capacity(total));
+        let mut off = [0; MAX_IN + 1];
+        let mut norm = 1.0;
+        for (j, (cs, &xj)) in self.centres.iter().zip(x).enumerate() {
+            let (p, inv_b) = (self.period[j], self.inv_b[j]);
+            for &c in cs {
+                let mut d = xj - c;
+                if p > 0.0 {
+                    d -= p * (d / p).round();
+                }
+                g.push((-0.5 * d * d * inv_b).exp());
+                r.push(d * inv_b);
+            }
+            off[j + 1] = g.len();
+            norm *= g[off[j]..].iter().sum::<f64>().max(f64::MIN_POSITIVE);
         }
-        Axes { g, r }
+        Axes {
+            n: self.n,
+            off,
+            g,
+            r,
+            norm,
+        }
     }
 
-    /// Calls `visit(i, φᵢ(x))` for every basis function, plus returns the per-axis
-    /// factors for gradients.
-    fn features(&self, x: &[f64], mut visit: impl FnMut(usize, f64, &[usize])) -> Axes {
+    /// Calls `visit(i, φᵢ(x), centre index per axis)` for every basis function and
+    /// returns the per-axis factors.
+    fn features(&self, x: &[f64], visit: impl FnMut(usize, f64, &[usize])) -> Axes {
         let axes = self.axes(x);
-        // Normalisation: Σ φ̃ = Π_j Σ_i g_j[i]; guard against underflow far outside.
-        let norm: f64 = axes
-            .g
-            .iter()
-            .map(|g| g.iter().sum::<f64>().max(f64::MIN_POSITIVE))
-            .product();
-        let mut idx = [0usize; MAX_IN];
-        for i in 0..self.trace.len() {
-            let mut v = 1.0;
-            for (g, &i) in axes.g.iter().zip(&idx[..self.n]) {
-                v *= g[i];
-            }
-            visit(i, v / norm, &idx[..self.n]);
-            for j in (0..self.n).rev() {
-                idx[j] += 1;
-                if idx[j] < self.counts[j] {
-                    break;
-                }
-                idx[j] = 0;
-            }
-        }
+        axes.for_each(visit);
         axes
     }
 
@@ -226,27 +261,27 @@ impl Approximator for Rbf {
         self.m
     }
     fn value(&self, x: &[f64], y: &mut [f64]) {
-        y.fill(0.0);
-        let m = self.m;
-        self.features(x, |i, phi, _| {
-            for (y, t) in y.iter_mut().zip(&self.theta[i * m..(i + 1) * m]) {
-                *y += t * phi;
+        let (m, axes) = (self.m, self.axes(x));
+        // The sums in a local array: accumulating through `y` costs twice the time.
+        let mut v = [0.0; MAX_OUT];
+        axes.for_each(|i, phi, _| {
+            for (v, t) in v[..m].iter_mut().zip(&self.theta[i * m..(i + 1) * m]) {
+                *v += t * phi;
             }
         });
+        y.fill(0.0);
+        y[..m].copy_from_slice(&v[..m]);
         self.clamp(y);
     }
     fn shift(&mut self, x: &[f64], step: &[f64]) {
         let step = &self.saturated_step(x, step);
-        let mut phis = Vec::with_capacity(self.trace.len());
-        self.features(x, |_, phi, _| phis.push(phi));
-        for (i, phi) in phis.into_iter().enumerate() {
-            for (t, s) in self.theta[i * self.m..(i + 1) * self.m]
-                .iter_mut()
-                .zip(step)
-            {
+        let (m, axes) = (self.m, self.axes(x));
+        let theta = &mut self.theta;
+        axes.for_each(|i, phi, _| {
+            for (t, s) in theta[i * m..(i + 1) * m].iter_mut().zip(step) {
                 *t += s * phi;
             }
-        }
+        });
     }
     fn fit(&mut self, x: &[f64], target: &[f64], rate: f64) {
         let mut y = [0.0; MAX_OUT];
@@ -268,30 +303,36 @@ impl Differentiable for Rbf {
         let (n, m) = (self.n, self.m);
         // First pass: value and Σᵢ φᵢ rᵢ per axis is separable: Σ_i φ_i r_j[i_j] equals
         // Σ_i g_j[i] r_j[i] / Σ_i g_j[i].
-        y.fill(0.0);
-        jac.fill(0.0);
-        let axes = self.axes(x);
-        let mean_r: Vec<f64> = (0..n)
-            .map(|j| {
-                let s: f64 = axes.g[j].iter().sum::<f64>().max(f64::MIN_POSITIVE);
-                axes.g[j]
-                    .iter()
-                    .zip(&axes.r[j])
-                    .map(|(g, r)| g * r)
-                    .sum::<f64>()
-                    / s
-            })
-            .collect();
-        self.features(x, |i, phi, idx| {
+        let mut axes = self.axes(x);
+        for j in 0..n {
+            let s: f64 = axes.g(j).iter().sum::<f64>().max(f64::MIN_POSITIVE);
+            let mean = axes
+                .g(j)
+                .iter()
+                .zip(axes.r(j))
+                .map(|(g, r)| g * r)
+                .sum::<f64>()
+                / s;
+            // From here on `r` holds `r_j[i] − mean_r_j`.
+            let range = axes.off[j]..axes.off[j + 1];
+            axes.r[range].iter_mut().for_each(|r| *r -= mean);
+        }
+        // Sums in local arrays, as in `value`.
+        let (mut v, mut dv) = ([0.0; MAX_OUT], [0.0; MAX_OUT * MAX_IN]);
+        axes.for_each(|i, phi, idx| {
             for o in 0..m {
                 let t = self.theta[i * m + o];
-                y[o] += t * phi;
+                v[o] += t * phi;
                 for j in 0..n {
                     // ∂φᵢ/∂x_j = −φᵢ (r_j[i_j] − mean_r_j)
-                    jac[o * n + j] -= t * phi * (axes.r[j][idx[j]] - mean_r[j]);
+                    dv[o * n + j] -= t * phi * axes.r[axes.off[j] + idx[j]];
                 }
             }
         });
+        y.fill(0.0);
+        y[..m].copy_from_slice(&v[..m]);
+        jac.fill(0.0);
+        jac[..m * n].copy_from_slice(&dv[..m * n]);
         if let Some((lo, hi)) = &self.bounds {
             for o in 0..m {
                 if y[o] <= lo[o] || y[o] >= hi[o] {
@@ -308,11 +349,9 @@ impl Traced for Rbf {
         for z in &mut self.trace {
             *z *= decay;
         }
-        let mut phis = Vec::with_capacity(self.trace.len());
-        self.features(x, |_, phi, _| phis.push(phi));
-        for (z, phi) in self.trace.iter_mut().zip(phis) {
-            *z += phi;
-        }
+        let axes = self.axes(x);
+        let trace = &mut self.trace;
+        axes.for_each(|i, phi, _| trace[i] += phi);
     }
     fn apply_td(&mut self, step: f64) {
         super::linear_td_step(&mut self.theta, &self.trace, step);
@@ -371,6 +410,50 @@ mod tests {
         assert!((sum - 1.0).abs() < 1e-12);
     }
 
+    /// The traversal visits every basis function once, in grid order (last axis
+    /// fastest), with `φᵢ = Π_j exp(−½ d_j² / b_j) / Σ` computed directly from the centres.
+    #[test]
+    fn features_in_grid_order() {
+        let counts = [3usize, 4, 2];
+        let rbf = Rbf::new(&RbfParams {
+            centres: counts.to_vec(),
+            range: vec![(-PI, PI), (-2.0, 2.0), (0.0, 1.0)],
+            periodic: vec![true, false, false],
+            intersection: 0.6,
+            outputs: 1,
+            initial: 0.0,
+            bounds: None,
+        });
+        let x = [2.9, -0.7, 0.2];
+        let gauss = |j: usize, c: f64| {
+            let mut d = x[j] - c;
+            if rbf.period[j] > 0.0 {
+                d -= rbf.period[j] * (d / rbf.period[j]).round();
+            }
+            (-0.5 * d * d * rbf.inv_b[j]).exp()
+        };
+        let raw = |idx: &[usize]| -> f64 {
+            (0..3).map(|j| gauss(j, rbf.centres[j][idx[j]])).product()
+        };
+        let mut all = Vec::new();
+        for a in 0..counts[0] {
+            for b in 0..counts[1] {
+                for c in 0..counts[2] {
+                    all.push(raw(&[a, b, c]));
+                }
+            }
+        }
+        let sum: f64 = all.iter().sum();
+        let mut seen = 0;
+        rbf.features(&x, |i, phi, idx| {
+            assert_eq!(i, seen);
+            assert_eq!(i, (idx[0] * counts[1] + idx[1]) * counts[2] + idx[2]);
+            assert!((phi - all[i] / sum).abs() < 1e-15, "φ_{i}: {phi}");
+            seen += 1;
+        });
+        assert_eq!(seen, 24);
+    }
+
     #[test]
     fn gradient_equals_finite_difference() {
         let rbf = pendulum_rbf(2);
@@ -424,7 +507,7 @@ mod tests {
         });
         // Midway between centres 1 and 2 the non-normalised Gaussians are both 0.5.
         let axes = rbf.axes(&[1.5]);
-        assert!((axes.g[0][1] - 0.5).abs() < 1e-12 && (axes.g[0][2] - 0.5).abs() < 1e-12);
+        assert!((axes.g(0)[1] - 0.5).abs() < 1e-12 && (axes.g(0)[2] - 0.5).abs() < 1e-12);
     }
 
     #[test]
