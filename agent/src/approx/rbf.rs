@@ -432,9 +432,8 @@ mod tests {
             }
             (-0.5 * d * d * rbf.inv_b[j]).exp()
         };
-        let raw = |idx: &[usize]| -> f64 {
-            (0..3).map(|j| gauss(j, rbf.centres[j][idx[j]])).product()
-        };
+        let raw =
+            |idx: &[usize]| -> f64 { (0..3).map(|j| gauss(j, rbf.centres[j][idx[j]])).product() };
         let mut all = Vec::new();
         for a in 0..counts[0] {
             for b in 0..counts[1] {

@@ -5,9 +5,9 @@ use std::sync::Arc;
 use ::plant::delay::Actuator;
 use ::plant::safety::SafetyCounts;
 use ::plant::sensor::Sensor;
-use ::plant::{Plant, Task};
+use ::plant::{MAX_STATE, Plant, Task};
 use anyhow::{Result, bail};
-use wire::{Action, Bus, Header, Measurement, Truth, flags, now_ns, topic};
+use wire::{Action, Bus, Header, MAX_U, Measurement, Truth, flags, now_ns, topic};
 
 use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
 
@@ -269,19 +269,39 @@ struct PlantLoop {
 }
 
 /// The actions that arrived within one realtime interval, with their arrival times.
-#[derive(Default)]
+/// One per trial, cleared at every instant: the loop allocates nothing per interval.
 struct Arrivals {
     /// `(t_arrival_ns, u)` in order of arrival.
-    list: Vec<(u64, Vec<f64>)>,
+    list: Vec<(u64, [f64; MAX_U])>,
     /// When the answer to the interval's sample arrived.
     answered: Option<u64>,
+    /// The sequence number of the trial's first sample: an action answering an earlier
+    /// one (a late answer to the last trial's END sample) is not this trial's.
+    first_seq: u64,
 }
 
 impl Arrivals {
+    fn new(first_seq: u64) -> Self {
+        Self {
+            list: Vec::with_capacity(8),
+            answered: None,
+            first_seq,
+        }
+    }
+
+    /// Starts the next interval.
+    fn clear(&mut self) {
+        self.list.clear();
+        self.answered = None;
+    }
+
     /// Notes action `a`, arrived at `t_a`; it answers the interval's sample if its
-    /// sequence number is `waiting_for`.
-    fn push(&mut self, a: &Action, t_a: u64, waiting_for: u64, task: &Task) {
-        self.list.push((t_a, a.u[..task.action_dim()].to_vec()));
+    /// sequence number is `waiting_for`. An answer to the previous trial is dropped.
+    fn push(&mut self, a: &Action, t_a: u64, waiting_for: u64) {
+        if a.header.seq < self.first_seq {
+            return;
+        }
+        self.list.push((t_a, a.u));
         if a.header.seq == waiting_for {
             self.answered = Some(t_a);
         }
@@ -402,7 +422,8 @@ impl PlantLoop {
     /// for its sample did not arrive is a missed deadline. The reward of an interval is `ρ(x_k, u)` with the action in effect
     /// at its end. An interval without any action trips the plant's watchdog
     /// ([`plant::safety::Supervisor::period`]): zero from its
-    /// end on, until an action arrives.
+    /// end on, until an action arrives. A late answer to the previous trial's last sample
+    /// is dropped, not applied in this one. Nothing is allocated per interval.
     fn realtime_trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<usize> {
         let steps = self.link.task.steps_per_trial();
         let (period_ns, speed, spin_ns) = {
@@ -410,9 +431,11 @@ impl PlantLoop {
             (c.period_ns, c.speed, c.spin_ns)
         };
         self.plant.reset(x0);
-        let mut u_hold = vec![0.0; self.link.task.action_dim()];
+        let m = self.link.task.action_dim();
+        let mut u_hold = vec![0.0; m];
         // Predictive timing: the action applied from the coming sample instant on.
-        let mut pending: Option<Vec<f64>> = None;
+        let mut pending: Option<[f64; MAX_U]> = None;
+        let mut arrivals = Arrivals::new(self.link.seq);
         if self.pipelined {
             self.link.u_next.clone_from(&u_hold);
         }
@@ -469,9 +492,9 @@ impl PlantLoop {
             // without sleeping, and in the last `APPROACH_NS` it only reads the clock, so
             // that the next sampling instant depends neither on when the operating system
             // wakes it nor on the transport.
-            let mut arrivals = Arrivals::default();
+            arrivals.clear();
             if let Some((t_a, a)) = late.take() {
-                arrivals.push(&a, t_a.min(deadline), waiting_for, &self.link.task);
+                arrivals.push(&a, t_a.min(deadline), waiting_for);
             }
             loop {
                 let now = now_ns();
@@ -497,7 +520,7 @@ impl PlantLoop {
                     late = Some((t_a, a));
                     break;
                 }
-                arrivals.push(&a, t_a, waiting_for, &self.link.task);
+                arrivals.push(&a, t_a, waiting_for);
             }
             while now_ns() < deadline {
                 std::hint::spin_loop();
@@ -524,16 +547,18 @@ impl PlantLoop {
             // Integrate the interval piecewise, in simulated seconds.
             let sim = |dt_ns: u64| dt_ns as f64 * 1e-9 * speed;
             let mut t = t_k;
-            let x_k_reward_state = self.plant.state().to_vec();
+            let mut x_k = [0.0; MAX_STATE];
+            let n = self.link.task.state_dim();
+            x_k[..n].copy_from_slice(self.plant.state());
             if self.pipelined {
                 if let Some(u) = pending.take() {
-                    u_hold = u;
+                    u_hold.copy_from_slice(&u[..m]);
                 }
-                pending = arrivals.list.last().map(|(_, u)| u.clone());
+                pending = arrivals.list.last().map(|&(_, u)| u);
             } else {
                 for (t_a, u) in &arrivals.list {
                     self.plant.advance(&u_hold, sim(t_a - t));
-                    u_hold.clone_from(u);
+                    u_hold.copy_from_slice(&u[..m]);
                     t = *t_a;
                 }
             }
@@ -544,15 +569,14 @@ impl PlantLoop {
                 pending = None;
             }
             if self.pipelined {
-                self.link
-                    .u_next
-                    .clone_from(pending.as_ref().unwrap_or(&u_hold));
+                let next = pending.as_ref().map_or(&u_hold[..], |u| &u[..m]);
+                self.link.u_next.copy_from_slice(next);
             }
             let r = self.plant.reward_of_transition(
                 self.link
                     .task
                     .reward
-                    .reward(&x_k_reward_state, self.plant.applied_action()),
+                    .reward(&x_k[..n], self.plant.applied_action()),
             );
             woke = woke_next;
             t_k = deadline;
@@ -605,5 +629,36 @@ impl Trials for PlantLoop {
 
     fn safety(&mut self) -> SafetyCounts {
         self.plant.safety().counts()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn action(seq: u64, u: f64) -> Action {
+        let mut a = Action::default();
+        a.header.seq = seq;
+        a.n_u = 1;
+        a.u[0] = u;
+        a
+    }
+
+    /// A late answer to the previous trial's END sample is not applied in the next
+    /// trial; the answer to the interval's sample is marked; `clear` starts afresh.
+    #[test]
+    fn arrivals_keep_this_trials_actions() {
+        let mut arrivals = Arrivals::new(10);
+        arrivals.push(&action(9, 0.0), 100, 10);
+        assert!(arrivals.list.is_empty() && arrivals.answered.is_none());
+        arrivals.push(&action(10, 1.5), 200, 10);
+        arrivals.push(&action(11, -2.0), 300, 10);
+        assert_eq!(arrivals.answered, Some(200));
+        let applied: Vec<(u64, f64)> = arrivals.list.iter().map(|(t, u)| (*t, u[0])).collect();
+        assert_eq!(applied, [(200, 1.5), (300, -2.0)]);
+        arrivals.clear();
+        assert!(arrivals.list.is_empty() && arrivals.answered.is_none());
+        arrivals.push(&action(11, -2.0), 400, 11);
+        assert_eq!(arrivals.answered, Some(400));
     }
 }
