@@ -225,6 +225,15 @@ struct Recording {
     t_sample_ns: u64,
 }
 
+/// `a,b,c`: values in Rust's shortest round-trip form, which a reader parses exactly.
+fn join<T: std::fmt::Display>(values: impl IntoIterator<Item = T>) -> String {
+    values
+        .into_iter()
+        .map(|v| v.to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
 fn header_fields(extra: Vec<Vec<Field>>) -> Vec<Field> {
     let mut f: Vec<Field> = ["seq", "trial", "step", "flags"]
         .iter()
@@ -801,6 +810,14 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
             },
         ),
         ("rig_version", env!("CARGO_PKG_VERSION").to_string()),
+        // The reward's weights, so that a reader can recompute a finite horizon's
+        // terminal reward τ_N(x_N) = −eᵀQe (Eq. 4.1; tests/python/check_mcap.py).
+        ("reward_q", join(&task.reward.q)),
+        ("reward_reference", join(&task.reward.reference)),
+        (
+            "reward_angles",
+            join(task.reward.angle_mask.iter().map(|&a| u8::from(a))),
+        ),
         (
             "resumed_after_trial",
             point

@@ -16,9 +16,14 @@ u_{k-1})) and `flags` (bit 0 trial start, bit 1 trial end, bit 2 greedy evaluati
 bit 3 shutdown). A trial's return is r_1 + r_2 + ... + r_N summed left to right from 0.0
 in Python floats, as the rig sums the same f64 values in the same order, so they are
 compared with `==` (NaN equals NaN; a `null` reward, the recorder's encoding of NaN/inf,
-reads as NaN). Messages without the greedy bit make the learning trial T's `return`;
-messages with it make the `greedy_return` of row T. Messages with the shutdown bit carry no
-step and are left out.
+reads as NaN). With a finite horizon (the `run` metadata's `horizon = finite`) the
+terminal reward tau_N(x_N) = -sum_i q_i e_i^2 of the trial's last state is added last
+(Eq. 4.1; e = x - reference, angles wrapped to [-pi, pi) as the rig wraps them; the
+weights are the metadata's `reward_q`, `reward_reference`, `reward_angles`; x_N is the
+`/plant/truth` message of the END sample when the sensor does not measure the full
+state, otherwise the END measurement's `y`). Messages without the greedy bit make the
+learning trial T's `return`; messages with it make the `greedy_return` of row T. Messages
+with the shutdown bit carry no step and are left out.
 
 Exit status 0 when every check passes, 1 with a message naming the first failure
 otherwise (2 for a usage error). The functions below can be imported and called one by
@@ -44,6 +49,7 @@ from mcap.records import Chunk, DataEnd, Footer
 from mcap.stream_reader import CRCValidationError, StreamReader
 
 MEASUREMENT_TOPIC = "/plant/measurement"
+TRUTH_TOPIC = "/plant/truth"
 CONFIG_ATTACHMENT = "config.toml"
 RETURNS_HEADER = ["run", "trial", "sim_time_s", "return", "greedy_return"]
 
@@ -72,6 +78,10 @@ class Recording:
     message_count: int = 0
     # Decoded JSON of every /plant/measurement message, in file order.
     measurements: list = field(default_factory=list)
+    # Decoded JSON of every /plant/truth message (angle-only sensing), by seq.
+    truth: dict = field(default_factory=dict)
+    # The `run` metadata record's entries.
+    run_metadata: dict = field(default_factory=dict)
 
 
 # ---------------------------------------------------------------------------------------
@@ -176,17 +186,24 @@ def read_recording(path: Path) -> Recording:
             rec.channels = [summary.channels[k] for k in sorted(summary.channels)]
             rec.schemas = dict(summary.schemas)
             rec.attachment_names = [a.name for a in reader.iter_attachments()]
-            rec.metadata_names = [m.name for m in reader.iter_metadata()]
+            for m in reader.iter_metadata():
+                rec.metadata_names.append(m.name)
+                if m.name == "run":
+                    rec.run_metadata = dict(m.metadata)
             for _schema, channel, message in reader.iter_messages(log_time_order=False):
                 rec.message_count += 1
-                if channel.topic == MEASUREMENT_TOPIC:
+                if channel.topic in (MEASUREMENT_TOPIC, TRUTH_TOPIC):
                     try:
-                        rec.measurements.append(json.loads(message.data))
+                        decoded = json.loads(message.data)
                     except ValueError as e:
                         raise CheckError(
-                            f"{path}: {MEASUREMENT_TOPIC} message {message.sequence} "
+                            f"{path}: {channel.topic} message {message.sequence} "
                             f"is not JSON: {e}"
                         ) from e
+                    if channel.topic == MEASUREMENT_TOPIC:
+                        rec.measurements.append(decoded)
+                    else:
+                        rec.truth[decoded.get("seq")] = decoded
     except CRCValidationError as e:
         raise CheckError(f"{path}: {e}") from e
     except McapError as e:
@@ -292,10 +309,76 @@ def same(a: float, b: float) -> bool:
     return a == b or (math.isnan(a) and math.isnan(b))
 
 
-def trial_returns(measurements: list) -> tuple[dict[int, float], dict[int, float]]:
+def wrap(a: float) -> float:
+    """An angle wrapped to [-pi, pi), with the rig's floating-point operations
+    (`plant::angle::wrap`: Rust's `rem_euclid` is C's fmod plus the divisor if negative)."""
+    if -math.pi <= a < math.pi:
+        return a
+    r = math.fmod(a + math.pi, 2.0 * math.pi)
+    if r < 0.0:
+        r += 2.0 * math.pi
+    w = r - math.pi
+    return w - 2.0 * math.pi if w >= math.pi else w
+
+
+@dataclass
+class TerminalReward:
+    """tau_N(x) = -sum_i q_i e_i^2, e = x - reference, angles wrapped (Eq. 4.1)."""
+
+    q: list
+    reference: list
+    angles: list
+
+    @staticmethod
+    def from_metadata(meta: dict) -> "TerminalReward | None":
+        """From the `run` metadata; None for an infinite horizon."""
+        horizon = meta.get("horizon")
+        if horizon != "finite":
+            return None
+        try:
+            q = [float(v) for v in meta["reward_q"].split(",")]
+            ref = [float(v) for v in meta["reward_reference"].split(",")]
+            angles = [v == "1" for v in meta["reward_angles"].split(",")]
+        except (KeyError, ValueError) as e:
+            raise CheckError(f"`run` metadata: finite horizon without reward weights: {e}") from e
+        if not len(q) == len(ref) == len(angles):
+            raise CheckError(f"`run` metadata: reward weights of different lengths: {meta}")
+        return TerminalReward(q, ref, angles)
+
+    def __call__(self, x: list) -> float:
+        r = 0.0
+        for i, q in enumerate(self.q):
+            e = x[i] - self.reference[i]
+            if self.angles[i]:
+                e = wrap(e)
+            r -= q * e * e
+        return r
+
+
+def final_state(m: dict, truth: dict) -> list:
+    """The true state of measurement `m`'s sample: its `/plant/truth` message (x_0, ...)
+    when the recording has one, else its measured `y` (full-state sensing)."""
+    if truth:
+        t = truth.get(m.get("seq"))
+        if t is None:
+            raise CheckError(f"{TRUTH_TOPIC}: no message for sample {m.get('seq')}")
+        prefix, src = "x_", t
+    else:
+        prefix, src = "y_", m
+    x = []
+    while f"{prefix}{len(x)}" in src:
+        x.append(as_float(src[f"{prefix}{len(x)}"]))
+    return x
+
+
+def trial_returns(
+    measurements: list, terminal: "TerminalReward | None" = None, truth: dict | None = None
+) -> tuple[dict[int, float], dict[int, float]]:
     """(learning returns, greedy returns) by trial number, from decoded measurement
-    messages: r_1 + ... + r_N of each trial, summed in step order from 0.0."""
+    messages: r_1 + ... + r_N of each trial, summed in step order from 0.0, plus
+    `terminal` of the END sample's true state when given (finite horizon)."""
     trials: dict[tuple[int, bool], dict[int, float]] = {}
+    finals: dict[tuple[int, bool], float] = {}
     for m in measurements:
         try:
             trial, step, flags = int(m["trial"]), int(m["step"]), int(m["flags"])
@@ -304,10 +387,13 @@ def trial_returns(measurements: list) -> tuple[dict[int, float], dict[int, float
             raise CheckError(f"{MEASUREMENT_TOPIC} message {m}: bad or missing field: {e}") from e
         if flags & FLAG_SHUTDOWN:
             continue
-        steps = trials.setdefault((trial, bool(flags & FLAG_GREEDY)), {})
+        key = (trial, bool(flags & FLAG_GREEDY))
+        steps = trials.setdefault(key, {})
         if step in steps:
             raise CheckError(f"{MEASUREMENT_TOPIC}: trial {trial} has step {step} twice")
         steps[step] = reward
+        if terminal is not None and flags & FLAG_TRIAL_END and step >= 1:
+            finals[key] = terminal(final_state(m, truth or {}))
     learning: dict[int, float] = {}
     greedy: dict[int, float] = {}
     for (trial, is_greedy), steps in sorted(trials.items()):
@@ -320,6 +406,10 @@ def trial_returns(measurements: list) -> tuple[dict[int, float], dict[int, float
         total = 0.0
         for k in range(1, n + 1):
             total += steps[k]
+        if terminal is not None:
+            if (trial, is_greedy) not in finals:
+                raise CheckError(f"{MEASUREMENT_TOPIC}: {kind} {trial} has no END sample")
+            total += finals[(trial, is_greedy)]
         (greedy if is_greedy else learning)[trial] = total
     return learning, greedy
 
@@ -406,12 +496,15 @@ def check_run(run_dir: Path, log=print) -> None:
     log("ok: every channel is json with a flat numeric jsonschema schema, no $ref")
     check_attachment(rec)
     log(f"ok: attachment {CONFIG_ATTACHMENT} present")
-    learning, greedy = trial_returns(rec.measurements)
+    terminal = TerminalReward.from_metadata(rec.run_metadata)
+    learning, greedy = trial_returns(rec.measurements, terminal, rec.truth)
     csv_path = run_dir / "returns.csv"
     compare_returns(learning, greedy, read_returns_csv(csv_path), csv_path.name)
     log(
         f"ok: returns of {len(learning)} trials and {len(greedy)} greedy trials "
-        f"from {MEASUREMENT_TOPIC} equal {csv_path.name} exactly"
+        f"from {MEASUREMENT_TOPIC}"
+        + (" (with the terminal reward of a finite horizon)" if terminal else "")
+        + f" equal {csv_path.name} exactly"
     )
 
 
