@@ -262,15 +262,24 @@ impl Approximator for Rbf {
     }
     fn value(&self, x: &[f64], y: &mut [f64]) {
         let (m, axes) = (self.m, self.axes(x));
-        // The sums in a local array: accumulating through `y` costs twice the time.
-        let mut v = [0.0; MAX_OUT];
-        axes.for_each(|i, phi, _| {
-            for (v, t) in v[..m].iter_mut().zip(&self.theta[i * m..(i + 1) * m]) {
-                *v += t * phi;
-            }
-        });
         y.fill(0.0);
-        y[..m].copy_from_slice(&v[..m]);
+        if m <= MAX_OUT {
+            // The sums in a local array: accumulating through `y` costs twice the time.
+            let mut v = [0.0; MAX_OUT];
+            axes.for_each(|i, phi, _| {
+                for (v, t) in v[..m].iter_mut().zip(&self.theta[i * m..(i + 1) * m]) {
+                    *v += t * phi;
+                }
+            });
+            y[..m].copy_from_slice(&v[..m]);
+        } else {
+            // More outputs than the array holds (SARSA's Q on the arm has nine).
+            axes.for_each(|i, phi, _| {
+                for (y, t) in y.iter_mut().zip(&self.theta[i * m..(i + 1) * m]) {
+                    *y += t * phi;
+                }
+            });
+        }
         self.clamp(y);
     }
     fn shift(&mut self, x: &[f64], step: &[f64]) {
@@ -317,8 +326,16 @@ impl Differentiable for Rbf {
             let range = axes.off[j]..axes.off[j + 1];
             axes.r[range].iter_mut().for_each(|r| *r -= mean);
         }
-        // Sums in local arrays, as in `value`.
-        let (mut v, mut dv) = ([0.0; MAX_OUT], [0.0; MAX_OUT * MAX_IN]);
+        // Sums in local arrays where they fit (as in `value`; here an array behind a
+        // slice measured as fast).
+        let (mut local_v, mut local_dv) = ([0.0; MAX_OUT], [0.0; MAX_OUT * MAX_IN]);
+        y.fill(0.0);
+        jac.fill(0.0);
+        let (v, dv): (&mut [f64], &mut [f64]) = if m <= MAX_OUT {
+            (&mut local_v[..m], &mut local_dv[..m * n])
+        } else {
+            (&mut y[..m], &mut jac[..m * n])
+        };
         axes.for_each(|i, phi, idx| {
             for o in 0..m {
                 let t = self.theta[i * m + o];
@@ -329,10 +346,10 @@ impl Differentiable for Rbf {
                 }
             }
         });
-        y.fill(0.0);
-        y[..m].copy_from_slice(&v[..m]);
-        jac.fill(0.0);
-        jac[..m * n].copy_from_slice(&dv[..m * n]);
+        if m <= MAX_OUT {
+            y[..m].copy_from_slice(&local_v[..m]);
+            jac[..m * n].copy_from_slice(&local_dv[..m * n]);
+        }
         if let Some((lo, hi)) = &self.bounds {
             for o in 0..m {
                 if y[o] <= lo[o] || y[o] >= hi[o] {
@@ -481,6 +498,40 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// More outputs than the local sums hold (`MAX_OUT`; SARSA's Q on the arm has nine):
+    /// the same sums, in the same order, as from the basis functions; the Jacobian by
+    /// finite differences.
+    #[test]
+    fn more_outputs_than_max_out() {
+        let m = MAX_OUT + 1;
+        let rbf = pendulum_rbf(m);
+        let x = [0.4, -3.0];
+        let mut phi = vec![0.0; rbf.len()];
+        rbf.basis(&x, &mut phi);
+        let mut want = vec![0.0; m];
+        for (i, p) in phi.iter().enumerate() {
+            for o in 0..m {
+                want[o] += rbf.theta[i * m + o] * p;
+            }
+        }
+        let (mut y, mut y2, mut jac) = (vec![0.0; m], vec![0.0; m], vec![0.0; 2 * m]);
+        rbf.value(&x, &mut y);
+        assert_eq!(y, want);
+        rbf.value_and_jacobian(&x, &mut y2, &mut jac);
+        assert_eq!(y2, want);
+        let h = 1e-6;
+        let (mut ya, mut yb) = (vec![0.0; m], vec![0.0; m]);
+        rbf.value(&[x[0], x[1] + h], &mut ya);
+        rbf.value(&[x[0], x[1] - h], &mut yb);
+        for o in 0..m {
+            let fd = (ya[o] - yb[o]) / (2.0 * h);
+            assert!(
+                (fd - jac[o * 2 + 1]).abs() < 1e-5 * (1.0 + fd.abs()),
+                "output {o}"
+            );
         }
     }
 
