@@ -8,7 +8,7 @@ use crate::approx::llr::{Eviction, Llr, LlrParams, Search};
 use crate::approx::rbf::{Rbf, RbfParams};
 use crate::approx::tiles::{Tiles, TilesParams};
 use crate::approx::{Approximator, Differentiable, ValueFunction};
-use crate::config::{Algo, Component, ExperimentConfig};
+use crate::config::{Algo, Component, ExperimentConfig, LstdPrior};
 use crate::critic::{Critic, TdLambda};
 use crate::explore::Exploration;
 use crate::lstd::Lstd;
@@ -226,7 +226,19 @@ pub fn build(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Box<dyn Agen
         .bounded_actor
         .then(|| (task.action_low.clone(), task.action_high.clone()));
     let critic: Box<dyn Critic> = match (&cfg.critic, make(&cfg.critic, &state(1, None))) {
-        (Component::Lstd(c), Built::Rbf(v)) => Box::new(Lstd::new(*v, c.initial_a)),
+        (Component::Lstd(c), Built::Rbf(v)) => {
+            let prior = (c.prior == LstdPrior::Reward).then(|| {
+                // θ_0 = ρ(c, 0) / (1 − γ): the value of staying at each centre.
+                let mut centre = vec![0.0; v.input_dim()];
+                (0..v.len())
+                    .map(|i| {
+                        v.centre(i, &mut centre);
+                        task.reward.state_reward(&centre) / (1.0 - cfg.learning.gamma)
+                    })
+                    .collect()
+            });
+            Box::new(Lstd::new(*v, c.initial_a, prior))
+        }
         (c, built) => Box::new(TdLambda::new(built.value_function(), c.alpha())),
     };
     let model = || {

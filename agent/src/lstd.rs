@@ -13,7 +13,9 @@
 //! in §6.4.1 ("updated at the end of every trial, which gives steadier behaviour") — so
 //! within a trial the value function, and the policy read from it, stay fixed. There is
 //! no learning rate. With `θ = 0` before the first solve and `b_0 = 0`, the initial value
-//! function is 0: optimistic, since every reward is negative (§6.4.1).
+//! function is 0: optimistic, since every reward is negative (§6.4.1). An optional prior
+//! `θ_0` (`b_0 = A_0 θ_0`, [`crate::config::LstdPrior`]) draws rarely visited basis
+//! functions towards `θ_0` instead.
 //!
 //! Cost: one rank-one update of the `p × p` matrix `A` per sample and one LU solve per
 //! trial (`p = 400` on the pendulum: about 27 µs and 4 ms on this machine).
@@ -40,20 +42,24 @@ pub struct Lstd {
 
 impl Lstd {
     /// LSTD on the basis functions of `v` (a scalar RBF approximator whose parameters
-    /// become `θ`), with `A_0 = a0 · I`.
+    /// become `θ`), with `A_0 = a0 · I` and `b_0 = A_0 θ_0`: `θ_0 = 0` (the thesis) or the
+    /// given prior, which is then also `θ` until the first solve.
     ///
     /// # Panics
-    /// If `v` is not scalar or `a0` is not positive (validated by the configuration).
-    pub fn new(mut v: Rbf, a0: f64) -> Self {
+    /// If `v` is not scalar, `a0` is not positive (validated by the configuration), or
+    /// the prior's length is not the number of basis functions.
+    pub fn new(mut v: Rbf, a0: f64, prior: Option<Vec<f64>>) -> Self {
         use crate::approx::Approximator;
         assert_eq!(v.output_dim(), 1, "an LSTD critic is scalar");
         assert!(a0 > 0.0, "A_0 must be invertible");
-        v.parameters_mut().fill(0.0);
         let p = v.len();
+        let theta0 = prior.unwrap_or_else(|| vec![0.0; p]);
+        assert_eq!(theta0.len(), p, "one prior value per basis function");
+        v.parameters_mut().copy_from_slice(&theta0);
         Self {
             v,
             a: DMatrix::identity(p, p) * a0,
-            b: DVector::zeros(p),
+            b: DVector::from_vec(theta0) * a0,
             z: DVector::zeros(p),
             phi: DVector::zeros(p),
             phi_next: DVector::zeros(p),
@@ -177,7 +183,7 @@ mod tests {
     /// gives `A = a₀ + 1 − γ`, `b = r`, `θ = r / (a₀ + 1 − γ)`.
     #[test]
     fn one_transition_by_hand() {
-        let mut c = Lstd::new(grid(1), 0.5);
+        let mut c = Lstd::new(grid(1), 0.5, None);
         c.start_trial();
         let td = c.observe(&[0.2], -2.0, Next::State(&[0.7]), 0.9, 0.3);
         assert_eq!(td, -2.0, "θ = 0 before the first solve");
@@ -191,11 +197,25 @@ mod tests {
         assert!((scalar(c.function(), &[0.5]) - want).abs() < 1e-12);
     }
 
+    /// With a prior `θ_0` (`b_0 = A_0 θ_0`): `θ = θ_0` before any data; one transition
+    /// (φ ≡ 1) gives `A = a₀ + 1 − γ`, `b = a₀ θ_0 + r`.
+    #[test]
+    fn a_prior_is_theta_before_data_and_a_ridge_target_after() {
+        let mut c = Lstd::new(grid(1), 0.5, Some(vec![-4.0]));
+        assert_eq!(scalar(c.function(), &[0.5]), -4.0);
+        c.start_trial();
+        let td = c.observe(&[0.2], -2.0, Next::State(&[0.7]), 0.9, 0.3);
+        assert!((td - (-2.0 + 0.9 * -4.0 + 4.0)).abs() < 1e-12);
+        c.end_trial();
+        let want = (0.5 * -4.0 + -2.0) / (0.5 + 1.0 - 0.9);
+        assert!((scalar(c.function(), &[0.5]) - want).abs() < 1e-12);
+    }
+
     /// A terminal transition (Eq. 4.3): `φ(x_{k+1}) = 0` and `τ_N` joins the reward, so
     /// `A = a₀ + 1`, `b = r + γ τ_N`.
     #[test]
     fn terminal_value_enters_as_reward() {
-        let mut c = Lstd::new(grid(1), 0.5);
+        let mut c = Lstd::new(grid(1), 0.5, None);
         c.start_trial();
         let td = c.observe(&[0.2], -2.0, Next::Terminal(-4.0), 0.9, 0.3);
         assert_eq!(td, -2.0 + 0.9 * -4.0);
@@ -209,7 +229,7 @@ mod tests {
     #[test]
     fn traces_accumulate_within_a_trial() {
         let (g, l) = (0.9, 0.5);
-        let mut c = Lstd::new(grid(1), 0.5);
+        let mut c = Lstd::new(grid(1), 0.5, None);
         c.start_trial();
         c.observe(&[0.1], -1.0, Next::State(&[0.2]), g, l);
         c.observe(&[0.2], -3.0, Next::State(&[0.3]), g, l);
@@ -224,7 +244,7 @@ mod tests {
     #[test]
     fn converges_to_the_value_of_a_constant_reward() {
         let g = 0.8;
-        let mut c = Lstd::new(grid(5), 0.5);
+        let mut c = Lstd::new(grid(5), 0.5, None);
         for _ in 0..200 {
             c.start_trial();
             for k in 0..20 {

@@ -44,7 +44,7 @@ use plant::{SystemName, Task};
 
 use crate::config::{
     Algo, ApproxKind, Component, ConfigError, ExperimentConfig, HorizonKind, LearningConfig,
-    LlrConfig, LstdConfig, RbfConfig, RunConfig, SarsaConfig, TilesConfig, VgbpConfig,
+    LlrConfig, LstdConfig, LstdPrior, RbfConfig, RunConfig, SarsaConfig, TilesConfig, VgbpConfig,
     finite_horizon_unsupported,
 };
 
@@ -462,6 +462,7 @@ fn critic_only(system: SystemName, algo: Algo, approx: ApproxKind) -> Experiment
                 centres: grid.clone(),
                 intersection: 0.5,
                 initial_a: 0.5,
+                prior: LstdPrior::Zero,
             }),
             0.3,
         ),

@@ -183,6 +183,17 @@ impl Rbf {
         self.features(x, |i, v, _| phi[i] = v);
     }
 
+    /// Writes the centre of basis function `i` (grid order, the last input fastest) into
+    /// `c`.
+    pub fn centre(&self, i: usize, c: &mut [f64]) {
+        let mut rest = i;
+        for j in (0..self.n).rev() {
+            let cs = &self.centres[j];
+            c[j] = cs[rest % cs.len()];
+            rest /= cs.len();
+        }
+    }
+
     /// The parameters `θ`, `m` per basis function (`θ[i·m + o]` weighs `φᵢ` in output `o`).
     pub fn parameters(&self) -> &[f64] {
         &self.theta
