@@ -282,6 +282,7 @@ names!(SensorKind, Full => "full", Angle => "angle");
 names!(ObserverKind, PassThrough => "pass-through", FiniteDifference => "finite-difference", Predictive => "predictive");
 names!(ObserverModel, Learned => "learned", Known => "known");
 names!(ObserverMode, Direct => "direct", Predictive => "predictive");
+names!(LstdPrior, Zero => "zero", Reward => "reward");
 
 /// A complete experiment.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -498,6 +499,9 @@ pub enum LstdPrior {
 }
 
 impl LstdPrior {
+    /// Both priors, for validation messages.
+    pub const ALL: [LstdPrior; 2] = [LstdPrior::Zero, LstdPrior::Reward];
+
     fn is_zero(&self) -> bool {
         *self == LstdPrior::Zero
     }
@@ -1056,7 +1060,7 @@ pub fn resolve(
     }
     merge(&mut merged, user, "").map_err(with_file)?;
     check_observer_choices(&merged).map_err(with_file)?;
-    check_lstd_prior(&merged).map_err(with_file)?;
+    check_choice::<LstdPrior>(&merged, "critic", "prior").map_err(with_file)?;
     let mut cfg: ExperimentConfig = toml::Value::Table(merged)
         .try_into()
         .map_err(|e: toml::de::Error| with_file(err("", e.message())))?;
@@ -1101,39 +1105,31 @@ pub fn resolve(
 /// Checks the spellings of the `[observer]` choice keys, so that a wrong one is reported
 /// with its key and the allowed values.
 fn check_observer_choices(merged: &toml::Table) -> Result<(), ConfigError> {
-    let Some(toml::Value::Table(o)) = merged.get("observer") else {
-        return Ok(());
-    };
-    fn one<T: Choice>(o: &toml::Table, key: &str) -> Result<(), ConfigError> {
-        let full = format!("observer.{key}");
-        match o.get(key) {
-            None => Ok(()),
-            Some(toml::Value::String(s)) => T::parse(s)
-                .map(|_| ())
-                .map_err(|_| err(&full, format!("\"{s}\" is not one of: {}", T::spellings()))),
-            Some(v) => Err(err(
-                &full,
-                format!("{v} must be a string, one of: {}", T::spellings()),
-            )),
-        }
-    }
-    one::<SensorKind>(o, "sensor")?;
-    one::<ObserverKind>(o, "observer")?;
-    one::<ObserverModel>(o, "model")?;
-    one::<ObserverMode>(o, "mode")
+    check_choice::<SensorKind>(merged, "observer", "sensor")?;
+    check_choice::<ObserverKind>(merged, "observer", "observer")?;
+    check_choice::<ObserverModel>(merged, "observer", "model")?;
+    check_choice::<ObserverMode>(merged, "observer", "mode")
 }
 
-/// `critic.prior` of an LSTD critic: one of its spellings.
-fn check_lstd_prior(merged: &toml::Table) -> Result<(), ConfigError> {
-    let Some(toml::Value::Table(c)) = merged.get("critic") else {
+/// `[section] key`, when present, is one of `T`'s spellings; the error names the key and
+/// the allowed values.
+fn check_choice<T: Choice>(
+    merged: &toml::Table,
+    section: &str,
+    key: &str,
+) -> Result<(), ConfigError> {
+    let Some(toml::Value::Table(t)) = merged.get(section) else {
         return Ok(());
     };
-    match c.get("prior") {
+    let full = format!("{section}.{key}");
+    match t.get(key) {
         None => Ok(()),
-        Some(toml::Value::String(s)) if s == "zero" || s == "reward" => Ok(()),
+        Some(toml::Value::String(s)) => T::parse(s)
+            .map(|_| ())
+            .map_err(|_| err(&full, format!("\"{s}\" is not one of: {}", T::spellings()))),
         Some(v) => Err(err(
-            "critic.prior",
-            format!("{v} is not one of: \"zero\", \"reward\""),
+            &full,
+            format!("{v} must be a string, one of: {}", T::spellings()),
         )),
     }
 }
@@ -1370,7 +1366,7 @@ mod tests {
             .to_string();
         assert_eq!(
             e,
-            "v.toml: `critic.prior`: \"pessimistic\" is not one of: \"zero\", \"reward\""
+            "v.toml: `critic.prior`: \"pessimistic\" is not one of: zero, reward"
         );
     }
 
