@@ -13,7 +13,8 @@ Opens DIR/run.mcap with the official Python `mcap` package and checks that
 Returns (check 4): a measurement message has fields `trial` (learning trial, from 1),
 `step` (0 = the trial's start state; the `reward` of step k >= 1 is r_k = rho(x_{k-1},
 u_{k-1})) and `flags` (bit 0 trial start, bit 1 trial end, bit 2 greedy evaluation trial,
-bit 3 shutdown). A trial's return is r_1 + r_2 + ... + r_N summed left to right from 0.0
+bit 3 shutdown, bit 7 primed: predictive timing's repeat of the start state, reward 0).
+A trial's return is r_1 + r_2 + ... + r_N summed left to right from 0.0
 in Python floats, as the rig sums the same f64 values in the same order, so they are
 compared with `==` (NaN equals NaN; a `null` reward, the recorder's encoding of NaN/inf,
 reads as NaN). With a finite horizon (the `run` metadata's `horizon = finite`) the
@@ -22,7 +23,8 @@ terminal reward tau_N(x_N) = -sum_i q_i e_i^2 of the trial's last state is added
 weights are the metadata's `reward_q`, `reward_reference`, `reward_angles`; x_N is the
 `/plant/truth` message of the END sample when the sensor does not measure the full
 state, otherwise the END measurement's `y`). Messages without the greedy bit make the
-learning trial T's `return`; messages with it make the `greedy_return` of row T. Messages
+learning trial T's `return`; messages with it make the `greedy_return` of row T — the mean
+over the task's start states when it has several (one greedy trial from each). Messages
 with the shutdown bit carry no step and are left out.
 
 Exit status 0 when every check passes, 1 with a message naming the first failure
@@ -57,6 +59,7 @@ FLAG_TRIAL_START = 1 << 0
 FLAG_TRIAL_END = 1 << 1
 FLAG_GREEDY = 1 << 2
 FLAG_SHUTDOWN = 1 << 3
+FLAG_PRIMED = 1 << 7
 
 MAGIC_SIZE = 8
 # opcode (1) + record length (8) + summary_start (8) + summary_offset_start (8) + crc (4)
@@ -375,10 +378,15 @@ def trial_returns(
     measurements: list, terminal: "TerminalReward | None" = None, truth: dict | None = None
 ) -> tuple[dict[int, float], dict[int, float]]:
     """(learning returns, greedy returns) by trial number, from decoded measurement
-    messages: r_1 + ... + r_N of each trial, summed in step order from 0.0, plus
-    `terminal` of the END sample's true state when given (finite horizon)."""
-    trials: dict[tuple[int, bool], dict[int, float]] = {}
-    finals: dict[tuple[int, bool], float] = {}
+    messages, summed as the rig sums them: from 0.0, the PRIMED repeat of the start state
+    (predictive timing; reward 0) if any, then r_1 + ... + r_N in step order, plus
+    `terminal` of the END sample's true state when given (finite horizon). A trial number
+    has one learning trial and a greedy trial from each start state (several on arm-6.4),
+    each opened by a START message; its greedy return is their mean, (0.0 + g_1 + ...) / n."""
+    trials: dict[tuple[int, bool, int], dict[int, float]] = {}
+    primed: dict[tuple[int, bool, int], float] = {}
+    finals: dict[tuple[int, bool, int], float] = {}
+    starts: dict[tuple[int, bool], int] = {}
     for m in measurements:
         try:
             trial, step, flags = int(m["trial"]), int(m["step"]), int(m["flags"])
@@ -387,16 +395,32 @@ def trial_returns(
             raise CheckError(f"{MEASUREMENT_TOPIC} message {m}: bad or missing field: {e}") from e
         if flags & FLAG_SHUTDOWN:
             continue
-        key = (trial, bool(flags & FLAG_GREEDY))
+        is_greedy = bool(flags & FLAG_GREEDY)
+        kind = "greedy trial" if is_greedy else "trial"
+        if flags & FLAG_TRIAL_START:
+            starts[(trial, is_greedy)] = starts.get((trial, is_greedy), -1) + 1
+            if not is_greedy and starts[(trial, False)] > 0:
+                raise CheckError(f"{MEASUREMENT_TOPIC}: trial {trial} starts twice")
+        if (trial, is_greedy) not in starts:
+            raise CheckError(f"{MEASUREMENT_TOPIC}: {kind} {trial}: a sample before its START")
+        key = (trial, is_greedy, starts[(trial, is_greedy)])
+        if flags & FLAG_PRIMED:
+            if step != 0 or key in primed:
+                raise CheckError(
+                    f"{MEASUREMENT_TOPIC}: {kind} {trial}: PRIMED at step {step}, or twice"
+                )
+            primed[key] = reward
+            continue
         steps = trials.setdefault(key, {})
         if step in steps:
-            raise CheckError(f"{MEASUREMENT_TOPIC}: trial {trial} has step {step} twice")
+            raise CheckError(f"{MEASUREMENT_TOPIC}: {kind} {trial} has step {step} twice")
         steps[step] = reward
         if terminal is not None and flags & FLAG_TRIAL_END and step >= 1:
             finals[key] = terminal(final_state(m, truth or {}))
     learning: dict[int, float] = {}
-    greedy: dict[int, float] = {}
-    for (trial, is_greedy), steps in sorted(trials.items()):
+    greedy_sums: dict[int, tuple[float, int]] = {}
+    for key, steps in sorted(trials.items()):
+        trial, is_greedy, _ = key
         kind = "greedy trial" if is_greedy else "trial"
         n = max(steps)
         if sorted(steps) != list(range(n + 1)) or n < 1:
@@ -404,13 +428,20 @@ def trial_returns(
                 f"{MEASUREMENT_TOPIC}: {kind} {trial} has steps {sorted(steps)}, not 0..N"
             )
         total = 0.0
+        if key in primed:
+            total += primed[key]
         for k in range(1, n + 1):
             total += steps[k]
         if terminal is not None:
-            if (trial, is_greedy) not in finals:
+            if key not in finals:
                 raise CheckError(f"{MEASUREMENT_TOPIC}: {kind} {trial} has no END sample")
-            total += finals[(trial, is_greedy)]
-        (greedy if is_greedy else learning)[trial] = total
+            total += finals[key]
+        if is_greedy:
+            acc, count = greedy_sums.get(trial, (0.0, 0))
+            greedy_sums[trial] = (acc + total, count + 1)
+        else:
+            learning[trial] = total
+    greedy = {trial: acc / count for trial, (acc, count) in greedy_sums.items()}
     return learning, greedy
 
 
