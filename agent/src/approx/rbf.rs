@@ -86,6 +86,24 @@ impl Axes {
         &self.r[self.off[j]..self.off[j + 1]]
     }
 
+    /// Replaces `r_j[i]` by `r_j[i] − mean_r_j`, `mean_r_j = Σ_i g_j[i] r_j[i] / Σ_i g_j[i]`:
+    /// the normalisation's part of the gradient (Eq. 6.15), which is separable —
+    /// `Σ_i φ_i r_j[i_j]` over the whole grid equals that one-axis mean.
+    fn centre_r(&mut self) {
+        for j in 0..self.n {
+            let s: f64 = self.g(j).iter().sum::<f64>().max(f64::MIN_POSITIVE);
+            let mean = self
+                .g(j)
+                .iter()
+                .zip(self.r(j))
+                .map(|(g, r)| g * r)
+                .sum::<f64>()
+                / s;
+            let range = self.off[j]..self.off[j + 1];
+            self.r[range].iter_mut().for_each(|r| *r -= mean);
+        }
+    }
+
     /// Calls `visit(i, φᵢ, index of centre i along each axis)` for every basis function
     /// in grid order (the last axis fastest). `φ̃ᵢ` is the product of the axes' factors
     /// in axis order; the product over all axes but the last is formed once per row.
@@ -372,22 +390,9 @@ impl Approximator for Rbf {
 impl Differentiable for Rbf {
     fn value_and_jacobian(&self, x: &[f64], y: &mut [f64], jac: &mut [f64]) {
         let (n, m) = (self.n, self.m);
-        // First pass: value and Σᵢ φᵢ rᵢ per axis is separable: Σ_i φ_i r_j[i_j] equals
-        // Σ_i g_j[i] r_j[i] / Σ_i g_j[i].
+        // ∂φᵢ/∂x_j = −φᵢ (r_j[i_j] − mean_r_j)                                (Eq. 6.15)
         let mut axes = self.axes(x);
-        for j in 0..n {
-            let s: f64 = axes.g(j).iter().sum::<f64>().max(f64::MIN_POSITIVE);
-            let mean = axes
-                .g(j)
-                .iter()
-                .zip(axes.r(j))
-                .map(|(g, r)| g * r)
-                .sum::<f64>()
-                / s;
-            // From here on `r` holds `r_j[i] − mean_r_j`.
-            let range = axes.off[j]..axes.off[j + 1];
-            axes.r[range].iter_mut().for_each(|r| *r -= mean);
-        }
+        axes.centre_r();
         y.fill(0.0);
         jac.fill(0.0);
         // The common shapes with their sizes known to the compiler, so that the sums stay
@@ -584,6 +589,34 @@ mod tests {
                 (fd - jac[o * 2 + 1]).abs() < 1e-5 * (1.0 + fd.abs()),
                 "output {o}"
             );
+        }
+    }
+
+    /// The fixed-shape sums equal the general ones bit for bit, for every fixed shape.
+    #[test]
+    fn fixed_shapes_equal_the_general_sums() {
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        for (m, n) in [(1, 2), (1, 3), (1, 4), (1, 5), (2, 2), (2, 3), (4, 6)] {
+            let mut rbf = Rbf::new(&RbfParams {
+                centres: vec![4; n],
+                range: vec![(-2.0, 2.0); n],
+                periodic: (0..n).map(|j| j == 0).collect(),
+                intersection: 0.6,
+                outputs: m,
+                initial: 0.0,
+                bounds: None,
+            });
+            for t in &mut rbf.theta {
+                *t = rng.random_range(-5.0..5.0);
+            }
+            let x: Vec<f64> = (0..n).map(|_| rng.random_range(-2.5..2.5)).collect();
+            let (mut y, mut jac) = (vec![0.0; m], vec![0.0; m * n]);
+            rbf.value_and_jacobian(&x, &mut y, &mut jac);
+            let mut axes = rbf.axes(&x);
+            axes.centre_r();
+            let (mut y2, mut jac2) = (vec![0.0; m], vec![0.0; m * n]);
+            rbf.sums(&axes, &mut y2, &mut jac2);
+            assert_eq!((y, jac), (y2, jac2), "shape ({m}, {n})");
         }
     }
 
