@@ -71,7 +71,9 @@ struct Axes {
     g: Vec<f64>,
     /// `B⁻¹ (x − c)` per axis and centre.
     r: Vec<f64>,
-    /// `Σⱼ φ̃ⱼ = Π_axes Σ_i g[i]` (guarded against underflow far outside the grid).
+    /// `Σ_i g_j[i]` per axis (guarded against underflow far outside the grid).
+    sums: [f64; MAX_IN],
+    /// `Σⱼ φ̃ⱼ = Π_axes Σ_i g_j[i]`.
     norm: f64,
 }
 
@@ -91,14 +93,13 @@ impl Axes {
     /// `Σ_i φ_i r_j[i_j]` over the whole grid equals that one-axis mean.
     fn centre_r(&mut self) {
         for j in 0..self.n {
-            let s: f64 = self.g(j).iter().sum::<f64>().max(f64::MIN_POSITIVE);
             let mean = self
                 .g(j)
                 .iter()
                 .zip(self.r(j))
                 .map(|(g, r)| g * r)
                 .sum::<f64>()
-                / s;
+                / self.sums[j];
             let range = self.off[j]..self.off[j + 1];
             self.r[range].iter_mut().for_each(|r| *r -= mean);
         }
@@ -227,7 +228,7 @@ impl Rbf {
         let total: usize = self.centres.iter().map(Vec::len).sum();
         let (mut g, mut r) = (Vec::with_capacity(total), Vec::with_capacity(total));
         let mut off = [0; MAX_IN + 1];
-        let mut norm = 1.0;
+        let (mut sums, mut norm) = ([0.0; MAX_IN], 1.0);
         for (j, (cs, &xj)) in self.centres.iter().zip(x).enumerate() {
             let (p, inv_b) = (self.period[j], self.inv_b[j]);
             for &c in cs {
@@ -239,38 +240,67 @@ impl Rbf {
                 r.push(d * inv_b);
             }
             off[j + 1] = g.len();
-            norm *= g[off[j]..].iter().sum::<f64>().max(f64::MIN_POSITIVE);
+            sums[j] = g[off[j]..].iter().sum::<f64>().max(f64::MIN_POSITIVE);
+            norm *= sums[j];
         }
         Axes {
             n: self.n,
             off,
             g,
             r,
+            sums,
             norm,
         }
     }
 
-    /// Calls `visit(i, φᵢ(x), centre index per axis)` for every basis function and
-    /// returns the per-axis factors.
-    fn features(&self, x: &[f64], visit: impl FnMut(usize, f64, &[usize])) -> Axes {
-        let axes = self.axes(x);
-        axes.for_each(visit);
-        axes
+    /// Calls `visit(i, φᵢ(x), centre index per axis)` for every basis function.
+    fn features(&self, x: &[f64], visit: impl FnMut(usize, f64, &[usize])) {
+        self.axes(x).for_each(visit);
     }
 
-    /// `step`, cut so that the saturated value at `x` plus the step stays within the
-    /// output bounds.
-    fn saturated_step(&self, x: &[f64], step: &[f64]) -> [f64; MAX_OUT] {
+    /// `Σᵢ θᵢ φᵢ` at the factors `axes`, before any output bound.
+    fn unbounded_value(&self, axes: &Axes, y: &mut [f64]) {
+        let m = self.m;
+        y.fill(0.0);
+        if m <= MAX_OUT {
+            // The sums in a local array: accumulating through `y` costs twice the time.
+            let mut v = [0.0; MAX_OUT];
+            axes.for_each(|i, phi, _| {
+                for (v, t) in v[..m].iter_mut().zip(&self.theta[i * m..(i + 1) * m]) {
+                    *v += t * phi;
+                }
+            });
+            y[..m].copy_from_slice(&v[..m]);
+        } else {
+            // More outputs than the array holds (SARSA's Q on the arm has nine).
+            axes.for_each(|i, phi, _| {
+                for (y, t) in y.iter_mut().zip(&self.theta[i * m..(i + 1) * m]) {
+                    *y += t * phi;
+                }
+            });
+        }
+    }
+
+    /// [`Approximator::shift`] at the factors `axes` of its input: the step is first cut
+    /// so that the saturated value plus the step stays within the output bounds.
+    fn shift_at(&mut self, axes: &Axes, step: &[f64]) {
+        let m = self.m;
         let mut s = [0.0; MAX_OUT];
-        s[..self.m].copy_from_slice(&step[..self.m]);
+        s[..m].copy_from_slice(&step[..m]);
         if let Some((lo, hi)) = &self.bounds {
             let mut y = [0.0; MAX_OUT];
-            self.value(x, &mut y[..self.m]);
-            for o in 0..self.m {
+            self.unbounded_value(axes, &mut y[..m]);
+            self.clamp(&mut y[..m]);
+            for o in 0..m {
                 s[o] = (y[o] + step[o]).clamp(lo[o], hi[o]) - y[o];
             }
         }
-        s
+        let theta = &mut self.theta;
+        axes.for_each(|i, phi, _| {
+            for (t, s) in theta[i * m..(i + 1) * m].iter_mut().zip(&s[..m]) {
+                *t += s * phi;
+            }
+        });
     }
 
     /// `Σᵢ θᵢ φᵢ` and `Σᵢ −θᵢ φᵢ (r_j[i_j] − mean_r_j)` (Eq. 6.15) into `y` and `jac`, for
@@ -341,49 +371,24 @@ impl Approximator for Rbf {
         self.m
     }
     fn value(&self, x: &[f64], y: &mut [f64]) {
-        let (m, axes) = (self.m, self.axes(x));
-        y.fill(0.0);
-        if m <= MAX_OUT {
-            // The sums in a local array: accumulating through `y` costs twice the time.
-            let mut v = [0.0; MAX_OUT];
-            axes.for_each(|i, phi, _| {
-                for (v, t) in v[..m].iter_mut().zip(&self.theta[i * m..(i + 1) * m]) {
-                    *v += t * phi;
-                }
-            });
-            y[..m].copy_from_slice(&v[..m]);
-        } else {
-            // More outputs than the array holds (SARSA's Q on the arm has nine).
-            axes.for_each(|i, phi, _| {
-                for (y, t) in y.iter_mut().zip(&self.theta[i * m..(i + 1) * m]) {
-                    *y += t * phi;
-                }
-            });
-        }
+        self.unbounded_value(&self.axes(x), y);
         self.clamp(y);
     }
     fn shift(&mut self, x: &[f64], step: &[f64]) {
-        let step = &self.saturated_step(x, step);
-        let (m, axes) = (self.m, self.axes(x));
-        let theta = &mut self.theta;
-        axes.for_each(|i, phi, _| {
-            for (t, s) in theta[i * m..(i + 1) * m].iter_mut().zip(step) {
-                *t += s * phi;
-            }
-        });
+        let axes = self.axes(x);
+        self.shift_at(&axes, step);
     }
     fn fit(&mut self, x: &[f64], target: &[f64], rate: f64) {
+        // One evaluation of the factors for the error and the step. The error is taken
+        // on the unbounded value, as a gradient step should.
+        let (m, axes) = (self.m, self.axes(x));
         let mut y = [0.0; MAX_OUT];
-        // The error is taken on the unbounded value, as a gradient step should.
-        let bounds = self.bounds.take();
-        self.value(x, &mut y[..self.m]);
-        self.bounds = bounds;
+        self.unbounded_value(&axes, &mut y[..m]);
         let mut step = [0.0; MAX_OUT];
-        for o in 0..self.m {
+        for o in 0..m {
             step[o] = rate * (target[o] - y[o]);
         }
-        let m = self.m;
-        self.shift(x, &step[..m]);
+        self.shift_at(&axes, &step[..m]);
     }
 }
 
