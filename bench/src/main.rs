@@ -914,14 +914,7 @@ fn print_summary(
         let mean = last.iter().sum::<f64>() / n;
         let var = last.iter().map(|g| (g - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
         // The median too: one run that spins the pendulum moves the mean by hundreds.
-        let mut sorted = last.clone();
-        sorted.sort_by(f64::total_cmp);
-        let mid = sorted.len() / 2;
-        let median = if sorted.len() % 2 == 1 {
-            sorted[mid]
-        } else {
-            0.5 * (sorted[mid - 1] + sorted[mid])
-        };
+        let median = rig::report::curve::median(&last);
         println!(
             "  greedy return after trial {trial}: mean {mean:.1}, sample std {:.1}, median {median:.1} ({} runs)",
             var.sqrt(),

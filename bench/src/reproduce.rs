@@ -804,9 +804,7 @@ fn measure(label: &str, cfg: &ExperimentConfig, summary: &LearnSummary) -> Resul
     } else {
         0.0
     };
-    let mut sorted = finals.clone();
-    sorted.sort_by(f64::total_cmp);
-    let final_greedy_median = (sorted[(sorted.len() - 1) / 2] + sorted[sorted.len() / 2]) / 2.0;
+    let final_greedy_median = report::curve::median(&finals);
     let mean: Vec<f64> = by_trial.values().map(|v| v.0 / v.2 as f64).collect();
     let minutes: Vec<f64> = by_trial.values().map(|v| v.1 / v.2 as f64 / 60.0).collect();
     let smooth: Vec<f64> = (0..mean.len())
@@ -830,7 +828,7 @@ fn measure(label: &str, cfg: &ExperimentConfig, summary: &LearnSummary) -> Resul
         final_greedy,
         final_greedy_sd,
         final_greedy_median,
-        final_greedy_worst: sorted[0],
+        final_greedy_worst: finals.iter().copied().fold(f64::INFINITY, f64::min),
         reaches_min: minutes[reach],
         start_level,
         final_level,

@@ -148,6 +148,19 @@ impl TQuantileCache {
     }
 }
 
+/// The median of `values` (the mean of the middle two for an even count; NaN when
+/// empty): of the runs' final returns, where one run that never swings up moves the
+/// mean by hundreds.
+pub fn median(values: &[f64]) -> f64 {
+    if values.is_empty() {
+        return f64::NAN;
+    }
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let n = sorted.len();
+    (sorted[(n - 1) / 2] + sorted[n / 2]) / 2.0
+}
+
 /// Writes a learning curve as CSV.
 ///
 /// The header is `trial,sim_time_s,mean,min,max,ci_low,ci_high` ([`CSV_HEADER`];
@@ -199,6 +212,13 @@ fn write_csv_to(path: &Path, points: &[CurvePoint]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn median_of_odd_even_and_empty() {
+        assert_eq!(median(&[3.0, -1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, -6000.0, 1.0, 2.0]), 1.5);
+        assert!(median(&[]).is_nan());
+    }
 
     /// A fresh, empty directory under the system temp dir.
     fn temp_dir(name: &str) -> std::path::PathBuf {
