@@ -40,6 +40,13 @@ enum Command {
     /// the stale-action watchdog, clamping and rejection of bad actions. Prints one
     /// PASS/FAIL line per check; exits non-zero if any fails.
     CheckDriver(CheckDriverArgs),
+    /// Be a driver (docs/driver.md) for the simulated pendulum of Appendix A.1, in Rust:
+    /// a sample every 30 ms / SPEED on the monotonic clock, actions applied from their
+    /// arrival (clamped, non-finite ones rejected), the watchdog, resets by a PD brake.
+    /// The stand-in for a motor driver process (`rig run --plant external`); its code,
+    /// `rig::driver::device`, is the template for one (`bench/examples/motor_driver.rs`).
+    /// Runs until Ctrl-C or SIGTERM.
+    SimDriver(SimDriverArgs),
     /// Compute the optimal return of the pendulum swing-up from [π, 0] (one 3 s trial,
     /// Eq. 3.16) by dynamic programming on a grid, run the DP's policy on the plant, and
     /// write its trajectory to DIR/optimal.csv (t, angle, velocity, u, reward).
@@ -317,6 +324,31 @@ impl DriverArgs {
 }
 
 #[derive(Args)]
+struct SimDriverArgs {
+    /// The driver id: its services are rig/driver/ID/{info,sample,command}; letters,
+    /// digits, '-' and '_'.
+    #[arg(long, value_name = "ID", default_value = "pendulum")]
+    driver_id: String,
+    /// Run SPEED times faster than real time (a sample every 30 ms / SPEED of wall time,
+    /// advertised as time_scale SPEED); in (0, 1000].
+    #[arg(long, value_name = "SPEED", default_value_t = 1.0)]
+    speed: f64,
+    /// Run under SCHED_FIFO at this priority (1–99), as a hardware driver should, so that
+    /// a loaded machine does not delay the sample instants by milliseconds; needs root,
+    /// CAP_SYS_NICE or an rtprio limit [default: normal scheduling].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(1..=99))]
+    rt_priority: Option<u8>,
+    /// Spin (a busy core) instead of sleeping for the last this many µs before each
+    /// sample instant, so that the instant does not depend on the operating system's
+    /// wake-up latency; larger values trade CPU for less jitter.
+    #[arg(long, value_name = "US", default_value_t = 1000)]
+    spin_us: u64,
+    /// Log resets, rejected commands, watchdog trips and missed periods to stderr.
+    #[arg(long)]
+    verbose: bool,
+}
+
+#[derive(Args)]
 struct CheckDriverArgs {
     #[command(flatten)]
     driver: DriverArgs,
@@ -575,6 +607,7 @@ fn main() -> ExitCode {
         },
         Command::CheckDriver(args) => check_driver(&args),
         Command::Optimal(args) => optimal(&args),
+        Command::SimDriver(args) => sim_driver(&args),
         Command::Plant(args) => process(rig::process::plant::run, &args),
         Command::Observer(args) => process(rig::process::observer::run, &args),
         Command::Agent(args) => process(rig::process::agent::run, &args),
@@ -805,6 +838,47 @@ fn optimal(args: &OptimalArgs) -> ExitCode {
     );
     println!("  wrote {}", csv.display());
     ExitCode::SUCCESS
+}
+
+fn sim_driver(args: &SimDriverArgs) -> ExitCode {
+    use rig::driver::device::{Serving, Simulated, serve};
+    let device = wire::driver::check_id(&args.driver_id)
+        .map_err(|e| anyhow::anyhow!("`--driver-id`: {e}"))
+        .and_then(|()| Simulated::new(SystemName::Pendulum, args.speed));
+    let mut device = match device {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let served = rig::process::set_rt_priority(args.rt_priority).and_then(|()| {
+        eprintln!(
+            "driver {:?}: pendulum, Ts 30 ms, period {:.3} ms of wall time (speed {})",
+            args.driver_id,
+            30.0 / args.speed,
+            args.speed
+        );
+        let how = Serving {
+            stop_after: None,
+            spin_ns: args.spin_us.saturating_mul(1000),
+            verbose: args.verbose,
+        };
+        serve(&mut device, &args.driver_id, &how)
+    });
+    match served {
+        Ok(s) => {
+            eprintln!(
+                "driver: stopped after {} samples ({} periods missed)",
+                s.samples, s.missed
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }
 
 fn check_driver(args: &CheckDriverArgs) -> ExitCode {

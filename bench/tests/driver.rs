@@ -54,10 +54,26 @@ fn python() -> Option<String> {
     }
 }
 
-/// The Python example driver, stopped (SIGTERM, then killed) when dropped. One runs at
-/// a time: these tests measure the driver's timing (sample rate, watchdog, the safe
-/// action after a death), which two drivers and their rigs sharing a 2-core CI machine
-/// would disturb.
+/// A driver process: the Python example (`examples/python_driver/driver.py`, official
+/// iceoryx2 bindings) or `rig sim-driver` (Rust, `rig::driver::device`).
+#[derive(Clone, Debug)]
+enum Kind {
+    /// The Python example, run by this interpreter.
+    Python(String),
+    /// `rig sim-driver`.
+    Rust,
+}
+
+/// The drivers to test: `rig sim-driver`, and the Python example where the bindings are.
+fn drivers() -> Vec<Kind> {
+    let mut kinds = vec![Kind::Rust];
+    kinds.extend(python().map(Kind::Python));
+    kinds
+}
+
+/// A driver, stopped (SIGTERM, then killed) when dropped. One runs at a time: these
+/// tests measure the driver's timing (sample rate, watchdog, the safe action after a
+/// death), which two drivers and their rigs sharing a 2-core CI machine would disturb.
 struct Driver {
     child: Child,
     id: String,
@@ -69,15 +85,36 @@ static ONE_DRIVER: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 impl Driver {
     fn start(python: &str, name: &str, extra: &[&str]) -> Self {
+        Self::launch(&Kind::Python(python.into()), name, extra)
+    }
+
+    /// Driver `kind` with id `<name>-rs<pid>` (Rust) or `<name>-py<pid>` (Python) and
+    /// flags `extra` (both drivers take `--speed`; the Python one also
+    /// `--inject-fault`).
+    fn launch(kind: &Kind, name: &str, extra: &[&str]) -> Self {
         // A failed test's poisoned lock is still a lock.
         let alone = ONE_DRIVER.lock().unwrap_or_else(|e| e.into_inner());
-        let id = format!("{name}{}", std::process::id());
-        let script = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../examples/python_driver/driver.py"
-        );
-        let child = Command::new(python)
-            .arg(script)
+        let tag = match kind {
+            Kind::Python(_) => "py",
+            Kind::Rust => "rs",
+        };
+        let id = format!("{name}-{tag}{}", std::process::id());
+        let mut command = match kind {
+            Kind::Python(python) => {
+                let mut c = Command::new(python);
+                c.arg(concat!(
+                    env!("CARGO_MANIFEST_DIR"),
+                    "/../examples/python_driver/driver.py"
+                ));
+                c
+            }
+            Kind::Rust => {
+                let mut c = rig();
+                c.arg("sim-driver");
+                c
+            }
+        };
+        let child = command
             .args(["--driver-id", &id])
             .args(extra)
             .stdout(Stdio::null())
@@ -149,12 +186,17 @@ fn line<'a>(stdout: &'a str, check: &str) -> &'a str {
 }
 
 #[test]
-fn the_python_driver_passes_check_driver() {
-    let Some(py) = python() else { return };
-    let d = Driver::start(&py, "pass", &["--speed", "2"]);
+fn the_rust_and_python_drivers_pass_check_driver() {
+    for kind in drivers() {
+        let d = Driver::launch(&kind, "pass", &["--speed", "2"]);
+        passes_check_driver(&d);
+    }
+}
+
+fn passes_check_driver(d: &Driver) {
     let out = check_driver(&d.id);
     let (stdout, stderr) = text(&out);
-    assert!(out.status.success(), "{stdout}\n{stderr}");
+    assert!(out.status.success(), "{}: {stdout}\n{stderr}", d.id);
     for check in [
         "payload types",
         "info",
@@ -173,10 +215,14 @@ fn the_python_driver_passes_check_driver() {
 }
 
 #[test]
-fn rig_run_learns_against_the_python_driver_and_records_it() {
-    let Some(py) = python() else { return };
-    let d = Driver::start(&py, "run", &["--speed", "10"]);
-    let dir = tmp("run");
+fn rig_run_learns_against_the_rust_and_python_drivers_and_records_them() {
+    for kind in drivers() {
+        let d = Driver::launch(&kind, "run", &["--speed", "10"]);
+        learns_and_records(&d, &tmp(&format!("run-{}", d.id)));
+    }
+}
+
+fn learns_and_records(d: &Driver, dir: &std::path::Path) {
     let out = run_external(
         &d.id,
         &[
@@ -187,10 +233,10 @@ fn rig_run_learns_against_the_python_driver_and_records_it() {
             "--driver-timeout",
             "20",
         ],
-        &dir,
+        dir,
     );
     let (stdout, stderr) = text(&out);
-    assert!(out.status.success(), "{stdout}\n{stderr}");
+    assert!(out.status.success(), "{}: {stdout}\n{stderr}", d.id);
     assert!(stdout.contains("deadline misses:"), "{stdout}");
     let returns = std::fs::read_to_string(dir.join("returns.csv")).unwrap();
     let rows: Vec<&str> = returns.lines().collect();
@@ -337,11 +383,14 @@ fn driver_traffic(
 /// which holds the driver's samples after the death.
 #[test]
 fn a_process_killed_during_an_external_run_leaves_the_driver_safe_within_two_periods() {
-    let Some(py) = python() else { return };
-    for role in ["plant", "agent"] {
+    for (kind, role) in drivers()
+        .into_iter()
+        .flat_map(|k| [(k.clone(), "plant"), (k, "agent")])
+    {
         // 3 × real time: 10 ms periods.
-        let d = Driver::start(&py, &format!("kill{role}"), &["--speed", "3"]);
-        let dir = tmp(&format!("kill-{role}"));
+        let d = Driver::launch(&kind, &format!("kill{role}"), &["--speed", "3"]);
+        let who = format!("{role} ({})", d.id);
+        let dir = tmp(&format!("kill-{}", d.id));
         let sup = rig()
             .args(["run", "--plant", "external", "--driver", &d.id])
             .args(["--trials", "50", "--eval-every", "0", "--quiet", "--out"])
@@ -364,18 +413,18 @@ fn a_process_killed_during_an_external_run_leaves_the_driver_safe_within_two_per
         common::signal(common::child_running(sup.id(), role), "-9");
         let out = sup.wait_with_output().unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{role}");
+        assert!(!out.status.success(), "{who}");
         assert!(
             err.contains(&format!("the {role} process exited (signal: 9")),
-            "{role}: {err}"
+            "{who}: {err}"
         );
         let (samples, commands) = driver_traffic(&dir.join("run.mcap"));
         let last = commands.last().expect("commands were recorded");
         assert_eq!(
             last["kind"], 1,
-            "{role}: killed mid-trial, the last command is an action"
+            "{who}: killed mid-trial, the last command is an action"
         );
-        assert_ne!(last["u_0"].as_f64(), Some(0.0), "{role}: a non-zero action");
+        assert_ne!(last["u_0"].as_f64(), Some(0.0), "{who}: a non-zero action");
         // The driver applied the last command during the period before the first sample
         // that names it as `last_command` (under load that can be later than the sample
         // it answered); the next sample instant had none, so zero applies from the one
@@ -388,26 +437,26 @@ fn a_process_killed_during_an_external_run_leaves_the_driver_safe_within_two_per
             .iter()
             .position(|k| samples[k]["last_command"].as_u64() == Some(seq))
             .expect("the driver reports applying the last command");
-        assert!(i_a > 0, "{role}: a sample before the last command's");
+        assert!(i_a > 0, "{who}: a sample before the last command's");
         let (k_prev, k_a) = (keys[i_a - 1], keys[i_a]);
         let period = 10e6;
         let t = |k: u64| samples[&k]["t_sample_ns"].as_f64().unwrap();
         let after = &keys[i_a + 1..];
         assert!(
             after.len() >= 3,
-            "{role}: the recording must show the driver after the death (last command applied by sample {k_a})"
+            "{who}: the recording must show the driver after the death (last command applied by sample {k_a})"
         );
         for &k in &after[1..] {
             let v = &samples[&k];
             assert_eq!(
                 v["u_applied_0"].as_f64(),
                 Some(0.0),
-                "{role}: sample {k}: {v} (last command applied by sample {k_a})"
+                "{who}: sample {k}: {v} (last command applied by sample {k_a})"
             );
             assert_ne!(
                 v["status"].as_u64().unwrap() & 4,
                 0,
-                "{role}: WATCHDOG at {k}"
+                "{who}: WATCHDOG at {k}"
             );
         }
         // Applied within [t(k_prev), t(k_a)); safe from the next sample instant: two
@@ -416,7 +465,7 @@ fn a_process_killed_during_an_external_run_leaves_the_driver_safe_within_two_per
         let periods = (k_next - k_prev) as f64;
         assert!(
             t(k_next) - t(k_prev) <= (periods + 0.5) * period,
-            "{role}: the safe action {} ms after the period the last action arrived in began ({periods} periods by seq: {k_prev} to {k_next})",
+            "{who}: the safe action {} ms after the period the last action arrived in began ({periods} periods by seq: {k_prev} to {k_next})",
             (t(k_next) - t(k_prev)) * 1e-6
         );
     }

@@ -323,6 +323,25 @@ impl Bus {
         })
     }
 
+    /// The connection of driver `driver_id`'s process (`docs/driver.md`): node
+    /// `rig-driver-<id>` ([`driver::node_name`]), which the rig lists to say which drivers
+    /// are running; its services are opened with [`Bus::tx_on`] and [`Bus::rx_on`] on
+    /// [`driver::service`] names.
+    pub fn for_driver(driver_id: &str) -> Result<Self, Error> {
+        driver::check_id(driver_id)?;
+        set_log_level_from_env_or(LogLevel::Error);
+        let node = NodeBuilder::new()
+            .name(&NodeName::new(&driver::node_name(driver_id))?)
+            .config(&iceoryx2::config::Config::default())
+            .create::<ipc::Service>()?;
+        Ok(Self {
+            node,
+            run_id: "driver".to_string(),
+            seen: Default::default(),
+            primed: Default::default(),
+        })
+    }
+
     /// The roles of the live processes of run `run_id`, sorted (e.g. `["agent",
     /// "plant"]`): non-empty when a run with this id is going on. Processes killed
     /// without cleaning up do not count.
@@ -704,16 +723,20 @@ mod tests {
         let bus = Bus::join(&run, "test").unwrap();
         let rx = bus.rx::<Action>(topic::ACTION).unwrap();
         // Nothing sent: returns at the deadline — not a scheduler tick later, as a socket
-        // receive timeout would (generous bounds: a shared machine).
+        // receive timeout would, every time. Generous bounds, on the median of five
+        // waits: on a shared machine one wait can be held up by a stall of the host.
         for wait_us in [300, 3_000] {
-            let t0 = now_ns();
-            rx.wait_until(t0 + wait_us * 1000).unwrap();
-            let waited = now_ns() - t0;
-            assert!(waited >= wait_us * 1000, "woke after {waited} ns");
-            assert!(
-                waited < wait_us * 1000 + 2_000_000,
-                "woke after {waited} ns"
-            );
+            let mut late: Vec<u64> = (0..5)
+                .map(|_| {
+                    let t0 = now_ns();
+                    rx.wait_until(t0 + wait_us * 1000).unwrap();
+                    let waited = now_ns() - t0;
+                    assert!(waited >= wait_us * 1000, "woke after {waited} ns");
+                    waited - wait_us * 1000
+                })
+                .collect();
+            late.sort_unstable();
+            assert!(late[2] < 2_000_000, "woke late by {late:?} ns");
             assert!(rx.try_recv().unwrap().is_none());
         }
         // A message sent from another thread 20 ms into a 2 s wait ends it.

@@ -1,8 +1,10 @@
 //! External drivers (`docs/driver.md`, [`wire::driver`]): what the rig requires of a
 //! driver for a task, and `rig check-driver` ([`check`]), the conformance check
-//! against any running driver.
+//! against any running driver; and the driver's own side ([`device`]): a [`device::Device`]
+//! served as a driver, with a simulated pendulum (`rig sim-driver`).
 
 pub mod check;
+pub mod device;
 
 use plant::Task;
 use wire::driver::DriverInfo;
