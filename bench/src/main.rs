@@ -40,9 +40,9 @@ enum Command {
     /// the stale-action watchdog, clamping and rejection of bad actions. Prints one
     /// PASS/FAIL line per check; exits non-zero if any fails.
     CheckDriver(CheckDriverArgs),
-    /// Be a driver (docs/driver.md) for the simulated pendulum of Appendix A.1, in Rust:
-    /// a sample every 30 ms / SPEED on the monotonic clock, actions applied from their
-    /// arrival (clamped, non-finite ones rejected), the watchdog, resets by a PD brake.
+    /// Be a driver (docs/driver.md) for a simulated system, in Rust: a sample every
+    /// Ts / SPEED on the monotonic clock, actions applied from their arrival (clamped,
+    /// non-finite ones rejected), the watchdog, resets by a PD brake.
     /// The stand-in for a motor driver process (`rig run --plant external`); its code,
     /// `rig::driver::device`, is the template for one (`bench/examples/motor_driver.rs`).
     /// Runs until Ctrl-C or SIGTERM.
@@ -329,7 +329,11 @@ struct SimDriverArgs {
     /// digits, '-' and '_'.
     #[arg(long, value_name = "ID", default_value = "pendulum")]
     driver_id: String,
-    /// Run SPEED times faster than real time (a sample every 30 ms / SPEED of wall time,
+    /// The system simulated: pendulum, arm-horizontal, arm-6.4, double-integrator
+    /// (arm-vertical cannot rest at its start state within its torque limits).
+    #[arg(long, value_parser = SystemName::parse, default_value = "pendulum")]
+    system: SystemName,
+    /// Run SPEED times faster than real time (a sample every Ts / SPEED of wall time,
     /// advertised as time_scale SPEED); in (0, 1000].
     #[arg(long, value_name = "SPEED", default_value_t = 1.0)]
     speed: f64,
@@ -844,7 +848,7 @@ fn sim_driver(args: &SimDriverArgs) -> ExitCode {
     use rig::driver::device::{Serving, Simulated, serve};
     let device = wire::driver::check_id(&args.driver_id)
         .map_err(|e| anyhow::anyhow!("`--driver-id`: {e}"))
-        .and_then(|()| Simulated::new(SystemName::Pendulum, args.speed));
+        .and_then(|()| Simulated::new(args.system, args.speed));
     let mut device = match device {
         Ok(d) => d,
         Err(e) => {
@@ -853,10 +857,13 @@ fn sim_driver(args: &SimDriverArgs) -> ExitCode {
         }
     };
     let served = rig::process::set_rt_priority(args.rt_priority).and_then(|()| {
+        let ts = rig::driver::device::Device::task(&device).ts;
         eprintln!(
-            "driver {:?}: pendulum, Ts 30 ms, period {:.3} ms of wall time (speed {})",
+            "driver {:?}: {}, Ts {} ms, period {:.3} ms of wall time (speed {})",
             args.driver_id,
-            30.0 / args.speed,
+            args.system,
+            ts * 1e3,
+            ts * 1e3 / args.speed,
             args.speed
         );
         let how = Serving {

@@ -269,6 +269,68 @@ fn learns_and_records(d: &Driver, dir: &std::path::Path) {
     assert!(samples >= 8 * 101, "{samples} driver samples recorded");
 }
 
+/// The §6.4.2 manipulator (two joints, ±0.1 N m, a ±1.2 rad operating range, four start
+/// states) behind `rig sim-driver`: it passes `rig check-driver --system arm-6.4`, and
+/// VGBP-LSTD learns against it — trials that leave the range end early, and the driver
+/// brakes back to each start state.
+#[test]
+fn the_rust_driver_of_the_manipulator_passes_check_driver_and_learns() {
+    let d = Driver::launch(&Kind::Rust, "arm", &["--system", "arm-6.4", "--speed", "2"]);
+    let out = rig()
+        .args(["check-driver", "--driver", &d.id, "--system", "arm-6.4"])
+        .args(["--rate-seconds", "3", "--max-jitter", "0.5"])
+        .output()
+        .unwrap();
+    let (stdout, stderr) = text(&out);
+    assert!(out.status.success(), "{stdout}\n{stderr}");
+    assert!(stdout.contains("check-driver: PASS (9 checks)"), "{stdout}");
+    drop(d);
+    let d = Driver::launch(
+        &Kind::Rust,
+        "armrun",
+        &["--system", "arm-6.4", "--speed", "20"],
+    );
+    let dir = tmp("armrun");
+    let out = run_external(
+        &d.id,
+        &[
+            "--system",
+            "arm-6.4",
+            "--algo",
+            "vgbp",
+            "--approx",
+            "lstd",
+            "--trials",
+            "2",
+            "--eval-every",
+            "2",
+            "--quiet",
+        ],
+        &dir,
+    );
+    let (stdout, stderr) = text(&out);
+    assert!(out.status.success(), "{stdout}\n{stderr}");
+    let returns = std::fs::read_to_string(dir.join("returns.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = returns
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 2, "{returns}");
+    // Every return is finite and negative; the greedy return after trial 2 is the mean
+    // over the four start states.
+    for r in &rows {
+        let ret: f64 = r[3].parse().unwrap();
+        assert!(ret.is_finite() && ret < 0.0, "{returns}");
+    }
+    let greedy: f64 = rows[1][4].parse().unwrap();
+    assert!(greedy.is_finite() && greedy < 0.0, "{returns}");
+    // A RESET per trial: 2 learning and 4 greedy.
+    let (_, commands) = driver_traffic(&dir.join("run.mcap"));
+    let resets = commands.iter().filter(|c| c["kind"] == 2).count();
+    assert_eq!(resets, 6, "{returns}");
+}
+
 #[test]
 fn a_driver_with_an_incompatible_payload_is_a_one_line_error() {
     let Some(py) = python() else { return };

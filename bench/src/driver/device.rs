@@ -331,29 +331,44 @@ pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result
 
 /// A simulated device: a [`Task`]'s system integrated with RK4 over the real elapsed
 /// time (times `speed`), piecewise between action arrivals, with the steps of the
-/// in-process plant ([`Plant::advance`]). It resets like a real pendulum would: braked
-/// toward the start state by a PD controller, `u = K_p e_φ + K_d e_φ̇` (1 V/rad,
-/// 0.7 V s/rad), until at rest within 0.02 rad and 0.05 rad/s.
+/// in-process plant ([`Plant::advance`]). It resets as hardware would: braked toward
+/// the start state by a PD law on each position–velocity pair (`x = [positions,
+/// velocities]`, one action per position), `u_i = K_p e_i + K_d ė_i` with the gains of
+/// [`Simulated::brake_gains`], until at rest within 0.02 (rad or m) and 0.05 (per s).
 pub struct Simulated {
     plant: Plant,
     u: [f64; MAX_U],
     /// Monotonic time the simulation has reached.
     t_ns: u64,
     speed: f64,
+    gains: (f64, f64),
 }
 
 impl Simulated {
-    /// The systems this simulated driver can reset by a PD brake: the pendulum, whose
-    /// start state is where it comes to rest by itself.
-    pub const SYSTEMS: [SystemName; 1] = [SystemName::Pendulum];
+    /// The reset brake's gains `(K_p, K_d)` for `system` (action units per position
+    /// unit, and per velocity unit), or why it cannot be reset by one: the vertical arm's
+    /// start state `[−1.1, 1, 0, 0]` needs 5.5 N m against gravity at joint 1, beyond the
+    /// ±1 N m limit — a state it cannot rest in.
+    pub fn brake_gains(system: SystemName) -> Result<(f64, f64)> {
+        match system {
+            // The Python example driver's gains: V/rad, V s/rad.
+            SystemName::Pendulum => Ok((1.0, 0.7)),
+            // N m/rad, N m s/rad: about 0.7 of critical damping on the first joint's
+            // inertia (0.27 kg m²).
+            SystemName::ArmHorizontal => Ok((1.0, 0.7)),
+            // ±0.1 N m; the joints' friction (0.125 N m s/rad) adds damping.
+            SystemName::Arm64 => Ok((0.1, 0.05)),
+            // N/m, N s/m on the unit mass.
+            SystemName::DoubleIntegrator => Ok((5.0, 3.0)),
+            SystemName::ArmVertical => Err(anyhow!(
+                "the simulated arm-vertical cannot rest at its start state [-1.1, 1, 0, 0]: gravity needs 5.5 N m at joint 1, beyond the ±1 N m limit"
+            )),
+        }
+    }
 
     /// `system` at its first start state, running `speed` times faster than real time.
     pub fn new(system: SystemName, speed: f64) -> Result<Self> {
-        if !Self::SYSTEMS.contains(&system) {
-            return Err(anyhow!(
-                "the simulated driver drives the pendulum only (its reset is a PD brake to the bottom); {system} is not supported"
-            ));
-        }
+        let gains = Self::brake_gains(system)?;
         if !(speed.is_finite() && speed > 0.0 && speed <= 1000.0) {
             return Err(anyhow!("--speed {speed}: must be in (0, 1000]"));
         }
@@ -362,6 +377,7 @@ impl Simulated {
             u: [0.0; MAX_U],
             t_ns: now_ns(),
             speed,
+            gains,
         })
     }
 
@@ -374,19 +390,28 @@ impl Simulated {
             self.t_ns = t_ns;
         }
     }
+
+    /// `x0 − x` per position (angles wrapped to [−π, π)) and per velocity: the pairs
+    /// `(e_i, ė_i)`, one per action component.
+    fn errors<'a>(&'a self, x: &'a [f64], x0: &'a [f64]) -> impl Iterator<Item = (f64, f64)> + 'a {
+        let task = self.plant.task();
+        let m = task.action_dim();
+        (0..m).map(move |i| {
+            let e = x0[i] - x[i];
+            let e = if task.angle_mask[i] {
+                (e + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
+                    - std::f64::consts::PI
+            } else {
+                e
+            };
+            (e, x0[m + i] - x[m + i])
+        })
+    }
 }
 
-/// Reset brake gains of [`Simulated`]: V/rad and V s/rad.
-const KP: f64 = 1.0;
-const KD: f64 = 0.7;
-/// "At rest" tolerance of [`Simulated`]: rad and rad/s.
-const REST_ANGLE: f64 = 0.02;
+/// "At rest" tolerance of [`Simulated`]: position (rad or m) and velocity (per s).
+const REST_POSITION: f64 = 0.02;
 const REST_SPEED: f64 = 0.05;
-
-/// Angle difference `a − b` wrapped to [−π, π).
-fn angle_error(a: f64, b: f64) -> f64 {
-    (a - b + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI) - std::f64::consts::PI
-}
 
 impl Device for Simulated {
     fn task(&self) -> &Task {
@@ -408,11 +433,15 @@ impl Device for Simulated {
     }
 
     fn reset_action(&mut self, x: &[f64], x0: &[f64], u: &mut [f64]) {
-        u[0] = KP * angle_error(x0[0], x[0]) + KD * (x0[1] - x[1]);
+        let (kp, kd) = self.gains;
+        for (ui, (e, de)) in u.iter_mut().zip(self.errors(x, x0)) {
+            *ui = kp * e + kd * de;
+        }
     }
 
     fn at_rest(&self, x: &[f64], x0: &[f64]) -> bool {
-        angle_error(x0[0], x[0]).abs() < REST_ANGLE && (x0[1] - x[1]).abs() < REST_SPEED
+        self.errors(x, x0)
+            .all(|(e, de)| e.abs() < REST_POSITION && de.abs() < REST_SPEED)
     }
 }
 
@@ -547,10 +576,9 @@ mod tests {
         assert_eq!((d.u[0], d.other_rejected), (0.0, 3));
     }
 
-    /// The simulated pendulum falls from near the top as the in-process plant does, and
-    /// its reset brake settles it at the bottom.
+    /// The simulated pendulum falls from near the top as the in-process plant does.
     #[test]
-    fn the_simulated_pendulum_integrates_and_resets() {
+    fn the_simulated_pendulum_integrates_as_the_plant() {
         let mut sim = Simulated::new(SystemName::Pendulum, 1.0).unwrap();
         let mut plant = Plant::new(Arc::new(Task::new(SystemName::Pendulum)));
         sim.plant.reset(&[0.3, 0.0]);
@@ -564,24 +592,51 @@ mod tests {
             assert!((a - b).abs() < 1e-9, "one period: the plant's step: {x:?}");
         }
         assert!(x[0] > 0.3, "falling away from the top: {x:?}");
-        // Brake from a swing to the bottom, one decision per 30 ms.
-        sim.plant.reset(&[2.0, 3.0]);
-        let x0 = [std::f64::consts::PI, 0.0];
-        let mut t = sim.t_ns;
-        let mut rest = 0;
-        for _ in 0..1000 {
-            sim.sample(t, &mut x);
-            rest = if sim.at_rest(&x, &x0) { rest + 1 } else { 0 };
-            if rest == REST_SAMPLES {
-                break;
+    }
+
+    /// Every simulated system's reset brake brings it to rest at each start state from a
+    /// state away from it (moving), within 20 s of simulated time; the vertical arm is
+    /// refused with the reason.
+    #[test]
+    fn the_reset_brake_settles_every_simulated_system() {
+        for system in [
+            SystemName::Pendulum,
+            SystemName::ArmHorizontal,
+            SystemName::Arm64,
+            SystemName::DoubleIntegrator,
+        ] {
+            let mut sim = Simulated::new(system, 1.0).unwrap();
+            let task = Task::new(system);
+            let ts_ns = (task.ts * 1e9) as u64;
+            let (n, m) = (task.state_dim(), task.action_dim());
+            for x0 in &task.initial_states {
+                // Half a unit off in every position, moving.
+                let start: Vec<f64> = (0..n).map(|i| x0[i] + 0.5).collect();
+                sim.plant.reset(&start);
+                let mut t = sim.t_ns;
+                let (mut rest, mut x) = (0, vec![0.0; n]);
+                for _ in 0..(20.0 / task.ts) as usize {
+                    sim.sample(t, &mut x);
+                    rest = if sim.at_rest(&x, x0) { rest + 1 } else { 0 };
+                    if rest == REST_SAMPLES {
+                        break;
+                    }
+                    let mut u = vec![0.0; m];
+                    sim.reset_action(&x, x0, &mut u);
+                    for (i, v) in u.iter_mut().enumerate() {
+                        *v = v.clamp(task.action_low[i], task.action_high[i]);
+                    }
+                    sim.apply(t, &u);
+                    t += ts_ns;
+                }
+                assert_eq!(
+                    rest, REST_SAMPLES,
+                    "{system}: at {x:?}, not at rest at {x0:?}"
+                );
             }
-            let mut u = [0.0];
-            sim.reset_action(&x, &x0, &mut u);
-            sim.apply(t, &[u[0].clamp(-3.0, 3.0)]);
-            t += 30_000_000;
         }
-        assert_eq!(rest, REST_SAMPLES, "at rest at the bottom: {x:?}");
-        assert!(Simulated::new(SystemName::ArmVertical, 1.0).is_err());
+        let e = Simulated::new(SystemName::ArmVertical, 1.0).err().unwrap();
+        assert!(e.to_string().contains("gravity"), "{e}");
         assert!(Simulated::new(SystemName::Pendulum, 0.0).is_err());
     }
 }
