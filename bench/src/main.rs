@@ -687,9 +687,10 @@ fn main() -> ExitCode {
                             s.wall.as_secs_f64(),
                             s.wall.as_secs_f64() * 1e6 / steps
                         );
-                        if let Some(i) = &s.driver {
+                        if let (Some(i), Some(d)) = (&s.driver, &opts.driver) {
                             println!(
-                                "  driver {:?}: period {:.3} ms × time scale {}; deadline misses: {} of {} samples",
+                                "  driver {:?} ({}): period {:.3} ms × time scale {}; deadline misses: {} of {} samples",
+                                d.id,
                                 i.system_name(),
                                 i.period_ns as f64 * 1e-6,
                                 i.time_scale,
