@@ -73,6 +73,26 @@ struct Driver {
 }
 
 impl Driver {
+    /// A driver of `task` as it starts: no reset yet (actions are not applied), zero in
+    /// effect.
+    fn new(task: &Task, verbose: bool) -> Self {
+        Self {
+            n_x: task.state_dim(),
+            n_u: task.action_dim(),
+            status: 0,
+            reset_id: 0,
+            target: [0.0; MAX_X],
+            at_rest: 0,
+            last_command: 0,
+            u: [0.0; MAX_U],
+            action_this_period: false,
+            acted_since_reset: false,
+            safety: Supervisor::new(task),
+            other_rejected: 0,
+            verbose,
+        }
+    }
+
     fn log(&self, text: impl FnOnce() -> String) {
         if self.verbose {
             eprintln!("driver: {}", text());
@@ -260,21 +280,7 @@ pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result
         .rx_on::<DriverCommand>(&service(driver_id, topic::COMMAND), DRIVER_QOS)
         .map_err(|e| open(topic::COMMAND, e))?;
     let wire_err = |e: wire::Error| anyhow!("driver {driver_id:?}: {e}");
-    let mut d = Driver {
-        n_x,
-        n_u,
-        status: 0,
-        reset_id: 0,
-        target: [0.0; MAX_X],
-        at_rest: 0,
-        last_command: 0,
-        u: [0.0; MAX_U],
-        action_this_period: false,
-        acted_since_reset: false,
-        safety: Supervisor::new(task),
-        other_rejected: 0,
-        verbose: how.verbose,
-    };
+    let mut d = Driver::new(task, how.verbose);
     let t_start = now_ns();
     device.apply(t_start, &d.u[..n_u]);
     infos
@@ -474,24 +480,6 @@ mod tests {
         }
     }
 
-    fn driver(task: &Task) -> Driver {
-        Driver {
-            n_x: 2,
-            n_u: 1,
-            status: 0,
-            reset_id: 0,
-            target: [0.0; MAX_X],
-            at_rest: 0,
-            last_command: 0,
-            u: [0.0; MAX_U],
-            action_this_period: false,
-            acted_since_reset: false,
-            safety: Supervisor::new(task),
-            other_rejected: 0,
-            verbose: false,
-        }
-    }
-
     fn action(seq: u64, u: f64) -> DriverCommand {
         let mut c = DriverCommand {
             seq,
@@ -525,7 +513,7 @@ mod tests {
             x: vec![0.5, 0.0],
             applied: vec![],
         };
-        let mut d = driver(&task);
+        let mut d = Driver::new(&task, false);
         d.command(&mut dev, 1, &action(1, 1.0));
         assert_eq!((d.status, d.other_rejected, dev.applied.len()), (0, 1, 0));
         d.command(&mut dev, 2, &reset(2, [3.0, 0.0]));
