@@ -331,6 +331,31 @@ fn the_rust_driver_of_the_manipulator_passes_check_driver_and_learns() {
     assert_eq!(resets, 6, "{returns}");
 }
 
+/// One driver per id: a second `rig sim-driver` with the same id is a one-line error
+/// naming the id and the service, and the first goes on.
+#[test]
+fn a_second_driver_with_the_same_id_is_refused() {
+    let first = Driver::launch(&Kind::Rust, "twice", &[]);
+    std::thread::sleep(Duration::from_millis(500));
+    let out = rig()
+        .args(["sim-driver", "--driver-id", &first.id])
+        .output()
+        .unwrap();
+    let (_, stderr) = text(&out);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    let error: Vec<&str> = stderr.lines().filter(|l| l.starts_with("error")).collect();
+    assert_eq!(
+        error,
+        [format!(
+            "error: another driver {:?} is running: rig/driver/{}/info has its one publisher already",
+            first.id, first.id
+        )],
+        "{stderr}"
+    );
+    let out = check_driver(&first.id);
+    assert!(out.status.success(), "{}", text(&out).0);
+}
+
 #[test]
 fn a_driver_with_an_incompatible_payload_is_a_one_line_error() {
     let Some(py) = python() else { return };

@@ -309,11 +309,15 @@ impl Bus {
                 "run id \"driver\" is reserved for driver services (rig/driver/...)".into(),
             );
         }
+        Self::with_node(&format!("rig-{run_id}-{name}"), run_id)
+    }
+
+    /// A connection through a new node named `node_name`, of run `run_id`.
+    fn with_node(node_name: &str, run_id: &str) -> Result<Self, Error> {
         set_log_level_from_env_or(LogLevel::Error);
-        let config = iceoryx2::config::Config::default();
         let node = NodeBuilder::new()
-            .name(&NodeName::new(&format!("rig-{run_id}-{name}"))?)
-            .config(&config)
+            .name(&NodeName::new(node_name)?)
+            .config(&iceoryx2::config::Config::default())
             .create::<ipc::Service>()?;
         Ok(Self {
             node,
@@ -329,17 +333,7 @@ impl Bus {
     /// [`driver::service`] names.
     pub fn for_driver(driver_id: &str) -> Result<Self, Error> {
         driver::check_id(driver_id)?;
-        set_log_level_from_env_or(LogLevel::Error);
-        let node = NodeBuilder::new()
-            .name(&NodeName::new(&driver::node_name(driver_id))?)
-            .config(&iceoryx2::config::Config::default())
-            .create::<ipc::Service>()?;
-        Ok(Self {
-            node,
-            run_id: "driver".to_string(),
-            seen: Default::default(),
-            primed: Default::default(),
-        })
+        Self::with_node(&driver::node_name(driver_id), "driver")
     }
 
     /// The roles of the live processes of run `run_id`, sorted (e.g. `["agent",

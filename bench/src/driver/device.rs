@@ -265,10 +265,14 @@ pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result
     let period_ns = (task.ts / scale * 1e9).round() as u64;
     let bus = Bus::for_driver(driver_id).map_err(|e| anyhow!("driver {driver_id:?}: {e}"))?;
     let open = |t: &str, e: wire::Error| {
-        anyhow!(
-            "driver {driver_id:?}: {} ({e}; another driver with this id, or a peer with another layout?)",
-            service(driver_id, t)
-        )
+        if e.to_string().contains("ExceedsMaxSupportedPublishers") {
+            anyhow!(
+                "another driver {driver_id:?} is running: {} has its one publisher already",
+                service(driver_id, t)
+            )
+        } else {
+            anyhow!("driver {driver_id:?}: {e}")
+        }
     };
     let infos = bus
         .tx_on::<DriverInfo>(&service(driver_id, topic::INFO), DRIVER_QOS)
