@@ -294,18 +294,10 @@ fn the_rust_driver_of_the_manipulator_passes_check_driver_and_learns() {
     let out = run_external(
         &d.id,
         &[
-            "--system",
-            "arm-6.4",
-            "--algo",
-            "vgbp",
-            "--approx",
-            "lstd",
-            "--trials",
-            "2",
-            "--eval-every",
-            "2",
-            "--quiet",
-        ],
+            common::ARM64_VGBP_LSTD.as_slice(),
+            &["--trials", "2", "--eval-every", "2", "--quiet"],
+        ]
+        .concat(),
         &dir,
     );
     let (stdout, stderr) = text(&out);

@@ -500,19 +500,10 @@ fn trials_that_leave_the_operating_range_end_early_in_both_drivers() {
     // VGBP on the §6.4.2 manipulator leaves the ±1.2 rad range in its first trials.
     let dir = tmp("arm64");
     let args = [
-        "--system",
-        "arm-6.4",
-        "--algo",
-        "vgbp",
-        "--approx",
-        "lstd",
-        "--trials",
-        "8",
-        "--eval-every",
-        "4",
-        "--quiet",
-        "--out",
-    ];
+        common::ARM64_VGBP_LSTD.as_slice(),
+        &["--trials", "8", "--eval-every", "4", "--quiet", "--out"],
+    ]
+    .concat();
     let ran = learn_and_run(&dir, "", &args);
     let rows: Vec<Vec<f64>> = ran
         .lines()

@@ -12,6 +12,7 @@
 use std::sync::Arc;
 
 use anyhow::{Result, anyhow};
+use plant::angle::wrap;
 use plant::safety::{Admission, Supervisor};
 use plant::{Plant, SystemName, Task};
 use wire::driver::{
@@ -155,7 +156,7 @@ impl Driver {
             } else {
                 0
             };
-            let mut u = [0.0; MAX_U];
+            let mut out = [0.0; MAX_U];
             if self.at_rest >= REST_SAMPLES {
                 self.status = status::READY;
                 self.action_this_period = false;
@@ -163,18 +164,12 @@ impl Driver {
                 self.safety.start_trial();
                 self.log(|| format!("reset {} done at {x:?}", self.reset_id));
             } else {
+                let mut u = [0.0; MAX_U];
                 device.reset_action(x, x0, &mut u[..self.n_u]);
-                let task = device.task();
-                for (i, v) in u[..self.n_u].iter_mut().enumerate() {
-                    // A non-finite reset action is the device's bug: the safe action.
-                    *v = if v.is_finite() {
-                        v.clamp(task.action_low[i], task.action_high[i])
-                    } else {
-                        0.0
-                    };
-                }
+                // Clamped; a non-finite reset action (the device's bug) is the safe one.
+                device.task().saturate(&u[..self.n_u], &mut out[..self.n_u]);
             }
-            self.set(device, t_ns, &u[..self.n_u]);
+            self.set(device, t_ns, &out[..self.n_u]);
         } else if self.status & status::READY != 0 && self.acted_since_reset {
             let fresh = std::mem::take(&mut self.action_this_period);
             if self.safety.period(fresh) && self.status & status::WATCHDOG == 0 {
@@ -408,12 +403,7 @@ impl Simulated {
         let m = task.action_dim();
         (0..m).map(move |i| {
             let e = x0[i] - x[i];
-            let e = if task.angle_mask[i] {
-                (e + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
-                    - std::f64::consts::PI
-            } else {
-                e
-            };
+            let e = if task.angle_mask[i] { wrap(e) } else { e };
             (e, x0[m + i] - x[m + i])
         })
     }
@@ -613,12 +603,10 @@ mod tests {
                     if rest == REST_SAMPLES {
                         break;
                     }
-                    let mut u = vec![0.0; m];
+                    let (mut u, mut applied) = (vec![0.0; m], vec![0.0; m]);
                     sim.reset_action(&x, x0, &mut u);
-                    for (i, v) in u.iter_mut().enumerate() {
-                        *v = v.clamp(task.action_low[i], task.action_high[i]);
-                    }
-                    sim.apply(t, &u);
+                    task.saturate(&u, &mut applied);
+                    sim.apply(t, &applied);
                     t += ts_ns;
                 }
                 assert_eq!(

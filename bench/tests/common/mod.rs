@@ -6,6 +6,10 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
+/// The flags of VGBP-LSTD on the §6.4.2 manipulator.
+pub const ARM64_VGBP_LSTD: [&str; 6] =
+    ["--system", "arm-6.4", "--algo", "vgbp", "--approx", "lstd"];
+
 /// The `rig` binary under test.
 pub fn rig() -> Command {
     Command::new(env!("CARGO_BIN_EXE_rig"))
