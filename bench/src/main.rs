@@ -347,6 +347,15 @@ struct SimDriverArgs {
     /// wake-up latency; larger values trade CPU for less jitter.
     #[arg(long, value_name = "US", default_value_t = 1000)]
     spin_us: u64,
+    /// What the samples report: `full` — the whole state; `angle` — an encoder-only
+    /// setup, as the physical pendulum of §6.4.1: positions quantised to
+    /// `--counts-per-rev`, velocities NaN (not measured). Against an `angle` driver, run
+    /// the rig with `--sensor angle` and an observer that estimates the velocities.
+    #[arg(long, value_name = "SENSOR", value_parser = ["full", "angle"], default_value = "full")]
+    sensor: String,
+    /// Encoder counts per revolution with `--sensor angle`.
+    #[arg(long, value_name = "N", default_value_t = 4096)]
+    counts_per_rev: u32,
     /// Log resets, rejected commands, watchdog trips and missed periods to stderr.
     #[arg(long)]
     verbose: bool,
@@ -849,7 +858,11 @@ fn sim_driver(args: &SimDriverArgs) -> ExitCode {
     use rig::driver::device::{Serving, Simulated, serve};
     let device = wire::driver::check_id(&args.driver_id)
         .map_err(|e| anyhow::anyhow!("`--driver-id`: {e}"))
-        .and_then(|()| Simulated::new(args.system, args.speed));
+        .and_then(|()| Simulated::new(args.system, args.speed))
+        .and_then(|d| match args.sensor.as_str() {
+            "angle" => d.measuring_positions_only(args.counts_per_rev),
+            _ => Ok(d),
+        });
     let mut device = match device {
         Ok(d) => d,
         Err(e) => {
@@ -860,9 +873,13 @@ fn sim_driver(args: &SimDriverArgs) -> ExitCode {
     let served = rig::process::set_rt_priority(args.rt_priority).and_then(|()| {
         let ts = rig::driver::device::Device::task(&device).ts;
         eprintln!(
-            "driver {:?}: {}, Ts {} ms, period {:.3} ms of wall time (speed {})",
+            "driver {:?}: {} ({}), Ts {} ms, period {:.3} ms of wall time (speed {})",
             args.driver_id,
             args.system,
+            match args.sensor.as_str() {
+                "angle" => format!("positions only, {} counts/rev", args.counts_per_rev),
+                _ => "full state".to_string(),
+            },
             ts * 1e3,
             ts * 1e3 / args.speed,
             args.speed

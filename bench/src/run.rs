@@ -118,10 +118,12 @@ struct Returns {
 }
 
 impl Returns {
-    /// Accounts for measurement `m`; `x` is the true state of its sample (its `y` with
-    /// full-state sensing).
-    fn measurement(&mut self, m: &Measurement, x: &[f64]) -> Result<()> {
-        let f = m.header.flags;
+    /// Accounts for the sample with header `h` and reward `reward`; `x` is its state for
+    /// a finite horizon's terminal reward. From the plant's measurements: the true state
+    /// (the measurement's `y` with full-state sensing); with [`flags::ESTIMATED_REWARD`]
+    /// from the observer's estimates instead: their rewards and `x̂`.
+    fn sample(&mut self, h: &wire::Header, reward: f64, x: &[f64]) -> Result<()> {
+        let f = h.flags;
         let greedy = f & flags::GREEDY != 0;
         if f & flags::SHUTDOWN != 0 || (f & flags::START != 0 && !greedy) {
             self.flush()?;
@@ -137,7 +139,7 @@ impl Returns {
                 self.pending_ended = false;
                 self.pending = Some(TrialRecord {
                     run: 0,
-                    trial: m.header.trial as u32,
+                    trial: h.trial as u32,
                     sim_time_s: 0.0,
                     ret: 0.0,
                     greedy: None,
@@ -157,7 +159,7 @@ impl Returns {
         };
         if greedy {
             // One greedy trial per start state: the greedy return is their mean.
-            self.greedy_trial += m.reward;
+            self.greedy_trial += reward;
             if end {
                 self.greedy_trial += final_reward;
                 self.greedy.0 += self.greedy_trial;
@@ -165,11 +167,11 @@ impl Returns {
                 pending.greedy = Some(self.greedy.0 / f64::from(self.greedy.1));
             }
         } else {
-            pending.ret += m.reward;
+            pending.ret += reward;
             if end {
                 self.pending_ended = true;
                 pending.ret += final_reward;
-                self.skipped_samples += self.steps_per_trial.saturating_sub(m.header.step);
+                self.skipped_samples += self.steps_per_trial.saturating_sub(h.step);
                 pending.sim_time_s = self
                     .task
                     .sim_time(pending.trial.into(), self.skipped_samples);
@@ -561,6 +563,8 @@ impl Supervisor {
                 bar.inc(1);
             }
             let n = m.n_x as usize;
+            // The rewards are the observer's: the estimates feed returns.csv.
+            let estimated = m.header.flags & flags::ESTIMATED_REWARD != 0;
             if self.truths.is_some() && m.header.flags & flags::SHUTDOWN == 0 {
                 let t = self
                     .truth_queue
@@ -574,9 +578,11 @@ impl Supervisor {
                     );
                 };
                 self.recording.truth(&t)?;
-                self.returns.measurement(m, &t.x[..n])?;
-            } else {
-                self.returns.measurement(m, &m.y[..n])?;
+                if !estimated {
+                    self.returns.sample(&m.header, m.reward, &t.x[..n])?;
+                }
+            } else if !estimated {
+                self.returns.sample(&m.header, m.reward, &m.y[..n])?;
             }
         }
         self.batch = batch;
@@ -584,6 +590,10 @@ impl Supervisor {
             self.continuity[1].check(topic::ESTIMATE, e.header.seq)?;
             self.recording.estimate(&e)?;
             self.messages += 1;
+            if e.header.flags & flags::ESTIMATED_REWARD != 0 {
+                self.returns
+                    .sample(&e.header, e.reward, &e.x[..e.n_x as usize])?;
+            }
         }
         if let Some(d) = &self.driver {
             while d.info.try_recv().map_err(wire_err)?.is_some() {}

@@ -224,14 +224,20 @@ impl Front {
         }
     }
 
-    /// Direct timing: the agent acts on `x̂_k` and learns the plant's reward.
+    /// Direct timing: the agent acts on `x̂_k` and learns the plant's reward — or, where
+    /// the plant cannot know it (NaN: a driver that measures positions only),
+    /// `ρ(x̂_k, u_k)` from the estimate it acted on, as on the physical setup (§6.4.1).
     fn direct(&mut self, s: &Sample) -> ToAgent<'_> {
+        let mut reward = s.reward;
         let call = if s.start {
             self.observer.reset(s.y);
             self.x.copy_from_slice(s.y);
             self.u.fill(0.0);
             Call::Start
         } else {
+            if reward.is_nan() {
+                reward = self.task.reward.reward(&self.x, s.u_applied);
+            }
             self.x
                 .copy_from_slice(self.observer.update(s.y, s.u_applied));
             self.u.copy_from_slice(s.u_applied);
@@ -245,7 +251,7 @@ impl Front {
         };
         ToAgent {
             call,
-            reward: s.reward,
+            reward,
             x: &self.x,
             u_prev: &self.u,
             step: s.step,
@@ -349,5 +355,27 @@ mod tests {
         assert_eq!((t.call, t.reward, t.u_prev), (Call::Learn, -7.0, &u[..]));
         let t = f.sample(&sample(n, true, false, &x0, &u));
         assert_eq!(t.call, Call::Last);
+    }
+
+    /// Direct timing with a plant that cannot know the reward (a driver measuring angles
+    /// only: NaN): the agent learns ρ(x̂_k, u_k) of the estimate it acted on at t_k; a
+    /// terminal penalty, which the plant does know, is passed on.
+    #[test]
+    fn direct_timing_computes_an_unknown_reward_from_the_estimate() {
+        let (task, mut f) = front(false);
+        let (x0, u) = ([3.0, 0.0], [2.0]);
+        let unknown = |step, terminal, y| Sample {
+            reward: f64::NAN,
+            ..sample(step, false, terminal, y, &u)
+        };
+        f.sample(&sample(0, false, false, &x0, &[0.0]));
+        let t = f.sample(&unknown(1, false, &[2.9, f64::NAN]));
+        assert_eq!(t.reward, task.reward.reward(&x0, &u));
+        let x1 = t.x.to_vec();
+        assert!(x1.iter().all(|v| v.is_finite()) && x1[1] < 0.0, "{x1:?}");
+        let t = f.sample(&unknown(2, false, &[2.7, f64::NAN]));
+        assert_eq!(t.reward, task.reward.reward(&x1, &u));
+        let t = f.sample(&sample(3, true, true, &[2.5, f64::NAN], &u));
+        assert_eq!((t.call, t.reward), (Call::Terminal, -7.0));
     }
 }

@@ -233,7 +233,27 @@ impl DriverSample {
         self.status & bit != 0
     }
 
-    /// Checks that the sample fits the driver's info: the dimensions, finite values.
+    /// Whether the driver measures positions only: the velocities — the second half of
+    /// the state, `[positions…, velocities…]` — are NaN (not measured; an encoder-only
+    /// setup such as the physical pendulum of §6.4.1). The rig's observer estimates them.
+    pub fn positions_only(&self) -> bool {
+        let x = self.state();
+        x[x.len() / 2..].iter().all(|v| v.is_nan())
+    }
+
+    /// The measured components of the state: the positions if the driver measures
+    /// [`Self::positions_only`], else the whole state.
+    pub fn measured(&self) -> &[f64] {
+        let x = self.state();
+        if self.positions_only() {
+            &x[..x.len() / 2]
+        } else {
+            x
+        }
+    }
+
+    /// Checks that the sample fits the driver's info: the dimensions, finite values —
+    /// except velocities that are all NaN ([`Self::positions_only`]).
     pub fn validate(&self, info: &DriverInfo) -> Result<(), String> {
         if self.n_x != info.n_x || self.n_u != info.n_u {
             return Err(format!(
@@ -241,9 +261,15 @@ impl DriverSample {
                 self.seq, self.n_x, self.n_u, info.n_x, info.n_u
             ));
         }
-        for (name, v) in [("x", self.state()), ("u_applied", self.applied())] {
+        let x = self.state();
+        for (name, v) in [("x", self.measured()), ("u_applied", self.applied())] {
             if let Some(i) = v.iter().position(|c| !c.is_finite()) {
-                return Err(format!("sample {}: {name}[{i}] = {}", self.seq, v[i]));
+                let hint = if name == "x" && v[i].is_nan() && i >= x.len() / 2 {
+                    " (a driver that does not measure velocities sends NaN for all of them)"
+                } else {
+                    ""
+                };
+                return Err(format!("sample {}: {name}[{i}] = {}{hint}", self.seq, v[i]));
             }
         }
         Ok(())
@@ -550,5 +576,40 @@ mod tests {
         let mut bad = i;
         bad.version = 2;
         assert!(bad.validate().unwrap_err().contains("version"));
+    }
+
+    /// Velocities may be unmeasured (all NaN); positions, a single NaN velocity and
+    /// infinities may not.
+    #[test]
+    fn sample_validation_allows_unmeasured_velocities_only() {
+        let info = DriverInfo {
+            n_x: 4,
+            n_u: 2,
+            ..Default::default()
+        };
+        let sample = |x: [f64; 4]| {
+            let mut s = DriverSample {
+                seq: 7,
+                n_x: 4,
+                n_u: 2,
+                ..Default::default()
+            };
+            s.x[..4].copy_from_slice(&x);
+            s
+        };
+        let nan = f64::NAN;
+        let full = sample([0.1, -0.2, 0.3, 0.4]);
+        assert_eq!(full.validate(&info), Ok(()));
+        assert!(!full.positions_only());
+        let encoder = sample([0.1, -0.2, nan, nan]);
+        assert_eq!(encoder.validate(&info), Ok(()));
+        assert!(encoder.positions_only());
+        let one = sample([0.1, -0.2, 0.3, nan]).validate(&info).unwrap_err();
+        assert!(one.contains("x[3] = NaN") && one.contains("NaN for all of them"), "{one}");
+        let position = sample([nan, -0.2, nan, nan]).validate(&info).unwrap_err();
+        assert!(position.starts_with("sample 7: x[0] = NaN"), "{position}");
+        assert!(!position.contains("all of them"), "{position}");
+        let inf = sample([0.1, -0.2, f64::INFINITY, 0.0]).validate(&info);
+        assert!(inf.unwrap_err().contains("x[2] = inf"));
     }
 }

@@ -56,6 +56,11 @@ pub mod flags {
     /// answer to [`START`] — the first interval's action `u_0`, computed from the known
     /// start state. The agent learns `(x_0, u_0) → x̂_{1|0}` and answers `u_1`.
     pub const PRIMED: u64 = 128;
+    /// Plant → observer (and on, in every message of the run): the plant does not know
+    /// the rewards — its driver measures positions only — so a measurement's `reward`
+    /// is NaN (a terminal penalty excepted) and the observer computes `ρ(x̂_k, u_k)`
+    /// from its estimate; the estimates carry the rewards the learning curves sum.
+    pub const ESTIMATED_REWARD: u64 = 256;
 }
 
 /// Header fields shared by all messages.

@@ -7,7 +7,8 @@
 //! 1. *info* — protocol version, dimensions, sample time, limits, watchdog, against the
 //!    task of `--system`;
 //! 2. *reset* — RESET to the task's start state; READY within `--reset-timeout`, near it;
-//! 3. *samples* — well-formed: READY, finite, stamped on this host's monotonic clock;
+//! 3. *samples* — well-formed: READY, finite (or all velocities NaN in every sample: a
+//!    driver measuring positions only), stamped on this host's monotonic clock;
 //! 4. *sample rate* — for `--rate-seconds`, answering every sample with zero: the mean
 //!    period, the jitter (p99 of each sample's lateness against a regular grid, against
 //!    `--max-jitter`), missed periods
@@ -170,6 +171,15 @@ fn percentile(sorted: &[f64], p: f64) -> f64 {
     sorted[((sorted.len() - 1) as f64 * p).round() as usize]
 }
 
+/// What a sample measures, in words.
+fn measures(s: &DriverSample) -> &'static str {
+    if s.positions_only() {
+        "positions only"
+    } else {
+        "the full state"
+    }
+}
+
 fn same(a: &[f64], b: &[f64]) -> bool {
     a.len() == b.len()
         && a.iter()
@@ -224,7 +234,7 @@ impl Session<'_> {
             .collect()
     }
 
-    /// The largest change between two states, each component relative to the width of
+    /// The largest change between two states (unmeasured components, NaN, ignored), each component relative to the width of
     /// the task's state range (angles wrapped).
     fn change(&self, a: &[f64], b: &[f64]) -> f64 {
         (0..a.len())
@@ -234,6 +244,7 @@ impl Session<'_> {
                 let (lo, hi) = self.task.state_range[i];
                 d.abs() / (hi - lo)
             })
+            .filter(|c| !c.is_nan())
             .fold(0.0, f64::max)
     }
 
@@ -345,6 +356,17 @@ impl Session<'_> {
             {
                 problems.push(format!("sample seq {} after {}", s.seq, prev.seq));
             }
+            if let Some((first, _)) = samples.first()
+                && s.positions_only() != first.positions_only()
+            {
+                problems.push(format!(
+                    "sample {}: measures {} after sample {} measured {}",
+                    s.seq,
+                    measures(&s),
+                    first.seq,
+                    measures(first)
+                ));
+            }
             let cmd = self.act(&zero, &s)?;
             samples.push((s, cmd));
             if problems.len() > 3 {
@@ -352,11 +374,17 @@ impl Session<'_> {
             }
         }
         problems.truncate(3);
+        let measured = match samples.first() {
+            Some((s, _)) if s.positions_only() => {
+                "positions only, velocities NaN: run the rig with `--sensor angle` and an observer"
+            }
+            _ => "the full state",
+        };
         self.record_problems(
             "samples",
             problems,
             format!(
-                "{} well-formed: READY, finite, stamped on this host's monotonic clock, seq increasing",
+                "{} well-formed: READY, finite ({measured}), stamped on this host's monotonic clock, seq increasing",
                 samples.len()
             ),
         );

@@ -14,6 +14,7 @@ use std::sync::Arc;
 use anyhow::{Result, anyhow};
 use plant::angle::wrap;
 use plant::safety::{Admission, Supervisor};
+use plant::sensor::Sensor;
 use plant::{Plant, SystemName, Task};
 use wire::driver::{
     DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, VERSION, kind, service, status, topic,
@@ -340,8 +341,16 @@ pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result
 /// the start state by a PD law on each position–velocity pair (`x = [positions,
 /// velocities]`, one action per position), `u_i = K_p e_i + K_d ė_i` with the gains of
 /// [`Simulated::brake_gains`], until at rest within 0.02 (rad or m) and 0.05 (per s).
+///
+/// [`Simulated::measuring_positions_only`] makes it an encoder-only setup, as the
+/// physical pendulum of §6.4.1: its samples carry the positions quantised to the
+/// encoder's counts and NaN velocities (not measured), and the rig's observer estimates
+/// them. Its reset brake still acts on the simulation's true state (a hardware driver
+/// would brake on its own velocity estimate).
 pub struct Simulated {
     plant: Plant,
+    /// What the samples report of the true state.
+    sensor: Sensor,
     u: [f64; MAX_U],
     /// Monotonic time the simulation has reached.
     t_ns: u64,
@@ -379,11 +388,23 @@ impl Simulated {
         }
         Ok(Self {
             plant: Plant::new(Arc::new(Task::new(system))),
+            sensor: Sensor::Full,
             u: [0.0; MAX_U],
             t_ns: now_ns(),
             speed,
             gains,
         })
+    }
+
+    /// Samples report the positions only, quantised to `counts_per_rev` counts per
+    /// revolution (no noise), and NaN velocities.
+    pub fn measuring_positions_only(mut self, counts_per_rev: u32) -> Result<Self> {
+        if counts_per_rev == 0 {
+            return Err(anyhow!("--counts-per-rev 0: must be at least 1"));
+        }
+        let mask = &self.plant.task().angle_mask;
+        self.sensor = Sensor::angle(mask, counts_per_rev, 0.0, 0);
+        Ok(self)
     }
 
     /// Integrates up to monotonic time `t_ns` with the action in effect.
@@ -424,7 +445,7 @@ impl Device for Simulated {
 
     fn sample(&mut self, t_ns: u64, x: &mut [f64]) {
         self.advance(t_ns);
-        x.copy_from_slice(self.plant.state());
+        self.sensor.measure(self.plant.state(), x);
     }
 
     fn apply(&mut self, t_ns: u64, u: &[f64]) {
@@ -432,15 +453,16 @@ impl Device for Simulated {
         self.u[..u.len()].copy_from_slice(u);
     }
 
-    fn reset_action(&mut self, x: &[f64], x0: &[f64], u: &mut [f64]) {
+    /// The brake acts on the true state (`x` may lack the velocities).
+    fn reset_action(&mut self, _: &[f64], x0: &[f64], u: &mut [f64]) {
         let (kp, kd) = self.gains;
-        for (ui, (e, de)) in u.iter_mut().zip(self.errors(x, x0)) {
+        for (ui, (e, de)) in u.iter_mut().zip(self.errors(self.plant.state(), x0)) {
             *ui = kp * e + kd * de;
         }
     }
 
-    fn at_rest(&self, x: &[f64], x0: &[f64]) -> bool {
-        self.errors(x, x0)
+    fn at_rest(&self, _: &[f64], x0: &[f64]) -> bool {
+        self.errors(self.plant.state(), x0)
             .all(|(e, de)| e.abs() < REST_POSITION && de.abs() < REST_SPEED)
     }
 }

@@ -35,6 +35,9 @@ pub struct Bridge {
     /// The rig's side of safety: actions are clamped (non-finite ones never reach the
     /// driver) and the operating range is watched here too; the driver does its own.
     safety: Supervisor,
+    /// Whether the driver measures positions only (NaN velocities), as its first sample
+    /// of the run showed.
+    positions_only: Option<bool>,
 }
 
 impl Bridge {
@@ -58,7 +61,28 @@ impl Bridge {
             link,
             driver,
             info,
+            positions_only: None,
         })
+    }
+
+    /// Whether sample `s` has the positions only. The first sample of the run decides
+    /// (positions only: the rewards become the observer's, [`Link::estimate_rewards`]);
+    /// a driver that changes what it measures is an error.
+    fn positions_only(&mut self, s: &DriverSample) -> Result<bool> {
+        let now = s.positions_only();
+        match self.positions_only {
+            None if now => self.link.estimate_rewards(&self.driver.id)?,
+            Some(before) if before != now => bail!(
+                "driver {:?} changed what it measures at sample {}: velocities {} before, {} now",
+                self.driver.id,
+                s.seq,
+                if before { "NaN" } else { "measured" },
+                if now { "NaN" } else { "measured" }
+            ),
+            _ => {}
+        }
+        self.positions_only = Some(now);
+        Ok(now)
     }
 
     /// The newest driver sample after sample `after`, checked: right dimensions, finite,
@@ -74,6 +98,7 @@ impl Bridge {
             }
             s.validate(&self.info)
                 .map_err(|e| anyhow!("driver {:?}: {e}", self.driver.id))?;
+            self.positions_only(&s)?;
             if !s.has(status::READY) || s.reset_id != reset_id {
                 bail!(
                     "driver {:?} left the trial: sample {} has status {:#x} and reset_id {} (expected READY from reset {reset_id}); was it restarted or reset by another process?",
@@ -115,10 +140,18 @@ impl Trials for Bridge {
             .driver
             .wait_ready(&self.link.bus, &self.info, reset_id, self.reset_timeout)
             .map_err(wire_err)?;
+        let positions_only = self.positions_only(&s)?;
+        // READY means at rest at x0: a driver that does not measure the velocities has
+        // brought them to x0's.
+        let mut start = s.state().to_vec();
+        if positions_only {
+            let half = start.len() / 2;
+            start[half..].copy_from_slice(&x0[half..]);
+        }
         let mut t_publish = self.link.publish(
             header.at(self.link.seq, 0, flags::START),
             0.0,
-            s.state(),
+            &start,
             s.applied(),
             s.t_sample_ns,
         )?;
@@ -133,13 +166,18 @@ impl Trials for Bridge {
             self.link.misses += next.seq - s.seq - 1 + u64::from(next.last_command != command);
             // Leaving the task's operating range ends the trial with its penalty (§6.4.2);
             // no further action is sent, so the driver's watchdog applies zero.
-            let left = self.safety.check(next.state());
+            let left = self.safety.check(next.measured());
+            // ρ(x_k, u): unknown here if the velocities are not measured (the observer
+            // computes it from its estimate, flags::ESTIMATED_REWARD).
+            let reward = if positions_only {
+                f64::NAN
+            } else {
+                task.reward.reward(s.state(), next.applied())
+            };
             let (r, end) = match left {
                 Some(penalty) => (penalty, flags::END | flags::TERMINAL),
-                None if k + 1 == steps => {
-                    (task.reward.reward(s.state(), next.applied()), flags::END)
-                }
-                None => (task.reward.reward(s.state(), next.applied()), 0),
+                None if k + 1 == steps => (reward, flags::END),
+                None => (reward, 0),
             };
             t_publish = self.link.publish(
                 header.at(self.link.seq, k + 1, end),

@@ -60,6 +60,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         latencies: Vec::new(),
         cycles: Vec::new(),
         misses: 0,
+        run_flags: 0,
     };
     let mut runner: Box<dyn Trials> = match &args.driver {
         Some(_) if cfg.observer.mode == ::agent::config::ObserverMode::Predictive => bail!(
@@ -119,7 +120,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
     // The end of the run, stamped with the run's final simulated and monotonic time.
     let header = Header {
         seq: p.seq,
-        flags: flags::SHUTDOWN,
+        flags: flags::SHUTDOWN | p.run_flags,
         t_sim: t_sim(u64::from(cfg.run.trials), skipped),
         ..Header::default()
     };
@@ -186,6 +187,9 @@ pub(super) struct Link {
     pub(super) cycles: Vec<[u64; 4]>,
     /// Deadlines missed so far (realtime, external driver).
     pub(super) misses: u64,
+    /// Flags of every message from here on: [`flags::ESTIMATED_REWARD`] once a driver
+    /// turned out to measure positions only.
+    pub(super) run_flags: u64,
 }
 
 impl Link {
@@ -202,6 +206,10 @@ impl Link {
         t_sample_ns: u64,
     ) -> Result<u64> {
         let n = self.task.state_dim();
+        let header = Header {
+            flags: header.flags | self.run_flags,
+            ..header
+        };
         if header.flags & flags::START != 0 {
             self.y.copy_from_slice(&x[..n]);
         } else {
@@ -233,6 +241,19 @@ impl Link {
         self.out.send(m).map_err(wire_err)?;
         self.seq += 1;
         Ok(m.t_publish_ns)
+    }
+
+    /// From now on the rewards are the observer's, from its estimate: the driver measures
+    /// positions only ([`flags::ESTIMATED_REWARD`]). That needs a sensor that leaves the
+    /// velocities to the observer (`--sensor angle`).
+    pub(super) fn estimate_rewards(&mut self, driver_id: &str) -> Result<()> {
+        if matches!(self.sensor, Sensor::Full) {
+            bail!(
+                "driver {driver_id:?} measures positions only (its velocities are NaN): run with `--sensor angle` and an observer that estimates them (`--observer finite-difference` or `--observer predictive`)"
+            );
+        }
+        self.run_flags |= flags::ESTIMATED_REWARD;
+        Ok(())
     }
 
     /// Checks that action `a` answers sample `seq`.
