@@ -323,6 +323,100 @@ fn the_rust_driver_of_the_manipulator_passes_check_driver_and_learns() {
     assert_eq!(resets, 6, "{returns}");
 }
 
+/// A driver that measures positions only (`rig sim-driver --sensor angle`: an encoder, as
+/// on the physical pendulum of §6.4.1; NaN velocities). Without `--sensor angle` the rig
+/// refuses it, naming the flags. With an observer the velocities are estimated, the
+/// measurements carry no reward (null, flag ESTIMATED_REWARD), each estimate carries
+/// `ρ(x̂_k, u_k)` of the previous estimate and the action applied over the interval,
+/// and returns.csv sums those.
+#[test]
+fn a_driver_measuring_positions_only_is_estimated_and_its_rewards_computed_from_the_estimates() {
+    let d = Driver::launch(
+        &Kind::Rust,
+        "encoder",
+        &["--sensor", "angle", "--speed", "10"],
+    );
+    let timeout = ["--driver-timeout", "20"];
+    let out = run_external(
+        &d.id,
+        &[&timeout[..], &["--trials", "1"]].concat(),
+        &tmp("encoder-refused"),
+    );
+    let (stdout, stderr) = text(&out);
+    assert!(!out.status.success(), "{stdout}");
+    assert!(
+        stderr.contains("measures positions only") && stderr.contains("`--sensor angle`"),
+        "{stderr}"
+    );
+    let dir = tmp("encoder-run");
+    let flags = ["--sensor", "angle", "--observer", "predictive"];
+    let more = ["--trials", "3", "--eval-every", "3"];
+    let out = run_external(&d.id, &[&timeout[..], &flags, &more].concat(), &dir);
+    let (stdout, stderr) = text(&out);
+    assert!(out.status.success(), "{stdout}\n{stderr}");
+    let task = plant::Task::new(plant::SystemName::Pendulum);
+    let bytes = std::fs::read(dir.join("run.mcap")).unwrap();
+    let num = |v: &serde_json::Value, k: &str| v[k].as_f64();
+    let (mut measured, mut estimated) = (0, 0);
+    let mut prev: Option<serde_json::Value> = None;
+    // Per learning trial, the sum of the estimates' rewards.
+    let mut sums = vec![0.0; 4];
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let topic = m.channel.topic.as_str();
+        if !["/plant/measurement", "/observer/estimate"].contains(&topic) {
+            continue;
+        }
+        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        let f = v["flags"].as_u64().unwrap();
+        assert_ne!(f & 256, 0, "{topic} without ESTIMATED_REWARD: {v}");
+        let (start, greedy, shutdown) = (f & 1 != 0, f & 4 != 0, f & 8 != 0);
+        match topic {
+            "/plant/measurement" if !start && !shutdown => {
+                assert!(v["reward"].is_null() && v["y_1"].is_null(), "{v}");
+                assert!(num(&v, "y_0").is_some(), "{v}");
+                measured += 1;
+            }
+            "/observer/estimate" if !shutdown => {
+                if !start {
+                    let p = prev.as_ref().unwrap();
+                    let x = [num(p, "x_0").unwrap(), num(p, "x_1").unwrap()];
+                    let u = [num(&v, "u_applied_0").unwrap()];
+                    let r = num(&v, "reward").unwrap();
+                    let expected = task.reward.reward(&x, &u);
+                    assert!((r - expected).abs() <= 1e-12 * r.abs(), "{v} after {p}");
+                    if !greedy {
+                        sums[v["trial"].as_u64().unwrap() as usize] += r;
+                    }
+                    estimated += 1;
+                }
+                prev = Some(v);
+            }
+            _ => {}
+        }
+    }
+    // 3 learning trials and one greedy of 100 samples each.
+    assert_eq!((measured, estimated), (400, 400));
+    let returns = std::fs::read_to_string(dir.join("returns.csv")).unwrap();
+    for row in returns.lines().skip(1) {
+        let c: Vec<&str> = row.split(',').collect();
+        let (trial, ret): (usize, f64) = (c[1].parse().unwrap(), c[3].parse().unwrap());
+        assert!((ret - sums[trial]).abs() <= 1e-9 * ret.abs(), "{returns}");
+        assert!(ret < -1000.0, "{returns}");
+    }
+    assert!(
+        returns
+            .lines()
+            .last()
+            .unwrap()
+            .split(',')
+            .nth(4)
+            .unwrap()
+            .parse::<f64>()
+            .is_ok()
+    );
+}
+
 /// One driver per id: a second `rig sim-driver` with the same id is a one-line error
 /// naming the id and the service, and the first goes on.
 #[test]

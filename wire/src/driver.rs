@@ -605,7 +605,10 @@ mod tests {
         assert_eq!(encoder.validate(&info), Ok(()));
         assert!(encoder.positions_only());
         let one = sample([0.1, -0.2, 0.3, nan]).validate(&info).unwrap_err();
-        assert!(one.contains("x[3] = NaN") && one.contains("NaN for all of them"), "{one}");
+        assert!(
+            one.contains("x[3] = NaN") && one.contains("NaN for all of them"),
+            "{one}"
+        );
         let position = sample([nan, -0.2, nan, nan]).validate(&info).unwrap_err();
         assert!(position.starts_with("sample 7: x[0] = NaN"), "{position}");
         assert!(!position.contains("all of them"), "{position}");

@@ -598,6 +598,25 @@ mod tests {
         assert!(x[0] > 0.3, "falling away from the top: {x:?}");
     }
 
+    /// An encoder-only simulation reports the angle in whole counts and no velocity.
+    #[test]
+    fn a_simulated_encoder_measures_the_angle_only() {
+        let sim = Simulated::new(SystemName::Pendulum, 1.0).unwrap();
+        assert!(sim.measuring_positions_only(0).is_err());
+        let mut sim = Simulated::new(SystemName::Pendulum, 1.0)
+            .unwrap()
+            .measuring_positions_only(4096)
+            .unwrap();
+        sim.plant.reset(&[0.3, 0.0]);
+        let t0 = sim.t_ns;
+        let mut x = [0.0; 2];
+        sim.sample(t0 + 30_000_000, &mut x);
+        let q = std::f64::consts::TAU / 4096.0;
+        let true_angle = sim.plant.state()[0];
+        assert!(x[1].is_nan() && (x[0] - true_angle).abs() <= q / 2.0, "{x:?}");
+        assert_eq!(x[0], (x[0] / q).round() * q);
+    }
+
     /// Every simulated system's reset brake brings it to rest at each start state from a
     /// state away from it (moving), within 20 s of simulated time; the vertical arm is
     /// refused with the reason.
