@@ -8,7 +8,10 @@ Opens DIR/run.mcap with the official Python `mcap` package and checks that
      object of `number`/`integer` properties with no `$ref` (so Foxglove plots it);
   3. the attachment `config.toml` is present;
   4. the per-trial returns recomputed from the `/plant/measurement` messages equal
-     DIR/returns.csv (`run,trial,sim_time_s,return,greedy_return`) exactly.
+     DIR/returns.csv (`run,trial,sim_time_s,return,greedy_return`) exactly — from the
+     `/observer/estimate` messages (their `reward` and `x`) instead when the measurements
+     have flag bit 8 (ESTIMATED_REWARD: a driver that measures positions only, whose
+     rewards the observer computes from its estimate).
 
 Returns (check 4): a measurement message has fields `trial` (learning trial, from 1),
 `step` (0 = the trial's start state; the `reward` of step k >= 1 is r_k = rho(x_{k-1},
@@ -52,6 +55,7 @@ from mcap.stream_reader import CRCValidationError, StreamReader
 
 MEASUREMENT_TOPIC = "/plant/measurement"
 TRUTH_TOPIC = "/plant/truth"
+ESTIMATE_TOPIC = "/observer/estimate"
 CONFIG_ATTACHMENT = "config.toml"
 RETURNS_HEADER = ["run", "trial", "sim_time_s", "return", "greedy_return"]
 
@@ -60,6 +64,7 @@ FLAG_TRIAL_END = 1 << 1
 FLAG_GREEDY = 1 << 2
 FLAG_SHUTDOWN = 1 << 3
 FLAG_PRIMED = 1 << 7
+FLAG_ESTIMATED_REWARD = 1 << 8
 
 MAGIC_SIZE = 8
 # opcode (1) + record length (8) + summary_start (8) + summary_offset_start (8) + crc (4)
@@ -83,6 +88,8 @@ class Recording:
     measurements: list = field(default_factory=list)
     # Decoded JSON of every /plant/truth message (angle-only sensing), by seq.
     truth: dict = field(default_factory=dict)
+    # Decoded JSON of every /observer/estimate message, in order.
+    estimates: list = field(default_factory=list)
     # The `run` metadata record's entries.
     run_metadata: dict = field(default_factory=dict)
 
@@ -195,7 +202,7 @@ def read_recording(path: Path) -> Recording:
                     rec.run_metadata = dict(m.metadata)
             for _schema, channel, message in reader.iter_messages(log_time_order=False):
                 rec.message_count += 1
-                if channel.topic in (MEASUREMENT_TOPIC, TRUTH_TOPIC):
+                if channel.topic in (MEASUREMENT_TOPIC, TRUTH_TOPIC, ESTIMATE_TOPIC):
                     try:
                         decoded = json.loads(message.data)
                     except ValueError as e:
@@ -205,6 +212,8 @@ def read_recording(path: Path) -> Recording:
                         ) from e
                     if channel.topic == MEASUREMENT_TOPIC:
                         rec.measurements.append(decoded)
+                    elif channel.topic == ESTIMATE_TOPIC:
+                        rec.estimates.append(decoded)
                     else:
                         rec.truth[decoded.get("seq")] = decoded
     except CRCValidationError as e:
@@ -528,12 +537,21 @@ def check_run(run_dir: Path, log=print) -> None:
     check_attachment(rec)
     log(f"ok: attachment {CONFIG_ATTACHMENT} present")
     terminal = TerminalReward.from_metadata(rec.run_metadata)
-    learning, greedy = trial_returns(rec.measurements, terminal, rec.truth)
+    source, truth, topic = rec.measurements, rec.truth, MEASUREMENT_TOPIC
+    if any(int(m.get("flags", 0)) & FLAG_ESTIMATED_REWARD for m in rec.measurements):
+        # The driver measures positions only: the rewards are the observer's, computed
+        # from its estimate x̂, which also gives x_N.
+        topic, truth = ESTIMATE_TOPIC, {}
+        source = [
+            {**e, **{"y_" + k[2:]: v for k, v in e.items() if k.startswith("x_")}}
+            for e in rec.estimates
+        ]
+    learning, greedy = trial_returns(source, terminal, truth)
     csv_path = run_dir / "returns.csv"
     compare_returns(learning, greedy, read_returns_csv(csv_path), csv_path.name)
     log(
         f"ok: returns of {len(learning)} trials and {len(greedy)} greedy trials "
-        f"from {MEASUREMENT_TOPIC}"
+        f"from {topic}"
         + (" (with the terminal reward of a finite horizon)" if terminal else "")
         + f" equal {csv_path.name} exactly"
     )
