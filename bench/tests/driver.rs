@@ -360,7 +360,7 @@ fn a_driver_measuring_positions_only_is_estimated_and_its_rewards_computed_from_
     let (mut measured, mut estimated) = (0, 0);
     let mut prev: Option<serde_json::Value> = None;
     // Per learning trial, the sum of the estimates' rewards.
-    let mut sums = vec![0.0; 4];
+    let mut sums = [0.0; 4];
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
         let topic = m.channel.topic.as_str();

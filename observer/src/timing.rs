@@ -10,7 +10,9 @@
 //! **Direct** (`mode = "direct"`): the agent acts on `x̂_k`; its answer `u_k` takes effect
 //! within `[t_k, t_{k+1})` after the compute and transport delay. Its transitions are
 //! `(x̂_k, u_k) → x̂_{k+1}` with the plant's reward `ρ(x_k, u_k)` (Eq. 3.16), as in the
-//! thesis's simulations.
+//! thesis's simulations — or, where the plant cannot know it (its reward is NaN: an
+//! external driver that measures positions only), `ρ(x̂_k, u_k)` of the estimate the agent
+//! acted on, as on the physical setup (§6.4.1).
 //!
 //! **Predictive** (`mode = "predictive"`): a one-sample action pipeline. At `t_k` the
 //! plant applies `u_k`, which the agent computed during the previous interval, for the

@@ -613,7 +613,10 @@ mod tests {
         sim.sample(t0 + 30_000_000, &mut x);
         let q = std::f64::consts::TAU / 4096.0;
         let true_angle = sim.plant.state()[0];
-        assert!(x[1].is_nan() && (x[0] - true_angle).abs() <= q / 2.0, "{x:?}");
+        assert!(
+            x[1].is_nan() && (x[0] - true_angle).abs() <= q / 2.0,
+            "{x:?}"
+        );
         assert_eq!(x[0], (x[0] / q).round() * q);
     }
 

@@ -6,7 +6,10 @@
 //! trial it asks the driver to reset and waits until the driver reports READY; it turns
 //! each driver sample into a [`wire::Measurement`] (header, reward `ρ(x_k, u)` with the
 //! action the driver reports in effect over the period) and forwards each of the agent's
-//! actions to the driver at once.
+//! actions to the driver at once. A driver that measures positions only (NaN velocities,
+//! `docs/driver.md`) needs `--sensor angle`: its measurements carry NaN rewards and
+//! [`flags::ESTIMATED_REWARD`], and the observer computes `ρ(x̂_k, u_k)` from its
+//! estimate; its start samples take the velocities of `x0` (READY is at rest there).
 //!
 //! The driver is the clock. When the agent answers late — the driver's next sample shows
 //! that the action was not applied by then, or whole periods passed — the trial goes on
