@@ -297,7 +297,7 @@ fn write_responses(path: &Path, responses: &[Vec<Sample>]) -> Result<()> {
     write_atomic(path, &s)
 }
 
-/// Reads what [`write_responses`] wrote for `runs` runs; `None` if the file is missing,
+/// Reads what `write_responses` wrote for `runs` runs; `None` if the file is missing,
 /// malformed or incomplete.
 pub fn read_responses(path: &Path, runs: usize) -> Option<Vec<Vec<Sample>>> {
     let mut reader = csv::Reader::from_path(path).ok()?;

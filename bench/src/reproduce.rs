@@ -3,7 +3,7 @@
 //! "thesis says / we measured" and the figure's qualitative claims checked against the
 //! regenerated data.
 //!
-//! Each figure is a set of experiments ([`Figure::curves`]), run with `rig learn`'s
+//! Each figure is a set of experiments (`Figure::curves`), run with `rig learn`'s
 //! machinery ([`crate::learn::learn`]: all runs in parallel, a progress bar each) into
 //! `DIR/<figure>/<curve>/`; an experiment that two figures share (3.23 gathers those of
 //! 3.12, 3.17 and 3.22) runs once. Per figure: `figure.png`/`.svg` (the learning curves
@@ -127,7 +127,7 @@ pub struct Measured {
     /// action at a bound.
     pub at_bound: f64,
     /// On the pendulum, per run, the swings of the final greedy policy's swing-up
-    /// ([`swings`]); empty for other systems.
+    /// (`swings`); empty for other systems.
     pub swings: Vec<Option<usize>>,
     /// The smoothed learning curve: (simulated minutes, 10-trial moving mean of the mean
     /// return).

@@ -14,7 +14,7 @@
 //!
 //! In predictive timing the start takes two exchanges before the first interval:
 //! `Measurement{START}` (the agent's answer is `u_0`) and `Measurement{PRIMED}` (`x_0`
-//! again, `u_next = u_0`; the answer is `u_1`), [`observer::timing`].
+//! again, `u_next = u_0`; the answer is `u_1`), [`::observer::timing`].
 //!
 //! Trials, greedy evaluation trials and the end of the run are the plant's to decide and
 //! announce ([`wire::flags`]).
@@ -118,11 +118,11 @@ pub struct ProcessArgs {
     /// `--timing` and `--speed` do not apply then.
     #[arg(long, value_name = "ID")]
     pub driver: Option<String>,
-    /// Plant only, with `--driver`: how long to wait for the driver to appear [s].
+    /// Plant only, with `--driver`: how long to wait for the driver to appear [seconds].
     #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
     pub driver_timeout: f64,
     /// Plant only, with `--driver`: how long the driver may take for one reset (bring
-    /// the system to rest at the start state) [s].
+    /// the system to rest at the start state) [seconds].
     #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
     pub reset_timeout: f64,
     /// Plant only, realtime: write every sample's timing to this CSV file
@@ -142,7 +142,7 @@ pub struct ProcessArgs {
     #[arg(long, value_name = "TRIAL", default_value_t = 0)]
     pub after_trial: u32,
     /// Plant only, with `--after-trial`: the simulated learning time at that trial's end
-    /// [s].
+    /// [seconds].
     #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
     pub sim_time: f64,
     /// Plant only, with `--after-trial`: the sequence number of the first sample.
