@@ -323,24 +323,26 @@ fn the_rust_driver_of_the_manipulator_passes_check_driver_and_learns() {
     assert_eq!(resets, 6, "{returns}");
 }
 
-/// A driver that measures positions only (`rig sim-driver --sensor angle`: an encoder, as
-/// on the physical pendulum of §6.4.1; NaN velocities). Without `--sensor angle` the rig
+/// A driver that measures positions only (`--sensor angle` of `rig sim-driver` and of the
+/// Python driver: an encoder, as on the physical pendulum of §6.4.1; NaN velocities). Without `--sensor angle` the rig
 /// refuses it, naming the flags. With an observer the velocities are estimated, the
 /// measurements carry no reward (null, flag ESTIMATED_REWARD), each estimate carries
 /// `ρ(x̂_k, u_k)` of the previous estimate and the action applied over the interval,
 /// and returns.csv sums those.
 #[test]
 fn a_driver_measuring_positions_only_is_estimated_and_its_rewards_computed_from_the_estimates() {
-    let d = Driver::launch(
-        &Kind::Rust,
-        "encoder",
-        &["--sensor", "angle", "--speed", "10"],
-    );
+    for kind in drivers() {
+        let d = Driver::launch(&kind, "encoder", &["--sensor", "angle", "--speed", "10"]);
+        estimated_rewards(&d);
+    }
+}
+
+fn estimated_rewards(d: &Driver) {
     let timeout = ["--driver-timeout", "20"];
     let out = run_external(
         &d.id,
         &[&timeout[..], &["--trials", "1"]].concat(),
-        &tmp("encoder-refused"),
+        &tmp(&format!("encoder-refused-{}", d.id)),
     );
     let (stdout, stderr) = text(&out);
     assert!(!out.status.success(), "{stdout}");
@@ -348,7 +350,7 @@ fn a_driver_measuring_positions_only_is_estimated_and_its_rewards_computed_from_
         stderr.contains("measures positions only") && stderr.contains("`--sensor angle`"),
         "{stderr}"
     );
-    let dir = tmp("encoder-run");
+    let dir = tmp(&format!("encoder-run-{}", d.id));
     let flags = ["--sensor", "angle", "--observer", "predictive"];
     let more = ["--trials", "3", "--eval-every", "3"];
     let out = run_external(&d.id, &[&timeout[..], &flags, &more].concat(), &dir);

@@ -87,6 +87,10 @@ class Pendulum:
         self.x = [wrap(p), w]
 
 
+# Counts per revolution of the simulated encoder (--sensor angle), as `rig sim-driver`'s.
+ENCODER_COUNTS = 4096
+
+
 def wrap(a):
     """Angle to [-π, π)."""
     return (a + math.pi) % (2.0 * math.pi) - math.pi
@@ -284,6 +288,11 @@ class Driver:
         s.n_x = 2
         s.n_u = 1
         s.x[0], s.x[1] = self.plant.x
+        if self.args.sensor == "angle":
+            # An encoder: the angle in whole counts, the velocity not measured (NaN);
+            # the rig's observer estimates it (docs/driver.md, "Positions only").
+            q = 2.0 * math.pi / ENCODER_COUNTS
+            s.x[0], s.x[1] = wrap(round(s.x[0] / q) * q), math.nan
         s.u_applied[0] = self.u
         if self.args.inject_fault != "layout":
             s.clamped = self.clamped
@@ -371,6 +380,14 @@ def main():
         help="misbehave on purpose, to see what `rig check-driver` says: publish a "
         "wrong sample layout, never engage the watchdog, or apply out-of-range and "
         "non-finite actions instead of clamping and rejecting them",
+    )
+    p.add_argument(
+        "--sensor",
+        choices=["full", "angle"],
+        default="full",
+        help="what the samples report: the full state, or (angle) an encoder's angle in "
+        f"{ENCODER_COUNTS} counts per revolution and NaN for the velocity, as on the "
+        "physical pendulum; run the rig with --sensor angle and an observer [default: full]",
     )
     p.add_argument(
         "--realtime-priority",
