@@ -35,7 +35,8 @@ pub trait Device {
 
     /// Writes the state at monotonic time `t_ns` (now) into `x` (`n_x` components, angles
     /// wrapped to [−π, π)): hardware reads its sensors; a simulation integrates up to
-    /// `t_ns` with the action in effect.
+    /// `t_ns` with the action in effect. A device that measures positions only writes
+    /// NaN for every velocity, and the rig estimates them (docs/driver.md).
     fn sample(&mut self, t_ns: u64, x: &mut [f64]);
 
     /// Puts action `u` into effect from monotonic time `t_ns` (now) until the next call.
