@@ -374,12 +374,13 @@ impl Session<'_> {
             }
         }
         problems.truncate(3);
-        let measured = match samples.first() {
-            Some((s, _)) if s.positions_only() => {
-                "positions only, velocities NaN: run the rig with `--sensor angle` and an observer"
-            }
-            _ => "the full state",
+        let (first, _) = &samples[0];
+        let hint = if first.positions_only() {
+            ", velocities NaN: run the rig with `--sensor angle` and an observer"
+        } else {
+            ""
         };
+        let measured = format!("{}{hint}", measures(first));
         self.record_problems(
             "samples",
             problems,
