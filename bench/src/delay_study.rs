@@ -2,7 +2,7 @@
 //! predictive timing recovers (issue 5; thesis §6.4.1; DESIGN.md "The observer and the
 //! latency budget").
 //!
-//! Every cell is one `rig learn` experiment ([`crate::learn::learn`], runs in parallel) on
+//! Every cell is one `rig learn` experiment ([`runtime::learn::learn`], runs in parallel) on
 //! the pendulum with angle-only sensing and the predictive (model-based) estimator:
 //! learner × timing × injected delay, the learners VGBP-LSTD and MLAC/LLR with their
 //! presets, the timings direct (`x̂_k`, action applied `D` after the sample) and
@@ -40,11 +40,11 @@ use agent::config::{
 use anyhow::{Result, anyhow};
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
-use crate::learn::{
+use runtime::learn::{
     LAST_EVALUATIONS, LearnOptions, Progress, final_greedy, learn, progress_bar, write_atomic,
 };
-use crate::report::plot::{PointSeries, plot_points};
-use crate::report::{CurvePoint, Series, SeriesStyle, curve, plot_curves};
+use runtime::report::plot::{PointSeries, plot_points};
+use runtime::report::{CurvePoint, Series, SeriesStyle, curve, plot_curves};
 
 /// The learners of the study.
 pub const LEARNERS: [(Algo, ApproxKind); 2] = [

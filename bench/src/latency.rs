@@ -44,11 +44,11 @@ use std::path::{Path, PathBuf};
 use agent::config::{ObserverKind, ObserverMode, Overrides, SensorKind};
 use anyhow::{Context, Result, anyhow, bail};
 
-use crate::learn::write_atomic;
 use crate::loop_bench::{Stats, raw_round_trips};
-use crate::process::Scheduling;
-use crate::report::plot::{Histogram, plot_histograms};
-use crate::run::{RunOptions, run};
+use runtime::learn::write_atomic;
+use runtime::process::Scheduling;
+use runtime::report::plot::{Histogram, plot_histograms};
+use runtime::run::{RunOptions, run};
 
 /// What `rig latency` runs.
 #[derive(Clone, Debug)]
@@ -318,9 +318,9 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
         .with_context(|| format!("cannot create {}", opts.out.display()))?;
     let exe = std::env::current_exe().context("cannot find the rig executable")?;
     // The baseline under the same policy: the ping-pong's partner process inherits it.
-    crate::process::set_rt_priority(opts.scheduling.rt_priority)?;
+    runtime::process::set_rt_priority(opts.scheduling.rt_priority)?;
     if opts.scheduling.pin_cpus {
-        crate::process::pin(crate::process::Cpus::Rest)?;
+        runtime::process::pin(runtime::process::Cpus::Rest)?;
     }
     let mut raw = raw_round_trips(&exe, &opts.out, opts.raw_samples, opts.scheduling.pin_cpus)?;
     let raw_rtt = Stats::of(&mut raw);
@@ -356,9 +356,12 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
             scheduling: opts.scheduling,
         },
     )?;
-    let machine = before
-        .zip(Counters::read())
-        .map(|(b, a)| b.until(&a, opts.scheduling.pin_cpus.then(crate::process::clock_cpu)));
+    let machine = before.zip(Counters::read()).map(|(b, a)| {
+        b.until(
+            &a,
+            opts.scheduling.pin_cpus.then(runtime::process::clock_cpu),
+        )
+    });
 
     let bytes = std::fs::read(run_dir.join("run.mcap"))?;
     let mut msgs: BTreeMap<String, Vec<Vec<u8>>> = BTreeMap::new();
@@ -609,7 +612,7 @@ mod tests {
                 .collect(),
         };
         let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) } as f64;
-        let pinned = now.until(&later, Some(crate::process::clock_cpu()));
+        let pinned = now.until(&later, Some(runtime::process::clock_cpu()));
         assert_eq!(pinned.load_avg, now.load_avg);
         assert!((pinned.steal_ms - 3e3 / hz).abs() < 1e-9);
         assert_eq!(pinned.plant_cpu, Some(online - 1));

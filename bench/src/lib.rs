@@ -1,18 +1,13 @@
-//! The `rig` command's library: the in-process experiment driver ([`experiment`]),
-//! `rig learn` ([`learn`]), the pendulum's optimal-control reference ([`optimal`]), and
-//! reports — learning-curve statistics and plots
-//! ([`report`]).
+//! Benchmarks and studies on top of the rig's runtime: the realtime loop's latency
+//! budget ([`latency`]), the lockstep loop against a raw ping-pong ([`loop_bench`]), the
+//! thesis's figures ([`reproduce`]), the delay study ([`delay_study`]), the sensitivity
+//! analysis ([`sensitivity`]), time responses of learned policies ([`response`]) and the
+//! pendulum's optimal-control reference ([`optimal`]).
 
 pub mod delay_study;
-pub mod driver;
-pub mod experiment;
 pub mod latency;
-pub mod learn;
 pub mod loop_bench;
 pub mod optimal;
-pub mod process;
-pub mod record;
-pub mod report;
 pub mod reproduce;
-pub mod resume;
-pub mod run;
+pub mod response;
+pub mod sensitivity;

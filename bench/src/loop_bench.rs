@@ -18,8 +18,8 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use wire::{Bus, Measurement, now_ns};
 
-use crate::learn::write_atomic;
-use crate::process::wire_err;
+use runtime::learn::write_atomic;
+use runtime::process::wire_err;
 
 /// Percentiles of a sample of durations \[µs\].
 #[derive(Clone, Debug)]
@@ -105,7 +105,7 @@ fn spawn(exe: &Path, args: &[&str], log: &Path) -> Result<Child> {
 /// with `seq == u64::MAX`; pinned to the plant's CPU with `pin_cpus`.
 pub fn pong(run_id: &str, pin_cpus: bool) -> Result<()> {
     if pin_cpus {
-        crate::process::pin(crate::process::Cpus::Clock)?;
+        runtime::process::pin(runtime::process::Cpus::Clock)?;
     }
     let bus = Bus::join(run_id, "pong").map_err(wire_err)?;
     let rx = bus.rx::<Measurement>("ping").map_err(wire_err)?;

@@ -5,7 +5,7 @@
 //! `u ∈ [−3, 3]`, one trial of 3 s = `N = 100` samples from `x_0 = [π, 0]`, reward
 //! Eq. 3.16, `ρ(x_k, u_k) = −x_kᵀ Q x_k − P u_k²` with `Q = diag(5, 0.1)`, `P = 1` and the
 //! angle wrapped to [-π, π). The number compared is exactly what a learner's greedy
-//! return sums ([`crate::experiment::Experiment::greedy_return_from`], infinite horizon):
+//! return sums ([`runtime::experiment::Experiment::greedy_return_from`], infinite horizon):
 //! the undiscounted `Σ_{k=0}^{N−1} ρ(x_k, u_k)` of the state *before* each transition and
 //! the action applied, with no terminal reward.
 //!
@@ -38,7 +38,7 @@ use std::time::{Duration, Instant};
 use plant::{Plant, Task};
 use rayon::prelude::*;
 
-use crate::experiment::Sample;
+use runtime::experiment::Sample;
 
 /// Allowed state-grid sizes (nodes per dimension).
 pub const GRID_RANGE: std::ops::RangeInclusive<usize> = 21..=4001;
@@ -326,7 +326,7 @@ pub fn write_trajectory(path: &std::path::Path, trajectory: &[Sample]) -> anyhow
             s.t, s.x[0], s.x[1], s.u[0], s.reward
         )?;
     }
-    crate::learn::write_atomic(path, &text)
+    runtime::learn::write_atomic(path, &text)
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@
 //! regenerated data.
 //!
 //! Each figure is a set of experiments (`Figure::curves`), run with `rig learn`'s
-//! machinery ([`crate::learn::learn`]: all runs in parallel, a progress bar each) into
+//! machinery ([`runtime::learn::learn`]: all runs in parallel, a progress bar each) into
 //! `DIR/<figure>/<curve>/`; an experiment that two figures share (3.23 gathers those of
 //! 3.12, 3.17 and 3.22) runs once. Per figure: `figure.png`/`.svg` (the learning curves
 //! over simulated minutes, as the thesis plots them; on the pendulum with the optimal
@@ -35,9 +35,9 @@ use anyhow::{Context, Result, anyhow, bail};
 use indicatif::ProgressBar;
 use plant::SystemName;
 
-use crate::experiment::TrialRecord;
-use crate::learn::{LearnOptions, LearnSummary, Progress, learn, progress_bar, write_atomic};
-use crate::report::{self, CurvePoint, Series, SeriesStyle};
+use runtime::experiment::TrialRecord;
+use runtime::learn::{LearnOptions, LearnSummary, Progress, learn, progress_bar, write_atomic};
+use runtime::report::{self, CurvePoint, Series, SeriesStyle};
 
 /// The ids `--only` takes: the figures in the thesis's order, and the sensitivity
 /// analysis.
@@ -791,7 +791,7 @@ fn measure(label: &str, cfg: &ExperimentConfig, summary: &LearnSummary) -> Resul
         e.2 += 1;
     }
     let finals =
-        crate::learn::final_greedy(records, runs as u32).with_context(|| label.to_string())?;
+        runtime::learn::final_greedy(records, runs as u32).with_context(|| label.to_string())?;
     let n = finals.len() as f64;
     let final_greedy = finals.iter().sum::<f64>() / n;
     let final_greedy_sd = if finals.len() > 1 {
@@ -864,7 +864,7 @@ fn measure(label: &str, cfg: &ExperimentConfig, summary: &LearnSummary) -> Resul
 /// pendulum upright"): the reversals of the direction of rotation (sign changes of φ̇)
 /// before the pendulum first comes within 0.3 rad of upright (φ = 0); `None` if it never
 /// does in the trial.
-fn swings(response: &[crate::experiment::Sample]) -> Option<usize> {
+fn swings(response: &[runtime::experiment::Sample]) -> Option<usize> {
     let mut reversals = 0;
     let mut direction = 0.0;
     for s in response {
@@ -952,13 +952,13 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
             responses.push(summary.responses);
         }
         let t_plots = Instant::now();
-        let labelled: Vec<(&str, &[crate::experiment::Sample])> = fig
+        let labelled: Vec<(&str, &[runtime::experiment::Sample])> = fig
             .curves
             .iter()
             .zip(&responses)
             .map(|(c, r)| (c.label, &r[0][..]))
             .collect();
-        report::plot_responses(
+        crate::response::plot_responses(
             &dir.join("response.png"),
             &dir.join("response.svg"),
             &format!(
@@ -1180,8 +1180,8 @@ fn load_finished(dir: &Path, cfg: &ExperimentConfig) -> Option<LearnSummary> {
     if records.len() != runs * trials {
         return None;
     }
-    let (curve, greedy_curve) = crate::learn::curves(&records, runs, trials).ok()?;
-    let responses = crate::learn::read_responses(&dir.join("responses.csv"), runs)?;
+    let (curve, greedy_curve) = runtime::learn::curves(&records, runs, trials).ok()?;
+    let responses = runtime::learn::read_responses(&dir.join("responses.csv"), runs)?;
     Some(LearnSummary {
         records,
         curve,
@@ -1328,7 +1328,7 @@ fn sensitivity(runner: &mut Runner) -> Result<Sensitivity> {
         }
     }
     write_atomic(&dir.join("sensitivity.csv"), &csv)?;
-    let sweeps: Vec<(&str, Vec<report::Sweep>)> = algos
+    let sweeps: Vec<(&str, Vec<crate::sensitivity::Sweep>)> = algos
         .iter()
         .map(|(name, preset, params)| {
             let sweeps = params
@@ -1342,7 +1342,7 @@ fn sensitivity(runner: &mut Runner) -> Result<Sensitivity> {
                         .chain([(1.0, preset.final_greedy, preset.reaches_min)])
                         .collect();
                     points.sort_by(|a, b| a.0.total_cmp(&b.0));
-                    report::Sweep {
+                    crate::sensitivity::Sweep {
                         // The symbol, without the explanation in brackets.
                         parameter: param.split(" (").next().unwrap_or(param),
                         points,
@@ -1352,7 +1352,7 @@ fn sensitivity(runner: &mut Runner) -> Result<Sensitivity> {
             (name.as_str(), sweeps)
         })
         .collect();
-    report::plot_sensitivity(
+    crate::sensitivity::plot_sensitivity(
         &dir.join("sensitivity.png"),
         &dir.join("sensitivity.svg"),
         &format!("Sensitivity: final greedy return and t₉₀ ({runs} runs per point)"),
@@ -1556,7 +1556,7 @@ fn write_sensitivity(s: &mut String, sens: &Sensitivity) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiment::Sample;
+    use runtime::experiment::Sample;
 
     fn response(states: &[(f64, f64)]) -> Vec<Sample> {
         states

@@ -10,7 +10,7 @@
 use agent::checkpoint::{Checkpoint, Snapshot};
 use agent::config::{Algo, ApproxKind, ExperimentConfig, HorizonKind};
 use plant::SystemName;
-use rig::experiment::Experiment;
+use runtime::experiment::Experiment;
 
 fn presets() -> Vec<ExperimentConfig> {
     let mut out = Vec::new();

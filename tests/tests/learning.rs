@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use agent::config::{Algo, ApproxKind, ExperimentConfig, HorizonKind, Overrides, resolve};
-use rig::learn::{LearnOptions, Progress, learn};
+use runtime::learn::{LearnOptions, Progress, learn};
 
 fn config(algo: Algo, approx: ApproxKind, runs: u32, trials: u32, seed: u64) -> ExperimentConfig {
     config_with(HorizonKind::Infinite, algo, approx, runs, trials, seed)
@@ -161,7 +161,7 @@ fn the_arm_and_the_linear_system_run_with_their_presets() {
 }
 
 /// Runs `cfg` with `rig learn` on two threads into a fresh test directory.
-fn learn_in(name: &str, cfg: &ExperimentConfig) -> rig::learn::LearnSummary {
+fn learn_in(name: &str, cfg: &ExperimentConfig) -> runtime::learn::LearnSummary {
     let options = LearnOptions {
         out: out_dir(name),
         threads: Some(2),
@@ -259,7 +259,7 @@ fn shipped_configuration_files_resolve() {
 fn finite_horizon_learners_run_and_count_the_terminal_reward() {
     for algo in [Algo::Sac, Algo::Mlac, Algo::Rmac] {
         let cfg = config_with(HorizonKind::Finite, algo, ApproxKind::Rbf, 1, 3, 1);
-        let mut exp = rig::experiment::Experiment::new(&cfg, 0);
+        let mut exp = runtime::experiment::Experiment::new(&cfg, 0);
         while let Some(r) = exp.next_trial() {
             assert!(r.ret.is_finite() && r.ret < 0.0, "{algo}: {r:?}");
         }

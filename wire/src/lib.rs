@@ -30,8 +30,6 @@ pub const MAX_X: usize = 8;
 /// Action components a message can carry.
 pub const MAX_U: usize = 4;
 
-pub mod driver;
-
 /// Bits of the `flags` field.
 pub mod flags {
     /// The sample is a trial's start state `x_0` (no reward yet).
@@ -317,8 +315,9 @@ impl Bus {
         Self::with_node(&format!("rig-{run_id}-{name}"), run_id)
     }
 
-    /// A connection through a new node named `node_name`, of run `run_id`.
-    fn with_node(node_name: &str, run_id: &str) -> Result<Self, Error> {
+    /// A connection through a new node named `node_name`, of run `run_id` (the driver
+    /// kit's drivers join as run `driver`).
+    pub fn with_node(node_name: &str, run_id: &str) -> Result<Self, Error> {
         set_log_level_from_env_or(LogLevel::Error);
         let node = NodeBuilder::new()
             .name(&NodeName::new(node_name)?)
@@ -330,15 +329,6 @@ impl Bus {
             seen: Default::default(),
             primed: Default::default(),
         })
-    }
-
-    /// The connection of driver `driver_id`'s process (`docs/driver.md`): node
-    /// `rig-driver-<id>` ([`driver::node_name`]), which the rig lists to say which drivers
-    /// are running; its services are opened with [`Bus::tx_on`] and [`Bus::rx_on`] on
-    /// [`driver::service`] names.
-    pub fn for_driver(driver_id: &str) -> Result<Self, Error> {
-        driver::check_id(driver_id)?;
-        Self::with_node(&driver::node_name(driver_id), "driver")
     }
 
     /// The roles of the live processes of run `run_id`, sorted (e.g. `["agent",

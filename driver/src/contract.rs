@@ -1,0 +1,626 @@
+//! The driver contract: how a process that owns the hardware (or a simulation of it)
+//! talks to the rig. `docs/driver.md` is the human-readable version of this module; a
+//! test checks its layout tables against these structs.
+//!
+//! ```text
+//!            rig/driver/<id>/info     (DriverInfo,   driver → rig, at least once a second)
+//! driver ──► rig/driver/<id>/sample   (DriverSample, driver → rig, once per period) ──► rig
+//!        ◄── rig/driver/<id>/command  (DriverCommand, rig → driver: ACTION or RESET) ◄──
+//! ```
+//!
+//! The driver is the clock: it samples every `period_ns` on its own and publishes the
+//! sample whether or not actions arrive. It applies an action from the moment it
+//! arrives (clamped to its limits; a non-finite action is rejected and the safe action,
+//! zero, applied), falls back to zero when actions stop ([`DriverInfo::watchdog_periods`]),
+//! and brings the system to rest at a requested start state when told to reset,
+//! reporting when it is done ([`status::READY`] with [`DriverSample::reset_id`]).
+//! Trials, rewards and learning are the rig's: the driver never sees them.
+
+use std::cell::Cell;
+use std::time::Duration;
+
+use iceoryx2::prelude::*;
+
+use wire::{Bus, Error, MAX_U, MAX_X, Qos, Rx, Tx, now_ns};
+
+/// The protocol version in [`DriverInfo::version`].
+pub const VERSION: u64 = 1;
+
+/// Settings of every driver service: one publisher (one driver per id; one rig
+/// commanding it at a time), up to eight subscribers (the rig's plant process, its
+/// recorder, `rig check-driver`, monitors), 256 samples of buffer.
+pub const DRIVER_QOS: Qos = Qos {
+    max_publishers: 1,
+    max_subscribers: 8,
+    buffer: 256,
+};
+
+/// Topics of a driver, below `rig/driver/<id>/`.
+pub mod topic {
+    /// Driver → rig: what the driver is and its limits.
+    pub const INFO: &str = "info";
+    /// Driver → rig: one per sample period.
+    pub const SAMPLE: &str = "sample";
+    /// Rig → driver: actions and reset requests.
+    pub const COMMAND: &str = "command";
+}
+
+/// Bits of [`DriverSample::status`].
+pub mod status {
+    /// The last reset is done and actions are applied.
+    pub const READY: u64 = 1;
+    /// A reset is in progress: actions are ignored.
+    pub const RESETTING: u64 = 2;
+    /// The watchdog applies the safe action: no action arrived for
+    /// [`super::DriverInfo::watchdog_periods`] periods (cleared by the next action or
+    /// a reset).
+    pub const WATCHDOG: u64 = 4;
+}
+
+/// Values of [`DriverCommand::kind`].
+pub mod kind {
+    /// Apply `u` from now on.
+    pub const ACTION: u64 = 1;
+    /// Bring the system to rest at `x0`, then report READY with `reset_id = seq`.
+    pub const RESET: u64 = 2;
+}
+
+/// Driver → rig: what the driver drives and its limits. Published at start and again
+/// at least once a second (a rig that starts later learns it from the next one).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("rig.DriverInfo.v1")]
+pub struct DriverInfo {
+    /// Protocol version: [`VERSION`].
+    pub version: u64,
+    /// The system, ASCII, NUL-padded: `pendulum`, `arm-vertical`, `arm-horizontal`,
+    /// `double-integrator` (the rig's `--system` names).
+    pub system: [u8; 32],
+    /// State components in [`DriverSample::x`].
+    pub n_x: u64,
+    /// Action components in [`DriverCommand::u`] and [`DriverSample::u_applied`].
+    pub n_u: u64,
+    /// Sample period on the monotonic clock \[ns\].
+    pub period_ns: u64,
+    /// Simulated seconds per monotonic-clock second: 1 for hardware; a simulation that
+    /// runs faster than real time reports its speed-up. The physical sample time is
+    /// `period_ns · time_scale`.
+    pub time_scale: f64,
+    /// Lower action limits (first `n_u` used).
+    pub u_min: [f64; MAX_U],
+    /// Upper action limits (first `n_u` used).
+    pub u_max: [f64; MAX_U],
+    /// Whole periods without an action after which the driver applies the safe action
+    /// (protocol version 1: 1).
+    pub watchdog_periods: u64,
+    /// When this driver instance started (monotonic ns): changes when it restarts.
+    pub t_start_ns: u64,
+    /// When this message was published (monotonic ns).
+    pub t_publish_ns: u64,
+}
+
+/// Driver → rig: one sample, published every period.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("rig.DriverSample.v1")]
+pub struct DriverSample {
+    /// Period index since the driver started: `t_sample_ns ≈ t_start_ns + seq ·
+    /// period_ns`. A gap means the driver missed periods.
+    pub seq: u64,
+    /// When the state was sampled (monotonic ns).
+    pub t_sample_ns: u64,
+    /// When this message was published (monotonic ns).
+    pub t_publish_ns: u64,
+    /// [`status`] bits.
+    pub status: u64,
+    /// `seq` of the last RESET command: in progress (RESETTING) or done (READY); 0 before
+    /// the first.
+    pub reset_id: u64,
+    /// `seq` of the last ACTION command applied; 0 before the first.
+    pub last_command: u64,
+    /// Used components of `x`.
+    pub n_x: u64,
+    /// Used components of `u_applied`.
+    pub n_u: u64,
+    /// The measured state at `t_sample_ns` (units and order: `docs/driver.md`).
+    pub x: [f64; MAX_X],
+    /// The action in effect at `t_sample_ns`, i.e. at the end of the period this sample
+    /// closes (after clamping; zero when the safe action is applied).
+    pub u_applied: [f64; MAX_U],
+    /// ACTION commands clamped to the limits so far (any component).
+    pub clamped: u64,
+    /// Commands rejected so far: a non-finite component, a wrong `n_u`/`n_x`, an unknown
+    /// kind, or an action while not READY.
+    pub rejected: u64,
+    /// Times the watchdog engaged so far.
+    pub watchdog_trips: u64,
+}
+
+/// Rig → driver: apply an action, or reset.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("rig.DriverCommand.v1")]
+pub struct DriverCommand {
+    /// Strictly increasing, also across rig sessions (the rig starts from its monotonic
+    /// clock).
+    pub seq: u64,
+    /// [`kind`].
+    pub kind: u64,
+    /// ACTION: the [`DriverSample::seq`] this action answers (information only).
+    pub sample_seq: u64,
+    /// When this message was published (monotonic ns).
+    pub t_publish_ns: u64,
+    /// ACTION: used components of `u`.
+    pub n_u: u64,
+    /// ACTION: the action (units: `docs/driver.md`).
+    pub u: [f64; MAX_U],
+    /// RESET: used components of `x0`.
+    pub n_x: u64,
+    /// RESET: the state to bring the system to rest at.
+    pub x0: [f64; MAX_X],
+}
+
+impl DriverInfo {
+    /// The system name as text (up to the first NUL).
+    pub fn system_name(&self) -> String {
+        let end = self.system.iter().position(|&b| b == 0).unwrap_or(32);
+        String::from_utf8_lossy(&self.system[..end]).into_owned()
+    }
+
+    /// The physical sample time `period_ns · time_scale` \[s\].
+    pub fn ts(&self) -> f64 {
+        self.period_ns as f64 * 1e-9 * self.time_scale
+    }
+
+    /// The period on the monotonic clock.
+    pub fn period(&self) -> Duration {
+        Duration::from_nanos(self.period_ns)
+    }
+
+    /// Checks what holds for any driver: the version, dimensions within the message
+    /// sizes, a positive period and time scale, finite and ordered limits, a watchdog of
+    /// one period.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.version != VERSION {
+            return Err(format!(
+                "protocol version {} (this rig speaks {VERSION})",
+                self.version
+            ));
+        }
+        if !(1..=MAX_X as u64).contains(&self.n_x) || !(1..=MAX_U as u64).contains(&self.n_u) {
+            return Err(format!(
+                "n_x = {}, n_u = {}: must be 1..={MAX_X} and 1..={MAX_U}",
+                self.n_x, self.n_u
+            ));
+        }
+        if self.period_ns == 0 || !(self.time_scale.is_finite() && self.time_scale > 0.0) {
+            return Err(format!(
+                "period_ns = {}, time_scale = {}: both must be positive (and finite)",
+                self.period_ns, self.time_scale
+            ));
+        }
+        for i in 0..self.n_u as usize {
+            let (lo, hi) = (self.u_min[i], self.u_max[i]);
+            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                return Err(format!(
+                    "limits of u[{i}]: [{lo}, {hi}]: must be finite with u_min < u_max"
+                ));
+            }
+        }
+        if self.watchdog_periods != 1 {
+            return Err(format!(
+                "watchdog_periods = {}: protocol version {VERSION} requires 1 (the safe action within two periods of the last action)",
+                self.watchdog_periods
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl DriverSample {
+    /// The state, `n_x` components.
+    pub fn state(&self) -> &[f64] {
+        &self.x[..(self.n_x as usize).min(MAX_X)]
+    }
+
+    /// The applied action, `n_u` components.
+    pub fn applied(&self) -> &[f64] {
+        &self.u_applied[..(self.n_u as usize).min(MAX_U)]
+    }
+
+    /// Whether the status has bit `bit`.
+    pub fn has(&self, bit: u64) -> bool {
+        self.status & bit != 0
+    }
+
+    /// Whether the driver measures positions only: the velocities — the second half of
+    /// the state, `[positions…, velocities…]` — are NaN (not measured; an encoder-only
+    /// setup such as the physical pendulum of §6.4.1). The rig's observer estimates them.
+    pub fn positions_only(&self) -> bool {
+        let x = self.state();
+        x[x.len() / 2..].iter().all(|v| v.is_nan())
+    }
+
+    /// The measured components of the state: the positions if the driver measures
+    /// [`Self::positions_only`], else the whole state.
+    pub fn measured(&self) -> &[f64] {
+        let x = self.state();
+        if self.positions_only() {
+            &x[..x.len() / 2]
+        } else {
+            x
+        }
+    }
+
+    /// Checks that the sample fits the driver's info: the dimensions, finite values —
+    /// except velocities that are all NaN ([`Self::positions_only`]).
+    pub fn validate(&self, info: &DriverInfo) -> Result<(), String> {
+        if self.n_x != info.n_x || self.n_u != info.n_u {
+            return Err(format!(
+                "sample {}: n_x = {}, n_u = {}, but the driver's info says {} and {}",
+                self.seq, self.n_x, self.n_u, info.n_x, info.n_u
+            ));
+        }
+        let x = self.state();
+        for (name, v) in [("x", self.measured()), ("u_applied", self.applied())] {
+            if let Some(i) = v.iter().position(|c| !c.is_finite()) {
+                let hint = if name == "x" && v[i].is_nan() && i >= x.len() / 2 {
+                    " (a driver that does not measure velocities sends NaN for all of them)"
+                } else {
+                    ""
+                };
+                return Err(format!("sample {}: {name}[{i}] = {}{hint}", self.seq, v[i]));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The service name of a driver topic: `rig/driver/<id>/<topic>`.
+pub fn service(driver_id: &str, topic: &str) -> String {
+    format!("rig/driver/{driver_id}/{topic}")
+}
+
+/// The iceoryx2 node name a driver should use: `rig-driver-<id>` (the rig lists nodes
+/// to say which drivers are running).
+pub fn node_name(driver_id: &str) -> String {
+    format!("rig-driver-{driver_id}")
+}
+
+/// The connection of driver `driver_id`'s process: node `rig-driver-<id>`
+/// ([`node_name`]), which the rig lists to say which drivers are running; its services
+/// are opened with [`Bus::tx_on`] and [`Bus::rx_on`] on [`service`] names.
+pub fn bus(driver_id: &str) -> Result<Bus, Error> {
+    check_id(driver_id)?;
+    Bus::with_node(&node_name(driver_id), "driver")
+}
+
+/// Checks a driver id: letters, digits, '-' and '_'.
+pub fn check_id(driver_id: &str) -> Result<(), Error> {
+    if driver_id.is_empty()
+        || !driver_id
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+    {
+        return Err(
+            format!("driver id {driver_id:?}: use letters, digits, '-' and '_' only").into(),
+        );
+    }
+    Ok(())
+}
+
+/// Drivers whose nodes are alive on this host: `(id, process id)`, by node name.
+pub fn running(bus: &Bus) -> Vec<(String, u32)> {
+    use iceoryx2::node::NodeView;
+    let mut found = Vec::new();
+    let _ = Node::<ipc::Service>::list(bus.node().config(), |state| {
+        if let NodeState::Alive(v) = &state
+            && let Some(d) = v.details()
+            && let Some(id) = d.name().to_string().strip_prefix("rig-driver-")
+        {
+            found.push((id.to_string(), d.process_id().value() as u32));
+        }
+        CallbackProgression::Continue
+    });
+    found.sort();
+    found
+}
+
+/// The newest [`DriverInfo`] published on `rx` within `timeout` (not validated: see
+/// [`DriverInfo::validate`]); waits in steps of 100 ms, so Ctrl-C ends the wait. The
+/// error names the service, the drivers that are running and how to start one.
+pub fn wait_info(
+    bus: &Bus,
+    rx: &Rx<DriverInfo>,
+    id: &str,
+    timeout: Duration,
+) -> Result<DriverInfo, Error> {
+    let t0 = std::time::Instant::now();
+    loop {
+        let mut newest = rx.recv_timeout(Duration::from_millis(100))?;
+        while let Some(i) = rx.try_recv()? {
+            newest = Some(i);
+        }
+        if let Some(i) = newest {
+            return Ok(i);
+        }
+        if bus.interrupted() {
+            return Err("interrupted".into());
+        }
+        if t0.elapsed() >= timeout {
+            let others: Vec<String> = running(bus)
+                .into_iter()
+                .map(|(id, pid)| format!("{id:?} (pid {pid})"))
+                .collect();
+            let hint = if others.is_empty() {
+                "no driver is running on this host".to_string()
+            } else {
+                format!("running drivers: {}", others.join(", "))
+            };
+            return Err(format!(
+                "no driver {id:?}: nothing published on {} within {:.0} s ({hint}); start one, e.g. `python3 examples/python_driver/driver.py --driver-id {id}` (docs/driver.md)",
+                service(id, topic::INFO),
+                timeout.as_secs_f64(),
+            )
+            .into());
+        }
+    }
+}
+
+/// A read-only view of a driver's traffic (for recorders and monitors): its info,
+/// samples and the commands it receives.
+pub struct DriverWatch {
+    /// The driver's info messages.
+    pub info: Rx<DriverInfo>,
+    /// The driver's samples.
+    pub samples: Rx<DriverSample>,
+    /// The commands sent to the driver.
+    pub commands: Rx<DriverCommand>,
+}
+
+impl DriverWatch {
+    /// Subscribes to driver `id`'s services (creating them if the driver is not there
+    /// yet).
+    pub fn open(bus: &Bus, id: &str) -> Result<Self, Error> {
+        check_id(id)?;
+        Ok(Self {
+            info: bus.rx_on(&service(id, topic::INFO), DRIVER_QOS)?,
+            samples: bus.rx_on(&service(id, topic::SAMPLE), DRIVER_QOS)?,
+            commands: bus.rx_on(&service(id, topic::COMMAND), DRIVER_QOS)?,
+        })
+    }
+}
+
+/// The rig's end of a driver connection: reads its info and samples, sends commands.
+pub struct DriverLink {
+    /// The driver id.
+    pub id: String,
+    info: Rx<DriverInfo>,
+    /// The driver's samples.
+    pub samples: Rx<DriverSample>,
+    commands: Tx<DriverCommand>,
+    next_seq: Cell<u64>,
+}
+
+impl DriverLink {
+    /// Opens driver `id`'s services (creating them if the driver is not there yet).
+    /// Fails with a message naming the service and both layouts when the driver uses an
+    /// incompatible payload, and when another rig process is commanding the driver.
+    pub fn connect(bus: &Bus, id: &str) -> Result<Self, Error> {
+        check_id(id)?;
+        let info = bus.rx_on::<DriverInfo>(&service(id, topic::INFO), DRIVER_QOS)?;
+        let samples = bus.rx_on::<DriverSample>(&service(id, topic::SAMPLE), DRIVER_QOS)?;
+        let commands = bus
+            .tx_on::<DriverCommand>(&service(id, topic::COMMAND), DRIVER_QOS)
+            .map_err(|e| {
+                if e.to_string().contains("ExceedsMaxSupportedPublishers") {
+                    format!(
+                        "driver {id:?} is in use: another rig process is commanding it ({})",
+                        service(id, topic::COMMAND)
+                    )
+                    .into()
+                } else {
+                    e
+                }
+            })?;
+        Ok(Self {
+            id: id.to_string(),
+            info,
+            samples,
+            commands,
+            next_seq: Cell::new(now_ns().max(1)),
+        })
+    }
+
+    /// The driver's info: the newest one published within `timeout` (not validated:
+    /// see [`DriverInfo::validate`]). Waits in steps of 100 ms, so Ctrl-C ends the wait.
+    pub fn wait_info(&self, bus: &Bus, timeout: Duration) -> Result<DriverInfo, Error> {
+        wait_info(bus, &self.info, &self.id, timeout)
+    }
+
+    fn send(&self, mut cmd: DriverCommand) -> Result<u64, Error> {
+        let seq = self.next_seq.get();
+        self.next_seq.set(seq + 1);
+        cmd.seq = seq;
+        cmd.t_publish_ns = now_ns();
+        self.commands.send(cmd)?;
+        Ok(seq)
+    }
+
+    /// Sends an ACTION answering sample `sample_seq`; returns the command's `seq`.
+    pub fn act(&self, u: &[f64], sample_seq: u64) -> Result<u64, Error> {
+        let mut cmd = DriverCommand {
+            kind: kind::ACTION,
+            sample_seq,
+            n_u: u.len() as u64,
+            ..Default::default()
+        };
+        cmd.u[..u.len()].copy_from_slice(u);
+        self.send(cmd)
+    }
+
+    /// Sends a raw command as it is (for conformance checks: wrong dimensions, unknown
+    /// kinds); `seq` and `t_publish_ns` are filled in. Returns the `seq`.
+    pub fn send_raw(&self, cmd: DriverCommand) -> Result<u64, Error> {
+        self.send(cmd)
+    }
+
+    /// Sends a RESET to `x0`; returns its `seq`, which the driver reports in
+    /// [`DriverSample::reset_id`] when done.
+    pub fn reset(&self, x0: &[f64]) -> Result<u64, Error> {
+        let mut cmd = DriverCommand {
+            kind: kind::RESET,
+            n_x: x0.len() as u64,
+            ..Default::default()
+        };
+        cmd.x0[..x0.len()].copy_from_slice(x0);
+        self.send(cmd)
+    }
+
+    /// The next sample, waiting at most `silence` (a driver publishes every period,
+    /// also while it resets: silence means it stopped).
+    pub fn next_sample(&self, bus: &Bus, silence: Duration) -> Result<DriverSample, Error> {
+        let t0 = std::time::Instant::now();
+        loop {
+            if let Some(s) = self.samples.recv_timeout(Duration::from_millis(100))? {
+                return Ok(s);
+            }
+            if bus.interrupted() {
+                return Err("interrupted".into());
+            }
+            if t0.elapsed() > silence {
+                return Err(format!(
+                    "driver {:?} stopped: no sample on {} for {:.1} s",
+                    self.id,
+                    service(&self.id, topic::SAMPLE),
+                    silence.as_secs_f64()
+                )
+                .into());
+            }
+        }
+    }
+
+    /// Drops every sample waiting; returns the newest, if any.
+    pub fn latest_sample(&self) -> Result<Option<DriverSample>, Error> {
+        let mut newest = None;
+        while let Some(s) = self.samples.try_recv()? {
+            newest = Some(s);
+        }
+        Ok(newest)
+    }
+
+    /// Waits until the driver reports reset `reset_id` done (READY), for at most
+    /// `timeout`; returns that first READY sample (the trial's start state).
+    pub fn wait_ready(
+        &self,
+        bus: &Bus,
+        info: &DriverInfo,
+        reset_id: u64,
+        timeout: Duration,
+    ) -> Result<DriverSample, Error> {
+        let t0 = std::time::Instant::now();
+        let silence = (info.period() * 20).max(Duration::from_secs(1));
+        loop {
+            let s = self.next_sample(bus, silence)?;
+            s.validate(info)
+                .map_err(|e| format!("driver {:?}: {e}", self.id))?;
+            if s.reset_id == reset_id && s.has(status::READY) {
+                return Ok(s);
+            }
+            if t0.elapsed() > timeout {
+                return Err(format!(
+                    "driver {:?} did not finish the reset within {:.0} s (last sample {}: status {:#x}, reset_id {}, x = {:?})",
+                    self.id,
+                    timeout.as_secs_f64(),
+                    s.seq,
+                    s.status,
+                    s.reset_id,
+                    s.state()
+                )
+                .into());
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::mem::{align_of, size_of};
+
+    #[test]
+    fn layouts_are_fixed() {
+        assert_eq!(size_of::<DriverInfo>(), 160);
+        assert_eq!(size_of::<DriverSample>(), 184);
+        assert_eq!(size_of::<DriverCommand>(), 144);
+        assert_eq!(align_of::<DriverInfo>(), 8);
+        assert_eq!(align_of::<DriverSample>(), 8);
+        assert_eq!(align_of::<DriverCommand>(), 8);
+    }
+
+    #[test]
+    fn info_validation_names_the_problem() {
+        let mut i = DriverInfo {
+            version: VERSION,
+            n_x: 2,
+            n_u: 1,
+            period_ns: 30_000_000,
+            time_scale: 1.0,
+            watchdog_periods: 1,
+            ..Default::default()
+        };
+        i.u_min[0] = -3.0;
+        i.u_max[0] = 3.0;
+        i.system[..8].copy_from_slice(b"pendulum");
+        assert_eq!(i.validate(), Ok(()));
+        assert_eq!(i.system_name(), "pendulum");
+        assert!((i.ts() - 0.03).abs() < 1e-12);
+        let mut bad = i;
+        bad.u_max[0] = f64::NAN;
+        assert!(bad.validate().unwrap_err().contains("u[0]"));
+        let mut bad = i;
+        bad.watchdog_periods = 3;
+        assert!(bad.validate().unwrap_err().contains("watchdog_periods"));
+        let mut bad = i;
+        bad.version = 2;
+        assert!(bad.validate().unwrap_err().contains("version"));
+    }
+
+    /// Velocities may be unmeasured (all NaN); positions, a single NaN velocity and
+    /// infinities may not.
+    #[test]
+    fn sample_validation_allows_unmeasured_velocities_only() {
+        let info = DriverInfo {
+            n_x: 4,
+            n_u: 2,
+            ..Default::default()
+        };
+        let sample = |x: [f64; 4]| {
+            let mut s = DriverSample {
+                seq: 7,
+                n_x: 4,
+                n_u: 2,
+                ..Default::default()
+            };
+            s.x[..4].copy_from_slice(&x);
+            s
+        };
+        let nan = f64::NAN;
+        let full = sample([0.1, -0.2, 0.3, 0.4]);
+        assert_eq!(full.validate(&info), Ok(()));
+        assert!(!full.positions_only());
+        let encoder = sample([0.1, -0.2, nan, nan]);
+        assert_eq!(encoder.validate(&info), Ok(()));
+        assert!(encoder.positions_only());
+        let one = sample([0.1, -0.2, 0.3, nan]).validate(&info).unwrap_err();
+        assert!(
+            one.contains("x[3] = NaN") && one.contains("NaN for all of them"),
+            "{one}"
+        );
+        let position = sample([nan, -0.2, nan, nan]).validate(&info).unwrap_err();
+        assert!(position.starts_with("sample 7: x[0] = NaN"), "{position}");
+        assert!(!position.contains("all of them"), "{position}");
+        let inf = sample([0.1, -0.2, f64::INFINITY, 0.0]).validate(&info);
+        assert!(inf.unwrap_err().contains("x[2] = inf"));
+    }
+}

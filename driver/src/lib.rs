@@ -1,0 +1,21 @@
+//! The driver kit: what a process that owns the hardware (or a simulation of it) links
+//! to serve the rig, and nothing else — no plotting, recording or thread pool.
+//!
+//! - [`contract`]: the messages and services of `docs/driver.md` (`DriverInfo`,
+//!   `DriverSample`, `DriverCommand`), and the rig's end of them.
+//! - [`device`]: the [`Device`] trait a driver implements, [`serve`] that runs the
+//!   contract for it (clock, commands, resets, watchdog), and [`Simulated`], any built-in
+//!   system as a device (`rig sim-driver`).
+//! - [`safety`]: the supervisor every action passes (clamps, rejection, watchdog, range
+//!   stop), the same one the simulated plant uses.
+//! - [`fits_task`]: whether a driver's limits fit a task.
+//!
+//! `examples/motor_driver.rs` is the template for a hardware driver.
+
+pub mod contract;
+pub mod device;
+mod fits;
+
+pub use device::{Device, Served, Serving, Simulated, serve};
+pub use fits::fits_task;
+pub use plant::safety;

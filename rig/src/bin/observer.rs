@@ -1,0 +1,23 @@
+//! The observer process of a rig run, as its own executable (the same as `rig observer`).
+
+use clap::Parser;
+use runtime::process::ProcessArgs;
+
+/// The observer process of a rig run: joins run `--run-id` over iceoryx2 and runs until the
+/// plant announces the end of the run.
+#[derive(Parser)]
+#[command(name = "observer", version)]
+struct Cli {
+    #[command(flatten)]
+    args: ProcessArgs,
+}
+
+fn main() -> std::process::ExitCode {
+    match runtime::process::observer::run(&Cli::parse().args) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

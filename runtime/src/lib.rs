@@ -1,0 +1,17 @@
+//! The rig's application library: everything `rig` does to run an experiment.
+//!
+//! - In one process: [`experiment`] (one run, trial by trial) and [`learn`] (runs in
+//!   parallel, `runs.csv`, curves and plots through [`report`]).
+//! - As processes over iceoryx2: the nodes in [`process`] (plant, observer, agent), the
+//!   supervisor that starts, watches and records them ([`run`]), the MCAP writer
+//!   ([`record`]) and [`resume`] after a crash.
+//! - Against an external driver: [`check_driver`] (`rig check-driver`).
+
+pub mod check_driver;
+pub mod experiment;
+pub mod learn;
+pub mod process;
+pub mod record;
+pub mod report;
+pub mod resume;
+pub mod run;

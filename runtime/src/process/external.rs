@@ -1,0 +1,211 @@
+//! The plant process with an external driver (`rig plant --driver ID`, started by
+//! `rig run --plant external`; the contract is `docs/driver.md`).
+//!
+//! The driver samples, applies actions and resets; it knows nothing of trials. This
+//! process is the episode master between it and the observer and agent: before each
+//! trial it asks the driver to reset and waits until the driver reports READY; it turns
+//! each driver sample into a [`wire::Measurement`] (header, reward `ρ(x_k, u)` with the
+//! action the driver reports in effect over the period) and forwards each of the agent's
+//! actions to the driver at once. A driver that measures positions only (NaN velocities,
+//! `docs/driver.md`) needs `--sensor angle`: its measurements carry NaN rewards and
+//! [`flags::ESTIMATED_REWARD`], and the observer computes `ρ(x̂_k, u_k)` from its
+//! estimate; its start samples take the velocities of `x0` (READY is at rest there).
+//!
+//! The driver is the clock. When the agent answers late — the driver's next sample shows
+//! that the action was not applied by then, or whole periods passed — the trial goes on
+//! with the newest sample and the miss is counted in
+//! [`wire::Measurement::deadline_misses`].
+
+use std::time::Duration;
+
+use ::plant::safety::{SafetyCounts, Supervisor};
+use anyhow::{Result, anyhow, bail};
+use driver::contract::{DriverInfo, DriverLink, DriverSample, status};
+use wire::{flags, now_ns};
+
+use super::plant::{Link, TrialHeader, Trials};
+use super::{ProcessArgs, SILENCE, STARTUP, seconds, wire_err};
+
+/// The episode master for an external driver.
+pub struct Bridge {
+    link: Link,
+    driver: DriverLink,
+    info: DriverInfo,
+    reset_timeout: Duration,
+    /// How long the driver may be silent (it publishes every period, also while it
+    /// resets).
+    silence: Duration,
+    /// The rig's side of safety: actions are clamped (non-finite ones never reach the
+    /// driver) and the operating range is watched here too; the driver does its own.
+    safety: Supervisor,
+    /// Whether the driver measures positions only (NaN velocities), as its first sample
+    /// of the run showed.
+    positions_only: Option<bool>,
+}
+
+impl Bridge {
+    /// Connects to driver `driver_id`: waits for its info (`--driver-timeout`), checks it
+    /// against the task, then waits for the observer (and recorder) to listen.
+    pub(super) fn connect(link: Link, driver_id: &str, args: &ProcessArgs) -> Result<Self> {
+        let driver = DriverLink::connect(&link.bus, driver_id).map_err(wire_err)?;
+        let info = driver
+            .wait_info(&link.bus, seconds("--driver-timeout", args.driver_timeout)?)
+            .map_err(wire_err)?;
+        info.validate()
+            .and_then(|()| driver::fits_task(&info, &link.task))
+            .map_err(|e| anyhow!("driver {driver_id:?} does not fit the task: {e}"))?;
+        link.out
+            .wait_for_receivers(args.receivers, STARTUP, &link.bus)
+            .map_err(wire_err)?;
+        Ok(Self {
+            safety: Supervisor::new(&link.task),
+            silence: (info.period() * 20).max(Duration::from_secs(1)),
+            reset_timeout: seconds("--reset-timeout", args.reset_timeout)?,
+            link,
+            driver,
+            info,
+            positions_only: None,
+        })
+    }
+
+    /// Whether sample `s` has the positions only. The first sample of the run decides
+    /// (positions only: the rewards become the observer's, [`Link::estimate_rewards`]);
+    /// a driver that changes what it measures is an error.
+    fn positions_only(&mut self, s: &DriverSample) -> Result<bool> {
+        let now = s.positions_only();
+        match self.positions_only {
+            None if now => self.link.estimate_rewards(&self.driver.id)?,
+            Some(before) if before != now => bail!(
+                "driver {:?} changed what it measures at sample {}: velocities {} before, {} now",
+                self.driver.id,
+                s.seq,
+                if before { "NaN" } else { "measured" },
+                if now { "NaN" } else { "measured" }
+            ),
+            _ => {}
+        }
+        self.positions_only = Some(now);
+        Ok(now)
+    }
+
+    /// The newest driver sample after sample `after`, checked: right dimensions, finite,
+    /// still READY from reset `reset_id`.
+    fn next_sample(&mut self, after: u64, reset_id: u64) -> Result<DriverSample> {
+        loop {
+            let mut s = self
+                .driver
+                .next_sample(&self.link.bus, self.silence)
+                .map_err(wire_err)?;
+            if let Some(newer) = self.driver.latest_sample().map_err(wire_err)? {
+                s = newer;
+            }
+            s.validate(&self.info)
+                .map_err(|e| anyhow!("driver {:?}: {e}", self.driver.id))?;
+            self.positions_only(&s)?;
+            if !s.has(status::READY) || s.reset_id != reset_id {
+                bail!(
+                    "driver {:?} left the trial: sample {} has status {:#x} and reset_id {} (expected READY from reset {reset_id}); was it restarted or reset by another process?",
+                    self.driver.id,
+                    s.seq,
+                    s.status,
+                    s.reset_id
+                );
+            }
+            if s.seq > after {
+                return Ok(s);
+            }
+        }
+    }
+
+    /// Waits for the agent's answer to the sample just published (sequence number
+    /// `seq`, published at `t_publish_ns`).
+    fn action(&mut self, seq: u64, t_publish_ns: u64) -> Result<Vec<f64>> {
+        let l = &mut self.link;
+        let a = l.actions.recv(&l.bus, SILENCE).map_err(wire_err)?;
+        l.latencies.push(now_ns() - t_publish_ns);
+        Link::check_answer(&a, seq)?;
+        Ok(a.u[..l.task.action_dim()].to_vec())
+    }
+}
+
+impl Trials for Bridge {
+    fn trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<usize> {
+        let task = self.link.task.clone();
+        let steps = task.steps_per_trial();
+        let header = TrialHeader {
+            trial,
+            mode,
+            t0,
+            ts: task.ts,
+        };
+        let reset_id = self.driver.reset(x0).map_err(wire_err)?;
+        let mut s = self
+            .driver
+            .wait_ready(&self.link.bus, &self.info, reset_id, self.reset_timeout)
+            .map_err(wire_err)?;
+        let positions_only = self.positions_only(&s)?;
+        // READY means at rest at x0: a driver that does not measure the velocities has
+        // brought them to x0's.
+        let mut start = s.state().to_vec();
+        if positions_only {
+            let half = start.len() / 2;
+            start[half..].copy_from_slice(&x0[half..]);
+        }
+        let mut t_publish = self.link.publish(
+            header.at(self.link.seq, 0, flags::START),
+            0.0,
+            &start,
+            s.applied(),
+            s.t_sample_ns,
+        )?;
+        let mut u = vec![0.0; task.action_dim()];
+        for k in 0..steps {
+            let requested = self.action(self.link.seq - 1, t_publish)?;
+            self.safety.admit(&requested, &mut u);
+            let command = self.driver.act(&u, s.seq).map_err(wire_err)?;
+            let next = self.next_sample(s.seq, reset_id)?;
+            // Periods that passed without a measurement, and an action the driver had
+            // not applied by the next sample, are missed deadlines.
+            self.link.misses += next.seq - s.seq - 1 + u64::from(next.last_command != command);
+            // Leaving the task's operating range ends the trial with its penalty (§6.4.2);
+            // no further action is sent, so the driver's watchdog applies zero.
+            let left = self.safety.check(next.measured());
+            // ρ(x_k, u): unknown here if the velocities are not measured (the observer
+            // computes it from its estimate, flags::ESTIMATED_REWARD).
+            let reward = if positions_only {
+                f64::NAN
+            } else {
+                task.reward.reward(s.state(), next.applied())
+            };
+            let (r, end) = match left {
+                Some(penalty) => (penalty, flags::END | flags::TERMINAL),
+                None if k + 1 == steps => (reward, flags::END),
+                None => (reward, 0),
+            };
+            t_publish = self.link.publish(
+                header.at(self.link.seq, k + 1, end),
+                r,
+                next.state(),
+                next.applied(),
+                next.t_sample_ns,
+            )?;
+            s = next;
+            if left.is_some() {
+                self.action(self.link.seq - 1, t_publish)?;
+                return Ok(steps - k - 1);
+            }
+        }
+        // The END sample's answer only acknowledges learning: nothing to apply (the
+        // next trial's reset follows, and the driver's watchdog stops the last action).
+        self.action(self.link.seq - 1, t_publish)?;
+        Ok(0)
+    }
+
+    fn link(&mut self) -> &mut Link {
+        &mut self.link
+    }
+
+    fn safety(&mut self) -> SafetyCounts {
+        self.safety.counts()
+    }
+}
