@@ -1,0 +1,93 @@
+//! `rig check-driver`: a running driver checked against the driver contract.
+
+use std::process::ExitCode;
+
+use agent::config::Choice;
+use clap::Args as Flags;
+use plant::SystemName;
+use runtime::check_driver::{CheckOptions, check};
+
+use crate::external::DriverArgs;
+
+#[derive(Flags)]
+pub struct Args {
+    #[command(flatten)]
+    driver: DriverArgs,
+    /// The task the driver must fit: pendulum, arm-vertical, arm-horizontal,
+    /// double-integrator.
+    #[arg(long, value_parser = SystemName::parse, default_value = "pendulum")]
+    system: SystemName,
+    /// How long to measure the sample rate, answering every sample with zero [s].
+    #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
+    rate_seconds: f64,
+    /// Largest allowed p99 of the samples' lateness against a regular grid (jitter), as
+    /// a fraction of the period.
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.1)]
+    max_jitter: f64,
+    /// Largest allowed fraction of periods without a sample.
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.01)]
+    max_missed: f64,
+    /// Size of the step input, as a fraction of the way from the middle of the action
+    /// range to its upper limit (0.25: 0.75 V for the pendulum's ±3 V).
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.25)]
+    step: f64,
+}
+
+/// Runs the command.
+pub fn main(args: &Args) -> ExitCode {
+    let fraction = |flag: &str, v: f64| {
+        if v.is_finite() && (0.0..=1.0).contains(&v) {
+            Ok(v)
+        } else {
+            Err(format!(
+                "`{flag}` {v} is out of range: must be a fraction in [0, 1]"
+            ))
+        }
+    };
+    let opts = (|| -> Result<CheckOptions, String> {
+        let d = args.driver.resolve(args.system)?;
+        let rate_seconds = runtime::process::seconds("--rate-seconds", args.rate_seconds)
+            .map_err(|e| e.to_string())?
+            .as_secs_f64();
+        Ok(CheckOptions {
+            driver: d.id,
+            system: args.system,
+            timeout: d.timeout,
+            reset_timeout: d.reset_timeout,
+            rate_seconds,
+            max_jitter: fraction("--max-jitter", args.max_jitter)?,
+            max_missed: fraction("--max-missed", args.max_missed)?,
+            step: fraction("--step", args.step)?,
+        })
+    })();
+    let opts = match opts {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    println!(
+        "rig check-driver: driver {:?} (rig/driver/{}/...) against the {} task",
+        opts.driver, opts.driver, opts.system
+    );
+    match check(&opts, &mut |o| println!("{o}")) {
+        Ok(outcomes) => {
+            let failed = outcomes.iter().filter(|o| !o.pass).count();
+            if failed == 0 {
+                println!("check-driver: PASS ({} checks)", outcomes.len());
+                ExitCode::SUCCESS
+            } else {
+                println!(
+                    "check-driver: FAIL ({failed} of {} checks failed)",
+                    outcomes.len()
+                );
+                ExitCode::FAILURE
+            }
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

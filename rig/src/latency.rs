@@ -1,0 +1,75 @@
+//! `rig latency`: the latency budget of the three-process loop in real time.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use agent::config::{Choice, ObserverKind, ObserverMode};
+use clap::Args as Flags;
+
+#[derive(Flags)]
+pub struct Args {
+    /// Samples (cycles) to time, at least (whole 3 s trials are run).
+    #[arg(long, default_value_t = 10_000)]
+    cycles: usize,
+    /// Sampling period [ms] (the pendulum's Ts is 30 ms; a shorter period runs the
+    /// simulation faster than real time).
+    #[arg(long, value_name = "MS", default_value_t = 30.0)]
+    period_ms: f64,
+    /// State observer on the angle encoder: finite-difference or predictive.
+    #[arg(long, default_value = "predictive", value_parser = ObserverKind::parse)]
+    observer: ObserverKind,
+    /// Timing: predictive (the plant applies the action answering sample k at the next
+    /// sample instant t_{k+1}; a deadline miss when it has not arrived by then; needs
+    /// `--observer predictive`) or direct (applied when it arrives, within the interval).
+    #[arg(long, default_value = "predictive", value_parser = ObserverMode::parse)]
+    observer_mode: ObserverMode,
+    /// Raw ping-pong round trips for the baseline.
+    #[arg(long, default_value_t = 20_000)]
+    raw_samples: usize,
+    #[command(flatten)]
+    scheduling: runtime::process::Scheduling,
+    /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
+    /// until one misses a deadline; writes DIR/sweep.csv and names the fastest period
+    /// sustained for `--cycles` cycles without a miss.
+    #[arg(long)]
+    sweep: bool,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "out/latency")]
+    out: PathBuf,
+}
+
+/// Runs the command.
+pub fn main(args: &Args) -> ExitCode {
+    let opts = bench::latency::LatencyOptions {
+        cycles: args.cycles,
+        period_ms: args.period_ms,
+        out: args.out.clone(),
+        observer: args.observer,
+        mode: args.observer_mode,
+        raw_samples: args.raw_samples,
+        scheduling: args.scheduling,
+        verbose: true,
+    };
+    let done = if args.sweep {
+        bench::latency::sweep(&opts, 1.5).map(|points| {
+            match points.iter().rev().find(|p| p.report.misses == 0) {
+                Some(p) => println!(
+                    "fastest period without a deadline miss in {} cycles: {} ms",
+                    p.report.cycles, p.period_ms
+                ),
+                None => println!("every period measured missed a deadline"),
+            }
+            println!("wrote {0}/sweep.csv and {0}/period-*/", args.out.display());
+        })
+    } else {
+        bench::latency::latency(&opts)
+            .map(|_| println!("wrote {}", bench::latency::describe(&args.out)))
+    };
+    match done {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,162 @@
+//! `rig run`: one experiment as three processes — plant, observer, agent — over
+//! iceoryx2, against the simulated plant or an external driver.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Args as Flags;
+use runtime::run::{RunOptions, run};
+
+use crate::external::DriverArgs;
+use crate::selection::{Selection, resolve_selection, resume_selection};
+
+#[derive(Flags)]
+pub struct Args {
+    #[command(flatten)]
+    selection: Selection,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "out/run")]
+    out: PathBuf,
+    /// Run id shared by the three processes [default: unique per invocation].
+    #[arg(long)]
+    run_id: Option<String>,
+    /// `lockstep`: simulated time advances only when the action for a sample has
+    /// arrived (deterministic). `realtime`: the plant samples at absolute deadlines of
+    /// Ts / speed; a late action is applied from the moment it arrives, the previous one
+    /// held until then, and the miss is counted.
+    #[arg(long, default_value = "lockstep", value_parser = ["lockstep", "realtime"])]
+    timing: String,
+    /// Realtime only: how many times faster than real time to run (e.g. 10: a 30 ms
+    /// sample period takes 3 ms).
+    #[arg(long, default_value_t = 1.0)]
+    speed: f64,
+    #[command(flatten)]
+    scheduling: runtime::process::Scheduling,
+    /// `sim`: the plant process simulates the system. `external`: a driver someone else
+    /// started (docs/driver.md; e.g. examples/python_driver/driver.py) is the system and
+    /// the clock; `rig run` waits for it, and the plant process resets it before each
+    /// trial and passes its samples and the agent's actions on (`--timing` and `--speed`
+    /// do not apply).
+    #[arg(long, default_value = "sim", value_parser = ["sim", "external"])]
+    plant: String,
+    #[command(flatten)]
+    driver: DriverArgs,
+    /// Continue the run in DIR after a crash, a killed process or Ctrl-C: from its last
+    /// trial that is complete in returns.csv, in the agent's checkpoints
+    /// (DIR/checkpoints) and in run.mcap. The configuration is DIR/config.toml; of the
+    /// experiment flags only `--trials` may be given (to learn on past the original
+    /// end). `--timing`, `--speed`, `--plant` and the driver flags apply to the part that
+    /// is run now. Completed trials stay in returns.csv and run.mcap.
+    #[arg(long, value_name = "DIR", conflicts_with = "out")]
+    resume: Option<PathBuf>,
+    /// No progress bar and no summary.
+    #[arg(long)]
+    quiet: bool,
+}
+
+/// Runs the command.
+pub fn main(args: &Args) -> ExitCode {
+    let selected = match &args.resume {
+        Some(dir) => resume_selection(dir, &args.selection),
+        None => resolve_selection(&args.selection),
+    };
+    let mut cfg = match selected {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    cfg.run.runs = 1;
+    if !(args.speed.is_finite() && args.speed > 0.0 && args.speed <= 1000.0) {
+        eprintln!(
+            "error: `--speed` {} is out of range: must be a number in (0, 1000]",
+            args.speed
+        );
+        return ExitCode::from(2);
+    }
+    let realtime = (args.timing == "realtime").then_some(args.speed);
+    let delayed = cfg.run.delay_ms != 0.0 || !cfg.run.delay_from.is_empty();
+    if delayed && (realtime.is_some() || args.plant == "external") {
+        eprintln!(
+            "error: `--delay-ms`/`--delay-from` (run.delay_ms, run.delay_from) apply in lockstep with the simulated plant only: in real time the delays are real"
+        );
+        return ExitCode::from(2);
+    }
+    let driver = if args.plant == "external" {
+        if realtime.is_some() || args.speed != 1.0 {
+            eprintln!(
+                "error: `--timing`/`--speed` do not apply with `--plant external`: the driver is the clock"
+            );
+            return ExitCode::from(2);
+        }
+        match args.driver.resolve(cfg.system) {
+            Ok(d) => Some(d),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(2);
+            }
+        }
+    } else {
+        if args.driver.driver.is_some() {
+            eprintln!("error: `--driver` needs `--plant external`");
+            return ExitCode::from(2);
+        }
+        None
+    };
+    let opts = RunOptions {
+        out: args.resume.clone().unwrap_or_else(|| args.out.clone()),
+        resume: args.resume.is_some(),
+        run_id: args.run_id.clone(),
+        progress: !args.quiet,
+        realtime,
+        driver,
+        cycles_out: None,
+        scheduling: args.scheduling,
+    };
+    match run(&cfg, &opts) {
+        Ok(s) => {
+            if !args.quiet {
+                let steps = s.messages as f64 / 3.0;
+                println!(
+                    "{} {}/{} over three processes: {} trials in {:.1} s wall ({:.1} µs per sample)",
+                    cfg.system,
+                    cfg.algo,
+                    cfg.approx,
+                    s.records.len(),
+                    s.wall.as_secs_f64(),
+                    s.wall.as_secs_f64() * 1e6 / steps
+                );
+                if let (Some(i), Some(d)) = (&s.driver, &opts.driver) {
+                    println!(
+                        "  driver {:?} ({}): period {:.3} ms × time scale {}; deadline misses: {} of {} samples",
+                        d.id,
+                        i.system_name(),
+                        i.period_ns as f64 * 1e-6,
+                        i.time_scale,
+                        s.deadline_misses,
+                        s.messages / 3
+                    );
+                } else if realtime.is_some() {
+                    println!(
+                        "  deadline misses: {} of {} samples",
+                        s.deadline_misses,
+                        s.messages / 3
+                    );
+                }
+                if let Some(g) = s.records.iter().rev().find_map(|r| r.greedy) {
+                    println!("  last greedy return: {g:.1}");
+                }
+                println!(
+                    "  wrote {}/{{returns.csv, run.mcap, config.toml, plant.log, observer.log, agent.log}}",
+                    args.out.display()
+                );
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
