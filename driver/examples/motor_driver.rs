@@ -8,9 +8,9 @@
 //! encoder; replace the bodies marked HARDWARE with your I/O.
 //!
 //! ```sh
-//! cargo run --release -p rig --example motor_driver -- lab-pendulum   # the driver
-//! rig check-driver --driver lab-pendulum                               # conformant?
-//! rig run --plant external --driver lab-pendulum                       # learn on it
+//! cargo run --release -p driver --example motor_driver -- lab-pendulum  # the driver
+//! rig check-driver --driver lab-pendulum                                # conformant?
+//! rig run --plant external --driver lab-pendulum                        # learn on it
 //! ```
 
 use driver::{Device, Serving, Simulated, serve};

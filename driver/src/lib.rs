@@ -3,9 +3,9 @@
 //!
 //! - [`contract`]: the messages and services of `docs/driver.md` (`DriverInfo`,
 //!   `DriverSample`, `DriverCommand`), and the rig's end of them.
-//! - [`device`]: the [`Device`] trait a driver implements, [`serve`] that runs the
-//!   contract for it (clock, commands, resets, watchdog), and [`Simulated`], any built-in
-//!   system as a device (`rig sim-driver`).
+//! - [`device`]: the [`Device`] trait a driver implements; [`serve`] runs the contract
+//!   for it (clock, commands, resets, watchdog); [`Simulated`] is any built-in system as
+//!   a device (`rig sim-driver`).
 //! - [`safety`]: the supervisor every action passes (clamps, rejection, watchdog, range
 //!   stop), the same one the simulated plant uses.
 //! - [`fits_task`]: whether a driver's limits fit a task.
@@ -15,7 +15,11 @@
 pub mod contract;
 pub mod device;
 mod fits;
+mod serve;
+mod simulated;
 
-pub use device::{Device, Served, Serving, Simulated, serve};
+pub use device::{Device, REST_SAMPLES};
 pub use fits::fits_task;
 pub use plant::safety;
+pub use serve::{Served, Serving, serve};
+pub use simulated::Simulated;
