@@ -17,7 +17,7 @@ pub mod stream {
     pub const SENSOR_NOISE: u64 = plant::sensor::NOISE_STREAM;
     /// The sample-to-actuation delays drawn from a recorded distribution.
     pub const DELAYS: u64 = plant::delay::STREAM;
-    /// SARSA's ε-greedy draws (until session 7 it was 2, the sensor noise's stream).
+    /// SARSA's ε-greedy draws (its own stream, apart from the sensor noise's).
     pub const SARSA: u64 = 4;
     /// All of them.
     pub const ALL: [u64; 4] = [EXPLORATION, SENSOR_NOISE, DELAYS, SARSA];

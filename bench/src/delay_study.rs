@@ -1,6 +1,5 @@
 //! `rig delay-study`: how a sample-to-actuation delay hurts learning, and how much
-//! predictive timing recovers (issue 5; thesis §6.4.1; DESIGN.md "The observer and the
-//! latency budget").
+//! predictive timing recovers (thesis §6.4.1; docs/latency.md).
 //!
 //! Every cell is one `rig learn` experiment ([`runtime::learn::learn`], runs in parallel) on
 //! the pendulum with angle-only sensing and the predictive (model-based) estimator:
@@ -53,7 +52,8 @@ pub const LEARNERS: [(Algo, ApproxKind); 2] = [
 ];
 /// The injected delays by default \[ms\].
 pub const DELAYS_MS: [f64; 4] = [0.0, 5.0, 10.0, 20.0];
-/// The swing-up is learned when the mean final greedy return is at least this (issue 5).
+/// The swing-up is learned when the mean final greedy return is at least this (this
+/// project's criterion for the study, not the thesis's).
 pub const SWING_UP: f64 = -900.0;
 /// The delay at which predictive and direct timing are compared \[ms\].
 pub const COMPARED_AT_MS: f64 = 10.0;

@@ -141,8 +141,8 @@ pub struct DriverSample {
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
 #[type_name("rig.DriverCommand.v1")]
 pub struct DriverCommand {
-    /// Strictly increasing, also across rig sessions (the rig starts from its monotonic
-    /// clock).
+    /// Strictly increasing, also across runs of the rig (the rig starts from its
+    /// monotonic clock).
     pub seq: u64,
     /// [`kind`].
     pub kind: u64,

@@ -1,5 +1,5 @@
 //! Timing: what the agent acts on, when its action takes effect, and what it learns from
-//! (`observer.mode`; thesis §6.4.1, DESIGN.md "The observer and the latency budget").
+//! (`observer.mode`; thesis §6.4.1; docs/latency.md).
 //!
 //! A [`Front`] turns each sample the plant reports — the measurement `y_k`, the plant's
 //! reward, the action applied over the last interval and, in predictive timing, the

@@ -7,7 +7,7 @@
 //! * [`read_csv`] — the recorded distribution: one delay per row in a named column.
 //! * [`Actuator`] — applies the agent's answer to a sample to the plant: *direct* timing
 //!   applies it within the interval after the sample's delay ([`crate::Plant::step_delayed`]);
-//!   *predictive* timing (thesis §6.4.1, DESIGN.md "The observer and the latency budget")
+//!   *predictive* timing (thesis §6.4.1; docs/latency.md)
 //!   holds it and applies it at the next sample instant for the whole interval — a
 //!   one-sample action pipeline, on which a delay below `Ts` has no effect.
 //!

@@ -86,7 +86,7 @@ fn three_processes_reproduce_the_in_process_run_byte_for_byte() {
     }
 }
 
-/// A sample-to-actuation delay (issue 5's delay studies) is deterministic in lockstep:
+/// A sample-to-actuation delay (the delay studies') is deterministic in lockstep:
 /// both drivers give the same bytes, and the delay changes what is learned.
 #[test]
 fn a_delay_is_the_same_in_both_drivers_and_changes_the_run() {

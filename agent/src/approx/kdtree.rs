@@ -20,58 +20,11 @@
 //!
 //! # Speed
 //!
-//! Measured with `agent_step/mlac_llr_full` (one MLAC/LLR pendulum step, three searches
-//! of 2000 samples and one of 100) on the shared 2-core development VM (AMD EPYC,
-//! default x86-64 target). Its medians vary by ±10 % and more with the other load, so
-//! each change was compared with the previous binary in the same session, alternating;
-//! the steadier figure is the best 1000-step chunk of a fixed replay of 200 000 steps on
-//! full memories, and callgrind's instruction and (simulated) mispredict counts.
-//!
-//! First round (with the LLR changes listed in [`super::llr`]: 16.1–16.3 µs → about
-//! 10 µs median):
-//!
-//! * [`Best`] is a sorted array (insertion from the end) instead of a heap sorted at the
-//!   end: the final sort of every search was ~5 % of the step. A branch-free rank by
-//!   counting was measured slower (11.5 against 10.8 µs minimum).
-//! * Node links (16 bytes), bounding boxes (`2·dim` floats) and leaf entries live in
-//!   separate vectors instead of one 232-byte node with `MAX_DIM`-wide boxes; a child is
-//!   pushed only if its box can still beat the bound, and the nearer child is descended
-//!   into without a push; the search stack is reused between searches.
-//! * The warm start is a ceiling (the farthest remembered neighbour of a nearby query),
-//!   not an offer of every remembered neighbour: that insertion sort of the seeds, and
-//!   the per-sample "already seeded" stamp, cost ~10 % of the step.
-//! * [`LEAF_SIZE`] 32 instead of 12: per node the search pays two box distances and
-//!   unpredictable branches, per leaf entry one distance. Minimum step time by leaf
-//!   size: 6 → 12.3 µs, 8 → 11.3, 12 → 10.8, 16 → 10.3, 24 → 10.1, 32 → 9.9, 48 → 10.2.
-//! * Box distances are branch-free, and leaf distances are computed in one pass per
-//!   block (vectorised by the compiler) before the few admitted entries are offered
-//!   (each about 2 %).
-//!
-//! Second round (branch `speed2`; about 10 µs → 6.5–7 µs median):
-//!
-//! * A second branch-free pass per block collects the positions of the entries within
-//!   the bound, so only those (about 32 of the 168 whose distances a search computed)
-//!   take a branch: "within?" is unpredictable, and was the search's costliest branch
-//!   (step median 22.2 → 20.1 µs at load 6, 6 alternating runs each).
-//! * Overwritten samples are removed from their leaves ([`KdTree::remove`]) instead of
-//!   staying as stale entries until the next rebuild: a search no longer looks each
-//!   admitted entry's slot up to check that it is live, nor computes distances to stale
-//!   entries (up to a quarter of the tree); and rebuilds are needed for box tightness
-//!   only, so they are rarer (`REBUILD_AFTER` in [`super::llr`]). A rebuild reuses the
-//!   old tree's storage and permutes indices, not 80-byte points. Replay, load 4–5:
-//!   9.0–11.6 µs before, 6.8–7.0 at the old rebuild rate, 6.5–6.8 with the rarer ones.
-//!   A search of 2000 samples now visits about 15 nodes and 3.4 leaves, computes 106
-//!   distances and makes 34 offers to a [`Best`] of 17–27.
-//! * The leaf-scan buffers are zeroed once per search, not per leaf.
-//! * Tried and not kept (no gain measurable): [`LEAF_SIZE`] 16, 24, 48, 64 again
-//!   (16, 24: +5 %; 48: ±1 %; 64: +5 %); a tighter warm start from both remembered
-//!   searches (offers 31.95 → 31.89 per search); sorting each block's admitted entries
-//!   before offering them, or filling [`Best`] unsorted and sorting once when full
-//!   (both +1–2 %). [`Best::offer`] is now the largest single cost of a step (about a
-//!   fifth: ~6 items shifted per offer, and an unpredictable stop).
-//!
-//! None of this changes which neighbours are found or in which order: results are
-//! bit-identical (checked against the previous code on whole learning runs).
+//! The search's layout (separate link, box and entry vectors; branch-free box and leaf
+//! distances; a sorted [`Best`]; [`LEAF_SIZE`] 32; removal of overwritten samples) was
+//! chosen by measurement: `docs/results/llr-search.md` lists each change, its effect and
+//! what was tried and dropped. None of it changes which neighbours are found or in which
+//! order.
 
 /// Maximum number of neighbours a query may ask for.
 pub const MAX_K: usize = 128;

@@ -34,21 +34,12 @@
 //!
 //! # Speed
 //!
-//! Besides the search itself (see [`super::kdtree`] for what was changed there and the
-//! measurements), the fit is monomorphised per input dimension like the search, and the
-//! last fit is remembered with the memory's version (bumped by every change of a stored
-//! input or output): MLAC asks for `π(x_k)` and then shifts the actor at `x_k`, which
-//! fits at the same point on the same memory again — one fit of about six per agent
-//! step saved. The results are bit-identical: the same sums in the same order.
-//!
-//! Second round (branch `speed2`): a query allocates nothing and copies no fit — the
-//! neighbours go into a kept buffer, a new search reuses the list of the remembered
-//! search it replaces, the last fit is kept in place, and the fit's scratch matrices
-//! are `N × N` and `N × m` instead of `8 × 8`; the neighbourhood after an insertion is
-//! the new sample followed by the earlier list, without a second selection (replay of
-//! full memories, best 1000-step chunk: 9.25–9.76 → 8.61–8.84 µs, before the k-d tree
-//! removals). A fit whose sums over outputs run one element at a time (a register
-//! instead of a chain of stores and loads) was not faster and was not kept.
+//! The fit is monomorphised per input dimension like the search, and the last fit is
+//! remembered with the memory's version (bumped by every change of a stored input or
+//! output): MLAC asks for `π(x_k)` and then shifts the actor at `x_k`, which fits at the
+//! same point on the same memory again. A query allocates nothing: the neighbours go into
+//! a kept buffer, and the neighbourhood after an insertion is the new sample followed by
+//! the earlier list. Measurements: `docs/results/llr-search.md`.
 
 use std::cell::{Cell, Ref, RefCell};
 use std::collections::VecDeque;
