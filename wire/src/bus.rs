@@ -1,0 +1,242 @@
+//! One process's connection to a run: its iceoryx2 node, the services it opens and the
+//! processes of the run it has seen.
+
+use std::time::Duration;
+
+use iceoryx2::prelude::*;
+
+use crate::{Error, Qos, RUN_QOS, Rx, Tx, describe_service, type_name_of};
+
+/// One process's connection to a run.
+pub struct Bus {
+    node: Node<ipc::Service>,
+    run_id: String,
+    /// Processes of the run seen alive so far.
+    seen: std::cell::RefCell<std::collections::BTreeSet<String>>,
+    primed: std::cell::Cell<bool>,
+}
+
+impl Bus {
+    /// Joins run `run_id` as process `name`. Stale resources of dead processes are
+    /// cleaned up on the way (iceoryx2's default configuration).
+    pub fn join(run_id: &str, name: &str) -> Result<Self, Error> {
+        if run_id.is_empty()
+            || !run_id
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+        {
+            return Err(format!("run id {run_id:?}: use letters, digits, '-' and '_' only").into());
+        }
+        if run_id == "driver" {
+            return Err(
+                "run id \"driver\" is reserved for driver services (rig/driver/...)".into(),
+            );
+        }
+        Self::with_node(&format!("rig-{run_id}-{name}"), run_id)
+    }
+
+    /// A connection through a new node named `node_name`, of run `run_id` (the driver
+    /// kit's drivers join as run `driver`).
+    pub fn with_node(node_name: &str, run_id: &str) -> Result<Self, Error> {
+        set_log_level_from_env_or(LogLevel::Error);
+        let node = NodeBuilder::new()
+            .name(&NodeName::new(node_name)?)
+            .config(&iceoryx2::config::Config::default())
+            .create::<ipc::Service>()?;
+        Ok(Self {
+            node,
+            run_id: run_id.to_string(),
+            seen: Default::default(),
+            primed: Default::default(),
+        })
+    }
+
+    /// The roles of the live processes of run `run_id`, sorted (e.g. `["agent",
+    /// "plant"]`): non-empty when a run with this id is going on. Processes killed
+    /// without cleaning up do not count.
+    pub fn live_roles(run_id: &str) -> Vec<String> {
+        use iceoryx2::node::NodeView;
+        let prefix = format!("rig-{run_id}-");
+        let mut roles = Vec::new();
+        let _ = Node::<ipc::Service>::list(&iceoryx2::config::Config::default(), |state| {
+            if let NodeState::Alive(v) = &state
+                && let Some(role) = v
+                    .details()
+                    .as_ref()
+                    .and_then(|d| d.name().to_string().strip_prefix(&prefix).map(String::from))
+            {
+                roles.push(role);
+            }
+            CallbackProgression::Continue
+        });
+        roles.sort();
+        roles.dedup();
+        roles
+    }
+
+    /// The full service name of a run topic: `rig/<run id>/<topic>`.
+    pub fn run_service(&self, topic: &str) -> String {
+        format!("rig/{}/{topic}", self.run_id)
+    }
+
+    /// The iceoryx2 node of this process.
+    pub fn node(&self) -> &Node<ipc::Service> {
+        &self.node
+    }
+
+    fn pubsub<T: std::fmt::Debug + ZeroCopySend + 'static>(
+        &self,
+        service: &str,
+        qos: Qos,
+    ) -> Result<
+        iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>,
+        Error,
+    > {
+        let name = ServiceName::new(service)?;
+        self.node
+            .service_builder(&name)
+            .publish_subscribe::<T>()
+            .max_publishers(qos.max_publishers)
+            .max_subscribers(qos.max_subscribers)
+            .subscriber_max_buffer_size(qos.buffer)
+            .enable_safe_overflow(true)
+            .open_or_create()
+            .map_err(|e| {
+                let found = describe_service(&name, self.node.config());
+                format!(
+                    "service {service}: {e:?}: this process needs payload {} ({} bytes, alignment {}), \
+                     max {} publisher(s), {} subscribers, buffer {}; {found}",
+                    type_name_of::<T>(),
+                    std::mem::size_of::<T>(),
+                    std::mem::align_of::<T>(),
+                    qos.max_publishers,
+                    qos.max_subscribers,
+                    qos.buffer,
+                )
+                .into()
+            })
+    }
+
+    fn event(
+        &self,
+        service: &str,
+    ) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, Error> {
+        Ok(self
+            .node
+            .service_builder(&ServiceName::new(service)?)
+            .event()
+            .open_or_create()
+            .map_err(|e| format!("event service {service}: {e:?}"))?)
+    }
+
+    /// A sender on run topic `topic`.
+    pub fn tx<T: std::fmt::Debug + ZeroCopySend + 'static>(
+        &self,
+        topic: &str,
+    ) -> Result<Tx<T>, Error> {
+        self.tx_on(&self.run_service(topic), RUN_QOS)
+    }
+
+    /// A receiver on run topic `topic`.
+    pub fn rx<T: std::fmt::Debug + ZeroCopySend + 'static>(
+        &self,
+        topic: &str,
+    ) -> Result<Rx<T>, Error> {
+        self.rx_on(&self.run_service(topic), RUN_QOS)
+    }
+
+    /// A sender on the service named `service` (publish-subscribe with settings `qos`,
+    /// plus the event service of the same name).
+    pub fn tx_on<T: std::fmt::Debug + ZeroCopySend + 'static>(
+        &self,
+        service: &str,
+        qos: Qos,
+    ) -> Result<Tx<T>, Error> {
+        let factory = self.pubsub::<T>(service, qos)?;
+        let publisher = factory
+            .publisher_builder()
+            .max_loaned_samples(2)
+            .create()
+            .map_err(|e| {
+                format!(
+                    "publisher on {service}: {e:?} (is another process publishing there already?)"
+                )
+            })?;
+        let notifier = self.event(service)?.notifier_builder().create()?;
+        Ok(Tx {
+            publisher,
+            notifier,
+            service: factory,
+        })
+    }
+
+    /// A receiver on the service named `service` (see [`Bus::tx_on`]).
+    pub fn rx_on<T: std::fmt::Debug + ZeroCopySend + 'static>(
+        &self,
+        service: &str,
+        qos: Qos,
+    ) -> Result<Rx<T>, Error> {
+        let factory = self.pubsub::<T>(service, qos)?;
+        let subscriber = factory
+            .subscriber_builder()
+            .create()
+            .map_err(|e| format!("subscriber on {service}: {e:?}"))?;
+        let listener = self
+            .event(service)?
+            .listener_builder()
+            .create()
+            .map_err(|e| format!("listener on {service}: {e:?}"))?;
+        Ok(Rx {
+            subscriber,
+            listener,
+        })
+    }
+
+    /// Whether Ctrl-C or a termination request arrived.
+    pub fn interrupted(&self) -> bool {
+        self.node.wait(Duration::ZERO).is_err()
+    }
+
+    /// Records, once, which processes of the run are alive (called when the first message
+    /// arrives: all of them are running by then), so that [`Bus::lost_peers`] can tell
+    /// when one goes.
+    pub fn prime(&self) {
+        if !self.primed.replace(true) {
+            let _ = self.lost_peers();
+        }
+    }
+
+    /// This run's processes that are gone: seen alive by an earlier call and now dead
+    /// (killed without cleaning up) or no longer there, e.g. `["agent"]`.
+    pub fn lost_peers(&self) -> Vec<String> {
+        use iceoryx2::node::NodeView;
+        let prefix = format!("rig-{}-", self.run_id);
+        let (mut alive, mut dead) = (Vec::new(), Vec::new());
+        let _ = Node::<ipc::Service>::list(self.node.config(), |state| {
+            let (view_name, is_alive) = match &state {
+                NodeState::Alive(v) => (v.details().as_ref().map(|d| d.name().to_string()), true),
+                NodeState::Dead(v) => (v.details().as_ref().map(|d| d.name().to_string()), false),
+                _ => (None, false),
+            };
+            if let Some(role) = view_name.as_deref().and_then(|n| n.strip_prefix(&prefix)) {
+                if is_alive {
+                    alive.push(role.to_string())
+                } else {
+                    dead.push(role.to_string())
+                }
+            }
+            CallbackProgression::Continue
+        });
+        let mut seen = self.seen.borrow_mut();
+        seen.extend(alive.iter().cloned());
+        let mut lost: Vec<String> = seen
+            .iter()
+            .filter(|r| !alive.contains(r))
+            .cloned()
+            .collect();
+        lost.extend(dead);
+        lost.sort();
+        lost.dedup();
+        lost
+    }
+}

@@ -1,0 +1,232 @@
+//! The ends of a topic: a sender that publishes and wakes its receivers, and a receiver
+//! that waits for messages.
+
+use std::time::Duration;
+
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::publisher::Publisher;
+use iceoryx2::port::subscriber::Subscriber;
+use iceoryx2::prelude::*;
+
+use crate::{Bus, Error, now_ns};
+
+/// Sends messages of type `T` on a topic and wakes its receivers.
+pub struct Tx<T: std::fmt::Debug + ZeroCopySend + 'static> {
+    pub(crate) publisher: Publisher<ipc::Service, T, ()>,
+    pub(crate) notifier: Notifier<ipc::Service>,
+    pub(crate) service:
+        iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>,
+}
+
+/// Receives messages of type `T` from a topic.
+pub struct Rx<T: std::fmt::Debug + ZeroCopySend + 'static> {
+    pub(crate) subscriber: Subscriber<ipc::Service, T, ()>,
+    pub(crate) listener: Listener<ipc::Service>,
+}
+
+impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Tx<T> {
+    /// Publishes `msg` and wakes the receivers.
+    pub fn send(&self, msg: T) -> Result<(), Error> {
+        self.publisher.loan_uninit()?.write_payload(msg).send()?;
+        self.notifier.notify()?;
+        Ok(())
+    }
+
+    /// Receivers currently connected.
+    pub fn receivers(&self) -> usize {
+        self.service.dynamic_config().number_of_subscribers()
+    }
+
+    /// Waits until at least `n` receivers are connected (all peers started), for at most
+    /// `timeout`.
+    pub fn wait_for_receivers(&self, n: usize, timeout: Duration, bus: &Bus) -> Result<(), Error> {
+        let t0 = std::time::Instant::now();
+        while self.receivers() < n {
+            if bus.interrupted() {
+                return Err("interrupted".into());
+            }
+            if t0.elapsed() > timeout {
+                return Err(format!(
+                    "only {} of {n} receivers connected after {timeout:?}",
+                    self.receivers()
+                )
+                .into());
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        Ok(())
+    }
+}
+
+/// How long a receiver still waits for a message after a peer process has left: what the
+/// peer sent last may still be passed on by a process in between.
+const PASSING_ON: Duration = Duration::from_millis(250);
+
+impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
+    /// The next message, if one is waiting.
+    pub fn try_recv(&self) -> Result<Option<T>, Error> {
+        Ok(self.subscriber.receive()?.map(|s| *s))
+    }
+
+    /// The next message, waiting for at most `timeout` (`None` if none came).
+    ///
+    /// A signal that interrupts the wait only ends it early: Ctrl-C and termination
+    /// requests are for the caller to notice with [`Bus::interrupted`], and any other
+    /// signal (`SIGCONT` after the process was stopped, `SIGWINCH`, …) must not end the
+    /// process.
+    pub fn recv_timeout(&self, timeout: Duration) -> Result<Option<T>, Error> {
+        if let Some(m) = self.try_recv()? {
+            return Ok(Some(m));
+        }
+        match self.listener.timed_wait(|_| {}, timeout) {
+            Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) | Ok(_) => {
+                self.try_recv()
+            }
+            Err(e) => Err(e.into()),
+        }
+    }
+
+    /// Waits until a message may have arrived or until monotonic time `t_ns`, whichever
+    /// comes first; [`Rx::try_recv`] then tells which. Unlike [`Rx::recv_timeout`]
+    /// (the socket's receive timeout, in whole scheduler ticks) the deadline is kept to
+    /// the high-resolution timer's precision: `ppoll(2)` on the listener's socket, whose
+    /// pending wake-ups are then cleared. A signal ends the wait early.
+    pub fn wait_until(&self, t_ns: u64) -> Result<(), Error> {
+        let left = t_ns.saturating_sub(now_ns());
+        if left == 0 {
+            return Ok(());
+        }
+        let timeout = libc::timespec {
+            tv_sec: (left / 1_000_000_000) as libc::time_t,
+            tv_nsec: (left % 1_000_000_000) as libc::c_long,
+        };
+        let mut fd = libc::pollfd {
+            // SAFETY: the descriptor is the listener's own and outlives the call.
+            fd: unsafe { self.listener.file_descriptor().native_handle() },
+            events: libc::POLLIN,
+            revents: 0,
+        };
+        // SAFETY: one valid pollfd, a valid timeout, no signal mask change.
+        let ready = unsafe { libc::ppoll(&mut fd, 1, &timeout, std::ptr::null()) };
+        if ready < 0 {
+            let e = std::io::Error::last_os_error();
+            return match e.kind() {
+                std::io::ErrorKind::Interrupted => Ok(()),
+                _ => Err(e.into()),
+            };
+        }
+        if ready > 0 {
+            match self.listener.try_wait(|_| {}) {
+                Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) | Ok(_) => {}
+                Err(e) => return Err(e.into()),
+            }
+        }
+        Ok(())
+    }
+
+    /// The next message, waiting as long as it takes; errors on Ctrl-C, when a process
+    /// of the run has stopped or died (checked every 100 ms of waiting), or when no
+    /// message arrives for `silence`.
+    pub fn recv(&self, bus: &Bus, silence: Duration) -> Result<T, Error> {
+        let t0 = std::time::Instant::now();
+        loop {
+            if let Some(m) = self.recv_timeout(Duration::from_millis(100))? {
+                bus.prime();
+                return Ok(m);
+            }
+            if bus.interrupted() {
+                return Err("interrupted".into());
+            }
+            let lost = bus.lost_peers();
+            if !lost.is_empty() {
+                // A message sent before its sender left is in the queue by now; one that
+                // a process in between (the observer) still forwards comes within
+                // moments — the plant ends a run by sending SHUTDOWN and exiting.
+                if let Some(m) = self.recv_timeout(PASSING_ON)? {
+                    bus.prime();
+                    return Ok(m);
+                }
+                let who = match lost.as_slice() {
+                    [one] => format!("the {one} process"),
+                    [init @ .., last] => format!("the {} and {last} processes", init.join(", ")),
+                    [] => unreachable!(),
+                };
+                return Err(format!("{who} of this run stopped").into());
+            }
+            if t0.elapsed() > silence {
+                return Err(format!("no message for {silence:?}: a peer process stopped").into());
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Action, Measurement, topic};
+
+    #[test]
+    fn round_trip_in_one_process() {
+        let run = format!("wiretest{}", std::process::id());
+        let bus = Bus::join(&run, "test").unwrap();
+        let rx = bus.rx::<Measurement>(topic::MEASUREMENT).unwrap();
+        let tx = bus.tx::<Measurement>(topic::MEASUREMENT).unwrap();
+        assert_eq!(tx.receivers(), 1);
+        let mut m = Measurement {
+            n_x: 2,
+            reward: -1.5,
+            ..Default::default()
+        };
+        m.header.seq = 7;
+        m.y[1] = 3.25;
+        tx.send(m).unwrap();
+        assert_eq!(rx.recv(&bus, Duration::from_secs(2)).unwrap(), m);
+        assert!(rx.try_recv().unwrap().is_none());
+        assert!(Bus::join("bad id/..", "x").is_err());
+    }
+
+    #[test]
+    fn wait_until_keeps_its_deadline_and_wakes_on_arrival() {
+        let run = format!("waittest{}", std::process::id());
+        let bus = Bus::join(&run, "test").unwrap();
+        let rx = bus.rx::<Action>(topic::ACTION).unwrap();
+        // Nothing sent: returns at the deadline — not a scheduler tick later, as a socket
+        // receive timeout would, every time. Generous bounds, on the median of five
+        // waits: on a shared machine one wait can be held up by a stall of the host.
+        for wait_us in [300, 3_000] {
+            let mut late: Vec<u64> = (0..5)
+                .map(|_| {
+                    let t0 = now_ns();
+                    rx.wait_until(t0 + wait_us * 1000).unwrap();
+                    let waited = now_ns() - t0;
+                    assert!(waited >= wait_us * 1000, "woke after {waited} ns");
+                    waited - wait_us * 1000
+                })
+                .collect();
+            late.sort_unstable();
+            assert!(late[2] < 2_000_000, "woke late by {late:?} ns");
+            assert!(rx.try_recv().unwrap().is_none());
+        }
+        // A message sent from another thread 20 ms into a 2 s wait ends it.
+        let sender = std::thread::spawn(move || {
+            let bus = Bus::join(&run, "sender").unwrap();
+            let tx = bus.tx::<Action>(topic::ACTION).unwrap();
+            std::thread::sleep(Duration::from_millis(20));
+            let mut a = Action::default();
+            a.header.seq = 9;
+            tx.send(a).unwrap();
+            std::thread::sleep(Duration::from_millis(200));
+        });
+        let t0 = now_ns();
+        let mut got = None;
+        while got.is_none() && now_ns() < t0 + 2_000_000_000 {
+            rx.wait_until(t0 + 2_000_000_000).unwrap();
+            got = rx.try_recv().unwrap();
+        }
+        let waited = now_ns() - t0;
+        assert_eq!(got.map(|a| a.header.seq), Some(9));
+        assert!(waited < 1_000_000_000, "woke {waited} ns after the start");
+        sender.join().unwrap();
+    }
+}

@@ -1,0 +1,55 @@
+//! Publish-subscribe settings of a service, and what an existing service carries.
+
+use iceoryx2::prelude::*;
+
+/// Subscriber buffer of every service: the recorder may lag this many samples behind.
+pub const BUFFER: usize = 4096;
+
+/// Publish-subscribe settings of a service. Both ends must use the same values:
+/// iceoryx2 refuses to open a service whose settings cannot serve the opener's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Qos {
+    /// Publishers at most.
+    pub max_publishers: usize,
+    /// Subscribers at most.
+    pub max_subscribers: usize,
+    /// Samples a subscriber may have waiting (the oldest is overwritten when full).
+    pub buffer: usize,
+}
+
+/// Settings of the run topics (`rig/<run id>/...`).
+pub const RUN_QOS: Qos = Qos {
+    max_publishers: 1,
+    max_subscribers: 4,
+    buffer: BUFFER,
+};
+
+/// The `#[type_name]` of a payload type: its identity across processes and languages.
+pub fn type_name_of<T: ZeroCopySend>() -> &'static str {
+    // SAFETY: only reads the name; the layout guarantee the trait asks for is the
+    // implementer's (every payload here is `#[repr(C)]` and derives it).
+    unsafe { <T as ZeroCopySend>::type_name() }
+}
+
+/// What an existing publish-subscribe service carries, in words, e.g. "the existing
+/// service carries payload `X` (16 bytes, alignment 8), max 1 publisher(s), 8
+/// subscribers, buffer 2" — for error messages about incompatible peers.
+pub fn describe_service(name: &ServiceName, config: &iceoryx2::config::Config) -> String {
+    match ipc::Service::details(name, config, MessagingPattern::PublishSubscribe) {
+        Ok(Some(d)) => {
+            let ps = d.static_details.publish_subscribe();
+            let p = &ps.message_type_details().payload;
+            format!(
+                "the existing service carries payload {} ({} bytes, alignment {}), max {} publisher(s), {} subscribers, buffer {}",
+                p.type_name(),
+                p.size(),
+                p.alignment(),
+                ps.max_publishers(),
+                ps.max_subscribers(),
+                ps.subscriber_max_buffer_size()
+            )
+        }
+        Ok(None) => "no such service exists yet".to_string(),
+        Err(e) => format!("its settings cannot be read ({e:?})"),
+    }
+}
