@@ -15,6 +15,7 @@
 pub mod contract;
 pub mod device;
 mod fits;
+mod link;
 mod serve;
 mod simulated;
 

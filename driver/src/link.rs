@@ -1,0 +1,247 @@
+//! The rig's end of the driver contract: finding the running drivers, waiting for a
+//! driver's info, watching a driver's traffic, and commanding a driver.
+
+use std::cell::Cell;
+use std::time::Duration;
+
+use iceoryx2::prelude::*;
+
+use wire::{Bus, Error, Rx, Tx, now_ns};
+
+use crate::contract::{
+    DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, check_id, kind, service, status, topic,
+};
+
+/// Drivers whose nodes are alive on this host: `(id, process id)`, by node name.
+pub fn running(bus: &Bus) -> Vec<(String, u32)> {
+    use iceoryx2::node::NodeView;
+    let mut found = Vec::new();
+    let _ = Node::<ipc::Service>::list(bus.node().config(), |state| {
+        if let NodeState::Alive(v) = &state
+            && let Some(d) = v.details()
+            && let Some(id) = d.name().to_string().strip_prefix("rig-driver-")
+        {
+            found.push((id.to_string(), d.process_id().value() as u32));
+        }
+        CallbackProgression::Continue
+    });
+    found.sort();
+    found
+}
+
+/// The newest [`DriverInfo`] published on `rx` within `timeout` (not validated: see
+/// [`DriverInfo::validate`]); waits in steps of 100 ms, so Ctrl-C ends the wait. The
+/// error names the service, the drivers that are running and how to start one.
+pub fn wait_info(
+    bus: &Bus,
+    rx: &Rx<DriverInfo>,
+    id: &str,
+    timeout: Duration,
+) -> Result<DriverInfo, Error> {
+    let t0 = std::time::Instant::now();
+    loop {
+        let mut newest = rx.recv_timeout(Duration::from_millis(100))?;
+        while let Some(i) = rx.try_recv()? {
+            newest = Some(i);
+        }
+        if let Some(i) = newest {
+            return Ok(i);
+        }
+        if bus.interrupted() {
+            return Err("interrupted".into());
+        }
+        if t0.elapsed() >= timeout {
+            let others: Vec<String> = running(bus)
+                .into_iter()
+                .map(|(id, pid)| format!("{id:?} (pid {pid})"))
+                .collect();
+            let hint = if others.is_empty() {
+                "no driver is running on this host".to_string()
+            } else {
+                format!("running drivers: {}", others.join(", "))
+            };
+            return Err(format!(
+                "no driver {id:?}: nothing published on {} within {:.0} s ({hint}); start one, e.g. `python3 examples/python_driver/driver.py --driver-id {id}` (docs/driver.md)",
+                service(id, topic::INFO),
+                timeout.as_secs_f64(),
+            )
+            .into());
+        }
+    }
+}
+
+/// A read-only view of a driver's traffic (for recorders and monitors): its info,
+/// samples and the commands it receives.
+pub struct DriverWatch {
+    /// The driver's info messages.
+    pub info: Rx<DriverInfo>,
+    /// The driver's samples.
+    pub samples: Rx<DriverSample>,
+    /// The commands sent to the driver.
+    pub commands: Rx<DriverCommand>,
+}
+
+impl DriverWatch {
+    /// Subscribes to driver `id`'s services (creating them if the driver is not there
+    /// yet).
+    pub fn open(bus: &Bus, id: &str) -> Result<Self, Error> {
+        check_id(id)?;
+        Ok(Self {
+            info: bus.rx_on(&service(id, topic::INFO), DRIVER_QOS)?,
+            samples: bus.rx_on(&service(id, topic::SAMPLE), DRIVER_QOS)?,
+            commands: bus.rx_on(&service(id, topic::COMMAND), DRIVER_QOS)?,
+        })
+    }
+}
+
+/// The rig's end of a driver connection: reads its info and samples, sends commands.
+pub struct DriverLink {
+    /// The driver id.
+    pub id: String,
+    info: Rx<DriverInfo>,
+    /// The driver's samples.
+    pub samples: Rx<DriverSample>,
+    commands: Tx<DriverCommand>,
+    next_seq: Cell<u64>,
+}
+
+impl DriverLink {
+    /// Opens driver `id`'s services (creating them if the driver is not there yet).
+    /// Fails with a message naming the service and both layouts when the driver uses an
+    /// incompatible payload, and when another rig process is commanding the driver.
+    pub fn connect(bus: &Bus, id: &str) -> Result<Self, Error> {
+        check_id(id)?;
+        let info = bus.rx_on::<DriverInfo>(&service(id, topic::INFO), DRIVER_QOS)?;
+        let samples = bus.rx_on::<DriverSample>(&service(id, topic::SAMPLE), DRIVER_QOS)?;
+        let commands = bus
+            .tx_on::<DriverCommand>(&service(id, topic::COMMAND), DRIVER_QOS)
+            .map_err(|e| {
+                if e.to_string().contains("ExceedsMaxSupportedPublishers") {
+                    format!(
+                        "driver {id:?} is in use: another rig process is commanding it ({})",
+                        service(id, topic::COMMAND)
+                    )
+                    .into()
+                } else {
+                    e
+                }
+            })?;
+        Ok(Self {
+            id: id.to_string(),
+            info,
+            samples,
+            commands,
+            next_seq: Cell::new(now_ns().max(1)),
+        })
+    }
+
+    /// The driver's info: the newest one published within `timeout` (not validated:
+    /// see [`DriverInfo::validate`]). Waits in steps of 100 ms, so Ctrl-C ends the wait.
+    pub fn wait_info(&self, bus: &Bus, timeout: Duration) -> Result<DriverInfo, Error> {
+        wait_info(bus, &self.info, &self.id, timeout)
+    }
+
+    fn send(&self, mut cmd: DriverCommand) -> Result<u64, Error> {
+        let seq = self.next_seq.get();
+        self.next_seq.set(seq + 1);
+        cmd.seq = seq;
+        cmd.t_publish_ns = now_ns();
+        self.commands.send(cmd)?;
+        Ok(seq)
+    }
+
+    /// Sends an ACTION answering sample `sample_seq`; returns the command's `seq`.
+    pub fn act(&self, u: &[f64], sample_seq: u64) -> Result<u64, Error> {
+        let mut cmd = DriverCommand {
+            kind: kind::ACTION,
+            sample_seq,
+            n_u: u.len() as u64,
+            ..Default::default()
+        };
+        cmd.u[..u.len()].copy_from_slice(u);
+        self.send(cmd)
+    }
+
+    /// Sends a raw command as it is (for conformance checks: wrong dimensions, unknown
+    /// kinds); `seq` and `t_publish_ns` are filled in. Returns the `seq`.
+    pub fn send_raw(&self, cmd: DriverCommand) -> Result<u64, Error> {
+        self.send(cmd)
+    }
+
+    /// Sends a RESET to `x0`; returns its `seq`, which the driver reports in
+    /// [`DriverSample::reset_id`] when done.
+    pub fn reset(&self, x0: &[f64]) -> Result<u64, Error> {
+        let mut cmd = DriverCommand {
+            kind: kind::RESET,
+            n_x: x0.len() as u64,
+            ..Default::default()
+        };
+        cmd.x0[..x0.len()].copy_from_slice(x0);
+        self.send(cmd)
+    }
+
+    /// The next sample, waiting at most `silence` (a driver publishes every period,
+    /// also while it resets: silence means it stopped).
+    pub fn next_sample(&self, bus: &Bus, silence: Duration) -> Result<DriverSample, Error> {
+        let t0 = std::time::Instant::now();
+        loop {
+            if let Some(s) = self.samples.recv_timeout(Duration::from_millis(100))? {
+                return Ok(s);
+            }
+            if bus.interrupted() {
+                return Err("interrupted".into());
+            }
+            if t0.elapsed() > silence {
+                return Err(format!(
+                    "driver {:?} stopped: no sample on {} for {:.1} s",
+                    self.id,
+                    service(&self.id, topic::SAMPLE),
+                    silence.as_secs_f64()
+                )
+                .into());
+            }
+        }
+    }
+
+    /// Drops every sample waiting; returns the newest, if any.
+    pub fn latest_sample(&self) -> Result<Option<DriverSample>, Error> {
+        let mut newest = None;
+        while let Some(s) = self.samples.try_recv()? {
+            newest = Some(s);
+        }
+        Ok(newest)
+    }
+
+    /// Waits until the driver reports reset `reset_id` done (READY), for at most
+    /// `timeout`; returns that first READY sample (the trial's start state).
+    pub fn wait_ready(
+        &self,
+        bus: &Bus,
+        info: &DriverInfo,
+        reset_id: u64,
+        timeout: Duration,
+    ) -> Result<DriverSample, Error> {
+        let t0 = std::time::Instant::now();
+        let silence = (info.period() * 20).max(Duration::from_secs(1));
+        loop {
+            let s = self.next_sample(bus, silence)?;
+            s.validate(info)
+                .map_err(|e| format!("driver {:?}: {e}", self.id))?;
+            if s.reset_id == reset_id && s.has(status::READY) {
+                return Ok(s);
+            }
+            if t0.elapsed() > timeout {
+                return Err(format!(
+                    "driver {:?} did not finish the reset within {:.0} s (last sample {}: status {:#x}, reset_id {}, x = {:?})",
+                    self.id,
+                    timeout.as_secs_f64(),
+                    s.seq,
+                    s.status,
+                    s.reset_id,
+                    s.state()
+                )
+                .into());
+            }
+        }
+    }
+}
