@@ -27,10 +27,10 @@
 //! * **Updates** (§3.5.2, "Application to SAC/MLAC/RMAC"): [`Approximator::shift`]
 //!   stores `[x | f(x)]` and adds the step to the output of it and its K−1 nearest
 //!   neighbours; [`Approximator::fit`] moves the neighbours' outputs towards the target and
-//!   stores `[x | target]`; a critic's [`Traced::visit`](super::Traced::visit) stores `[x | V(x)]` and gives it
-//!   and its neighbours eligibility 1, decaying all others. Outputs can be bounded (the
-//!   actor's memory is saturated to the input bounds, so it never proposes an action
-//!   beyond them).
+//!   stores `[x | target]`; a critic's [`Traced::visit`](super::Traced::visit) stores
+//!   `[x | V(x)]` and gives it and its neighbours eligibility 1, decaying all others.
+//!   Outputs can be bounded (the actor's memory is saturated to the input bounds, so it
+//!   never proposes an action beyond them).
 //!
 //! # Speed
 //!
