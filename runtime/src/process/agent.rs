@@ -1,7 +1,7 @@
 //! The agent process: state estimates in, actions out; learns as it goes.
 
-use ::agent::checkpoint::{Checkpoint, Origin, Snapshot};
-use ::agent::config::ObserverMode;
+use ::agent::checkpoint::{Checkpoint, Snapshot};
+use ::observer::config::ObserverMode;
 use ::observer::timing::{Call, ToAgent, act};
 use ::plant::Task;
 use anyhow::{Result, anyhow, bail};
@@ -20,15 +20,15 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
     let task = Task::new(cfg.system);
     let mut agent = ::agent::build(
         &task,
-        &cfg,
+        &cfg.agent,
         ::agent::seed::run_seed(cfg.run.seed, args.run_index),
     );
-    let origin = Origin::of(&cfg, args.run_index);
+    let origin = cfg.origin(args.run_index);
     // The first learning trial this process runs.
     let mut expect_trial = 1;
     if let Some(path) = &args.resume {
         let c = Checkpoint::read(path).map_err(|e| anyhow!("{e}"))?;
-        c.restore(&cfg, args.run_index, agent.as_mut())
+        c.restore(&origin, agent.as_mut())
             .map_err(|e| anyhow!("{}: {e}", path.display()))?;
         expect_trial = u64::from(c.trial) + 1;
     }

@@ -27,7 +27,7 @@ pub mod plant;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use ::agent::config::{ExperimentConfig, Overrides, resolve};
+use crate::config::{ExperimentConfig, Overrides, resolve};
 use anyhow::{Context, Result};
 use clap::Args;
 

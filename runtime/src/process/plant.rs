@@ -63,7 +63,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         run_flags: 0,
     };
     let mut runner: Box<dyn Trials> = match &args.driver {
-        Some(_) if cfg.observer.mode == ::agent::config::ObserverMode::Predictive => bail!(
+        Some(_) if cfg.observer.mode == ::observer::config::ObserverMode::Predictive => bail!(
             "predictive timing (`observer.mode = \"predictive\"`) needs the simulated plant: an external driver applies each action as it arrives (use `--observer-mode direct`)"
         ),
         Some(id) => Box::new(super::external::Bridge::connect(link, id, args)?),
@@ -88,7 +88,7 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
                 }
             });
             Box::new(PlantLoop {
-                pipelined: cfg.observer.mode == ::agent::config::ObserverMode::Predictive,
+                pipelined: cfg.observer.mode == ::observer::config::ObserverMode::Predictive,
                 plant: Plant::new(task.clone()),
                 link,
                 realtime,
