@@ -44,7 +44,7 @@ use plant::config::{ConfigError, RunConfig};
 use plant::{SystemName, Task};
 
 use crate::config::{
-    Algo, AgentConfig, ApproxKind, Component, HorizonKind, LearningConfig, LlrConfig, LstdConfig,
+    AgentConfig, Algo, ApproxKind, Component, HorizonKind, LearningConfig, LlrConfig, LstdConfig,
     LstdPrior, RbfConfig, SarsaConfig, TilesConfig, VgbpConfig, finite_horizon_unsupported,
 };
 

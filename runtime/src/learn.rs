@@ -30,11 +30,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-use crate::config::ExperimentConfig;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 
+use crate::config::ExperimentConfig;
 use crate::experiment::{Experiment, Sample, TrialRecord};
 use crate::report::{self, CurvePoint, Series, SeriesStyle};
 

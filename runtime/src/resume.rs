@@ -25,11 +25,11 @@ use std::sync::mpsc;
 use std::thread::JoinHandle;
 
 use agent::checkpoint::Checkpoint;
-use crate::config::ExperimentConfig;
 use anyhow::{Context, Result, anyhow, bail};
 use serde::Deserialize;
 use wire::flags;
 
+use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
 
 /// The checkpoint directory of run directory `out`.

@@ -26,13 +26,13 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use crate::config::ExperimentConfig;
 use ::agent::horizon::Horizon;
 use anyhow::{Context, Result, anyhow, bail};
 use driver::contract::{DriverCommand, DriverInfo, DriverSample, DriverWatch};
 use indicatif::ProgressBar;
 use wire::{Action, Bus, Estimate, Header, Measurement, Truth, flags, topic};
 
+use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
 use crate::learn::{RUNS_HEADER, progress_bar, write_atomic, write_row};
 use crate::process::{Scheduling, wire_err};

@@ -100,7 +100,10 @@ mod tests {
         assert!(check_float("k", f64::NAN, 0.0, 1.0, false).is_err());
         assert!(check_float("k", 1.0, 0.0, 1.0, false).is_ok());
         let e = check_int("run.runs", 0, 1, 100_000).unwrap_err();
-        assert_eq!(e.message, "0 is out of range: must be an integer in 1..=100000");
+        assert_eq!(
+            e.message,
+            "0 is out of range: must be an integer in 1..=100000"
+        );
         let e = check_len("critic.centres", 2, 3, "state component").unwrap_err();
         assert_eq!(
             e.message,

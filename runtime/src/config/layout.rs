@@ -4,8 +4,7 @@
 //! every configuration file and `config.toml` has.
 
 use agent::config::{
-    AgentConfig, Algo, ApproxKind, Component, HorizonKind, LearningConfig, SarsaConfig,
-    VgbpConfig,
+    AgentConfig, Algo, ApproxKind, Component, HorizonKind, LearningConfig, SarsaConfig, VgbpConfig,
 };
 use observer::config::ObserverConfig;
 use plant::SystemName;

@@ -17,9 +17,9 @@ pub(super) fn check_choice<T: Choice>(
     let full = format!("{section}.{key}");
     match t.get(key) {
         None => Ok(()),
-        Some(toml::Value::String(s)) => T::parse(s)
-            .map(|_| ())
-            .map_err(|_| ConfigError::new(&full, format!("\"{s}\" is not one of: {}", T::spellings()))),
+        Some(toml::Value::String(s)) => T::parse(s).map(|_| ()).map_err(|_| {
+            ConfigError::new(&full, format!("\"{s}\" is not one of: {}", T::spellings()))
+        }),
         Some(v) => Err(ConfigError::new(
             &full,
             format!("{v} must be a string, one of: {}", T::spellings()),
@@ -37,15 +37,19 @@ pub(super) fn choose<T: Choice>(
 ) -> Result<T, ConfigError> {
     match (flag, file) {
         (Some(v), _) => Ok(v),
-        (None, Some(s)) => {
-            T::parse(&s).map_err(|_| ConfigError::new(key, format!("\"{s}\" is not one of: {}", T::spellings())))
-        }
+        (None, Some(s)) => T::parse(&s).map_err(|_| {
+            ConfigError::new(key, format!("\"{s}\" is not one of: {}", T::spellings()))
+        }),
         (None, None) => Ok(default),
     }
 }
 
 /// Overlays `user` on `base`, rejecting keys `base` does not have.
-pub(super) fn merge(base: &mut toml::Table, user: toml::Table, prefix: &str) -> Result<(), ConfigError> {
+pub(super) fn merge(
+    base: &mut toml::Table,
+    user: toml::Table,
+    prefix: &str,
+) -> Result<(), ConfigError> {
     for (k, v) in user {
         let key = if prefix.is_empty() {
             k.clone()
@@ -71,7 +75,10 @@ pub(super) fn merge(base: &mut toml::Table, user: toml::Table, prefix: &str) -> 
         match (slot, v) {
             (toml::Value::Table(b), toml::Value::Table(u)) => merge(b, u, &key)?,
             (toml::Value::Table(_), other) => {
-                return Err(ConfigError::new(&key, format!("must be a table, not {other}")));
+                return Err(ConfigError::new(
+                    &key,
+                    format!("must be a table, not {other}"),
+                ));
             }
             (slot, v) => {
                 if std::mem::discriminant(slot) != std::mem::discriminant(&v)

@@ -17,7 +17,7 @@ mod tests;
 pub use resolve::{Overrides, resolve};
 
 use agent::checkpoint::{self, Origin};
-use agent::config::{AgentConfig, HorizonKind};
+use agent::config::{AgentConfig, Algo, ApproxKind, HorizonKind};
 use observer::config::{ObserverConfig, ObserverMode};
 use plant::config::{ConfigError, RunConfig};
 use plant::{SystemName, Task};
@@ -40,6 +40,23 @@ pub struct ExperimentConfig {
 }
 
 impl ExperimentConfig {
+    /// The preset for `(system, algo, approx)` with `horizon` ([`agent::preset`]), with
+    /// the default sensor and observer.
+    pub fn preset(
+        system: SystemName,
+        algo: Algo,
+        approx: ApproxKind,
+        horizon: HorizonKind,
+    ) -> Result<Self, ConfigError> {
+        let preset = agent::preset::preset(system, algo, approx, horizon)?;
+        Ok(Self {
+            system,
+            agent: preset.agent,
+            run: preset.run,
+            observer: ObserverConfig::default(),
+        })
+    }
+
     /// Checks every value against its allowed range and the system's dimensions, section
     /// by section, then what spans sections.
     pub fn validate(&self) -> Result<(), ConfigError> {

@@ -116,13 +116,7 @@ impl PresetChoice {
     /// The preset as a TOML table with every key a user may set: also those it does not
     /// write when they have their default values.
     fn table(&self) -> Result<toml::Table, ConfigError> {
-        let preset = agent::preset::preset(self.system, self.algo, self.approx, self.horizon)?;
-        let cfg = ExperimentConfig {
-            system: self.system,
-            agent: preset.agent,
-            run: preset.run,
-            observer: ObserverConfig::default(),
-        };
+        let cfg = ExperimentConfig::preset(self.system, self.algo, self.approx, self.horizon)?;
         let mut table = toml::Table::try_from(&cfg).expect("a preset always serialises");
         // The observer section is written only when it differs from the default; a user's
         // file may still set any of its keys.

@@ -31,8 +31,7 @@ fn default_is_pendulum_mlac_llr_with_table_3_2() {
 
 #[test]
 fn file_overrides_and_round_trips() {
-    let c =
-        resolve_str("algo = \"sac\"\n[critic]\nneighbours = 12\n[run]\nruns = 3\n").unwrap();
+    let c = resolve_str("algo = \"sac\"\n[critic]\nneighbours = 12\n[run]\nruns = 3\n").unwrap();
     assert_eq!(c.agent.algo, Algo::Sac);
     assert_eq!(c.run.runs, 3);
     let Component::Llr(critic) = &c.agent.critic else {
@@ -81,7 +80,10 @@ fn out_of_range_is_named_with_the_range() {
 fn finite_horizon_adds_time_to_actor_and_critic() {
     let c = resolve_str("horizon = \"finite\"\nalgo = \"sac\"\napprox = \"rbf\"\n").unwrap();
     assert_eq!(c.agent.horizon, HorizonKind::Finite);
-    assert_eq!(c.agent.learning.gamma, 1.0, "Algorithms 4–6 do not discount");
+    assert_eq!(
+        c.agent.learning.gamma, 1.0,
+        "Algorithms 4–6 do not discount"
+    );
     assert_eq!(resolve_str(&c.to_toml()).unwrap(), c);
     let e = resolve_str("horizon = \"finit\"\n").unwrap_err();
     assert_eq!(e.key, "horizon");
@@ -98,11 +100,9 @@ fn finite_horizon_adds_time_to_actor_and_critic() {
     assert!(resolve_str(&format!("{fh}[learning]\ngamma = 1.01\n")).is_err());
     let e = resolve_str("[learning]\ngamma = 1.0\n").unwrap_err();
     assert_eq!(e.key, "learning.gamma", "an infinite horizon must discount");
-    let e =
-        resolve_str("horizon = \"finite\"\nalgo = \"vgbp\"\napprox = \"lstd\"\n").unwrap_err();
+    let e = resolve_str("horizon = \"finite\"\nalgo = \"vgbp\"\napprox = \"lstd\"\n").unwrap_err();
     assert_eq!(e.key, "horizon");
-    let e =
-        resolve_str("horizon = \"finite\"\nalgo = \"sac\"\napprox = \"llr\"\n").unwrap_err();
+    let e = resolve_str("horizon = \"finite\"\nalgo = \"sac\"\napprox = \"llr\"\n").unwrap_err();
     assert_eq!(e.key, "approx");
     // Validation, for a configuration not made by `resolve`.
     let mut c = c;
@@ -205,8 +205,7 @@ fn observer_errors_name_file_key_and_range() {
 
 #[test]
 fn timing_and_delay_keys_resolve_round_trip_and_are_checked() {
-    let text =
-        "[observer]\nsensor = \"angle\"\nobserver = \"predictive\"\nmode = \"predictive\"\n";
+    let text = "[observer]\nsensor = \"angle\"\nobserver = \"predictive\"\nmode = \"predictive\"\n";
     let c = resolve(Some((Path::new("t.toml"), text)), &Overrides::default()).unwrap();
     assert_eq!(c.observer.mode, ObserverMode::Predictive);
     let again = resolve(
