@@ -169,11 +169,13 @@ impl Component {
         match self {
             Component::Llr(l) => l.validate(at),
             Component::Rbf(r) => {
-                check_grid(at, &r.centres, 2_000_000, "")?;
+                check_grid(at, &r.centres, 2_000_000, |_| String::new())?;
                 check_float(&at.key("intersection"), r.intersection, 0.0, 1.0, true)
             }
             Component::Lstd(l) => {
-                check_grid(at, &l.centres, 5000, "LSTD solves a dense {n}×{n} system, ")?;
+                check_grid(at, &l.centres, 5000, |n| {
+                    format!("LSTD solves a dense {n}×{n} system, ")
+                })?;
                 check_float(&at.key("intersection"), l.intersection, 0.0, 1.0, true)?;
                 check_float(&at.key("initial_a"), l.initial_a, 0.0, 1e12, true)
             }
@@ -218,19 +220,90 @@ impl LlrConfig {
 }
 
 /// Checks an RBF grid's `centres`: one entry per input, 1 to 1000 each, at most `max`
-/// basis functions in all (`why`, with `{n}` for the count, says why the limit).
-fn check_grid(at: &Slot, centres: &[usize], max: u64, why: &str) -> Result<(), ConfigError> {
+/// basis functions in all (`why` of the count says why the limit).
+fn check_grid(
+    at: &Slot,
+    centres: &[usize],
+    max: u64,
+    why: fn(u64) -> String,
+) -> Result<(), ConfigError> {
     check_len(&at.key("centres"), centres.len(), at.dim, at.what)?;
     for (i, c) in centres.iter().enumerate() {
         check_int(&format!("{}.centres[{i}]", at.section), *c as u64, 1, 1000)?;
     }
     let total: u64 = centres.iter().map(|&c| c as u64).product();
     if total > max {
-        let why = why.replace("{n}", &total.to_string());
         return Err(ConfigError::new(
             &at.key("centres"),
-            format!("{total} basis functions in all: {why}at most {max}"),
+            format!(
+                "{total} basis functions in all: {}at most {max}",
+                why(total)
+            ),
         ));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn critic(dim: usize) -> Slot<'static> {
+        Slot {
+            section: "critic",
+            kinds: &[ApproxKind::Lstd, ApproxKind::Llr],
+            dim,
+            what: "state component",
+            algo: Algo::Vgbp,
+            approx: ApproxKind::Lstd,
+        }
+    }
+
+    #[test]
+    fn grids_and_memories_are_checked_against_their_limits() {
+        let lstd = |centres| {
+            Component::Lstd(LstdConfig {
+                centres,
+                intersection: 0.5,
+                initial_a: 0.5,
+                prior: LstdPrior::Zero,
+            })
+        };
+        lstd(vec![20, 20]).validate(&critic(2)).unwrap();
+        let e = lstd(vec![80, 80]).validate(&critic(2)).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "`critic.centres`: 6400 basis functions in all: LSTD solves a dense 6400×6400 system, at most 5000"
+        );
+        let e = lstd(vec![20]).validate(&critic(2)).unwrap_err();
+        assert_eq!(
+            e.message,
+            "has 1 entries; must have 2, one per state component"
+        );
+        let llr = LlrConfig {
+            alpha: 0.1,
+            memory: 10,
+            neighbours: 11,
+            weights: vec![1.0, 0.1],
+            eviction: "oldest".into(),
+            redundancy_radius: 0.0,
+            clip_to_neighbours: false,
+        };
+        let e = Component::Llr(llr).validate(&critic(2)).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "`critic.neighbours`: 11 is out of range: must be an integer in 1..=10"
+        );
+        let rbf = Component::Rbf(RbfConfig {
+            alpha: 0.1,
+            centres: vec![9, 9],
+            intersection: 0.5,
+        });
+        let e = rbf.validate(&critic(2)).unwrap_err();
+        assert_eq!(e.key, "critic");
+        assert!(
+            e.message
+                .starts_with("holds rbf parameters; vgbp expects lstd or llr")
+        );
+    }
 }
