@@ -57,20 +57,7 @@ pub(super) fn merge(
             format!("{prefix}.{k}")
         };
         let Some(slot) = base.get_mut(&k) else {
-            let mut known: Vec<&str> = base.keys().map(String::as_str).collect();
-            known.sort();
-            let place = if prefix.is_empty() {
-                "at the top level".to_string()
-            } else {
-                format!("in [{prefix}]")
-            };
-            return Err(ConfigError::new(
-                &key,
-                format!(
-                    "unknown key; the keys allowed {place} are: {}",
-                    known.join(", ")
-                ),
-            ));
+            return Err(unknown_key(base, &key, prefix));
         };
         match (slot, v) {
             (toml::Value::Table(b), toml::Value::Table(u)) => merge(b, u, &key)?,
@@ -80,29 +67,51 @@ pub(super) fn merge(
                     format!("must be a table, not {other}"),
                 ));
             }
-            (slot, v) => {
-                if std::mem::discriminant(slot) != std::mem::discriminant(&v)
-                    && !matches!(
-                        (&*slot, &v),
-                        (toml::Value::Float(_), toml::Value::Integer(_))
-                    )
-                {
-                    return Err(ConfigError::new(
-                        &key,
-                        format!(
-                            "{v} has the wrong type: expected a {} like {slot}",
-                            slot.type_str()
-                        ),
-                    ));
-                }
-                *slot = match (&*slot, v) {
-                    (toml::Value::Float(_), toml::Value::Integer(i)) => {
-                        toml::Value::Float(i as f64)
-                    }
-                    (_, v) => v,
-                };
-            }
+            (slot, v) => overwrite(slot, v, &key)?,
         }
     }
+    Ok(())
+}
+
+/// The error for `key`, which the table `known` (at `prefix`) does not have: it lists
+/// the keys allowed there.
+fn unknown_key(known: &toml::Table, key: &str, prefix: &str) -> ConfigError {
+    let mut keys: Vec<&str> = known.keys().map(String::as_str).collect();
+    keys.sort();
+    let place = if prefix.is_empty() {
+        "at the top level".to_string()
+    } else {
+        format!("in [{prefix}]")
+    };
+    ConfigError::new(
+        key,
+        format!(
+            "unknown key; the keys allowed {place} are: {}",
+            keys.join(", ")
+        ),
+    )
+}
+
+/// Sets the value at `key` to `v`, which must be of its type (an integer where a float
+/// is expected becomes that float).
+fn overwrite(slot: &mut toml::Value, v: toml::Value, key: &str) -> Result<(), ConfigError> {
+    if std::mem::discriminant(slot) != std::mem::discriminant(&v)
+        && !matches!(
+            (&*slot, &v),
+            (toml::Value::Float(_), toml::Value::Integer(_))
+        )
+    {
+        return Err(ConfigError::new(
+            key,
+            format!(
+                "{v} has the wrong type: expected a {} like {slot}",
+                slot.type_str()
+            ),
+        ));
+    }
+    *slot = match (&*slot, v) {
+        (toml::Value::Float(_), toml::Value::Integer(i)) => toml::Value::Float(i as f64),
+        (_, v) => v,
+    };
     Ok(())
 }
