@@ -80,7 +80,11 @@ impl Schedule {
     pub fn next_trial(&self) -> Option<Trial> {
         (self.done < self.trials).then(|| {
             let starts = &self.task.initial_states;
-            self.trial(self.done + 1, false, &starts[self.done as usize % starts.len()])
+            self.trial(
+                self.done + 1,
+                false,
+                &starts[self.done as usize % starts.len()],
+            )
         })
     }
 
@@ -99,7 +103,10 @@ impl Schedule {
     /// in their order.
     pub fn evaluation(&self) -> Vec<Trial> {
         let starts = &self.task.initial_states;
-        starts.iter().map(|x0| self.trial(self.done, true, x0)).collect()
+        starts
+            .iter()
+            .map(|x0| self.trial(self.done, true, x0))
+            .collect()
     }
 
     fn trial(&self, number: u32, greedy: bool, x0: &[f64]) -> Trial {

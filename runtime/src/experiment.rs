@@ -128,10 +128,7 @@ impl Experiment {
         let o = &cfg.observer;
         let sensor = sensor(&task, o, run_seed);
         Self {
-            episode: Episode::new(
-                Plant::new(task.clone()),
-                actuator(&task, cfg, run_seed),
-            ),
+            episode: Episode::new(Plant::new(task.clone()), actuator(&task, cfg, run_seed)),
             sensor,
             y: vec![0.0; task.state_dim()],
             front: front(&task, cfg),

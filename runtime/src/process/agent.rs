@@ -7,28 +7,29 @@ use ::plant::Task;
 use anyhow::{Result, anyhow, bail};
 use wire::{Action, Bus, Estimate, flags, now_ns, topic};
 
-use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
+use super::{AgentArgs, SILENCE, STARTUP, pack, wire_err};
 use crate::resume::CheckpointWriter;
 
 /// Runs the agent side of a run until the plant announces its end.
-pub fn run(args: &ProcessArgs) -> Result<()> {
-    super::set_rt_priority(args.scheduling.rt_priority)?;
-    if args.scheduling.pin_cpus {
+pub fn run(args: &AgentArgs) -> Result<()> {
+    let node = &args.node;
+    super::set_rt_priority(node.scheduling.rt_priority)?;
+    if node.scheduling.pin_cpus {
         super::pin(super::Cpus::Rest)?;
     }
-    let cfg = args.config()?;
+    let cfg = node.config()?;
     let task = Task::new(cfg.system);
     let mut agent = ::agent::build(
         &task,
         &cfg,
-        ::agent::seed::run_seed(cfg.run.seed, args.run_index),
+        ::agent::seed::run_seed(cfg.run.seed, node.run_index),
     );
-    let origin = Origin::of(&cfg, args.run_index);
+    let origin = Origin::of(&cfg, node.run_index);
     // The first learning trial this process runs.
     let mut expect_trial = 1;
     if let Some(path) = &args.resume {
         let c = Checkpoint::read(path).map_err(|e| anyhow!("{e}"))?;
-        c.restore(&cfg, args.run_index, agent.as_mut())
+        c.restore(&cfg, node.run_index, agent.as_mut())
             .map_err(|e| anyhow!("{}: {e}", path.display()))?;
         expect_trial = u64::from(c.trial) + 1;
     }
@@ -37,10 +38,10 @@ pub fn run(args: &ProcessArgs) -> Result<()> {
         .as_deref()
         .map(CheckpointWriter::new)
         .transpose()?;
-    let bus = Bus::join(&args.run_id, "agent").map_err(wire_err)?;
+    let bus = Bus::join(&node.run_id, "agent").map_err(wire_err)?;
     let estimates = bus.rx::<Estimate>(topic::ESTIMATE).map_err(wire_err)?;
     let out = bus.tx::<Action>(topic::ACTION).map_err(wire_err)?;
-    out.wait_for_receivers(args.receivers, STARTUP, &bus)
+    out.wait_for_receivers(node.receivers, STARTUP, &bus)
         .map_err(wire_err)?;
     let m = task.action_dim();
     let predictive = cfg.observer.mode == ObserverMode::Predictive;
