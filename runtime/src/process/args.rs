@@ -105,11 +105,11 @@ pub struct PlantArgs {
     /// `--speed` do not apply then.
     #[arg(long, value_name = "ID")]
     pub driver: Option<String>,
-    /// With `--driver`: how long to wait for the driver to appear [seconds].
+    /// With `--driver`: how long to wait for the driver to appear (seconds).
     #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
     pub driver_timeout: f64,
     /// With `--driver`: how long the driver may take for one reset (bring the system to
-    /// rest at the start state) [seconds].
+    /// rest at the start state), in seconds.
     #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
     pub reset_timeout: f64,
     /// Realtime: write every sample's timing to this CSV file (columns
@@ -121,7 +121,7 @@ pub struct PlantArgs {
     /// Continue a run after this trial (its greedy evaluations done).
     #[arg(long, value_name = "TRIAL", default_value_t = 0)]
     pub after_trial: u32,
-    /// With `--after-trial`: the simulated learning time at that trial's end [seconds].
+    /// With `--after-trial`: the simulated learning time at that trial's end (seconds).
     #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
     pub sim_time: f64,
     /// With `--after-trial`: the sequence number of the first sample.

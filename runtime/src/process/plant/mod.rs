@@ -3,13 +3,13 @@
 //! It runs the trials of the run's schedule ([`::plant::schedule`]) and announces the end
 //! of the run; what runs a trial depends on the timing:
 //!
-//! * [`lockstep`] — the simulated system ([`::plant::episode::Episode`]); simulated time
+//! * `lockstep` — the simulated system ([`::plant::episode::Episode`]); simulated time
 //!   advances when the action has arrived (`--timing lockstep`, the default);
-//! * [`realtime`] — the simulated system sampled at absolute deadlines
+//! * `realtime` — the simulated system sampled at absolute deadlines
 //!   (`--timing realtime`);
 //! * [`external`] — an external driver's system, which is the clock (`--driver ID`).
 //!
-//! All three publish on the same [`link`]: measurements (and ground truth) out, actions
+//! All three publish on the same `link`: measurements (and ground truth) out, actions
 //! in.
 
 mod arrivals;
@@ -87,8 +87,8 @@ fn schedule_clock(s: &Scheduling) -> Result<()> {
     Ok(())
 }
 
-/// Runs trials: the simulation in lockstep ([`lockstep`]) or in real time
-/// ([`realtime`]), or an external driver ([`external::Bridge`]).
+/// Runs trials: the simulation in lockstep or in real time, or an external driver
+/// ([`external::Bridge`]).
 trait Trials {
     /// Runs `trial`. Returns how many of its samples were not run because it left the
     /// operating range.
