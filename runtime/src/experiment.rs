@@ -1,5 +1,7 @@
 //! The in-process driver: one learning experiment (a "run": `trials` consecutive trials,
-//! §3.6) with plant, observer and agent called directly, one sample at a time.
+//! §3.6) with plant, observer and agent called directly, one sample at a time. Which
+//! trial comes next is the run's schedule ([`plant::schedule`]); a trial is an episode
+//! on the plant ([`plant::episode`]), as in the plant process.
 //!
 //! Per trial: the plant is reset to the task's start state; the agent acts on the
 //! observer's estimate; the reward of each sample is `ρ(x_k, u_k)` of the true state and

@@ -16,8 +16,8 @@
 //! `Measurement{START}` (the agent's answer is `u_0`) and `Measurement{PRIMED}` (`x_0`
 //! again, `u_next = u_0`; the answer is `u_1`), [`::observer::timing`].
 //!
-//! Trials, greedy evaluation trials and the end of the run are the plant's to decide and
-//! announce ([`wire::flags`]).
+//! Trials, greedy evaluation trials and the end of the run are the plant's to decide (the
+//! run's schedule, [`::plant::schedule`], as in process) and announce ([`wire::flags`]).
 
 pub mod agent;
 mod args;
