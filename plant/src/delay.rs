@@ -183,6 +183,12 @@ impl Actuator {
         }
     }
 
+    /// Whether the timing is predictive: the answer to a sample is applied at the next
+    /// sample instant.
+    pub fn is_pipelined(&self) -> bool {
+        self.pipelined.is_some()
+    }
+
     /// The action the plant applies from the current sample instant on, as sent
     /// (predictive timing); `None` in direct timing, where it is not known at the instant.
     pub fn next_action(&self) -> Option<&[f64]> {

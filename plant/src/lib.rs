@@ -12,6 +12,10 @@
 //!   effect (direct or one-sample pipeline).
 //! * [`Plant`] — the step function: saturate the action, integrate one sample period,
 //!   wrap the angles.
+//! * [`episode::Episode`] — one trial on the plant: reset to a start state, step one
+//!   sample interval at a time until terminated or truncated.
+//! * [`schedule::Schedule`] — the trials of a run: learning trials, greedy evaluations,
+//!   start states, simulated learning time.
 //! * [`safety`] — the plant side's safety pieces (saturation, operating range, the
 //!   stale-action [`safety::Watchdog`]), for the simulated plant and Rust drivers.
 //! * [`config`] — what every configuration section shares ([`config::ConfigError`],
@@ -24,10 +28,12 @@ pub mod angle;
 pub mod config;
 pub mod delay;
 pub mod double_integrator;
+pub mod episode;
 pub mod pendulum;
 pub mod reward;
 pub mod rk4;
 pub mod safety;
+pub mod schedule;
 pub mod sensor;
 pub mod task;
 pub mod two_link;

@@ -4,7 +4,7 @@
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use runtime::process::ProcessArgs;
+use runtime::process::{AgentArgs, ObserverArgs, PlantArgs};
 
 mod bench_loop;
 mod check_driver;
@@ -89,11 +89,11 @@ enum Command {
     /// thesis's claims checked against the new data.
     Reproduce(reproduce::Args),
     /// The plant process of a run (started by `rig run`, or by hand).
-    Plant(ProcessArgs),
+    Plant(PlantArgs),
     /// The observer process of a run (started by `rig run`, or by hand).
-    Observer(ProcessArgs),
+    Observer(ObserverArgs),
     /// The agent process of a run (started by `rig run`, or by hand).
-    Agent(ProcessArgs),
+    Agent(AgentArgs),
 }
 
 fn main() -> ExitCode {
@@ -116,7 +116,7 @@ fn main() -> ExitCode {
 }
 
 /// One process of a run (`rig plant|observer|agent`).
-fn process(node: fn(&ProcessArgs) -> anyhow::Result<()>, args: &ProcessArgs) -> ExitCode {
+fn process<A>(node: fn(&A) -> anyhow::Result<()>, args: &A) -> ExitCode {
     match node(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

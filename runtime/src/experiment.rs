@@ -1,5 +1,7 @@
 //! The in-process driver: one learning experiment (a "run": `trials` consecutive trials,
-//! §3.6) with plant, observer and agent called directly, one sample at a time.
+//! §3.6) with plant, observer and agent called directly, one sample at a time. Which
+//! trial comes next is the run's schedule ([`plant::schedule`]); a trial is an episode
+//! on the plant ([`plant::episode`]), as in the plant process.
 //!
 //! Per trial: the plant is reset to the task's start state; the agent acts on the
 //! observer's estimate; the reward of each sample is `ρ(x_k, u_k)` of the true state and
@@ -25,6 +27,7 @@
 //! With a finite horizon (Chapter 4) a trial's return also counts the terminal reward of
 //! the state it ends in, `τ_N(x_N) + Σ_k ρ(x_k, u_k)` (Eq. 4.1).
 
+use std::convert::Infallible;
 use std::sync::Arc;
 
 use agent::Agent;
@@ -33,6 +36,8 @@ use agent::horizon::Horizon;
 use observer::config::{ObserverConfig, ObserverMode, SensorKind};
 use observer::timing::{Front, Sample as AtSample, act};
 use plant::delay::Actuator;
+use plant::episode::{Episode, Step};
+use plant::schedule::{Schedule, Trial};
 use plant::sensor::Sensor;
 use plant::{Plant, Task};
 
@@ -68,24 +73,20 @@ pub fn sensor(task: &Task, o: &ObserverConfig, run_seed: u64) -> Sensor {
 /// One experiment's moving parts.
 pub struct Experiment {
     task: Arc<Task>,
-    plant: Plant,
+    /// The plant and when actions take effect (timing, delays), one trial at a time.
+    episode: Episode,
     sensor: Sensor,
     /// The sensor's last measurement `y_k`.
     y: Vec<f64>,
     /// The observer in its timing.
     front: Front,
-    /// When actions take effect (timing, delays).
-    actuator: Actuator,
     agent: Box<dyn Agent>,
     horizon: Horizon,
     /// Which experiment and run this is (for checkpoints).
     origin: Origin,
     run: u32,
-    trials: u32,
-    eval_every: u32,
-    trial: u32,
-    /// Samples not run because trials ended early (left the operating range).
-    skipped_samples: u64,
+    /// Which trial comes next.
+    schedule: Schedule,
     /// How far what the agent acted on was from the truth (learning trials).
     acted_on_error: ActedOnError,
 }
@@ -130,20 +131,16 @@ impl Experiment {
         let o = &cfg.observer;
         let sensor = sensor(&task, o, run_seed);
         Self {
-            plant: Plant::new(task.clone()),
+            episode: Episode::new(Plant::new(task.clone()), actuator(&task, cfg, run_seed)),
             sensor,
             y: vec![0.0; task.state_dim()],
             front: front(&task, cfg),
-            actuator: actuator(&task, cfg, run_seed),
             horizon: cfg.agent.horizon.of(&task),
             origin: cfg.origin(run),
+            schedule: Schedule::new(task.clone(), cfg.run.trials, cfg.run.eval_every),
             task,
             agent,
             run,
-            trials: cfg.run.trials,
-            eval_every: cfg.run.eval_every,
-            trial: 0,
-            skipped_samples: 0,
             acted_on_error: ActedOnError::default(),
         }
     }
@@ -154,8 +151,8 @@ impl Experiment {
         self.agent.save(&mut state);
         Checkpoint {
             origin: self.origin.clone(),
-            trial: self.trial,
-            sim_time_s: self.sim_time_s(),
+            trial: self.schedule.done(),
+            sim_time_s: self.schedule.sim_time_s(),
             state,
         }
     }
@@ -176,14 +173,8 @@ impl Experiment {
         resumable_delays(cfg).map_err(CheckpointError)?;
         let mut e = Self::new(cfg, run);
         c.restore(&cfg.origin(run), e.agent.as_mut())?;
-        e.trial = c.trial;
-        e.skipped_samples = e.task.skipped_samples(c.trial.into(), c.sim_time_s);
+        e.schedule.resume(c.trial, c.sim_time_s);
         Ok(e)
-    }
-
-    /// Simulated learning time so far \[s\].
-    fn sim_time_s(&self) -> f64 {
-        self.task.sim_time(self.trial.into(), self.skipped_samples)
     }
 
     /// How far the states the agent acted on in the learning trials so far were from the
@@ -197,56 +188,54 @@ impl Experiment {
         self.agent.as_ref()
     }
 
-    fn start_state(&self) -> Vec<f64> {
-        let s = &self.task.initial_states;
-        s[self.trial as usize % s.len()].clone()
-    }
-
     /// Runs the next learning trial (and its greedy evaluation, if due); `None` when all
     /// trials are done.
     pub fn next_trial(&mut self) -> Option<TrialRecord> {
-        if self.trial >= self.trials {
-            return None;
-        }
-        let x0 = self.start_state();
-        let steps = self.task.steps_per_trial();
-        let mut u = vec![0.0; self.task.action_dim()];
-        // The agent starts from the plant's state as measured (angles wrapped), exactly as
-        // it does over the wire.
-        self.start(&x0, false, &mut u);
-        let mut ret = 0.0;
-        let predictive = self.front.is_predictive();
-        for k in 0..steps {
-            let acted_on = self.front_state();
-            let r = self.actuator.interval(&mut self.plant, &u);
-            ret += r;
-            if predictive {
-                // x̂_{k+1|k} against x_{k+1}.
-                self.acted_on_error
-                    .add(&self.task, &acted_on, self.plant.state());
-            }
-            let terminated = self.sample(k, r, false, &mut u);
-            if !predictive && k + 1 < steps {
-                // x̂_{k+1} against x_{k+1}.
-                let x = self.front.acted_on();
-                self.acted_on_error.add(&self.task, x, self.plant.state());
-            }
-            if terminated {
-                self.skipped_samples += (steps - k - 1) as u64;
-                break;
-            }
-        }
-        ret += self.final_reward();
-        self.trial += 1;
-        let greedy = (self.eval_every > 0 && self.trial.is_multiple_of(self.eval_every))
-            .then(|| self.greedy_return());
+        let trial = self.schedule.next_trial()?;
+        let ret = self.learning_trial(&trial.x0);
+        let greedy = self
+            .schedule
+            .end_trial(self.episode.skipped())
+            .map(|evaluation| self.evaluate(&evaluation));
         Some(TrialRecord {
             run: self.run,
-            trial: self.trial,
-            sim_time_s: self.sim_time_s(),
+            trial: trial.number,
+            sim_time_s: self.schedule.sim_time_s(),
             ret,
             greedy,
         })
+    }
+
+    /// One learning trial from `x0`; returns its return (with the terminal reward of a
+    /// finite horizon).
+    fn learning_trial(&mut self, x0: &[f64]) -> f64 {
+        let mut u = vec![0.0; self.task.action_dim()];
+        // The agent starts from the plant's state as measured (angles wrapped), exactly as
+        // it does over the wire.
+        self.start(x0, false, &mut u);
+        let mut ret = 0.0;
+        let predictive = self.front.is_predictive();
+        loop {
+            let acted_on = self.front_state();
+            let step = self.episode.step(&u);
+            ret += step.reward;
+            if predictive {
+                // x̂_{k+1|k} against x_{k+1}.
+                let x = self.episode.plant().state();
+                self.acted_on_error.add(&self.task, &acted_on, x);
+            }
+            self.sample(&step, false, &mut u);
+            if !predictive && !step.truncated {
+                // x̂_{k+1} against x_{k+1}.
+                let x = self.front.acted_on();
+                let truth = self.episode.plant().state();
+                self.acted_on_error.add(&self.task, x, truth);
+            }
+            if step.ended() {
+                break;
+            }
+        }
+        ret + self.final_reward()
     }
 
     /// A trial's start: the plant is put at `x0`, the observer and the agent start from it
@@ -254,66 +243,53 @@ impl Experiment {
     /// that answer is the first interval's action `u_0`, and the agent, told so, answers
     /// `u_1` into `u` ([`observer::timing`], trial start).
     fn start(&mut self, x0: &[f64], greedy: bool, u: &mut [f64]) {
-        self.plant.reset(x0);
-        self.actuator.reset();
-        self.start_sample(false, greedy, u);
-        if self.front.is_predictive() {
-            self.actuator.prime(u);
-            self.start_sample(true, greedy, u);
-        }
-    }
-
-    /// The start state as a sample — the trial's start, or (`primed`, predictive timing)
-    /// the start again with the first interval's action — and the agent's answer into `u`.
-    fn start_sample(&mut self, primed: bool, greedy: bool, u: &mut [f64]) {
-        let t = self.front.sample(&AtSample {
-            step: 0,
-            start: !primed,
-            primed,
-            end: false,
-            terminal: false,
-            y: self.plant.state(),
-            reward: 0.0,
-            u_applied: self.plant.applied_action(),
-            u_next: self.actuator.next_action().unwrap_or(&[]),
+        let (front, agent) = (&mut self.front, self.agent.as_mut());
+        let Ok(()) = self.episode.start(x0, u, |e, primed, u| {
+            start_sample(front, agent, e, primed, greedy, u);
+            Ok::<(), Infallible>(())
         });
-        act(self.agent.as_mut(), greedy, &t, u);
     }
 
-    /// Sample `k + 1` after interval `k` (reward `r`): measure, estimate, let the agent act
-    /// (learn, unless `greedy`), its answer into `u`. Returns whether the trial ended by
-    /// leaving the operating range.
-    fn sample(&mut self, k: usize, r: f64, greedy: bool, u: &mut [f64]) -> bool {
-        self.sensor.measure(self.plant.state(), &mut self.y);
-        let terminal = self.plant.terminated();
+    /// Sample `k + 1` after interval `k` (`step`): measure, estimate, let the agent act
+    /// (learn, unless `greedy`), its answer into `u`.
+    fn sample(&mut self, step: &Step, greedy: bool, u: &mut [f64]) {
+        let (plant, actuator) = (self.episode.plant(), self.episode.actuator());
+        self.sensor.measure(plant.state(), &mut self.y);
         let t = self.front.sample(&AtSample {
-            step: k + 1,
+            step: step.sample,
             start: false,
             primed: false,
-            end: terminal || k + 1 == self.task.steps_per_trial(),
-            terminal,
+            end: step.ended(),
+            terminal: step.terminated,
             y: &self.y,
-            reward: r,
-            u_applied: self.plant.applied_action(),
-            u_next: self.actuator.next_action().unwrap_or(&[]),
+            reward: step.reward,
+            u_applied: plant.applied_action(),
+            u_next: actuator.next_action().unwrap_or(&[]),
         });
         act(self.agent.as_mut(), greedy, &t, u);
-        terminal
     }
 
     /// `τ_N(x_N)` of the plant's state after a finite horizon's last sample (Eq. 4.1); 0
     /// for an infinite horizon.
     fn final_reward(&self) -> f64 {
         self.horizon
-            .final_reward(&self.task.reward, self.plant.state())
+            .final_reward(&self.task.reward, self.episode.plant().state())
     }
 
     /// The greedy policy's return without learning: the mean over the task's start
     /// states of one trial from each.
     pub fn greedy_return(&mut self) -> f64 {
-        let starts = self.task.initial_states.clone();
-        let total: f64 = starts.iter().map(|x0| self.greedy_return_from(x0)).sum();
-        total / starts.len() as f64
+        let evaluation = self.schedule.evaluation();
+        self.evaluate(&evaluation)
+    }
+
+    /// The mean return of the greedy trials of an evaluation.
+    fn evaluate(&mut self, evaluation: &[Trial]) -> f64 {
+        let total: f64 = evaluation
+            .iter()
+            .map(|t| self.greedy_return_from(&t.x0))
+            .sum();
+        total / evaluation.len() as f64
     }
 
     /// The return of one trial from `x0` under the greedy policy, without learning.
@@ -325,31 +301,54 @@ impl Experiment {
     /// One greedy trial from `x0`: the time response of the current policy (until the
     /// trial's end or until the system leaves its operating range).
     pub fn greedy_trajectory(&mut self, x0: &[f64]) -> Vec<Sample> {
-        let steps = self.task.steps_per_trial();
         let mut u = vec![0.0; self.task.action_dim()];
         self.start(x0, true, &mut u);
         let mut acted_on = self.front_state();
-        let mut out = Vec::with_capacity(steps);
-        for k in 0..steps {
-            let reward = self.actuator.interval(&mut self.plant, &u);
+        let mut out = Vec::with_capacity(self.task.steps_per_trial());
+        loop {
+            let step = self.episode.step(&u);
             out.push(Sample {
-                t: k as f64 * self.task.ts,
-                x: acted_on.clone(),
-                u: self.plant.applied_action().to_vec(),
-                reward,
+                t: (step.sample - 1) as f64 * self.task.ts,
+                x: std::mem::take(&mut acted_on),
+                u: self.episode.plant().applied_action().to_vec(),
+                reward: step.reward,
             });
-            if self.sample(k, reward, true, &mut u) {
-                break;
+            self.sample(&step, true, &mut u);
+            if step.ended() {
+                return out;
             }
             acted_on = self.front_state();
         }
-        out
     }
 
     /// The state the agent last acted on.
     fn front_state(&self) -> Vec<f64> {
         self.front.acted_on().to_vec()
     }
+}
+
+/// The start state as a sample — the trial's start, or (`primed`, predictive timing) the
+/// start again with the first interval's action — and the agent's answer into `u`.
+fn start_sample(
+    front: &mut Front,
+    agent: &mut dyn Agent,
+    e: &Episode,
+    primed: bool,
+    greedy: bool,
+    u: &mut [f64],
+) {
+    let t = front.sample(&AtSample {
+        step: 0,
+        start: !primed,
+        primed,
+        end: false,
+        terminal: false,
+        y: e.plant().state(),
+        reward: 0.0,
+        u_applied: e.plant().applied_action(),
+        u_next: e.actuator().next_action().unwrap_or(&[]),
+    });
+    act(agent, greedy, &t, u);
 }
 
 /// The observer `cfg` asks for on `task`, in the configured timing.

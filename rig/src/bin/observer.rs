@@ -1,7 +1,7 @@
 //! The observer process of a rig run, as its own executable (the same as `rig observer`).
 
 use clap::Parser;
-use runtime::process::ProcessArgs;
+use runtime::process::ObserverArgs;
 
 /// The observer process of a rig run: joins run `--run-id` over iceoryx2 and runs until the
 /// plant announces the end of the run.
@@ -9,7 +9,7 @@ use runtime::process::ProcessArgs;
 #[command(name = "observer", version)]
 struct Cli {
     #[command(flatten)]
-    args: ProcessArgs,
+    args: ObserverArgs,
 }
 
 fn main() -> std::process::ExitCode {

@@ -11,7 +11,7 @@ use ::plant::Task;
 use anyhow::Result;
 use wire::{Bus, Estimate, Measurement, flags, now_ns, topic};
 
-use super::{ProcessArgs, SILENCE, STARTUP, pack, wire_err};
+use super::{ObserverArgs, SILENCE, STARTUP, pack, wire_err};
 
 /// The [`flags`] an estimate carries for agent call `call`: the measurement's, plus
 /// [`flags::LAST`] / [`flags::HOLD`] where predictive timing makes the agent's trial end
@@ -41,7 +41,8 @@ pub fn call_of(f: u64) -> Call {
 }
 
 /// Runs the observer side of a run until the plant announces its end.
-pub fn run(args: &ProcessArgs) -> Result<()> {
+pub fn run(args: &ObserverArgs) -> Result<()> {
+    let args = &args.node;
     super::set_rt_priority(args.scheduling.rt_priority)?;
     if args.scheduling.pin_cpus {
         super::pin(super::Cpus::Rest)?;

@@ -18,13 +18,16 @@
 
 use std::time::Duration;
 
+use ::plant::episode::{Step, TimeLimit};
 use ::plant::safety::{SafetyCounts, Supervisor};
+use ::plant::schedule::Trial;
 use anyhow::{Result, anyhow, bail};
 use driver::contract::{DriverInfo, DriverLink, DriverSample, status};
 use wire::{flags, now_ns};
 
-use super::plant::{Link, TrialHeader, Trials};
-use super::{ProcessArgs, SILENCE, STARTUP, seconds, wire_err};
+use super::super::{PlantArgs, SILENCE, STARTUP, seconds, wire_err};
+use super::Trials;
+use super::link::{Link, TrialHeader, end_flags};
 
 /// The episode master for an external driver.
 pub struct Bridge {
@@ -41,12 +44,14 @@ pub struct Bridge {
     /// Whether the driver measures positions only (NaN velocities), as its first sample
     /// of the run showed.
     positions_only: Option<bool>,
+    /// The samples of the trial.
+    limit: TimeLimit,
 }
 
 impl Bridge {
     /// Connects to driver `driver_id`: waits for its info (`--driver-timeout`), checks it
     /// against the task, then waits for the observer (and recorder) to listen.
-    pub(super) fn connect(link: Link, driver_id: &str, args: &ProcessArgs) -> Result<Self> {
+    pub(super) fn connect(link: Link, driver_id: &str, args: &PlantArgs) -> Result<Self> {
         let driver = DriverLink::connect(&link.bus, driver_id).map_err(wire_err)?;
         let info = driver
             .wait_info(&link.bus, seconds("--driver-timeout", args.driver_timeout)?)
@@ -55,10 +60,11 @@ impl Bridge {
             .and_then(|()| driver::fits_task(&info, &link.task))
             .map_err(|e| anyhow!("driver {driver_id:?} does not fit the task: {e}"))?;
         link.out
-            .wait_for_receivers(args.receivers, STARTUP, &link.bus)
+            .wait_for_receivers(args.node.receivers, STARTUP, &link.bus)
             .map_err(wire_err)?;
         Ok(Self {
             safety: Supervisor::new(&link.task),
+            limit: TimeLimit::new(link.task.steps_per_trial()),
             silence: (info.period() * 20).max(Duration::from_secs(1)),
             reset_timeout: seconds("--reset-timeout", args.reset_timeout)?,
             link,
@@ -128,77 +134,89 @@ impl Bridge {
     }
 }
 
-impl Trials for Bridge {
-    fn trial(&mut self, trial: u64, x0: &[f64], mode: u64, t0: f64) -> Result<usize> {
-        let task = self.link.task.clone();
-        let steps = task.steps_per_trial();
-        let header = TrialHeader {
-            trial,
-            mode,
-            t0,
-            ts: task.ts,
-        };
+impl Bridge {
+    /// Resets the driver to `x0` and publishes the start sample (`header`) when it is
+    /// READY there. Returns the READY sample, the reset's id and when the start sample
+    /// was published.
+    fn start(&mut self, x0: &[f64], header: &TrialHeader) -> Result<(DriverSample, u64, u64)> {
         let reset_id = self.driver.reset(x0).map_err(wire_err)?;
-        let mut s = self
+        let s = self
             .driver
             .wait_ready(&self.link.bus, &self.info, reset_id, self.reset_timeout)
             .map_err(wire_err)?;
-        let positions_only = self.positions_only(&s)?;
         // READY means at rest at x0: a driver that does not measure the velocities has
         // brought them to x0's.
         let mut start = s.state().to_vec();
-        if positions_only {
+        if self.positions_only(&s)? {
             let half = start.len() / 2;
             start[half..].copy_from_slice(&x0[half..]);
         }
-        let mut t_publish = self.link.publish(
+        let t_publish = self.link.publish(
             header.at(self.link.seq, 0, flags::START),
             0.0,
             &start,
             s.applied(),
             s.t_sample_ns,
         )?;
-        let mut u = vec![0.0; task.action_dim()];
-        for k in 0..steps {
-            let requested = self.action(self.link.seq - 1, t_publish)?;
-            self.safety.admit(&requested, &mut u);
-            let command = self.driver.act(&u, s.seq).map_err(wire_err)?;
-            let next = self.next_sample(s.seq, reset_id)?;
-            // Periods that passed without a measurement, and an action the driver had
-            // not applied by the next sample, are missed deadlines.
-            self.link.misses += next.seq - s.seq - 1 + u64::from(next.last_command != command);
-            // Leaving the task's operating range ends the trial with its penalty (§6.4.2);
-            // no further action is sent, so the driver's watchdog applies zero.
-            let left = self.safety.check(next.measured());
-            // ρ(x_k, u): unknown here if the velocities are not measured (the observer
-            // computes it from its estimate, flags::ESTIMATED_REWARD).
-            let reward = if positions_only {
-                f64::NAN
-            } else {
-                task.reward.reward(s.state(), next.applied())
-            };
-            let (r, end) = match left {
-                Some(penalty) => (penalty, flags::END | flags::TERMINAL),
-                None if k + 1 == steps => (reward, flags::END),
-                None => (reward, 0),
-            };
+        Ok((s, reset_id, t_publish))
+    }
+
+    /// One period after driver sample `s` (of reset `reset_id`), published at
+    /// `t_publish`: the agent's answer, made safe into `u`, goes to the driver; returns
+    /// the driver's next sample and what the period came to.
+    fn period(
+        &mut self,
+        s: &DriverSample,
+        t_publish: u64,
+        reset_id: u64,
+        u: &mut [f64],
+    ) -> Result<(DriverSample, Step)> {
+        let requested = self.action(self.link.seq - 1, t_publish)?;
+        self.safety.admit(&requested, u);
+        let command = self.driver.act(u, s.seq).map_err(wire_err)?;
+        let next = self.next_sample(s.seq, reset_id)?;
+        // Periods that passed without a measurement, and an action the driver had not
+        // applied by the next sample, are missed deadlines.
+        self.link.misses += next.seq - s.seq - 1 + u64::from(next.last_command != command);
+        // Leaving the task's operating range ends the trial with its penalty (§6.4.2); no
+        // further action is sent, so the driver's watchdog applies zero.
+        let left = self.safety.check(next.measured());
+        // ρ(x_k, u): unknown here if the velocities are not measured (the observer
+        // computes it from its estimate, flags::ESTIMATED_REWARD).
+        let reward = if self.positions_only == Some(true) {
+            f64::NAN
+        } else {
+            self.link.task.reward.reward(s.state(), next.applied())
+        };
+        let step = self.limit.step(left.unwrap_or(reward), left.is_some());
+        Ok((next, step))
+    }
+}
+
+impl Trials for Bridge {
+    fn trial(&mut self, trial: &Trial) -> Result<usize> {
+        let header = TrialHeader::new(trial, self.link.task.ts);
+        let (mut s, reset_id, mut t_publish) = self.start(&trial.x0, &header)?;
+        self.limit.reset();
+        let mut u = vec![0.0; self.link.task.action_dim()];
+        loop {
+            let (next, step) = self.period(&s, t_publish, reset_id, &mut u)?;
             t_publish = self.link.publish(
-                header.at(self.link.seq, k + 1, end),
-                r,
+                header.at(self.link.seq, step.sample, end_flags(&step)),
+                step.reward,
                 next.state(),
                 next.applied(),
                 next.t_sample_ns,
             )?;
             s = next;
-            if left.is_some() {
+            if step.ended() {
+                // The END sample's answer only acknowledges learning: nothing to apply
+                // (the next trial's reset follows, and the driver's watchdog stops the
+                // last action).
                 self.action(self.link.seq - 1, t_publish)?;
-                return Ok(steps - k - 1);
+                return Ok(self.limit.skipped());
             }
         }
-        // The END sample's answer only acknowledges learning: nothing to apply (the
-        // next trial's reset follows, and the driver's watchdog stops the last action).
-        self.action(self.link.seq - 1, t_publish)?;
-        Ok(0)
     }
 
     fn link(&mut self) -> &mut Link {

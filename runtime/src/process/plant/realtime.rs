@@ -1,0 +1,270 @@
+//! The simulated plant in real time: it samples at absolute deadlines of `Ts / speed` on
+//! the monotonic clock, whether the agent has answered or not.
+//!
+//! In direct timing every action that arrives within an interval is applied from its
+//! arrival on (the previous one held until then); in predictive timing the last action
+//! that arrived within an interval is applied at the next sample instant, for the whole
+//! next interval (none arrived: the previous one is held). An interval in which the
+//! action for its sample did not arrive is a missed deadline. The reward of an interval
+//! is `ρ(x_k, u)` with the action in effect at its end. An interval without any action
+//! trips the plant's watchdog ([`plant::safety::Supervisor::period`]): zero from its end
+//! on, until an action arrives. A late answer to the previous trial's last sample is
+//! dropped, not applied in this one. Nothing is allocated per interval.
+
+use ::plant::episode::{Episode, Step};
+use ::plant::safety::SafetyCounts;
+use ::plant::schedule::Trial;
+use ::plant::{Plant, Task};
+use anyhow::Result;
+use wire::{Header, MAX_U, flags, now_ns};
+
+use super::super::{SILENCE, wire_err};
+use super::Trials;
+use super::arrivals::Arrivals;
+use super::link::{Link, TrialHeader, end_flags};
+
+/// Absolute sampling deadlines on the monotonic clock.
+struct Clock {
+    period_ns: u64,
+    /// The next sampling instant \[ns\].
+    next_ns: u64,
+    /// How many times faster than real time.
+    speed: f64,
+    /// How long before each instant the plant spins instead of sleeping \[ns\].
+    spin_ns: u64,
+}
+
+/// Sleeps, then spins the last `spin_ns`, until monotonic time `t_ns`: the sleep may
+/// overshoot (the operating system's wake-up latency, on a virtual machine up to
+/// milliseconds), the spin does not.
+fn sleep_until(t_ns: u64, spin_ns: u64) {
+    loop {
+        let now = now_ns();
+        if now >= t_ns {
+            return;
+        }
+        let left = t_ns - now;
+        if left > spin_ns + 100_000 {
+            std::thread::sleep(std::time::Duration::from_nanos(left - spin_ns));
+        } else {
+            std::hint::spin_loop();
+        }
+    }
+}
+
+/// The actions a realtime trial applies.
+struct Held {
+    /// The action in effect.
+    u: Vec<f64>,
+    /// Predictive timing: the action applied from the coming sample instant on.
+    pending: Option<[f64; MAX_U]>,
+}
+
+impl Held {
+    /// Integrates `plant` over the interval `[t_k, deadline)` with the actions of
+    /// `arrivals` ([module documentation](self)), piecewise in simulated seconds
+    /// (`speed` times the monotonic ones); `pipelined`: predictive timing.
+    fn integrate(
+        &mut self,
+        plant: &mut Plant,
+        arrivals: &Arrivals,
+        (t_k, deadline): (u64, u64),
+        speed: f64,
+        pipelined: bool,
+    ) {
+        let m = self.u.len();
+        let sim = |dt_ns: u64| dt_ns as f64 * 1e-9 * speed;
+        let mut t = t_k;
+        if pipelined {
+            if let Some(u) = self.pending.take() {
+                self.u.copy_from_slice(&u[..m]);
+            }
+            self.pending = arrivals.list.last().map(|&(_, u)| u);
+        } else {
+            for (t_a, u) in &arrivals.list {
+                plant.advance(&self.u, sim(t_a - t));
+                self.u.copy_from_slice(&u[..m]);
+                t = *t_a;
+            }
+        }
+        plant.advance(&self.u, sim(deadline - t));
+        if plant.safety().period(!arrivals.list.is_empty()) {
+            // No action for a whole period: the safe action from this instant on.
+            self.u.fill(0.0);
+            self.pending = None;
+        }
+    }
+
+    /// Predictive timing: the action applied from the coming instant on.
+    fn next(&self) -> &[f64] {
+        self.pending
+            .as_ref()
+            .map_or(&self.u[..], |u| &u[..self.u.len()])
+    }
+}
+
+/// The simulated system in real time.
+pub(super) struct Realtime {
+    episode: Episode,
+    link: Link,
+    clock: Clock,
+    /// Keep every sample's timing ([`Link::cycles`]).
+    record_cycles: bool,
+    /// Predictive timing (`observer.mode`): the action that answers sample `k` is
+    /// applied at `t_{k+1}` for the whole interval.
+    pipelined: bool,
+}
+
+impl Realtime {
+    /// Trials of `episode` in real time, `speed` times faster than `task`'s sample time,
+    /// published on `link`; the clock starts a period from now.
+    pub(super) fn new(
+        link: Link,
+        episode: Episode,
+        task: &Task,
+        speed: f64,
+        spin_us: u64,
+        record_cycles: bool,
+    ) -> Self {
+        let period_ns = (task.ts * 1e9 / speed).round() as u64;
+        let clock = Clock {
+            period_ns,
+            next_ns: now_ns() + period_ns,
+            speed,
+            spin_ns: spin_us * 1000,
+        };
+        Self {
+            pipelined: episode.actuator().is_pipelined(),
+            episode,
+            link,
+            clock,
+            record_cycles,
+        }
+    }
+
+    /// Publishes the current sample without waiting.
+    fn publish(&mut self, header: Header, reward: f64, t_sample_ns: u64) -> Result<u64> {
+        let plant = self.episode.plant();
+        self.link.publish(
+            header,
+            reward,
+            plant.state(),
+            plant.applied_action(),
+            t_sample_ns,
+        )
+    }
+
+    /// Predictive timing: the first interval's action `u_0` from the known start state
+    /// (`h`, the start sample), before the clock starts (`observer::timing`, trial
+    /// start), into `held`; the start instant moves on by one period for it.
+    fn prime(&mut self, h: Header, held: &mut Held) -> Result<()> {
+        self.publish(h, 0.0, now_ns())?;
+        let a = loop {
+            let a = self
+                .link
+                .actions
+                .recv(&self.link.bus, SILENCE)
+                .map_err(wire_err)?;
+            // A late answer to the last trial's final sample is stale here: skip it.
+            if a.header.seq >= h.seq {
+                break a;
+            }
+        };
+        Link::check_answer(&a, h.seq)?;
+        let m = held.u.len();
+        held.u.copy_from_slice(&a.u[..m]);
+        self.link.u_next.clone_from(&held.u);
+        let c = &mut self.clock;
+        c.next_ns = c.next_ns.max(now_ns()) + c.period_ns;
+        Ok(())
+    }
+
+    /// Notes how the interval from `t_k` (woken at `woke`), awaiting the answer to sample
+    /// `waiting_for`, went: the answer's latency, or a deadline miss; its timing.
+    fn account(&mut self, arrivals: &Arrivals, waiting_for: u64, t_k: u64, woke: u64) {
+        let t_answer = match arrivals.answered {
+            Some(t_a) => {
+                self.link.latencies.push(t_a.saturating_sub(t_k));
+                t_a
+            }
+            None => {
+                self.link.misses += 1;
+                0
+            }
+        };
+        if self.record_cycles {
+            self.link.cycles.push([waiting_for, t_k, woke, t_answer]);
+        }
+    }
+
+    /// The interval `[t_k, deadline)` with the actions that arrived in it.
+    fn interval(&mut self, arrivals: &Arrivals, held: &mut Held, span: (u64, u64)) -> Step {
+        let (speed, pipelined) = (self.clock.speed, self.pipelined);
+        let step = self
+            .episode
+            .step_with(|plant| held.integrate(plant, arrivals, span, speed, pipelined));
+        if pipelined {
+            self.link.u_next.copy_from_slice(held.next());
+        }
+        step
+    }
+}
+
+impl Trials for Realtime {
+    fn trial(&mut self, trial: &Trial) -> Result<usize> {
+        let steps = self.link.task.steps_per_trial();
+        self.episode.reset(&trial.x0);
+        let mut held = Held {
+            u: vec![0.0; self.link.task.action_dim()],
+            pending: None,
+        };
+        let mut arrivals = Arrivals::new(self.link.seq);
+        let header = TrialHeader::new(trial, self.link.task.ts);
+        let mut first = flags::START;
+        if self.pipelined {
+            self.link.u_next.clone_from(&held.u);
+            self.prime(header.at(self.link.seq, 0, flags::START), &mut held)?;
+            first = flags::PRIMED;
+        }
+        // Room for the trial's timing records now, before the clock runs: a vector that
+        // grows within the loop copies itself at a sampling instant.
+        self.link.latencies.reserve(steps + 2);
+        if self.record_cycles {
+            self.link.cycles.reserve(steps + 2);
+        }
+        let mut t_k = self.clock.next_ns;
+        sleep_until(t_k, self.clock.spin_ns);
+        let mut woke = now_ns();
+        self.publish(header.at(self.link.seq, 0, first), 0.0, t_k)?;
+        let mut ended = None;
+        loop {
+            let waiting_for = self.link.seq - 1;
+            let deadline = t_k + self.clock.period_ns;
+            let actions = &self.link.actions;
+            arrivals.collect(actions, deadline, waiting_for, self.clock.spin_ns)?;
+            let woke_next = now_ns();
+            self.account(&arrivals, waiting_for, t_k, woke);
+            if let Some(skipped) = ended {
+                // The END sample's answer only acknowledges learning; the trial is over.
+                self.clock.next_ns = deadline;
+                return Ok(skipped);
+            }
+            let step = self.interval(&arrivals, &mut held, (t_k, deadline));
+            woke = woke_next;
+            t_k = deadline;
+            let h = header.at(self.link.seq, step.sample, end_flags(&step));
+            self.publish(h, step.reward, t_k)?;
+            if step.ended() {
+                ended = Some(self.episode.skipped());
+            }
+        }
+    }
+
+    fn link(&mut self) -> &mut Link {
+        &mut self.link
+    }
+
+    fn safety(&mut self) -> SafetyCounts {
+        self.episode.plant_mut().safety().counts()
+    }
+}
