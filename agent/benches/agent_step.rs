@@ -20,7 +20,7 @@ use agent::Agent;
 use agent::approx::llr::{Eviction, Llr, LlrParams, Search};
 use agent::approx::rbf::{Rbf, RbfParams};
 use agent::approx::{Approximator, Differentiable};
-use agent::config::{Overrides, resolve};
+use agent::config::{Algo, ApproxKind, HorizonKind};
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use plant::{Plant, Task};
 use rand::{RngExt, SeedableRng};
@@ -32,9 +32,11 @@ type Recorded = (f64, Vec<f64>, bool);
 /// Learns until every actor and critic memory is full; returns the agent and the
 /// transitions of the last ten trials.
 fn trained_mlac_llr() -> (Box<dyn Agent>, Vec<Recorded>) {
-    let cfg = resolve(None, &Overrides::default()).expect("default preset");
-    let task = Arc::new(Task::new(cfg.system));
-    let mut agent = agent::build(&task, &cfg, 1);
+    let system = plant::SystemName::Pendulum;
+    let preset = agent::preset::preset(system, Algo::Mlac, ApproxKind::Llr, HorizonKind::Infinite)
+        .expect("the default preset");
+    let task = Arc::new(Task::new(system));
+    let mut agent = agent::build(&task, &preset.agent, 1);
     let mut plant = Plant::new(task.clone());
     let steps = task.steps_per_trial();
     let mut record = Vec::new();

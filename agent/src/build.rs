@@ -8,7 +8,7 @@ use crate::approx::llr::{Eviction, Llr, LlrParams, Search};
 use crate::approx::rbf::{Rbf, RbfParams};
 use crate::approx::tiles::{Tiles, TilesParams};
 use crate::approx::{Approximator, Differentiable, ValueFunction};
-use crate::config::{Algo, Component, ExperimentConfig, LstdPrior};
+use crate::config::{AgentConfig, Algo, Component, LstdPrior};
 use crate::critic::{Critic, TdLambda};
 use crate::explore::Exploration;
 use crate::lstd::Lstd;
@@ -158,7 +158,7 @@ impl crate::approx::Traced for GradientFree {
 
 /// The agent `cfg` describes, for `task`, with every random stream derived from
 /// `run_seed`.
-pub fn build(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Box<dyn Agent> {
+pub fn build(task: &Task, cfg: &AgentConfig, run_seed: u64) -> Box<dyn Agent> {
     let horizon = cfg.horizon.of(task);
     let info = TaskInfo {
         horizon,

@@ -24,8 +24,6 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::config::ExperimentConfig;
-
 /// The checkpoint format version this build writes and reads.
 pub const VERSION: u32 = 1;
 
@@ -264,30 +262,14 @@ pub struct Origin {
     pub seed: u64,
     /// The run index within the experiment.
     pub run: u32,
-    /// Fingerprint of the configuration's learning-relevant part (all but
-    /// `run.trials` and `run.eval_every`).
+    /// [`fingerprint`] of the configuration's learning-relevant part, as the caller
+    /// defines it (every key but those that only say how long and how often to run).
     pub fingerprint: u64,
 }
 
-impl Origin {
-    /// The origin of run `run` of experiment `cfg`.
-    pub fn of(cfg: &ExperimentConfig, run: u32) -> Self {
-        let mut c = cfg.clone();
-        c.run.trials = 0;
-        c.run.eval_every = 0;
-        c.run.runs = 0;
-        Self {
-            system: cfg.system.to_string(),
-            learner: format!("{}/{}/{}", cfg.algo, cfg.approx, cfg.horizon),
-            seed: cfg.run.seed,
-            run,
-            fingerprint: fnv1a(c.to_toml().as_bytes()),
-        }
-    }
-}
-
-/// FNV-1a, 64 bit: a fingerprint that is stable across builds and platforms.
-fn fnv1a(bytes: &[u8]) -> u64 {
+/// A fingerprint of `bytes` (a configuration's text, for [`Origin::fingerprint`]):
+/// FNV-1a, 64 bit, stable across builds and platforms.
+pub fn fingerprint(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
         (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
     })
@@ -357,23 +339,21 @@ impl Checkpoint {
         Self::from_bytes(&bytes).map_err(|e| CheckpointError(format!("{}: {e}", path.display())))
     }
 
-    /// Restores `agent`, built from experiment `cfg` for run `run`, to the learned state
-    /// of this checkpoint, after checking that the checkpoint belongs to that run.
+    /// Restores `agent`, built for the run `want` describes, to the learned state of this
+    /// checkpoint, after checking that the checkpoint belongs to that run.
     pub fn restore(
         &self,
-        cfg: &ExperimentConfig,
-        run: u32,
+        want: &Origin,
         agent: &mut dyn crate::Agent,
     ) -> Result<(), CheckpointError> {
-        self.check_origin(cfg, run)?;
+        self.check_origin(want)?;
         let mut r = self.state.reader();
         agent.restore(&mut r)?;
         r.finish()
     }
 
-    /// Checks that the checkpoint belongs to run `run` of experiment `cfg`.
-    pub fn check_origin(&self, cfg: &ExperimentConfig, run: u32) -> Result<(), CheckpointError> {
-        let want = Origin::of(cfg, run);
+    /// Checks that the checkpoint belongs to the run `want` describes.
+    pub fn check_origin(&self, want: &Origin) -> Result<(), CheckpointError> {
         let have = &self.origin;
         if have.system != want.system {
             return err(format!(
@@ -418,22 +398,21 @@ mod tests {
         let _: u64 = rng.next_u64();
         s.rng("exploration", &rng);
         Checkpoint {
-            origin: Origin::of(&pendulum(), 0),
+            origin: pendulum(0),
             trial: 7,
             sim_time_s: 21.0,
             state: s,
         }
     }
 
-    fn pendulum() -> ExperimentConfig {
-        use crate::config::{Algo, ApproxKind, HorizonKind};
-        crate::preset::preset(
-            plant::SystemName::Pendulum,
-            Algo::Mlac,
-            ApproxKind::Llr,
-            HorizonKind::Infinite,
-        )
-        .unwrap()
+    fn pendulum(run: u32) -> Origin {
+        Origin {
+            system: "pendulum".into(),
+            learner: "mlac/llr/infinite".into(),
+            seed: 1,
+            run,
+            fingerprint: fingerprint(b"[learning]\ngamma = 0.97\n"),
+        }
     }
 
     #[test]
@@ -497,26 +476,35 @@ mod tests {
 
     #[test]
     fn origin_mismatches_are_named() {
-        let cfg = pendulum();
         let c = sample();
-        c.check_origin(&cfg, 0).unwrap();
-        assert!(c.check_origin(&cfg, 1).unwrap_err().0.contains("run 1"));
-        let mut other = cfg.clone();
-        other.run.trials += 10;
-        c.check_origin(&other, 0)
-            .expect("more trials is the same learner");
-        let arm = crate::preset::preset(
-            plant::SystemName::ArmVertical,
-            cfg.algo,
-            cfg.approx,
-            cfg.horizon,
-        )
-        .unwrap();
-        let e = c.check_origin(&arm, 0).unwrap_err().0;
+        c.check_origin(&pendulum(0)).unwrap();
+        let e = c.check_origin(&pendulum(1)).unwrap_err().0;
+        assert!(e.contains("run 1"), "{e}");
+        let arm = Origin {
+            system: "arm-vertical".into(),
+            ..pendulum(0)
+        };
+        let e = c.check_origin(&arm).unwrap_err().0;
         assert!(e.contains("from system pendulum"), "{e}");
-        let mut tuned = cfg.clone();
-        tuned.learning.gamma = 0.5;
-        let e = c.check_origin(&tuned, 0).unwrap_err().0;
+        let sac = Origin {
+            learner: "sac/llr/infinite".into(),
+            ..pendulum(0)
+        };
+        let e = c.check_origin(&sac).unwrap_err().0;
+        assert!(e.contains("from learner mlac/llr/infinite"), "{e}");
+        let tuned = Origin {
+            fingerprint: fingerprint(b"[learning]\ngamma = 0.5\n"),
+            ..pendulum(0)
+        };
+        let e = c.check_origin(&tuned).unwrap_err().0;
         assert!(e.contains("different learning parameters"), "{e}");
+    }
+
+    #[test]
+    fn the_fingerprint_is_fnv_1a() {
+        // The published FNV-1a 64 test vectors: a checkpoint's fingerprint never changes.
+        assert_eq!(fingerprint(b""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(fingerprint(b"a"), 0xaf63_dc4c_8601_ec8c);
+        assert_eq!(fingerprint(b"foobar"), 0x8594_4171_f739_67e8);
     }
 }

@@ -12,8 +12,9 @@
 //!   baseline.
 //! * [`horizon`] — infinite or finite horizon (Chapter 4: time as an input, terminal
 //!   reward; SAC-FH, MLAC-FH, RMAC-FH are the shared step with a finite horizon).
-//! * [`config`], [`preset`], [`build()`] — from a configuration to a running agent;
-//!   [`checkpoint`] — its learned state saved at a trial's end and restored.
+//! * [`config`] — the agent's part of the configuration, [`preset`] — the thesis's
+//!   values of it, [`build()`] — from it to a running agent; [`checkpoint`] — the
+//!   agent's learned state saved at a trial's end and restored.
 //!
 //! An [`Agent`] is a plain step function; it knows nothing about processes or
 //! transport.

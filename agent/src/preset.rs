@@ -40,13 +40,36 @@
 //!   integrator) start from the pendulum values of the same algorithm and approximator.
 //! * Finite horizon (Chapter 4, §4.4): see [`finite_horizon`].
 
+use plant::config::{ConfigError, RunConfig};
 use plant::{SystemName, Task};
 
 use crate::config::{
-    Algo, ApproxKind, Component, ConfigError, ExperimentConfig, HorizonKind, LearningConfig,
-    LlrConfig, LstdConfig, LstdPrior, RbfConfig, RunConfig, SarsaConfig, TilesConfig, VgbpConfig,
-    finite_horizon_unsupported,
+    AgentConfig, Algo, ApproxKind, Component, HorizonKind, LearningConfig, LlrConfig, LstdConfig,
+    LstdPrior, RbfConfig, SarsaConfig, TilesConfig, VgbpConfig, finite_horizon_unsupported,
 };
+
+/// A preset: the agent's part of the configuration and the `[run]` section the thesis
+/// used with it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Preset {
+    /// The learner and its parameters.
+    pub agent: AgentConfig,
+    /// Trials, runs, seed and evaluation.
+    pub run: RunConfig,
+}
+
+/// `[run]` with seed 1 and no delay.
+fn run_section(trials: u32, runs: u32, eval_every: u32) -> RunConfig {
+    RunConfig {
+        trials,
+        runs,
+        seed: 1,
+        eval_every,
+        delay_ms: 0.0,
+        delay_from: String::new(),
+        delay_column: String::new(),
+    }
+}
 
 /// LLR memories of actors, critics and reference models replace a stored sample closer
 /// than this (in scaled units) instead of purging the oldest; see the module docs.
@@ -127,23 +150,8 @@ pub fn preset(
     algo: Algo,
     approx: ApproxKind,
     horizon: HorizonKind,
-) -> Result<ExperimentConfig, ConfigError> {
-    if !algo.approximators().contains(&approx) {
-        let names: Vec<&str> = algo.approximators().iter().map(|a| a.as_str()).collect();
-        return Err(ConfigError {
-            file: None,
-            key: "approx".into(),
-            message: format!(
-                "{algo} works with {}, not {approx}{}",
-                names.join(", "),
-                if approx == ApproxKind::Tiles {
-                    " (tile coding has no gradient, §3.5)"
-                } else {
-                    ""
-                }
-            ),
-        });
-    }
+) -> Result<Preset, ConfigError> {
+    algo.check_approx(approx)?;
     if horizon == HorizonKind::Finite {
         return finite_horizon(system, algo, approx);
     }
@@ -266,19 +274,10 @@ pub fn preset(
             }
         }
     }
-    Ok(ExperimentConfig {
-        system,
+    let agent = AgentConfig {
         algo,
         approx,
-        run: RunConfig {
-            trials: if arm { 600 } else { 400 },
-            runs: if arm { 20 } else { 30 },
-            seed: 1,
-            eval_every: 10,
-            delay_ms: 0.0,
-            delay_from: String::new(),
-            delay_column: String::new(),
-        },
+        horizon: HorizonKind::Infinite,
         learning: LearningConfig {
             gamma: 0.97,
             lambda: 0.65,
@@ -287,14 +286,18 @@ pub fn preset(
             saturation_margin: if approx == Rbf { 0.1 } else { 0.0 },
             bounded_actor: true,
         },
-        horizon: HorizonKind::Infinite,
         actor: Some(actor),
         critic,
         model,
         vgbp: None,
         sarsa: None,
-        observer: Default::default(),
-    })
+    };
+    let run = if arm {
+        run_section(600, 20, 10)
+    } else {
+        run_section(400, 30, 10)
+    };
+    Ok(Preset { agent, run })
 }
 
 /// Chapter 4's finite-horizon learners, SAC-FH, MLAC-FH and RMAC-FH (Algorithms 4–6),
@@ -331,18 +334,17 @@ pub fn finite_horizon(
     system: SystemName,
     algo: Algo,
     approx: ApproxKind,
-) -> Result<ExperimentConfig, ConfigError> {
+) -> Result<Preset, ConfigError> {
     if !algo.has_actor() {
         return Err(finite_horizon_unsupported(algo));
     }
     if approx != ApproxKind::Rbf {
-        return Err(ConfigError {
-            file: None,
-            key: "approx".into(),
-            message: format!(
+        return Err(ConfigError::new(
+            "approx",
+            format!(
                 "the finite-horizon presets (§4.4) use rbf; there is none for {algo} with {approx}"
             ),
-        });
+        ));
     }
     let task = Task::new(system);
     let (n, m) = (task.state_dim(), task.action_dim());
@@ -363,20 +365,10 @@ pub fn finite_horizon(
         ),
         Algo::Vgbp | Algo::Sarsa => unreachable!("rejected above"),
     };
-    Ok(ExperimentConfig {
-        system,
+    let agent = AgentConfig {
         algo,
         approx,
         horizon: HorizonKind::Finite,
-        run: RunConfig {
-            trials: 600,
-            runs: 20,
-            seed: 1,
-            eval_every: 10,
-            delay_ms: 0.0,
-            delay_from: String::new(),
-            delay_column: String::new(),
-        },
         learning: LearningConfig {
             gamma: 1.0,
             lambda: 0.65,
@@ -390,7 +382,10 @@ pub fn finite_horizon(
         model,
         vgbp: None,
         sarsa: None,
-        observer: Default::default(),
+    };
+    Ok(Preset {
+        agent,
+        run: run_section(600, 20, 10),
     })
 }
 
@@ -445,7 +440,7 @@ pub const VGBP_ACTION_GRID: u32 = 61;
 /// The RBF grids cover the task's state range (`φ̇ ∈ [−8π, 8π]` on the pendulum; the
 /// thesis's SARSA grid spans ±25 rad/s, 0.5 % narrower). Other systems take the same
 /// values with the grid and scaling per state component as for the actor-critics.
-fn critic_only(system: SystemName, algo: Algo, approx: ApproxKind) -> ExperimentConfig {
+fn critic_only(system: SystemName, algo: Algo, approx: ApproxKind) -> Preset {
     let task = Task::new(system);
     let n = task.state_dim();
     let arm_6_4 = system == SystemName::Arm64;
@@ -471,21 +466,10 @@ fn critic_only(system: SystemName, algo: Algo, approx: ApproxKind) -> Experiment
         (_, _) => (rbf(0.5, grid.clone(), 0.5), 0.85),
     };
     let vgbp = algo == Algo::Vgbp;
-    ExperimentConfig {
-        system,
+    let agent = AgentConfig {
         algo,
         approx,
         horizon: HorizonKind::Infinite,
-        run: RunConfig {
-            trials: 200,
-            runs: 20,
-            seed: 1,
-            // One greedy evaluation per sequence of the four start states (§6.4.2).
-            eval_every: if arm_6_4 { 4 } else { 5 },
-            delay_ms: 0.0,
-            delay_from: String::new(),
-            delay_column: String::new(),
-        },
         learning: LearningConfig {
             gamma: 0.97,
             lambda,
@@ -522,7 +506,12 @@ fn critic_only(system: SystemName, algo: Algo, approx: ApproxKind) -> Experiment
             epsilon_decay: 0.96,
             epsilon_min: 0.1,
         }),
-        observer: Default::default(),
+    };
+    // One greedy evaluation per sequence of the four start states (§6.4.2).
+    let eval_every = if arm_6_4 { 4 } else { 5 };
+    Preset {
+        agent,
+        run: run_section(200, 20, eval_every),
     }
 }
 
@@ -539,10 +528,15 @@ mod tests {
                         let supported = algo.approximators().contains(&approx)
                             && (horizon == HorizonKind::Infinite
                                 || (algo.has_actor() && approx == ApproxKind::Rbf));
+                        let task = Task::new(system);
                         match preset(system, algo, approx, horizon) {
-                            Ok(c) => c.validate().unwrap_or_else(|e| {
-                                panic!("{system}/{algo}/{approx}/{horizon}: {e}")
-                            }),
+                            Ok(p) => p
+                                .agent
+                                .validate(&task)
+                                .and_then(|()| p.run.validate(&task))
+                                .unwrap_or_else(|e| {
+                                    panic!("{system}/{algo}/{approx}/{horizon}: {e}")
+                                }),
                             Err(e) => assert!(!supported, "{e}"),
                         }
                     }
@@ -554,14 +548,14 @@ mod tests {
     #[test]
     fn finite_horizon_presets_are_those_of_section_4_4() {
         let rates = |algo| {
-            let c = preset(
+            let Preset { agent: c, run } = preset(
                 SystemName::Pendulum,
                 algo,
                 ApproxKind::Rbf,
                 HorizonKind::Finite,
             )
             .unwrap();
-            assert_eq!((c.run.trials, c.run.runs, c.learning.gamma), (600, 20, 1.0));
+            assert_eq!((run.trials, run.runs, c.learning.gamma), (600, 20, 1.0));
             let Some(Component::Rbf(a)) = c.actor else {
                 panic!()
             };

@@ -33,12 +33,12 @@
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use agent::config::{
-    Algo, ApproxKind, ObserverKind, ObserverMode, ObserverModel, Overrides, SensorKind, resolve,
-};
+use agent::config::{Algo, ApproxKind};
 use anyhow::{Result, anyhow};
+use observer::config::{ObserverKind, ObserverMode, ObserverModel, SensorKind};
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
+use runtime::config::{Overrides, resolve};
 use runtime::learn::{
     LAST_EVALUATIONS, LearnOptions, Progress, final_greedy, learn, progress_bar, write_atomic,
 };

@@ -41,10 +41,11 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use agent::config::{ObserverKind, ObserverMode, Overrides, SensorKind};
 use anyhow::{Context, Result, anyhow, bail};
+use observer::config::{ObserverKind, ObserverMode, SensorKind};
 
 use crate::loop_bench::{Stats, raw_round_trips};
+use runtime::config::Overrides;
 use runtime::learn::write_atomic;
 use runtime::process::Scheduling;
 use runtime::report::plot::{Histogram, plot_histograms};
@@ -325,7 +326,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     let mut raw = raw_round_trips(&exe, &opts.out, opts.raw_samples, opts.scheduling.pin_cpus)?;
     let raw_rtt = Stats::of(&mut raw);
 
-    let mut cfg = agent::config::resolve(
+    let mut cfg = runtime::config::resolve(
         None,
         &Overrides {
             sensor: Some(SensorKind::Angle),

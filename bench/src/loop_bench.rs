@@ -164,7 +164,7 @@ pub fn raw_round_trips(exe: &Path, out: &Path, samples: usize, pin_cpus: bool) -
 
 fn lockstep_steps(exe: &Path, out: &Path, samples: usize) -> Result<Vec<u64>> {
     let mut cfg =
-        agent::config::resolve(None, &Default::default()).map_err(|e| anyhow::anyhow!("{e}"))?;
+        runtime::config::resolve(None, &Default::default()).map_err(|e| anyhow::anyhow!("{e}"))?;
     let steps = plant::Task::new(cfg.system).steps_per_trial();
     cfg.run.trials = samples.div_ceil(steps + 1) as u32;
     cfg.run.eval_every = 0;

@@ -28,13 +28,12 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use agent::config::{
-    Algo, ApproxKind, Component, ExperimentConfig, HorizonKind, Overrides, resolve,
-};
+use agent::config::{Algo, ApproxKind, Component, HorizonKind};
 use anyhow::{Context, Result, anyhow, bail};
 use indicatif::ProgressBar;
 use plant::SystemName;
 
+use runtime::config::{ExperimentConfig, Overrides, resolve};
 use runtime::experiment::TrialRecord;
 use runtime::learn::{LearnOptions, LearnSummary, Progress, learn, progress_bar, write_atomic};
 use runtime::report::{self, CurvePoint, Series, SeriesStyle};
@@ -172,7 +171,7 @@ fn preset(
     approx: ApproxKind,
     horizon: HorizonKind,
 ) -> ExperimentConfig {
-    agent::preset::preset(system, algo, approx, horizon).expect("every figure's preset exists")
+    ExperimentConfig::preset(system, algo, approx, horizon).expect("every figure's preset exists")
 }
 
 /// Chapter 6's MLAC/LLR (Table 6.2), shipped as `bench/configs/fig6.1-mlac-llr.toml`.
@@ -327,8 +326,8 @@ fn swing_counts(c: &Measured) -> (BTreeMap<Option<usize>, usize>, String) {
 /// A curve with §3.7's input saturation ignored: the actor's outputs unbounded and
 /// MLAC's `∇_u f̂` not cut at the bounds (the plant still saturates).
 fn saturation_ignored(mut cfg: ExperimentConfig) -> ExperimentConfig {
-    cfg.learning.bounded_actor = false;
-    cfg.learning.saturation_margin = 0.0;
+    cfg.agent.learning.bounded_actor = false;
+    cfg.agent.learning.saturation_margin = 0.0;
     cfg
 }
 
@@ -987,7 +986,7 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
             })
             .collect();
         let pendulum = fig.curves[0].cfg.system == SystemName::Pendulum
-            && fig.curves[0].cfg.horizon == HorizonKind::Infinite;
+            && fig.curves[0].cfg.agent.horizon == HorizonKind::Infinite;
         report::plot_curves(
             &dir.join("figure.png"),
             &dir.join("figure.svg"),
@@ -1200,12 +1199,12 @@ type Scale = fn(&mut ExperimentConfig, f64);
 /// `(name, short name for directories, how)` of each parameter.
 const PARAMETERS: [(&str, &str, Scale); 5] = [
     ("α_a (actor rate)", "alpha_a", |c, f| {
-        if let Some(Component::Llr(l)) = &mut c.actor {
+        if let Some(Component::Llr(l)) = &mut c.agent.actor {
             l.alpha *= f;
         }
     }),
     ("α_c (critic rate)", "alpha_c", |c, f| {
-        if let Component::Llr(l) = &mut c.critic {
+        if let Component::Llr(l) = &mut c.agent.critic {
             l.alpha *= f;
         }
     }),
@@ -1219,14 +1218,17 @@ const PARAMETERS: [(&str, &str, Scale); 5] = [
             l.memory = ((l.memory as f64 * f).round() as usize).max(10)
         })
     }),
-    ("σ (exploration)", "sigma", |c, f| c.learning.sigma *= f),
+    ("σ (exploration)", "sigma", |c, f| {
+        c.agent.learning.sigma *= f
+    }),
 ];
 
 /// Factors applied to each parameter (the preset is factor 1).
 pub const FACTORS: [f64; 4] = [0.25, 0.5, 2.0, 4.0];
 
 fn for_each_llr(c: &mut ExperimentConfig, mut f: impl FnMut(&mut agent::config::LlrConfig)) {
-    for comp in [c.actor.as_mut(), Some(&mut c.critic), c.model.as_mut()]
+    let a = &mut c.agent;
+    for comp in [a.actor.as_mut(), Some(&mut a.critic), a.model.as_mut()]
         .into_iter()
         .flatten()
     {
@@ -1454,7 +1456,7 @@ fn write_report(
             "| curve | runs × trials | final greedy | median [worst] | final level | t₉₀ [min] | % of optimal | thesis says |\n|---|---|---|---|---|---|---|---|"
         );
         let pendulum = fig.curves[0].cfg.system == SystemName::Pendulum
-            && fig.curves[0].cfg.horizon == HorizonKind::Infinite;
+            && fig.curves[0].cfg.agent.horizon == HorizonKind::Infinite;
         for m in &r.measured {
             let says = fig
                 .thesis

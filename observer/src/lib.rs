@@ -10,10 +10,12 @@
 //!   dynamics) predicts `x̂_{k+1|k}`, and the measured angle corrects it.
 //! * [`timing`] — what the agent acts on and learns from, in direct or predictive timing
 //!   (shared by `rig learn` and the observer process of `rig run`).
-//! * [`build`] — the observer an [`agent::config::ObserverConfig`] asks for.
+//! * [`config`] — `[observer]`: sensor, observer and timing, with their validation;
+//!   [`build`] — the observer a [`config::ObserverConfig`] asks for.
 //!
 //! Observers are plain step functions; they know nothing about processes or transport.
 
+pub mod config;
 pub mod predictive;
 pub mod timing;
 
@@ -21,7 +23,8 @@ pub use predictive::{Predictive, PredictiveModel};
 
 use std::sync::Arc;
 
-use agent::config::{Component, ObserverConfig, ObserverKind, ObserverModel};
+use agent::config::Component;
+use config::{ObserverConfig, ObserverKind, ObserverModel};
 use plant::Task;
 use plant::angle::wrap;
 

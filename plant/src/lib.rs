@@ -18,11 +18,14 @@
 //!   start states, simulated learning time.
 //! * [`safety`] — the plant side's safety pieces (saturation, operating range, the
 //!   stale-action [`safety::Watchdog`]), for the simulated plant and Rust drivers.
+//! * [`config`] — what every configuration section shares ([`config::ConfigError`],
+//!   [`config::Choice`]) and the plant's own, `[run]` ([`config::RunConfig`]).
 //!
 //! Conventions: SI units; angles wrapped to [-π, π); actions saturated at the plant
 //! whatever the caller sends; non-finite actions replaced by the safe action (zero).
 
 pub mod angle;
+pub mod config;
 pub mod delay;
 pub mod double_integrator;
 pub mod episode;

@@ -4,8 +4,9 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use agent::config::{Choice, ObserverModel};
 use clap::Args as Flags;
+use observer::config::ObserverModel;
+use plant::config::Choice;
 
 #[derive(Flags)]
 pub struct Args {

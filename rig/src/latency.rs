@@ -3,8 +3,9 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use agent::config::{Choice, ObserverKind, ObserverMode};
 use clap::Args as Flags;
+use observer::config::{ObserverKind, ObserverMode};
+use plant::config::Choice;
 
 #[derive(Flags)]
 pub struct Args {

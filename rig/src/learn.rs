@@ -3,9 +3,9 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use agent::config::ExperimentConfig;
 use clap::Args as Flags;
 use plant::Task;
+use runtime::config::ExperimentConfig;
 use runtime::learn::{LearnOptions, learn};
 
 use crate::selection::{Selection, resolve_selection};
@@ -62,8 +62,8 @@ fn print_summary(cfg: &ExperimentConfig, s: &runtime::learn::LearnSummary, out: 
     println!(
         "{} {}/{}: {} runs × {} trials in {:.1} s wall ({:.2} µs per learning step, all threads)",
         cfg.system,
-        cfg.algo,
-        cfg.approx,
+        cfg.agent.algo,
+        cfg.agent.approx,
         cfg.run.runs,
         cfg.run.trials,
         s.wall.as_secs_f64(),

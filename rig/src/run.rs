@@ -121,8 +121,8 @@ pub fn main(args: &Args) -> ExitCode {
                 println!(
                     "{} {}/{} over three processes: {} trials in {:.1} s wall ({:.1} µs per sample)",
                     cfg.system,
-                    cfg.algo,
-                    cfg.approx,
+                    cfg.agent.algo,
+                    cfg.agent.approx,
                     s.records.len(),
                     s.wall.as_secs_f64(),
                     s.wall.as_secs_f64() * 1e6 / steps

@@ -4,12 +4,12 @@
 
 use std::path::PathBuf;
 
-use agent::config::{
-    Algo, ApproxKind, Choice, ExperimentConfig, HorizonKind, ObserverKind, ObserverMode, Overrides,
-    SensorKind, resolve,
-};
+use agent::config::{Algo, ApproxKind, HorizonKind};
 use clap::Args;
+use observer::config::{ObserverKind, ObserverMode, SensorKind};
 use plant::SystemName;
+use plant::config::Choice;
+use runtime::config::{ExperimentConfig, Overrides, resolve};
 
 /// Which experiment: the preset for (system, algorithm, approximator), a TOML file
 /// overriding any of its keys, and flags overriding both.

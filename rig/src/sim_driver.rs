@@ -2,9 +2,9 @@
 
 use std::process::ExitCode;
 
-use agent::config::Choice;
 use clap::Args as Flags;
 use plant::SystemName;
+use plant::config::Choice;
 
 #[derive(Flags)]
 pub struct Args {

@@ -7,9 +7,10 @@
 
 use std::sync::{Arc, OnceLock};
 
-use agent::config::{Algo, ApproxKind, Overrides, resolve};
+use agent::config::{Algo, ApproxKind};
 use bench::optimal::{Optimum, OptimumOptions, pendulum_optimum};
 use plant::{Plant, Task};
+use runtime::config::{Overrides, resolve};
 use runtime::learn::{LearnOptions, Progress, learn};
 
 fn optimum(grid: usize, actions: usize) -> Optimum {
@@ -116,8 +117,11 @@ fn no_learner_beats_the_optimum() {
             },
         )
         .expect("preset");
-        let out =
-            std::env::temp_dir().join(format!("rig-optimal-{}-{}", std::process::id(), cfg.algo));
+        let out = std::env::temp_dir().join(format!(
+            "rig-optimal-{}-{}",
+            std::process::id(),
+            cfg.agent.algo
+        ));
         let s = learn(
             &cfg,
             &LearnOptions {
@@ -131,15 +135,19 @@ fn no_learner_beats_the_optimum() {
         let best = greedy.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         eprintln!(
             "{}/llr: {} greedy returns ({} runs × {} trials), best {best:.2}; bound {bound:.2}",
-            cfg.algo,
+            cfg.agent.algo,
             greedy.len(),
             cfg.run.runs,
             cfg.run.trials
         );
         assert_eq!(greedy.len() as u32, 3 * cfg.run.trials / cfg.run.eval_every);
-        assert!(best <= bound, "{}: {best} > {bound}", cfg.algo);
+        assert!(best <= bound, "{}: {best} > {bound}", cfg.agent.algo);
         // And they do swing up: the best is within 20 % of the optimum.
-        assert!(best > 1.2 * o.simulated_return, "{}: {best}", cfg.algo);
+        assert!(
+            best > 1.2 * o.simulated_return,
+            "{}: {best}",
+            cfg.agent.algo
+        );
         let _ = std::fs::remove_dir_all(out);
     }
 }

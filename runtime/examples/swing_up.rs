@@ -3,7 +3,7 @@
 //!
 //! `cargo run --release -p rig --example swing_up`
 
-use agent::config::{Overrides, resolve};
+use runtime::config::{Overrides, resolve};
 use runtime::experiment::Experiment;
 
 fn main() {

@@ -32,15 +32,16 @@ use std::sync::Arc;
 
 use agent::Agent;
 use agent::checkpoint::{Checkpoint, CheckpointError, Origin, Snapshot};
-use agent::config::ExperimentConfig;
-use agent::config::{ObserverConfig, ObserverMode, SensorKind};
 use agent::horizon::Horizon;
+use observer::config::{ObserverConfig, ObserverMode, SensorKind};
 use observer::timing::{Front, Sample as AtSample, act};
 use plant::delay::Actuator;
 use plant::episode::{Episode, Step};
 use plant::schedule::{Schedule, Trial};
 use plant::sensor::Sensor;
 use plant::{Plant, Task};
+
+use crate::config::ExperimentConfig;
 
 /// The outcome of one learning trial.
 #[derive(Clone, Debug, PartialEq)]
@@ -126,7 +127,7 @@ impl Experiment {
     pub fn new(cfg: &ExperimentConfig, run: u32) -> Self {
         let task = Arc::new(Task::new(cfg.system));
         let run_seed = agent::seed::run_seed(cfg.run.seed, run);
-        let agent = agent::build(&task, cfg, run_seed);
+        let agent = agent::build(&task, &cfg.agent, run_seed);
         let o = &cfg.observer;
         let sensor = sensor(&task, o, run_seed);
         Self {
@@ -134,8 +135,8 @@ impl Experiment {
             sensor,
             y: vec![0.0; task.state_dim()],
             front: front(&task, cfg),
-            horizon: cfg.horizon.of(&task),
-            origin: Origin::of(cfg, run),
+            horizon: cfg.agent.horizon.of(&task),
+            origin: cfg.origin(run),
             schedule: Schedule::new(task.clone(), cfg.run.trials, cfg.run.eval_every),
             task,
             agent,
@@ -171,7 +172,7 @@ impl Experiment {
         }
         resumable_delays(cfg).map_err(CheckpointError)?;
         let mut e = Self::new(cfg, run);
-        c.restore(cfg, run, e.agent.as_mut())?;
+        c.restore(&cfg.origin(run), e.agent.as_mut())?;
         e.schedule.resume(c.trial, c.sim_time_s);
         Ok(e)
     }
@@ -355,7 +356,7 @@ pub fn front(task: &Arc<Task>, cfg: &ExperimentConfig) -> Front {
     let o = &cfg.observer;
     Front::new(
         task.clone(),
-        observer::build(task.clone(), o, cfg.model.as_ref()),
+        observer::build(task.clone(), o, cfg.agent.model.as_ref()),
         o.mode == ObserverMode::Predictive,
     )
 }
@@ -364,6 +365,7 @@ pub fn front(task: &Arc<Task>, cfg: &ExperimentConfig) -> Front {
 /// configuration's delay file has been read once already).
 pub fn actuator(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Actuator {
     let delays = cfg
+        .run
         .delays_for_run(task, run_seed)
         .unwrap_or_else(|e| panic!("run.delay_from: {e}"));
     Actuator::new(
@@ -404,7 +406,8 @@ pub struct Sample {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use agent::config::{ObserverKind, Overrides, resolve};
+    use crate::config::{Overrides, resolve};
+    use observer::config::ObserverKind;
 
     fn angle_config(observer: ObserverKind, noise: &str) -> ExperimentConfig {
         let text = format!("[observer]\nnoise_std = {noise}\n");
@@ -413,7 +416,7 @@ mod tests {
             &Overrides {
                 trials: Some(3),
                 runs: Some(1),
-                sensor: Some(agent::config::SensorKind::Angle),
+                sensor: Some(SensorKind::Angle),
                 observer: Some(observer),
                 ..Default::default()
             },

@@ -30,11 +30,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-use agent::config::ExperimentConfig;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 
+use crate::config::ExperimentConfig;
 use crate::experiment::{Experiment, Sample, TrialRecord};
 use crate::report::{self, CurvePoint, Series, SeriesStyle};
 
@@ -221,8 +221,8 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
     let title = format!(
         "{} {}/{} — {} runs",
         cfg.system,
-        cfg.algo.as_str().to_uppercase(),
-        cfg.approx.as_str().to_uppercase(),
+        cfg.agent.algo.as_str().to_uppercase(),
+        cfg.agent.approx.as_str().to_uppercase(),
         runs
     );
     let mut series = vec![Series {

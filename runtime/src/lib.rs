@@ -1,5 +1,7 @@
 //! The rig's application library: everything `rig` does to run an experiment.
 //!
+//! - The experiment's [`config`]: the sections of plant, observer and agent composed,
+//!   resolved from preset, file and flags, validated, written as TOML.
 //! - In one process: [`experiment`] (one run, trial by trial) and [`learn`] (runs in
 //!   parallel, `runs.csv`, curves and plots through [`report`]).
 //! - As processes over iceoryx2: the nodes in [`process`] (plant, observer, agent), the
@@ -8,6 +10,7 @@
 //! - Against an external driver: [`check_driver`] (`rig check-driver`).
 
 pub mod check_driver;
+pub mod config;
 pub mod experiment;
 pub mod learn;
 pub mod process;

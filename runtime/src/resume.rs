@@ -25,11 +25,11 @@ use std::sync::mpsc;
 use std::thread::JoinHandle;
 
 use agent::checkpoint::Checkpoint;
-use agent::config::ExperimentConfig;
 use anyhow::{Context, Result, anyhow, bail};
 use serde::Deserialize;
 use wire::flags;
 
+use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
 
 /// The checkpoint directory of run directory `out`.
@@ -382,7 +382,7 @@ pub fn prepare(out: &Path, cfg: &ExperimentConfig) -> Result<ResumePoint> {
                 None => anyhow!("cannot resume: {e}"),
             }
         })?;
-        ck.check_origin(cfg, 0)
+        ck.check_origin(&cfg.origin(0))
             .map_err(|e| anyhow!("cannot resume from {}: {e}", path.display()))?;
         if ck.trial != c || ck.sim_time_s.to_bits() != sim_time_s.to_bits() {
             bail!(

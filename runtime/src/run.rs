@@ -26,13 +26,13 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use ::agent::config::ExperimentConfig;
 use ::agent::horizon::Horizon;
 use anyhow::{Context, Result, anyhow, bail};
 use driver::contract::{DriverCommand, DriverInfo, DriverSample, DriverWatch};
 use indicatif::ProgressBar;
 use wire::{Action, Bus, Estimate, Header, Measurement, Truth, flags, topic};
 
+use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
 use crate::learn::{RUNS_HEADER, progress_bar, write_atomic, write_row};
 use crate::process::{Scheduling, wire_err};
@@ -771,7 +771,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         .map_err(wire_err)?;
     let estimates = bus.rx::<Estimate>(topic::ESTIMATE).map_err(wire_err)?;
     let actions = bus.rx::<Action>(topic::ACTION).map_err(wire_err)?;
-    let full_state = cfg.observer.sensor == ::agent::config::SensorKind::Full;
+    let full_state = cfg.observer.sensor == ::observer::config::SensorKind::Full;
     let truths = if full_state {
         None
     } else {
@@ -805,9 +805,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         ("run_id", run_id.clone()),
         ("seed", cfg.run.seed.to_string()),
         ("system", cfg.system.to_string()),
-        ("algo", cfg.algo.to_string()),
-        ("approx", cfg.approx.to_string()),
-        ("horizon", cfg.horizon.to_string()),
+        ("algo", cfg.agent.algo.to_string()),
+        ("approx", cfg.agent.approx.to_string()),
+        ("horizon", cfg.agent.horizon.to_string()),
         (
             "timing",
             match (&opts.driver, &driver_info, opts.realtime) {
@@ -860,7 +860,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         task: task.clone(),
         steps_per_trial: task.steps_per_trial() as u64,
         skipped_samples: task.skipped_samples(after.into(), sim_time),
-        horizon: cfg.horizon.of(&task),
+        horizon: cfg.agent.horizon.of(&task),
         reward: task.reward.clone(),
         pending: None,
         pending_ended: false,

@@ -8,8 +8,9 @@
 //! serves them as the pendulum's RBF presets, which are included.
 
 use agent::checkpoint::{Checkpoint, Snapshot};
-use agent::config::{Algo, ApproxKind, ExperimentConfig, HorizonKind};
+use agent::config::{Algo, ApproxKind, HorizonKind};
 use plant::SystemName;
+use runtime::config::ExperimentConfig;
 use runtime::experiment::Experiment;
 
 fn presets() -> Vec<ExperimentConfig> {
@@ -25,7 +26,7 @@ fn presets() -> Vec<ExperimentConfig> {
                     if heavy {
                         continue;
                     }
-                    if let Ok(mut cfg) = agent::preset::preset(system, algo, approx, horizon) {
+                    if let Ok(mut cfg) = ExperimentConfig::preset(system, algo, approx, horizon) {
                         cfg.run.trials = 6;
                         cfg.run.eval_every = 1;
                         out.push(cfg);
@@ -38,7 +39,8 @@ fn presets() -> Vec<ExperimentConfig> {
 }
 
 fn name(cfg: &ExperimentConfig) -> String {
-    format!("{} {}/{}/{}", cfg.system, cfg.algo, cfg.approx, cfg.horizon)
+    let a = &cfg.agent;
+    format!("{} {}/{}/{}", cfg.system, a.algo, a.approx, a.horizon)
 }
 
 #[test]
@@ -112,7 +114,7 @@ fn a_checkpoint_does_not_restore_into_another_learner() {
     // not fit another learner: an error, never a panic.
     for other in &all[1..] {
         let mut forged = c.clone();
-        forged.origin = agent::checkpoint::Origin::of(other, 0);
+        forged.origin = other.origin(0);
         if let Err(e) = Experiment::resume(other, 0, &forged) {
             assert!(
                 e.0.contains("differently configured"),

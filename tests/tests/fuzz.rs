@@ -6,10 +6,10 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use agent::config::{Overrides, resolve};
 use plant::{Plant, SystemName, Task};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use runtime::config::{Overrides, resolve};
 
 /// A value a broken agent, a corrupted message or a hostile sender could produce.
 fn wild_f64(rng: &mut ChaCha8Rng) -> f64 {
@@ -116,7 +116,7 @@ fn mutated_configuration_files_are_errors_or_run_but_never_panic() {
             Ok(cfg) => {
                 // Accepted: it must build and learn a few samples within the limits.
                 let task = Arc::new(Task::new(cfg.system));
-                let mut agent = agent::build(&task, &cfg, 1);
+                let mut agent = agent::build(&task, &cfg.agent, 1);
                 let mut plant = Plant::new(task.clone());
                 let mut u = vec![0.0; task.action_dim()];
                 plant.reset(&task.initial_states[0]);

@@ -4,7 +4,8 @@
 
 use std::path::PathBuf;
 
-use agent::config::{Algo, ApproxKind, ExperimentConfig, HorizonKind, Overrides, resolve};
+use agent::config::{Algo, ApproxKind, HorizonKind};
+use runtime::config::{ExperimentConfig, Overrides, resolve};
 use runtime::learn::{LearnOptions, Progress, learn};
 
 fn config(algo: Algo, approx: ApproxKind, runs: u32, trials: u32, seed: u64) -> ExperimentConfig {

@@ -2,13 +2,14 @@
 
 use ::agent::Agent;
 use ::agent::checkpoint::{Checkpoint, Origin, Snapshot};
-use ::agent::config::{ExperimentConfig, ObserverMode};
+use ::observer::config::ObserverMode;
 use ::observer::timing::{Call, ToAgent, act};
 use ::plant::Task;
 use anyhow::{Result, anyhow, bail};
 use wire::{Action, Bus, Estimate, flags, now_ns, topic};
 
 use super::{AgentArgs, SILENCE, STARTUP, pack, wire_err};
+use crate::config::ExperimentConfig;
 use crate::resume::CheckpointWriter;
 
 /// Runs the agent side of a run until the plant announces its end.
@@ -73,12 +74,17 @@ impl Learner {
     fn new(args: &AgentArgs, cfg: &ExperimentConfig) -> Result<Self> {
         let run = args.node.run_index;
         let task = Task::new(cfg.system);
-        let mut agent = ::agent::build(&task, cfg, ::agent::seed::run_seed(cfg.run.seed, run));
+        let mut agent = ::agent::build(
+            &task,
+            &cfg.agent,
+            ::agent::seed::run_seed(cfg.run.seed, run),
+        );
+        let origin = cfg.origin(run);
         // The first learning trial this process runs.
         let mut expect_trial = 1;
         if let Some(path) = &args.resume {
             let c = Checkpoint::read(path).map_err(|e| anyhow!("{e}"))?;
-            c.restore(cfg, run, agent.as_mut())
+            c.restore(&origin, agent.as_mut())
                 .map_err(|e| anyhow!("{}: {e}", path.display()))?;
             expect_trial = u64::from(c.trial) + 1;
         }
@@ -89,7 +95,7 @@ impl Learner {
             .transpose()?;
         Ok(Self {
             agent,
-            origin: Origin::of(cfg, run),
+            origin,
             checkpoints,
             expect_trial,
             predictive: cfg.observer.mode == ObserverMode::Predictive,

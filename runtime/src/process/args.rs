@@ -4,9 +4,10 @@
 
 use std::path::PathBuf;
 
-use ::agent::config::{ExperimentConfig, Overrides, resolve};
 use anyhow::{Context, Result};
 use clap::Args;
+
+use crate::config::{ExperimentConfig, Overrides, resolve};
 
 /// The realtime plant's default spin before each sampling instant \[µs\] (`--spin-us`).
 pub const SPIN_US: u64 = 100;

@@ -21,7 +21,7 @@ mod realtime;
 use std::path::Path;
 use std::sync::Arc;
 
-use ::agent::config::{ExperimentConfig, ObserverMode};
+use ::observer::config::ObserverMode;
 use ::plant::episode::Episode;
 use ::plant::safety::SafetyCounts;
 use ::plant::schedule::{Schedule, Trial};
@@ -29,6 +29,7 @@ use ::plant::{Plant, Task};
 use anyhow::{Result, bail};
 
 use super::{PlantArgs, STARTUP, Scheduling, wire_err};
+use crate::config::ExperimentConfig;
 use link::Link;
 
 /// Columns of the plant's per-sample timing file (`--cycles-out`, realtime): the sample's

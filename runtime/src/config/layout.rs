@@ -1,0 +1,82 @@
+//! The experiment file's layout: every key where a user writes it — the system and the
+//! learner's choices at the top level, then `[run]`, the agent's sections, `[observer]`.
+//! [`ExperimentConfig`] is read and written through it, so its TOML form is the one
+//! every configuration file and `config.toml` has.
+
+use agent::config::{
+    AgentConfig, Algo, ApproxKind, Component, HorizonKind, LearningConfig, SarsaConfig, VgbpConfig,
+};
+use observer::config::ObserverConfig;
+use plant::SystemName;
+use plant::config::RunConfig;
+use serde::{Deserialize, Serialize};
+
+use super::ExperimentConfig;
+
+/// The top level of an experiment file, in the order it is written.
+#[derive(Serialize, Deserialize)]
+// Messages about the whole file name the experiment, not this layout.
+#[serde(deny_unknown_fields, rename = "ExperimentConfig")]
+pub(super) struct Layout {
+    system: SystemName,
+    algo: Algo,
+    approx: ApproxKind,
+    /// Absent: infinite.
+    #[serde(default)]
+    horizon: HorizonKind,
+    run: RunConfig,
+    learning: LearningConfig,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    actor: Option<Component>,
+    critic: Component,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    model: Option<Component>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    vgbp: Option<VgbpConfig>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    sarsa: Option<SarsaConfig>,
+    /// Absent: full state, pass-through.
+    #[serde(default, skip_serializing_if = "ObserverConfig::is_default")]
+    observer: ObserverConfig,
+}
+
+impl From<Layout> for ExperimentConfig {
+    fn from(l: Layout) -> Self {
+        Self {
+            system: l.system,
+            agent: AgentConfig {
+                algo: l.algo,
+                approx: l.approx,
+                horizon: l.horizon,
+                learning: l.learning,
+                actor: l.actor,
+                critic: l.critic,
+                model: l.model,
+                vgbp: l.vgbp,
+                sarsa: l.sarsa,
+            },
+            run: l.run,
+            observer: l.observer,
+        }
+    }
+}
+
+impl From<ExperimentConfig> for Layout {
+    fn from(c: ExperimentConfig) -> Self {
+        let a = c.agent;
+        Self {
+            system: c.system,
+            algo: a.algo,
+            approx: a.approx,
+            horizon: a.horizon,
+            run: c.run,
+            learning: a.learning,
+            actor: a.actor,
+            critic: a.critic,
+            model: a.model,
+            vgbp: a.vgbp,
+            sarsa: a.sarsa,
+            observer: c.observer,
+        }
+    }
+}

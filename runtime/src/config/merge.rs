@@ -1,0 +1,117 @@
+//! Layering TOML: a user's table overlaid on the preset's, rejecting keys the preset
+//! does not have and values of the wrong type; and the choice keys, whose spellings are
+//! checked before the sections are read so that a wrong one is named with its key.
+
+use plant::config::{Choice, ConfigError};
+
+/// `[section] key`, when present, is one of `T`'s spellings; the error names the key and
+/// the allowed values.
+pub(super) fn check_choice<T: Choice>(
+    merged: &toml::Table,
+    section: &str,
+    key: &str,
+) -> Result<(), ConfigError> {
+    let Some(toml::Value::Table(t)) = merged.get(section) else {
+        return Ok(());
+    };
+    let full = format!("{section}.{key}");
+    match t.get(key) {
+        None => Ok(()),
+        Some(toml::Value::String(s)) => T::parse(s).map(|_| ()).map_err(|_| {
+            ConfigError::new(&full, format!("\"{s}\" is not one of: {}", T::spellings()))
+        }),
+        Some(v) => Err(ConfigError::new(
+            &full,
+            format!("{v} must be a string, one of: {}", T::spellings()),
+        )),
+    }
+}
+
+/// The value of a choice key: the command line's, else the file's spelling, else
+/// `default`.
+pub(super) fn choose<T: Choice>(
+    key: &str,
+    flag: Option<T>,
+    file: Option<String>,
+    default: T,
+) -> Result<T, ConfigError> {
+    match (flag, file) {
+        (Some(v), _) => Ok(v),
+        (None, Some(s)) => T::parse(&s).map_err(|_| {
+            ConfigError::new(key, format!("\"{s}\" is not one of: {}", T::spellings()))
+        }),
+        (None, None) => Ok(default),
+    }
+}
+
+/// Overlays `user` on `base`, rejecting keys `base` does not have.
+pub(super) fn merge(
+    base: &mut toml::Table,
+    user: toml::Table,
+    prefix: &str,
+) -> Result<(), ConfigError> {
+    for (k, v) in user {
+        let key = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        let Some(slot) = base.get_mut(&k) else {
+            return Err(unknown_key(base, &key, prefix));
+        };
+        match (slot, v) {
+            (toml::Value::Table(b), toml::Value::Table(u)) => merge(b, u, &key)?,
+            (toml::Value::Table(_), other) => {
+                return Err(ConfigError::new(
+                    &key,
+                    format!("must be a table, not {other}"),
+                ));
+            }
+            (slot, v) => overwrite(slot, v, &key)?,
+        }
+    }
+    Ok(())
+}
+
+/// The error for `key`, which the table `known` (at `prefix`) does not have: it lists
+/// the keys allowed there.
+fn unknown_key(known: &toml::Table, key: &str, prefix: &str) -> ConfigError {
+    let mut keys: Vec<&str> = known.keys().map(String::as_str).collect();
+    keys.sort();
+    let place = if prefix.is_empty() {
+        "at the top level".to_string()
+    } else {
+        format!("in [{prefix}]")
+    };
+    ConfigError::new(
+        key,
+        format!(
+            "unknown key; the keys allowed {place} are: {}",
+            keys.join(", ")
+        ),
+    )
+}
+
+/// Sets the value at `key` to `v`, which must be of its type (an integer where a float
+/// is expected becomes that float).
+fn overwrite(slot: &mut toml::Value, v: toml::Value, key: &str) -> Result<(), ConfigError> {
+    if std::mem::discriminant(slot) != std::mem::discriminant(&v)
+        && !matches!(
+            (&*slot, &v),
+            (toml::Value::Float(_), toml::Value::Integer(_))
+        )
+    {
+        return Err(ConfigError::new(
+            key,
+            format!(
+                "{v} has the wrong type: expected a {} like {slot}",
+                slot.type_str()
+            ),
+        ));
+    }
+    *slot = match (&*slot, v) {
+        (toml::Value::Float(_), toml::Value::Integer(i)) => toml::Value::Float(i as f64),
+        (_, v) => v,
+    };
+    Ok(())
+}

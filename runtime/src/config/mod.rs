@@ -1,0 +1,100 @@
+//! The experiment configuration: the system and the sections of the crates that use
+//! them — the agent's keys ([`agent::config`]), `[run]` ([`plant::config`]) and
+//! `[observer]` ([`observer::config`]) — composed into one [`ExperimentConfig`], its TOML
+//! form, and the checks that span sections.
+//!
+//! A configuration is resolved in layers ([`resolve`]): the preset for (system,
+//! algorithm, approximator) — the thesis's tuned values, see [`agent::preset`] — then a
+//! user's TOML file, then command-line [`Overrides`]. A key in the user's file that the
+//! preset does not have is an error naming the key and the keys that are allowed there.
+
+mod layout;
+mod merge;
+mod resolve;
+#[cfg(test)]
+mod tests;
+
+pub use resolve::{Overrides, resolve};
+
+use agent::checkpoint::{self, Origin};
+use agent::config::{AgentConfig, Algo, ApproxKind, HorizonKind};
+use observer::config::{ObserverConfig, ObserverMode};
+use plant::config::{ConfigError, RunConfig};
+use plant::{SystemName, Task};
+use serde::{Deserialize, Serialize};
+
+/// A complete experiment. Its TOML form keeps every key where a user writes it (see
+/// `layout`): the system and the learner's choices at the top level, then `[run]`, the
+/// agent's sections and `[observer]` (written only when it is not the default).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(from = "layout::Layout", into = "layout::Layout")]
+pub struct ExperimentConfig {
+    /// The system learned on.
+    pub system: SystemName,
+    /// The learner: algorithm, approximator, horizon and their sections.
+    pub agent: AgentConfig,
+    /// Trials, runs, seed, evaluation, delays.
+    pub run: RunConfig,
+    /// Sensor and state observer; the default: full state, pass-through.
+    pub observer: ObserverConfig,
+}
+
+impl ExperimentConfig {
+    /// The preset for `(system, algo, approx)` with `horizon` ([`agent::preset`]), with
+    /// the default sensor and observer.
+    pub fn preset(
+        system: SystemName,
+        algo: Algo,
+        approx: ApproxKind,
+        horizon: HorizonKind,
+    ) -> Result<Self, ConfigError> {
+        let preset = agent::preset::preset(system, algo, approx, horizon)?;
+        Ok(Self {
+            system,
+            agent: preset.agent,
+            run: preset.run,
+            observer: ObserverConfig::default(),
+        })
+    }
+
+    /// Checks every value against its allowed range and the system's dimensions, section
+    /// by section, then what spans sections.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let task = Task::new(self.system);
+        self.run.validate(&task)?;
+        self.observer.validate()?;
+        if self.observer.mode == ObserverMode::Predictive
+            && self.agent.horizon == HorizonKind::Finite
+        {
+            return Err(ConfigError::new(
+                "observer.mode",
+                "\"predictive\" needs an infinite horizon (a finite-horizon agent's time index would be one sample off the plant's)",
+            ));
+        }
+        self.agent.validate(&task)
+    }
+
+    /// The configuration as TOML.
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a configuration always serialises")
+    }
+
+    /// What a checkpoint of run `run` of this experiment belongs to: its fingerprint is
+    /// that of the TOML form without the keys that only say how long and how often to run
+    /// (`run.trials`, `run.runs`, `run.eval_every`), so a run can be resumed with more
+    /// trials.
+    pub fn origin(&self, run: u32) -> Origin {
+        let mut c = self.clone();
+        c.run.trials = 0;
+        c.run.eval_every = 0;
+        c.run.runs = 0;
+        let a = &self.agent;
+        Origin {
+            system: self.system.to_string(),
+            learner: format!("{}/{}/{}", a.algo, a.approx, a.horizon),
+            seed: self.run.seed,
+            run,
+            fingerprint: checkpoint::fingerprint(c.to_toml().as_bytes()),
+        }
+    }
+}

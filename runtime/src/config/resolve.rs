@@ -1,0 +1,190 @@
+//! Resolution: preset ← file ← command line, into a validated [`ExperimentConfig`].
+
+use std::path::Path;
+
+use agent::config::{Algo, ApproxKind, HorizonKind, LstdPrior};
+use observer::config::{ObserverConfig, ObserverKind, ObserverMode, ObserverModel, SensorKind};
+use plant::SystemName;
+use plant::config::ConfigError;
+
+use super::ExperimentConfig;
+use super::merge::{check_choice, choose, merge};
+
+/// Command-line choices and overrides, applied over preset and file.
+#[derive(Clone, Debug, Default)]
+pub struct Overrides {
+    /// `--system`.
+    pub system: Option<SystemName>,
+    /// `--algo`.
+    pub algo: Option<Algo>,
+    /// `--approx`.
+    pub approx: Option<ApproxKind>,
+    /// `--horizon`.
+    pub horizon: Option<HorizonKind>,
+    /// `--trials`.
+    pub trials: Option<u32>,
+    /// `--runs`.
+    pub runs: Option<u32>,
+    /// `--seed`.
+    pub seed: Option<u64>,
+    /// `--eval-every`.
+    pub eval_every: Option<u32>,
+    /// `--sensor`.
+    pub sensor: Option<SensorKind>,
+    /// `--observer`.
+    pub observer: Option<ObserverKind>,
+    /// `--delay-ms`.
+    pub delay_ms: Option<f64>,
+    /// `--delay-from`.
+    pub delay_from: Option<String>,
+    /// `--delay-column`.
+    pub delay_column: Option<String>,
+    /// `--observer-mode`.
+    pub observer_mode: Option<ObserverMode>,
+}
+
+impl Overrides {
+    /// Sets the values given on the command line (all but the choices of preset).
+    fn apply(&self, cfg: &mut ExperimentConfig) {
+        let run = &mut cfg.run;
+        if let Some(v) = self.trials {
+            run.trials = v;
+        }
+        if let Some(v) = self.runs {
+            run.runs = v;
+        }
+        if let Some(v) = self.seed {
+            run.seed = v;
+        }
+        if let Some(v) = self.eval_every {
+            run.eval_every = v;
+        }
+        if let Some(v) = self.delay_ms {
+            run.delay_ms = v;
+        }
+        if let Some(v) = &self.delay_from {
+            run.delay_from.clone_from(v);
+        }
+        if let Some(v) = &self.delay_column {
+            run.delay_column.clone_from(v);
+        }
+        let observer = &mut cfg.observer;
+        if let Some(v) = self.sensor {
+            observer.sensor = v;
+        }
+        if let Some(v) = self.observer {
+            observer.observer = v;
+        }
+        if let Some(v) = self.observer_mode {
+            observer.mode = v;
+        }
+    }
+}
+
+/// Which preset: the system and the learner.
+struct PresetChoice {
+    system: SystemName,
+    algo: Algo,
+    approx: ApproxKind,
+    horizon: HorizonKind,
+}
+
+impl PresetChoice {
+    /// The command line's choices, else the file's top-level keys, else the defaults
+    /// (the pendulum, MLAC, LLR, infinite horizon).
+    fn of(user: &toml::Table, o: &Overrides) -> Result<Self, ConfigError> {
+        let pick = |key: &str| -> Result<Option<String>, ConfigError> {
+            match user.get(key) {
+                None => Ok(None),
+                Some(toml::Value::String(s)) => Ok(Some(s.clone())),
+                Some(v) => Err(ConfigError::new(key, format!("{v} must be a string"))),
+            }
+        };
+        Ok(Self {
+            system: choose("system", o.system, pick("system")?, SystemName::Pendulum)?,
+            algo: choose("algo", o.algo, pick("algo")?, Algo::Mlac)?,
+            approx: choose("approx", o.approx, pick("approx")?, ApproxKind::Llr)?,
+            horizon: choose(
+                "horizon",
+                o.horizon,
+                pick("horizon")?,
+                HorizonKind::Infinite,
+            )?,
+        })
+    }
+
+    /// The preset as a TOML table with every key a user may set: also those it does not
+    /// write when they have their default values.
+    fn table(&self) -> Result<toml::Table, ConfigError> {
+        let cfg = ExperimentConfig::preset(self.system, self.algo, self.approx, self.horizon)?;
+        let mut table = toml::Table::try_from(&cfg).expect("a preset always serialises");
+        // The observer section is written only when it differs from the default; a user's
+        // file may still set any of its keys.
+        table.entry("observer").or_insert_with(|| {
+            toml::Value::Table(
+                toml::Table::try_from(ObserverConfig::default()).expect("serialises"),
+            )
+        });
+        // So are the optional keys of `[run]`.
+        if let Some(toml::Value::Table(run)) = table.get_mut("run") {
+            for key in ["delay_from", "delay_column"] {
+                run.entry(key)
+                    .or_insert_with(|| toml::Value::String(String::new()));
+            }
+        }
+        // And an LSTD critic's prior.
+        if let Some(toml::Value::Table(critic)) = table.get_mut("critic")
+            && critic.contains_key("initial_a")
+        {
+            critic
+                .entry("prior")
+                .or_insert_with(|| toml::Value::String("zero".into()));
+        }
+        Ok(table)
+    }
+}
+
+/// Resolves preset ← file ← overrides into a validated configuration.
+pub fn resolve(
+    file: Option<(&Path, &str)>,
+    o: &Overrides,
+) -> Result<ExperimentConfig, ConfigError> {
+    let path = file.map(|(p, _)| p.to_path_buf());
+    let with_file = |mut e: ConfigError| {
+        e.file = path.clone();
+        e
+    };
+    let user: toml::Table = match file {
+        Some((_, text)) => toml::from_str(text).map_err(|e| {
+            with_file(ConfigError::new(
+                "",
+                format!("not valid TOML: {}", e.message()),
+            ))
+        })?,
+        None => toml::Table::new(),
+    };
+    let choice = PresetChoice::of(&user, o).map_err(with_file)?;
+    let mut merged = choice.table().map_err(with_file)?;
+    merge(&mut merged, user, "").map_err(with_file)?;
+    check_choices(&merged).map_err(with_file)?;
+    let mut cfg: ExperimentConfig = toml::Value::Table(merged)
+        .try_into()
+        .map_err(|e: toml::de::Error| with_file(ConfigError::new("", e.message())))?;
+    cfg.system = choice.system;
+    cfg.agent.algo = choice.algo;
+    cfg.agent.approx = choice.approx;
+    cfg.agent.horizon = choice.horizon;
+    o.apply(&mut cfg);
+    cfg.validate().map_err(with_file)?;
+    Ok(cfg)
+}
+
+/// Checks the spellings of the choice keys in sections (`[observer]`, an LSTD critic's
+/// prior), so that a wrong one is reported with its key and the allowed values.
+fn check_choices(merged: &toml::Table) -> Result<(), ConfigError> {
+    check_choice::<SensorKind>(merged, "observer", "sensor")?;
+    check_choice::<ObserverKind>(merged, "observer", "observer")?;
+    check_choice::<ObserverModel>(merged, "observer", "model")?;
+    check_choice::<ObserverMode>(merged, "observer", "mode")?;
+    check_choice::<LstdPrior>(merged, "critic", "prior")
+}

@@ -1,0 +1,274 @@
+//! Resolution, validation and the TOML form of whole experiments.
+
+use std::path::Path;
+
+use agent::config::{Algo, ApproxKind, Component, HorizonKind, LstdPrior};
+use observer::config::{ObserverMode, ObserverModel, SensorKind};
+use plant::SystemName;
+use plant::config::ConfigError;
+
+use super::*;
+
+fn resolve_str(text: &str) -> Result<ExperimentConfig, ConfigError> {
+    resolve(Some((Path::new("exp.toml"), text)), &Overrides::default())
+}
+
+#[test]
+fn default_is_pendulum_mlac_llr_with_table_3_2() {
+    let c = resolve(None, &Overrides::default()).unwrap();
+    assert_eq!(
+        (c.system, c.agent.algo, c.agent.approx),
+        (SystemName::Pendulum, Algo::Mlac, ApproxKind::Llr)
+    );
+    let Some(Component::Llr(actor)) = &c.agent.actor else {
+        panic!()
+    };
+    assert_eq!(
+        (actor.alpha, actor.memory, actor.neighbours),
+        (0.05, 2000, 25)
+    );
+}
+
+#[test]
+fn file_overrides_and_round_trips() {
+    let c = resolve_str("algo = \"sac\"\n[critic]\nneighbours = 12\n[run]\nruns = 3\n").unwrap();
+    assert_eq!(c.agent.algo, Algo::Sac);
+    assert_eq!(c.run.runs, 3);
+    let Component::Llr(critic) = &c.agent.critic else {
+        panic!()
+    };
+    assert_eq!(critic.neighbours, 12);
+    let again: ExperimentConfig = toml::from_str(&c.to_toml()).unwrap();
+    assert_eq!(again, c);
+    // A resolved configuration fed back as a file resolves to itself.
+    assert_eq!(resolve_str(&c.to_toml()).unwrap(), c);
+}
+
+#[test]
+fn unknown_key_is_named() {
+    let e = resolve_str("[actor]\nalpa = 0.1\n").unwrap_err();
+    assert_eq!(e.key, "actor.alpa");
+    assert!(
+        e.to_string()
+            .starts_with("exp.toml: `actor.alpa`: unknown key"),
+        "{e}"
+    );
+    assert!(
+        e.message
+            .contains("alpha, clip_to_neighbours, eviction, memory, neighbours"),
+        "{e}"
+    );
+}
+
+#[test]
+fn out_of_range_is_named_with_the_range() {
+    let e = resolve_str("[learning]\ngamma = 1.5\n").unwrap_err();
+    assert_eq!(e.key, "learning.gamma");
+    assert!(e.message.contains("(0, 1)"), "{e}");
+    let e = resolve_str("[critic]\nneighbours = 0\n").unwrap_err();
+    assert_eq!(e.key, "critic.neighbours");
+    assert!(e.message.contains("1..=128"), "{e}");
+    let e = resolve_str("[actor]\nweights = [1.0]\n").unwrap_err();
+    assert_eq!(e.key, "actor.weights");
+    let e = resolve_str("[actor]\nmemory = \"big\"\n").unwrap_err();
+    assert!(e.message.contains("wrong type"), "{e}");
+    let e = resolve_str("system = \"cartpole\"\n").unwrap_err();
+    assert!(e.message.contains("pendulum, arm-vertical"), "{e}");
+}
+
+#[test]
+fn finite_horizon_adds_time_to_actor_and_critic() {
+    let c = resolve_str("horizon = \"finite\"\nalgo = \"sac\"\napprox = \"rbf\"\n").unwrap();
+    assert_eq!(c.agent.horizon, HorizonKind::Finite);
+    assert_eq!(
+        c.agent.learning.gamma, 1.0,
+        "Algorithms 4–6 do not discount"
+    );
+    assert_eq!(resolve_str(&c.to_toml()).unwrap(), c);
+    let e = resolve_str("horizon = \"finit\"\n").unwrap_err();
+    assert_eq!(e.key, "horizon");
+    assert!(e.to_string().starts_with("exp.toml: `horizon`"), "{e}");
+    assert!(e.message.contains("infinite, finite"), "{e}");
+    let fh = "horizon = \"finite\"\nalgo = \"mlac\"\napprox = \"rbf\"\n";
+    let e = resolve_str(&format!("{fh}[critic]\ncentres = [9, 9]\n")).unwrap_err();
+    assert_eq!(e.key, "critic.centres");
+    assert!(
+        e.message
+            .contains("must have 3, one per state component and time"),
+        "{e}"
+    );
+    assert!(resolve_str(&format!("{fh}[learning]\ngamma = 1.01\n")).is_err());
+    let e = resolve_str("[learning]\ngamma = 1.0\n").unwrap_err();
+    assert_eq!(e.key, "learning.gamma", "an infinite horizon must discount");
+    let e = resolve_str("horizon = \"finite\"\nalgo = \"vgbp\"\napprox = \"lstd\"\n").unwrap_err();
+    assert_eq!(e.key, "horizon");
+    let e = resolve_str("horizon = \"finite\"\nalgo = \"sac\"\napprox = \"llr\"\n").unwrap_err();
+    assert_eq!(e.key, "approx");
+    // Validation, for a configuration not made by `resolve`.
+    let mut c = c;
+    c.agent.algo = Algo::Sarsa;
+    assert_eq!(c.validate().unwrap_err().key, "horizon");
+}
+
+#[test]
+fn tile_coding_is_for_sac_only() {
+    let o = Overrides {
+        algo: Some(Algo::Mlac),
+        approx: Some(ApproxKind::Tiles),
+        ..Default::default()
+    };
+    let e = resolve(None, &o).unwrap_err();
+    assert_eq!(e.key, "approx");
+}
+
+#[test]
+fn the_default_observer_section_is_not_written() {
+    let c = resolve(None, &Overrides::default()).unwrap();
+    assert!(c.observer.is_default());
+    assert!(!c.to_toml().contains("[observer]"));
+}
+
+#[test]
+fn observer_keys_resolve_and_round_trip() {
+    let text = "[observer]\nsensor = \"angle\"\ncounts_per_rev = 1024\nobserver = \"predictive\"\nmodel = \"known\"\n";
+    let c = resolve(Some((Path::new("o.toml"), text)), &Overrides::default()).unwrap();
+    assert_eq!(c.observer.sensor, SensorKind::Angle);
+    assert_eq!(c.observer.counts_per_rev, 1024);
+    assert_eq!(c.observer.model, ObserverModel::Known);
+    let again = resolve(
+        Some((Path::new("c.toml"), &c.to_toml())),
+        &Overrides::default(),
+    )
+    .unwrap();
+    assert_eq!(again, c);
+}
+
+#[test]
+fn lstd_prior_choices_and_errors() {
+    let vgbp = "algo = \"vgbp\"\napprox = \"lstd\"\n";
+    let none = Overrides::default();
+    let file = |text: String| resolve(Some((Path::new("v.toml"), &text)), &none);
+    let prior = |c: &ExperimentConfig| match &c.agent.critic {
+        Component::Lstd(l) => l.prior,
+        other => panic!("not LSTD: {other:?}"),
+    };
+    assert_eq!(prior(&file(vgbp.to_string()).unwrap()), LstdPrior::Zero);
+    let c = file(format!("{vgbp}[critic]\nprior = \"reward\"\n")).unwrap();
+    assert_eq!(prior(&c), LstdPrior::Reward);
+    // The default is not written; the other choice is, and reads back.
+    assert!(!file(vgbp.to_string()).unwrap().to_toml().contains("prior"));
+    let again = file(c.to_toml()).unwrap();
+    assert_eq!(prior(&again), LstdPrior::Reward);
+    let e = file(format!("{vgbp}[critic]\nprior = \"pessimistic\"\n"))
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "v.toml: `critic.prior`: \"pessimistic\" is not one of: zero, reward"
+    );
+}
+
+#[test]
+fn observer_errors_name_file_key_and_range() {
+    let bad = |text: &str, o: &Overrides| {
+        resolve(Some((Path::new("o.toml"), text)), o)
+            .unwrap_err()
+            .to_string()
+    };
+    let none = Overrides::default();
+    let e = bad("[observer]\nsensor = \"camera\"\n", &none);
+    assert_eq!(
+        e,
+        "o.toml: `observer.sensor`: \"camera\" is not one of: full, angle"
+    );
+    let e = bad("[observer]\ncounts_per_rev = 2\n", &none);
+    assert!(
+        e.starts_with("o.toml: `observer.counts_per_rev`: 2 is out of range"),
+        "{e}"
+    );
+    let e = bad("[observer]\ngain = 2.5\n", &none);
+    assert!(e.contains("`observer.gain`") && e.contains("[0, 2)"), "{e}");
+    let e = bad("[observer]\nnoise_std = -1.0\n", &none);
+    assert!(e.contains("`observer.noise_std`"), "{e}");
+    let angle = Overrides {
+        sensor: Some(SensorKind::Angle),
+        ..Default::default()
+    };
+    let e = bad("", &angle);
+    assert!(
+        e.contains("`observer.observer`") && e.contains("pass-through"),
+        "{e}"
+    );
+    let e = bad("[observer]\nfilter = 1.0\n", &none);
+    assert!(e.contains("`observer.filter`"), "{e}");
+}
+
+#[test]
+fn timing_and_delay_keys_resolve_round_trip_and_are_checked() {
+    let text = "[observer]\nsensor = \"angle\"\nobserver = \"predictive\"\nmode = \"predictive\"\n";
+    let c = resolve(Some((Path::new("t.toml"), text)), &Overrides::default()).unwrap();
+    assert_eq!(c.observer.mode, ObserverMode::Predictive);
+    let again = resolve(
+        Some((Path::new("c.toml"), &c.to_toml())),
+        &Overrides::default(),
+    );
+    assert_eq!(again.unwrap(), c);
+    let bad = |text: &str| {
+        resolve(Some((Path::new("t.toml"), text)), &Overrides::default())
+            .unwrap_err()
+            .to_string()
+    };
+    let e = bad("[observer]\nmode = \"predictive\"\n");
+    assert!(
+        e.contains("`observer.mode`") && e.contains("predictive"),
+        "{e}"
+    );
+    let e = bad("[observer]\nmode = \"late\"\n");
+    assert!(
+        e.contains("`observer.mode`") && e.contains("direct, predictive"),
+        "{e}"
+    );
+    let csv = std::env::temp_dir().join(format!("cfg-delays-{}.csv", std::process::id()));
+    std::fs::write(&csv, "delay_ms\n1\n2\n").unwrap();
+    let from = format!("[run]\ndelay_from = {:?}\n", csv.display().to_string());
+    let c = resolve(Some((Path::new("t.toml"), &from)), &Overrides::default()).unwrap();
+    assert!(c.to_toml().contains("delay_from"));
+    let e = bad(&format!("{from}delay_ms = 3.0\n"));
+    assert!(
+        e.contains("`run.delay_from`") && e.contains("exclusive"),
+        "{e}"
+    );
+    let e = bad("[run]\ndelay_column = \"x_ms\"\n");
+    assert!(e.contains("`run.delay_column`"), "{e}");
+    // The default configuration does not mention the optional keys.
+    let plain = resolve(None, &Overrides::default()).unwrap().to_toml();
+    assert!(!plain.contains("delay_from") && !plain.contains("\nmode ="));
+}
+
+#[test]
+fn a_checkpoint_origin_fingerprints_the_learning_parameters() {
+    let cfg = resolve(None, &Overrides::default()).unwrap();
+    let origin = cfg.origin(0);
+    // The fingerprints of checkpoints already written: they must not change.
+    assert_eq!(origin.fingerprint, 15377454252297950925);
+    let vgbp = Overrides {
+        algo: Some(Algo::Vgbp),
+        approx: Some(ApproxKind::Lstd),
+        ..Default::default()
+    };
+    let vgbp = resolve(None, &vgbp).unwrap().origin(3);
+    assert_eq!(vgbp.fingerprint, 7102850041982682030);
+    assert_eq!((vgbp.learner.as_str(), vgbp.run), ("vgbp/lstd/infinite", 3));
+    assert_eq!((origin.system.as_str(), origin.seed), ("pendulum", 1));
+    let mut longer = cfg.clone();
+    longer.run.trials += 10;
+    longer.run.runs += 1;
+    longer.run.eval_every = 0;
+    assert_eq!(longer.origin(0), origin, "more trials is the same learner");
+    let mut tuned = cfg.clone();
+    tuned.agent.learning.gamma = 0.5;
+    assert_ne!(tuned.origin(0).fingerprint, origin.fingerprint);
+    let mut reseeded = cfg;
+    reseeded.run.seed = 2;
+    assert_ne!(reseeded.origin(0).fingerprint, origin.fingerprint);
+}
