@@ -9,7 +9,7 @@
 //!   sample from publishing its measurement to receiving the action — three one-way
 //!   hops, the observer's and the trivial agent's work.
 //!
-//! The target: one lockstep step ≤ 1.5 × three raw one-way hops (median).
+//! This project's target: one lockstep step ≤ 1.5 × three raw one-way hops (median).
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};

@@ -1,5 +1,4 @@
-//! Acceptance test of the model-predicted observer (issue "Model-predicted state observer
-//! and the latency budget"): on a recorded pendulum swing-up measured by a 4096-count
+//! Acceptance test of the model-predicted observer: on a recorded pendulum swing-up measured by a 4096-count
 //! encoder, its velocity estimate is closer to the ground truth than the finite-difference
 //! estimate.
 //!

@@ -1,4 +1,4 @@
-//! Fuzz-style robustness (issue "Swapping in a real motor driver"): random, NaN and
+//! Fuzz-style robustness, for a real motor driver swapped in: random, NaN and
 //! extreme values through the action path and through configuration files must never
 //! panic and never actuate outside the limits. Deterministic: every input derives from
 //! a fixed seed, so a failure names a reproducible case.

@@ -64,7 +64,7 @@ fn same_seed_same_bytes_any_thread_count_different_seed_different() {
     assert_eq!(a, again);
     let (_, other) = run(&config(Algo::Mlac, ApproxKind::Llr, 3, 6, 8), "det-d", 2);
     assert_ne!(a, other, "a different seed must give different runs");
-    // The header and shape the issue prescribes: 3 runs × 6 trials, greedy every 5.
+    // The header and shape of runs.csv: 3 runs × 6 trials, greedy every 5.
     let lines: Vec<&str> = a.lines().collect();
     assert_eq!(lines[0], "run,trial,sim_time_s,return,greedy_return");
     assert_eq!(lines.len(), 1 + 3 * 6);
