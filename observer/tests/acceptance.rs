@@ -1,6 +1,6 @@
-//! Acceptance test of the model-predicted observer: on a recorded pendulum swing-up measured by a 4096-count
-//! encoder, its velocity estimate is closer to the ground truth than the finite-difference
-//! estimate.
+//! Acceptance test of the model-predicted observer: on a recorded pendulum swing-up
+//! measured by a 4096-count encoder, its velocity estimate is closer to the ground truth
+//! than the finite-difference estimate.
 //!
 //! The recording: five 3 s trials (100 samples each) of the pendulum (Appendix A.1) from
 //! `[π − 0.05·i, 0]`, i = 0…4, under a fixed swing-up law of the true state — energy
