@@ -30,7 +30,7 @@
 //! lookahead on the interpolated `V_{k+1}` over the same action levels) run on the true
 //! plant from `x_0` ([`Optimum::simulated_return`], [`Optimum::trajectory`]). Being the
 //! return of an actual policy, it is a lower bound: `J* ≥ simulated_return`. The two agree
-//! to a fraction of a percent on fine grids (README, "Optimal reference").
+//! to a fraction of a percent on fine grids (`docs/results/optimal.md`).
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};

@@ -78,7 +78,7 @@ pub struct DriverInfo {
     /// Protocol version: [`VERSION`].
     pub version: u64,
     /// The system, ASCII, NUL-padded: `pendulum`, `arm-vertical`, `arm-horizontal`,
-    /// `double-integrator` (the rig's `--system` names).
+    /// `arm-6.4`, `double-integrator` (the rig's `--system` names).
     pub system: [u8; 32],
     /// State components in [`DriverSample::x`].
     pub n_x: u64,

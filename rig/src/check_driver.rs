@@ -13,7 +13,7 @@ use crate::external::DriverArgs;
 pub struct Args {
     #[command(flatten)]
     driver: DriverArgs,
-    /// The task the driver must fit: pendulum, arm-vertical, arm-horizontal,
+    /// The task the driver must fit: pendulum, arm-vertical, arm-horizontal, arm-6.4,
     /// double-integrator.
     #[arg(long, value_parser = SystemName::parse, default_value = "pendulum")]
     system: SystemName,

@@ -3,7 +3,7 @@
 //! no learner beating it, and `rig optimal` on the command line.
 //!
 //! The grids here are coarse (201², 61 action levels: about 4 s with the test profile's
-//! optimisation) so the file stays fast; the README has 401² and 801².
+//! optimisation) so the file stays fast; `docs/results/optimal.md` has 401² and 801².
 
 use std::sync::{Arc, OnceLock};
 

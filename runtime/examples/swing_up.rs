@@ -1,7 +1,7 @@
 //! Learn the pendulum swing-up with MLAC/LLR for 60 trials (3 simulated minutes), then
 //! print the greedy policy's time response, like the thesis's Figure 6.2.
 //!
-//! `cargo run --release -p rig --example swing_up`
+//! `cargo run --release -p runtime --example swing_up`
 
 use runtime::config::{Overrides, resolve};
 use runtime::experiment::Experiment;

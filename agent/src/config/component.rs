@@ -80,7 +80,7 @@ pub struct LstdConfig {
     /// staying at each centre, `ρ(c, 0) / (1 − γ)` — §6.5's "value function initialised
     /// using knowledge of the reward function"; not in the thesis). Measured on the
     /// pendulum (VGBP-LSTD, 20 runs × 200 trials, seed 1): `reward` never learns the
-    /// swing-up (−3630 after 200 trials; README, Chapter 6 results).
+    /// swing-up (−3630 after 200 trials; `docs/results/pendulum.md`).
     #[serde(default, skip_serializing_if = "LstdPrior::is_zero")]
     pub prior: LstdPrior,
 }

@@ -37,8 +37,8 @@ pub const STARTUP: Duration = Duration::from_secs(30);
 
 /// Puts this process under `SCHED_FIFO` at `priority` (`--rt-priority`) and locks its
 /// memory (`mlockall`, no page faults in the loop); nothing for `None`. A control loop's
-/// usual remedy against being preempted by other work on the machine (measured in the
-/// README, "Latency budget").
+/// usual remedy against being preempted by other work on the machine (measured in
+/// `docs/results/latency.md`).
 pub fn set_rt_priority(priority: Option<u8>) -> Result<()> {
     let Some(p) = priority else {
         return Ok(());
@@ -83,7 +83,7 @@ pub fn clock_cpu() -> usize {
 }
 
 /// Pins this process to `cpus` (`--pin-cpus`, `sched_setaffinity`): the clock gets a CPU
-/// that none of the rig's other work runs on (measured in the README, "Latency budget").
+/// that none of the rig's other work runs on (measured in `docs/results/latency.md`).
 pub fn pin(cpus: Cpus) -> Result<()> {
     let last = clock_cpu();
     if last < 1 {
