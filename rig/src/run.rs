@@ -45,8 +45,10 @@ pub struct Args {
     /// trial that is complete in returns.csv, in the agent's checkpoints
     /// (DIR/checkpoints) and in run.mcap. The configuration is DIR/config.toml; of the
     /// experiment flags only `--trials` may be given (to learn on past the original
-    /// end). `--timing`, `--speed`, `--plant` and the driver flags apply to the part that
-    /// is run now. Completed trials stay in returns.csv and run.mcap.
+    /// end). `--timing`, `--speed` and the driver flags apply to the part that is run
+    /// now; the plant must be the run's own (a run made against an external driver is
+    /// resumed with `--plant external`, a simulated one without). Completed trials stay in
+    /// returns.csv and run.mcap.
     #[arg(long, value_name = "DIR", conflicts_with = "out")]
     resume: Option<PathBuf>,
     /// No progress bar and no summary.
@@ -149,7 +151,7 @@ pub fn main(args: &Args) -> ExitCode {
                 }
                 println!(
                     "  wrote {}/{{returns.csv, run.mcap, config.toml, plant.log, observer.log, agent.log}}",
-                    args.out.display()
+                    opts.out.display()
                 );
             }
             ExitCode::SUCCESS

@@ -269,6 +269,47 @@ fn learns_and_records(d: &Driver, dir: &std::path::Path) {
     assert!(samples >= 8 * 101, "{samples} driver samples recorded");
 }
 
+/// A run against a driver resumes against a driver only: without `--plant external` the
+/// hardware run would quietly finish in the simulator. Resumed against the driver, it
+/// goes on, and the summary names the resumed directory.
+#[test]
+fn a_run_against_a_driver_resumes_only_against_a_driver() {
+    let d = Driver::launch(&Kind::Rust, "resume", &["--speed", "10"]);
+    let dir = tmp(&format!("resume-{}", d.id));
+    let out = run_external(&d.id, &["--trials", "2", "--driver-timeout", "20"], &dir);
+    assert!(out.status.success(), "{}", text(&out).1);
+
+    let simulated = rig()
+        .args(["run", "--trials", "3", "--quiet", "--resume"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let (_, err) = text(&simulated);
+    assert!(!simulated.status.success());
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("was run against an external driver") && err.contains("--plant external"),
+        "{err}"
+    );
+
+    let resumed = rig()
+        .args([
+            "run", "--plant", "external", "--driver", &d.id, "--trials", "3",
+        ])
+        .args(["--driver-timeout", "20", "--resume"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let (stdout, stderr) = text(&resumed);
+    assert!(resumed.status.success(), "{stdout}\n{stderr}");
+    assert!(
+        stdout.contains(&format!("wrote {}/{{returns.csv", dir.display())),
+        "{stdout}"
+    );
+    let returns = std::fs::read_to_string(dir.join("returns.csv")).unwrap();
+    assert_eq!(returns.lines().count(), 4, "{returns}");
+}
+
 /// The §6.4.2 manipulator (two joints, ±0.1 N m, a ±1.2 rad operating range, four start
 /// states) behind `rig sim-driver`: it passes `rig check-driver --system arm-6.4`, and
 /// VGBP-LSTD learns against it — trials that leave the range end early, and the driver

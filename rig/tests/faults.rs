@@ -222,6 +222,20 @@ fn bad_resumes_are_one_line_errors() {
     let ckpt = pendulum.join("checkpoints/trial-000003.ckpt");
     let good = std::fs::read(&ckpt).unwrap();
 
+    // A simulated run does not continue against a driver (checked before waiting for one).
+    let err = resume(&[
+        "--plant",
+        "external",
+        "--driver",
+        "absent",
+        "--driver-timeout",
+        "1",
+    ]);
+    assert!(
+        err.contains("was run with the simulated plant") && err.contains("--plant external"),
+        "{err}"
+    );
+
     let err = resume(&["--seed", "2"]);
     assert!(
         err.contains("--seed") && err.contains("config.toml"),

@@ -257,6 +257,24 @@ fn read_recording(out: &Path, notes: &mut Vec<String>) -> Result<Vec<RecordedMes
     Ok(messages)
 }
 
+/// Refuses to continue a run on another plant than it was made on: a hardware run
+/// finished in the simulator (or the reverse) would mix two systems in one learning
+/// curve.
+fn same_plant(out: &Path, messages: &[RecordedMessage], external: bool) -> Result<()> {
+    let recorded = messages.iter().any(|m| m.topic.starts_with("/driver/"));
+    match (recorded, external) {
+        (true, false) => bail!(
+            "{} was run against an external driver; resume it with `--plant external` and the same `--driver`",
+            out.display()
+        ),
+        (false, true) => bail!(
+            "{} was run with the simulated plant; resume it without `--plant external`",
+            out.display()
+        ),
+        _ => Ok(()),
+    }
+}
+
 /// What the recording holds, per learning trial.
 struct Recorded {
     /// Per main topic, the sequence numbers present.
@@ -317,8 +335,11 @@ impl Recorded {
 ///
 /// A run with a sensor or observer other than the defaults cannot be resumed: a
 /// checkpoint holds the agent's state only, not the observer's (a learned model, a
-/// velocity filter) nor where the sensor's noise stream stands.
-pub fn prepare(out: &Path, cfg: &ExperimentConfig) -> Result<ResumePoint> {
+/// velocity filter) nor where the sensor's noise stream stands. Nor can a run continue on
+/// another plant than it was made on: `external` says whether the resumed part runs
+/// against an external driver, and must match the recording (which holds the driver's
+/// traffic, `/driver/...`, exactly when the run was made against one).
+pub fn prepare(out: &Path, cfg: &ExperimentConfig, external: bool) -> Result<ResumePoint> {
     if !cfg.observer.is_default() {
         bail!(
             "{}: cannot resume a run with `[observer]` sensor {} / observer {}: checkpoints hold the agent's state only, not the observer's (its learned model, its filter) nor the sensor's noise stream; start a new run",
@@ -340,6 +361,7 @@ pub fn prepare(out: &Path, cfg: &ExperimentConfig) -> Result<ResumePoint> {
         );
     }
     let messages = read_recording(out, &mut notes)?;
+    same_plant(out, &messages, external)?;
     let recorded = index(&messages)?;
     let dir = checkpoint_dir(out);
     let starts = plant::Task::new(cfg.system).initial_states.len();

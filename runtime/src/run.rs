@@ -747,7 +747,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     }
     // Where a resumed run continues; checked before anything is written.
     let point = if opts.resume {
-        Some(resume::prepare(&opts.out, &cfg)?)
+        Some(resume::prepare(&opts.out, &cfg, opts.driver.is_some())?)
     } else {
         None
     };
