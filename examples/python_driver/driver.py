@@ -20,6 +20,7 @@ import argparse
 import ctypes
 import math
 import os
+import random
 import signal
 import sys
 import time
@@ -111,6 +112,7 @@ class Driver:
         self.args = args
         self.speed = args.speed
         self.period_ns = round(Pendulum.TS / self.speed * 1e9)
+        self.clock_error = random.Random(1)  # --inject-fault clock
         self.plant = Pendulum()
         self.t_start = time.monotonic_ns()
         self.t_phys = self.t_start  # monotonic time the physics has reached
@@ -348,6 +350,11 @@ class Driver:
                 self.publish_info()
                 next_info = t_sample + 1_000_000_000
             seq += 1
+            if self.args.inject_fault == "clock":
+                # The fault: a relative wait, each off by up to ±2 ms (a fixed seed).
+                error = self.clock_error.randint(-2_000_000, 2_000_000)
+                self.wait_until(t_sample + period + error)
+                continue
             self.wait_until(self.t_start + seq * period)
             # Woken late by a period or more: those periods were missed.
             late = (time.monotonic_ns() - (self.t_start + seq * period)) // period
@@ -376,10 +383,12 @@ def main():
     )
     p.add_argument(
         "--inject-fault",
-        choices=["layout", "watchdog", "limits"],
+        choices=["layout", "watchdog", "limits", "clock"],
         help="misbehave on purpose, to see what `rig check-driver` says: publish a "
-        "wrong sample layout, never engage the watchdog, or apply out-of-range and "
-        "non-finite actions instead of clamping and rejecting them",
+        "wrong sample layout, never engage the watchdog, apply out-of-range and "
+        "non-finite actions instead of clamping and rejecting them, or time each "
+        "sample from the previous one with a wait off by up to ±2 ms (as a timed wait "
+        "would be), so that the instants drift",
     )
     p.add_argument(
         "--sensor",

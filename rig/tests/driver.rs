@@ -485,6 +485,31 @@ fn a_second_driver_with_the_same_id_is_refused() {
     assert!(out.status.success(), "{}", text(&out).0);
 }
 
+/// A driver that times each sample from the previous one, its wait off by up to ±2 ms,
+/// fails the sample-rate check, and the line says that its clock drifts (or, on a
+/// machine that stalls it besides, that it is irregular) instead of reporting only an
+/// accumulated lateness. With `--inject-fault clock` removed the driver passes.
+#[test]
+fn check_driver_says_when_a_drivers_clock_drifts() {
+    let Some(py) = python() else { return };
+    let d = Driver::start(&py, "clock", &["--inject-fault", "clock"]);
+    let out = rig()
+        .args(["check-driver", "--driver", &d.id, "--rate-seconds", "3"])
+        .args(["--driver-timeout", "20"])
+        .output()
+        .unwrap();
+    let (stdout, stderr) = text(&out);
+    assert_eq!(out.status.code(), Some(1), "{stdout}\n{stderr}");
+    let rate = line(&stdout, "sample rate");
+    assert!(rate.starts_with("FAIL"), "{stdout}");
+    assert!(
+        rate.contains("intervals off the period by p99")
+            && (rate.contains("the driver's clock drifts")
+                || rate.contains("the driver's clock is irregular")),
+        "{rate}"
+    );
+}
+
 #[test]
 fn a_driver_with_an_incompatible_payload_is_a_one_line_error() {
     let Some(py) = python() else { return };

@@ -87,7 +87,7 @@ pub fn check(opts: &CheckOptions, report: &mut dyn FnMut(&Outcome)) -> Result<Ve
         .wait_info(&bus, opts.timeout)
         .map_err(|e| anyhow!("{e}"))?;
     let task = Task::new(opts.system);
-    let mut s = Session {
+    let mut s = Probe {
         silence: (info.period() * 20).max(Duration::from_secs(1)),
         bus,
         link,
@@ -120,7 +120,9 @@ pub fn check(opts: &CheckOptions, report: &mut dyn FnMut(&Outcome)) -> Result<Ve
     Ok(s.outcomes)
 }
 
-struct Session<'r> {
+/// One check of a driver: the connection, what the driver advertised, and the outcomes
+/// so far.
+struct Probe<'r> {
     bus: Bus,
     link: DriverLink,
     info: DriverInfo,
@@ -142,19 +144,13 @@ fn vector(v: &[f64]) -> String {
     format!("[{}]", parts.join(", "))
 }
 
-/// Percentile `p` (0..=1) of sorted values.
 /// Each sample's lateness against a regular grid placed at the earliest sample, sorted
 /// \[ns\]; `stamps` are `(seq, t_sample_ns)` in order, at least two. The grid's period is
 /// the median of the sample-to-sample periods, so that one late sample is one outlier: the
 /// mean from the first to the last sample would tilt the grid when either of those is the
 /// late one (a first sample 12 ms late spread 0–12 ms of "lateness" over all the others).
 fn lateness(stamps: &[(u64, u64)]) -> Vec<f64> {
-    let mut steps: Vec<f64> = stamps
-        .windows(2)
-        .map(|w| (w[1].1 - w[0].1) as f64 / (w[1].0 - w[0].0) as f64)
-        .collect();
-    steps.sort_by(f64::total_cmp);
-    let grid = percentile(&steps, 0.5);
+    let grid = percentile(&intervals(stamps), 0.5);
     let (seq0, t0) = stamps[0];
     let offsets: Vec<f64> = stamps
         .iter()
@@ -166,6 +162,49 @@ fn lateness(stamps: &[(u64, u64)]) -> Vec<f64> {
     late
 }
 
+/// The sample-to-sample intervals per period, sorted \[ns\]; `stamps` as for
+/// [`lateness`].
+fn intervals(stamps: &[(u64, u64)]) -> Vec<f64> {
+    let mut steps: Vec<f64> = stamps
+        .windows(2)
+        .map(|w| (w[1].1 - w[0].1) as f64 / (w[1].0 - w[0].0) as f64)
+        .collect();
+    steps.sort_by(f64::total_cmp);
+    steps
+}
+
+/// How far each interval is from the median interval, sorted \[ns\]: how irregular the
+/// driver's clock is from one sample to the next. Lateness against a grid sums such
+/// errors when a driver times each sample from the previous one rather than from its
+/// start.
+fn interval_jitter(stamps: &[(u64, u64)]) -> Vec<f64> {
+    let steps = intervals(stamps);
+    let median = percentile(&steps, 0.5);
+    let mut off: Vec<f64> = steps.iter().map(|s| (s - median).abs()).collect();
+    off.sort_by(f64::total_cmp);
+    off
+}
+
+/// What a lateness p99 beyond `bound` says about the driver's clock, given the p99 of
+/// its interval jitter (all in ns): either the period itself is irregular, or each
+/// interval is fine and their errors accumulate.
+fn clock_diagnosis(late_p99: f64, interval_p99: f64, bound: f64) -> Option<String> {
+    if late_p99 <= bound {
+        None
+    } else if interval_p99 > bound {
+        Some(format!(
+            "the driver's clock is irregular: its intervals differ from the period by up to {:.3} ms (p99); sample on an absolute clock (docs/driver.md, \"Keeping time\")",
+            interval_p99 * 1e-6
+        ))
+    } else {
+        Some(format!(
+            "the driver's clock drifts: each interval is within {:.3} ms (p99) of the period, but the instants stray from a regular grid, as when each sample is timed from the previous one; sample at t_start + k·period (docs/driver.md, \"Keeping time\")",
+            interval_p99 * 1e-6
+        ))
+    }
+}
+
+/// Percentile `p` (0..=1) of sorted values.
 fn percentile(sorted: &[f64], p: f64) -> f64 {
     if sorted.is_empty() {
         return f64::NAN;
@@ -189,7 +228,7 @@ fn same(a: &[f64], b: &[f64]) -> bool {
             .all(|(x, y)| (x - y).abs() <= 1e-9 * (1.0 + y.abs()))
 }
 
-impl Session<'_> {
+impl Probe<'_> {
     fn record(&mut self, name: &'static str, pass: bool, detail: String) {
         let o = Outcome { name, pass, detail };
         (self.report)(&o);
@@ -288,14 +327,14 @@ impl Session<'_> {
     }
 
     fn run_phases(&mut self) {
-        type Phase<'r> = (&'static str, fn(&mut Session<'r>) -> Result<()>);
+        type Phase<'r> = (&'static str, fn(&mut Probe<'r>) -> Result<()>);
         let phases: [Phase<'_>; 6] = [
-            ("reset", Session::reset),
-            ("sample rate", Session::rate),
-            ("step response", Session::step),
-            ("watchdog", Session::watchdog),
-            ("out-of-range actions", Session::out_of_range),
-            ("non-finite and malformed actions", Session::non_finite),
+            ("reset", Probe::reset),
+            ("sample rate", Probe::rate),
+            ("step response", Probe::step),
+            ("watchdog", Probe::watchdog),
+            ("out-of-range actions", Probe::out_of_range),
+            ("non-finite and malformed actions", Probe::non_finite),
         ];
         for (name, phase) in phases {
             if let Err(e) = phase(self) {
@@ -405,6 +444,10 @@ impl Session<'_> {
             percentile(&jitter, 0.99),
             jitter[jitter.len() - 1],
         );
+        let interval_p99 = percentile(&interval_jitter(&stamps), 0.99);
+        let bound = self.opts.max_jitter * period;
+        let diagnosis =
+            clock_diagnosis(p99, interval_p99, bound).map_or(String::new(), |d| format!(" — {d}"));
         let mut missed = 0;
         let mut acked = 0;
         for w in samples.windows(2) {
@@ -413,21 +456,22 @@ impl Session<'_> {
             acked += usize::from(b.last_command == cmd);
         }
         let rate_ok = (mean - period).abs() <= 0.01 * period;
-        let jitter_ok = p99 <= self.opts.max_jitter * period;
+        let jitter_ok = p99 <= bound;
         let missed_ok = missed as f64 <= self.opts.max_missed * periods;
         let acked_ok = acked * 10 >= (samples.len() - 1) * 9;
         self.record(
             "sample rate",
             rate_ok && jitter_ok && missed_ok && acked_ok,
             format!(
-                "{} samples: mean period {:.3} ms (advertised {:.3}, bound ±1 %); lateness against a regular grid p50 {:.3} ms, p99 {:.3} (bound {:.3}), max {:.3}; {missed} missed period(s) (bound {:.0} %); {acked} of {} actions applied by the next sample (bound 90 %)",
+                "{} samples: mean period {:.3} ms (advertised {:.3}, bound ±1 %); lateness against a regular grid p50 {:.3} ms, p99 {:.3} (bound {:.3}), max {:.3}; intervals off the period by p99 {:.3} ms; {missed} missed period(s) (bound {:.0} %); {acked} of {} actions applied by the next sample (bound 90 %){diagnosis}",
                 samples.len(),
                 mean * 1e-6,
                 period * 1e-6,
                 p50 * 1e-6,
                 p99 * 1e-6,
-                self.opts.max_jitter * period * 1e-6,
+                bound * 1e-6,
                 max * 1e-6,
+                interval_p99 * 1e-6,
                 self.opts.max_missed * 100.0,
                 samples.len() - 1,
             ),
@@ -631,6 +675,35 @@ mod tests {
             assert!(percentile(&l, 0.99).abs() < 1.0, "late {late}: {l:?}");
             assert!((l[166] - 12e6).abs() < 1.0, "late {late}: max {}", l[166]);
         }
+    }
+
+    /// A clock that times each sample from the previous one, each wait off by ±2 ms: every
+    /// interval is within 2 ms of the period, the lateness against the grid grows past it,
+    /// and the diagnosis says the clock drifts; a clock whose intervals themselves exceed
+    /// the bound is called irregular.
+    #[test]
+    fn an_accumulating_clock_is_told_from_an_irregular_one() {
+        let mut t = 0u64;
+        let stamps: Vec<(u64, u64)> = (0..200u64)
+            .map(|k| {
+                // A fixed pattern of ±2 ms errors whose sum wanders (no random source).
+                let e = [2_000_000i64, 1_500_000, 1_000_000, -500_000, 2_000_000][k as usize % 5]
+                    * if (k / 25) % 2 == 0 { 1 } else { -1 };
+                t = (t as i64 + 30_000_000 + e) as u64;
+                (k, t)
+            })
+            .collect();
+        let late = percentile(&lateness(&stamps), 0.99);
+        let steps = percentile(&interval_jitter(&stamps), 0.99);
+        assert!(
+            steps <= 2.5e6 && late > 10e6,
+            "intervals {steps}, lateness {late}"
+        );
+        let d = clock_diagnosis(late, steps, 3e6).unwrap();
+        assert!(d.contains("drifts") && d.contains("Keeping time"), "{d}");
+        assert!(clock_diagnosis(late, steps, 2.0 * late).is_none());
+        let d = clock_diagnosis(late, 5e6, 3e6).unwrap();
+        assert!(d.contains("irregular"), "{d}");
     }
 
     #[test]
