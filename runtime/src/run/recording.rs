@@ -1,0 +1,271 @@
+//! The run's MCAP recording: one channel per topic, the wall-clock stamps on their
+//! own `/timing/...` channels, log time simulated (lockstep) or the plant's (realtime).
+
+use std::path::Path;
+
+use anyhow::Result;
+use driver::contract::{DriverCommand, DriverSample};
+use wire::{Action, Estimate, Header, Measurement, Truth};
+
+use crate::record::{ChannelId, Field, FieldKind, Recorder, Value};
+
+/// The MCAP recording: one channel per topic, and one `/timing/...` channel per topic
+/// for the wall-clock timestamps, which differ from run to run by nature. Log time is
+/// simulated time.
+pub(super) struct Recording {
+    pub(super) rec: Recorder,
+    pub(super) measurement: ChannelId,
+    pub(super) estimate: ChannelId,
+    pub(super) action: ChannelId,
+    /// `/plant/truth`, with a sensor that does not measure the full state.
+    pub(super) truth: Option<ChannelId>,
+    pub(super) t_measurement: ChannelId,
+    pub(super) t_estimate: ChannelId,
+    pub(super) t_action: ChannelId,
+    /// `/driver/sample` and `/driver/command`, with an external driver.
+    pub(super) driver: Option<(ChannelId, ChannelId)>,
+    pub(super) n: usize,
+    pub(super) m: usize,
+    pub(super) values: Vec<Value>,
+    /// Log time: simulated time (lockstep) or the plant's sample time (realtime).
+    pub(super) realtime: bool,
+    /// The current sample's plant sample time (monotonic ns).
+    pub(super) t_sample_ns: u64,
+}
+
+/// `a,b,c`: values in Rust's shortest round-trip form, which a reader parses exactly.
+pub(super) fn join<T: std::fmt::Display>(values: impl IntoIterator<Item = T>) -> String {
+    values
+        .into_iter()
+        .map(|v| v.to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+pub(super) fn header_fields(extra: Vec<Vec<Field>>) -> Vec<Field> {
+    let mut f: Vec<Field> = ["seq", "trial", "step", "flags"]
+        .iter()
+        .map(|n| Field::integer(n))
+        .collect();
+    f.push(Field::number("t_sim"));
+    f.extend(extra.into_iter().flatten());
+    f
+}
+
+pub(super) fn timing_fields(names: &[&str]) -> Vec<Field> {
+    std::iter::once(Field::integer("seq"))
+        .chain(names.iter().map(|n| Field::integer(n)))
+        .collect()
+}
+
+impl Recording {
+    pub(super) fn create(path: &Path, n: usize, m: usize) -> Result<Self> {
+        let mut rec = Recorder::create(path)?;
+        let state = |name| {
+            vec![
+                vec![Field::number("reward")],
+                Field::array(name, n, FieldKind::Number),
+                Field::array("u_applied", m, FieldKind::Number),
+            ]
+        };
+        let mut measured = state("y");
+        measured.push(Field::array("u_next", m, FieldKind::Number));
+        measured.push(vec![Field::number("delay_s")]);
+        let measurement = rec.channel(
+            "/plant/measurement",
+            "rig.Measurement",
+            &header_fields(measured),
+        )?;
+        let estimate = rec.channel(
+            "/observer/estimate",
+            "rig.Estimate",
+            &header_fields(state("x")),
+        )?;
+        let action = rec.channel(
+            "/agent/action",
+            "rig.Action",
+            &header_fields(vec![Field::array("u", m, FieldKind::Number)]),
+        )?;
+        let stamps = ["t_sample_ns", "t_received_ns", "t_publish_ns"];
+        let t_measurement = rec.channel(
+            "/timing/plant/measurement",
+            "rig.Timing.Measurement",
+            &timing_fields(&["t_sample_ns", "t_publish_ns"]),
+        )?;
+        let t_estimate = rec.channel(
+            "/timing/observer/estimate",
+            "rig.Timing.Estimate",
+            &timing_fields(&stamps),
+        )?;
+        let t_action = rec.channel(
+            "/timing/agent/action",
+            "rig.Timing.Action",
+            &timing_fields(&stamps),
+        )?;
+        Ok(Self {
+            rec,
+            measurement,
+            estimate,
+            action,
+            truth: None,
+            t_measurement,
+            t_estimate,
+            t_action,
+            driver: None,
+            n,
+            m,
+            values: Vec::new(),
+            realtime: false,
+            t_sample_ns: 0,
+        })
+    }
+
+    /// Starts a message with the header fields; returns its log time (simulated, ns).
+    pub(super) fn header(&mut self, h: &Header) -> u64 {
+        self.values.clear();
+        self.values.extend([
+            Value::Int(h.seq),
+            Value::Int(h.trial),
+            Value::Int(h.step),
+            Value::Int(h.flags),
+            Value::Num(h.t_sim),
+        ]);
+        if self.realtime {
+            self.t_sample_ns
+        } else {
+            (h.t_sim * 1e9).round() as u64
+        }
+    }
+
+    pub(super) fn write(
+        &mut self,
+        ch: ChannelId,
+        t: u64,
+        timing: ChannelId,
+        seq: u64,
+        stamps: &[u64],
+    ) -> Result<()> {
+        self.rec.write(ch, t, t, &self.values)?;
+        self.values.clear();
+        self.values.push(Value::Int(seq));
+        self.values.extend(stamps.iter().map(|&s| Value::Int(s)));
+        self.rec.write(timing, t, t, &self.values)
+    }
+
+    pub(super) fn nums(&mut self, v: &[f64]) {
+        self.values.extend(v.iter().map(|&x| Value::Num(x)));
+    }
+
+    pub(super) fn measurement(&mut self, msg: &Measurement) -> Result<()> {
+        self.t_sample_ns = msg.t_sample_ns;
+        let t = self.header(&msg.header);
+        self.nums(&[msg.reward]);
+        self.nums(&msg.y[..self.n]);
+        self.nums(&msg.u_applied[..self.m]);
+        self.nums(&msg.u_next[..self.m]);
+        self.nums(&[msg.delay_s]);
+        self.write(
+            self.measurement,
+            t,
+            self.t_measurement,
+            msg.header.seq,
+            &[msg.t_sample_ns, msg.t_publish_ns],
+        )
+    }
+
+    /// Adds the channel of the plant's ground truth.
+    pub(super) fn add_truth(&mut self) -> Result<()> {
+        let fields = header_fields(vec![Field::array("x", self.n, FieldKind::Number)]);
+        self.truth = Some(self.rec.channel("/plant/truth", "rig.Truth", &fields)?);
+        Ok(())
+    }
+
+    /// Records the ground truth of a sample, with the log time of its measurement.
+    pub(super) fn truth(&mut self, msg: &Truth) -> Result<()> {
+        let Some(ch) = self.truth else {
+            return Ok(());
+        };
+        self.t_sample_ns = msg.t_sample_ns;
+        let t = self.header(&msg.header);
+        self.nums(&msg.x[..self.n]);
+        self.rec.write(ch, t, t, &self.values)
+    }
+
+    pub(super) fn estimate(&mut self, msg: &Estimate) -> Result<()> {
+        self.t_sample_ns = msg.t_sample_ns;
+        let t = self.header(&msg.header);
+        self.nums(&[msg.reward]);
+        self.nums(&msg.x[..self.n]);
+        self.nums(&msg.u_applied[..self.m]);
+        self.write(
+            self.estimate,
+            t,
+            self.t_estimate,
+            msg.header.seq,
+            &[msg.t_sample_ns, msg.t_received_ns, msg.t_publish_ns],
+        )
+    }
+
+    /// Adds the channels of an external driver's samples and commands.
+    pub(super) fn add_driver(&mut self) -> Result<()> {
+        let (n, m) = (self.n, self.m);
+        let ints =
+            |names: &[&str]| -> Vec<Field> { names.iter().map(|f| Field::integer(f)).collect() };
+        let mut sample = ints(&["seq", "t_sample_ns", "status", "reset_id", "last_command"]);
+        sample.extend(Field::array("x", n, FieldKind::Number));
+        sample.extend(Field::array("u_applied", m, FieldKind::Number));
+        sample.extend(ints(&["clamped", "rejected", "watchdog_trips"]));
+        let mut command = ints(&["seq", "kind", "sample_seq", "t_publish_ns"]);
+        command.extend(Field::array("u", m, FieldKind::Number));
+        command.extend(Field::array("x0", n, FieldKind::Number));
+        let s = self
+            .rec
+            .channel("/driver/sample", "rig.DriverSample", &sample)?;
+        let c = self
+            .rec
+            .channel("/driver/command", "rig.DriverCommand", &command)?;
+        self.driver = Some((s, c));
+        Ok(())
+    }
+
+    pub(super) fn driver_sample(&mut self, s: &DriverSample) -> Result<()> {
+        let Some((ch, _)) = self.driver else {
+            return Ok(());
+        };
+        self.values.clear();
+        self.values
+            .extend([s.seq, s.t_sample_ns, s.status, s.reset_id, s.last_command].map(Value::Int));
+        self.nums(&s.x[..self.n]);
+        self.nums(&s.u_applied[..self.m]);
+        self.values
+            .extend([s.clamped, s.rejected, s.watchdog_trips].map(Value::Int));
+        self.rec
+            .write(ch, s.t_sample_ns, s.t_sample_ns, &self.values)
+    }
+
+    pub(super) fn driver_command(&mut self, c: &DriverCommand) -> Result<()> {
+        let Some((_, ch)) = self.driver else {
+            return Ok(());
+        };
+        self.values.clear();
+        self.values
+            .extend([c.seq, c.kind, c.sample_seq, c.t_publish_ns].map(Value::Int));
+        self.nums(&c.u[..self.m]);
+        self.nums(&c.x0[..self.n]);
+        self.rec
+            .write(ch, c.t_publish_ns, c.t_publish_ns, &self.values)
+    }
+
+    pub(super) fn action(&mut self, msg: &Action) -> Result<()> {
+        self.t_sample_ns = msg.t_sample_ns;
+        let t = self.header(&msg.header);
+        self.nums(&msg.u[..self.m]);
+        self.write(
+            self.action,
+            t,
+            self.t_action,
+            msg.header.seq,
+            &[msg.t_sample_ns, msg.t_received_ns, msg.t_publish_ns],
+        )
+    }
+}

@@ -1,0 +1,123 @@
+//! `returns.csv` of a run, streamed from the plant's measurements (or the observer's
+//! estimates, when the driver measures positions only): one row per trial, the format
+//! of `rig learn`'s `runs.csv`.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+
+use ::agent::horizon::Horizon;
+use anyhow::{Result, anyhow};
+use wire::flags;
+
+use crate::experiment::TrialRecord;
+use crate::learn::write_row;
+
+/// Builds `returns.csv` rows from the plant's measurements.
+pub(super) struct Returns {
+    pub(super) out: BufWriter<File>,
+    pub(super) task: std::sync::Arc<plant::Task>,
+    pub(super) steps_per_trial: u64,
+    /// Samples not run because trials ended early (left the operating range).
+    pub(super) skipped_samples: u64,
+    /// Adds `τ_N(x_N)` of a finite horizon's last measurement to the return (Eq. 4.1).
+    pub(super) horizon: Horizon,
+    pub(super) reward: plant::QuadraticReward,
+    pub(super) pending: Option<TrialRecord>,
+    /// Whether the pending learning trial has ended.
+    pub(super) pending_ended: bool,
+    /// Greedy evaluation trials after a learning trial, when due (one per start state).
+    pub(super) eval_starts: u32,
+    /// A greedy evaluation after every this-many trials (0: none).
+    pub(super) eval_every: u32,
+    /// The running greedy trial's reward sum.
+    pub(super) greedy_trial: f64,
+    /// Sum of the returns of the greedy trials after the pending trial, and their count.
+    pub(super) greedy: (f64, u32),
+    pub(super) records: Vec<TrialRecord>,
+}
+
+impl Returns {
+    /// Accounts for the sample with header `h` and reward `reward`; `x` is its state for
+    /// a finite horizon's terminal reward. From the plant's measurements: the true state
+    /// (the measurement's `y` with full-state sensing); with [`flags::ESTIMATED_REWARD`]
+    /// from the observer's estimates instead: their rewards and `x̂`.
+    pub(super) fn sample(&mut self, h: &wire::Header, reward: f64, x: &[f64]) -> Result<()> {
+        let f = h.flags;
+        let greedy = f & flags::GREEDY != 0;
+        if f & flags::SHUTDOWN != 0 || (f & flags::START != 0 && !greedy) {
+            self.flush()?;
+        }
+        if f & flags::SHUTDOWN != 0 {
+            return Ok(());
+        }
+        if f & flags::START != 0 {
+            if greedy {
+                self.greedy_trial = 0.0;
+            } else {
+                self.greedy = (0.0, 0);
+                self.pending_ended = false;
+                self.pending = Some(TrialRecord {
+                    run: 0,
+                    trial: h.trial as u32,
+                    sim_time_s: 0.0,
+                    ret: 0.0,
+                    greedy: None,
+                });
+            }
+            return Ok(());
+        }
+        let pending = self
+            .pending
+            .as_mut()
+            .ok_or_else(|| anyhow!("a sample arrived before any trial started"))?;
+        let end = f & flags::END != 0;
+        let final_reward = if end {
+            self.horizon.final_reward(&self.reward, x)
+        } else {
+            0.0
+        };
+        if greedy {
+            // One greedy trial per start state: the greedy return is their mean.
+            self.greedy_trial += reward;
+            if end {
+                self.greedy_trial += final_reward;
+                self.greedy.0 += self.greedy_trial;
+                self.greedy.1 += 1;
+                pending.greedy = Some(self.greedy.0 / f64::from(self.greedy.1));
+            }
+        } else {
+            pending.ret += reward;
+            if end {
+                self.pending_ended = true;
+                pending.ret += final_reward;
+                self.skipped_samples += self.steps_per_trial.saturating_sub(h.step);
+                pending.sim_time_s = self
+                    .task
+                    .sim_time(pending.trial.into(), self.skipped_samples);
+            }
+        }
+        Ok(())
+    }
+
+    pub(super) fn flush(&mut self) -> Result<()> {
+        if let Some(r) = self.pending.take() {
+            write_row(&mut self.out, &r)?;
+            self.out.flush()?;
+            self.records.push(r);
+        }
+        Ok(())
+    }
+
+    /// After a failure: writes the pending trial only if it is complete — the learning
+    /// trial and its greedy evaluations (a resumed run redoes an incomplete one).
+    pub(super) fn flush_complete(&mut self) -> Result<()> {
+        let complete = self.pending.as_ref().is_some_and(|p| {
+            let due = self.eval_every > 0 && p.trial.is_multiple_of(self.eval_every);
+            self.pending_ended && self.greedy.1 == if due { self.eval_starts } else { 0 }
+        });
+        if complete {
+            self.flush()?;
+        }
+        Ok(())
+    }
+}

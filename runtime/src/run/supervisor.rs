@@ -1,0 +1,285 @@
+//! The supervision loop: drains every topic into the recording and `returns.csv`,
+//! checks sequence continuity, watches the child processes and names the cause of an
+//! early stop.
+
+use std::path::{Path, PathBuf};
+use std::process::Child;
+use std::time::{Duration, Instant};
+
+use anyhow::{Result, anyhow, bail};
+use driver::contract::DriverWatch;
+use indicatif::ProgressBar;
+use wire::{Action, Bus, Estimate, Measurement, Truth, flags, topic};
+
+use crate::process::wire_err;
+
+use super::recording::Recording;
+use super::returns::Returns;
+
+/// How long the supervisor watches after a process exits early, to see which process
+/// caused the stop (the others follow within milliseconds).
+pub(super) const CAUSE_WINDOW: Duration = Duration::from_millis(100);
+
+/// Checks that a topic's sequence numbers arrive without gaps.
+#[derive(Default)]
+pub(super) struct Continuity {
+    pub(super) next: u64,
+}
+
+impl Continuity {
+    pub(super) fn check(&mut self, topic: &str, seq: u64) -> Result<()> {
+        if seq != self.next {
+            bail!(
+                "the recorder lost messages on {topic}: expected sample {}, got {seq}",
+                self.next
+            );
+        }
+        self.next = seq + 1;
+        Ok(())
+    }
+}
+
+/// The child processes; killed when dropped.
+pub(super) struct Children(pub(super) Vec<(&'static str, Child)>);
+
+impl Drop for Children {
+    fn drop(&mut self) {
+        for (_, c) in &mut self.0 {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+pub(super) fn log_tail(path: &Path) -> String {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let lines: Vec<&str> = text.lines().collect();
+    lines[lines.len().saturating_sub(5)..].join("\n")
+}
+
+/// Everything the supervision loop works on.
+pub(super) struct Supervisor {
+    pub(super) bus: Bus,
+    pub(super) measurements: wire::Rx<Measurement>,
+    pub(super) estimates: wire::Rx<Estimate>,
+    pub(super) actions: wire::Rx<Action>,
+    /// The plant's ground truth, with a sensor that does not measure the full state.
+    pub(super) truths: Option<wire::Rx<Truth>>,
+    /// Measurements drained, waiting for their ground truth to be drained too.
+    pub(super) batch: Vec<Measurement>,
+    /// Ground truth drained ahead of its measurement.
+    pub(super) truth_queue: std::collections::VecDeque<Truth>,
+    pub(super) recording: Recording,
+    pub(super) returns: Returns,
+    pub(super) children: Children,
+    pub(super) out: PathBuf,
+    pub(super) messages: u64,
+    pub(super) continuity: [Continuity; 3],
+    pub(super) deadline_misses: u64,
+    /// The external driver's traffic, recorded.
+    pub(super) driver: Option<DriverWatch>,
+    /// Realtime and external driver: how long to go on recording after a process died,
+    /// so that the recording shows the plant's reaction (its watchdog, or the driver's,
+    /// applying the safe action within two periods).
+    pub(super) grace: Option<Duration>,
+}
+
+impl Supervisor {
+    /// Records everything waiting; returns whether the run's end came by.
+    pub(super) fn drain(&mut self, bar: &ProgressBar) -> Result<bool> {
+        let mut done = false;
+        if let Some(a) = self
+            .actions
+            .recv_timeout(Duration::from_millis(2))
+            .map_err(wire_err)?
+        {
+            done |= self.action(a)?;
+        }
+        while let Some(a) = self.actions.try_recv().map_err(wire_err)? {
+            done |= self.action(a)?;
+        }
+        // The plant publishes a sample's ground truth before its measurement: drained
+        // after the measurements, the truth of each of them is in.
+        self.batch.clear();
+        while let Some(m) = self.measurements.try_recv().map_err(wire_err)? {
+            self.batch.push(m);
+        }
+        if let Some(t) = &self.truths {
+            while let Some(x) = t.try_recv().map_err(wire_err)? {
+                self.truth_queue.push_back(x);
+            }
+        }
+        let batch = std::mem::take(&mut self.batch);
+        for m in &batch {
+            self.continuity[0].check(topic::MEASUREMENT, m.header.seq)?;
+            self.deadline_misses = self.deadline_misses.max(m.deadline_misses);
+            self.recording.measurement(m)?;
+            self.messages += 1;
+            if m.header.flags & flags::END != 0 {
+                bar.inc(1);
+            }
+            let n = m.n_x as usize;
+            // The rewards are the observer's: the estimates feed returns.csv.
+            let estimated = m.header.flags & flags::ESTIMATED_REWARD != 0;
+            if self.truths.is_some() && m.header.flags & flags::SHUTDOWN == 0 {
+                let t = self
+                    .truth_queue
+                    .pop_front()
+                    .filter(|t| t.header == m.header);
+                let Some(t) = t else {
+                    bail!(
+                        "the recorder lost messages on {}: no ground truth for sample {}",
+                        topic::TRUTH,
+                        m.header.seq
+                    );
+                };
+                self.recording.truth(&t)?;
+                if !estimated {
+                    self.returns.sample(&m.header, m.reward, &t.x[..n])?;
+                }
+            } else if !estimated {
+                self.returns.sample(&m.header, m.reward, &m.y[..n])?;
+            }
+        }
+        self.batch = batch;
+        while let Some(e) = self.estimates.try_recv().map_err(wire_err)? {
+            self.continuity[1].check(topic::ESTIMATE, e.header.seq)?;
+            self.recording.estimate(&e)?;
+            self.messages += 1;
+            if e.header.flags & flags::ESTIMATED_REWARD != 0 {
+                self.returns
+                    .sample(&e.header, e.reward, &e.x[..e.n_x as usize])?;
+            }
+        }
+        if let Some(d) = &self.driver {
+            while d.info.try_recv().map_err(wire_err)?.is_some() {}
+            while let Some(s) = d.samples.try_recv().map_err(wire_err)? {
+                self.recording.driver_sample(&s)?;
+            }
+            while let Some(c) = d.commands.try_recv().map_err(wire_err)? {
+                self.recording.driver_command(&c)?;
+            }
+        }
+        Ok(done)
+    }
+
+    pub(super) fn action(&mut self, a: Action) -> Result<bool> {
+        self.continuity[2].check(topic::ACTION, a.header.seq)?;
+        self.recording.action(&a)?;
+        self.messages += 1;
+        Ok(a.header.flags & flags::SHUTDOWN != 0)
+    }
+
+    /// A process that has exited, if any: its role, exit status and log file.
+    pub(super) fn exited(
+        &mut self,
+    ) -> Result<Option<(&'static str, std::process::ExitStatus, PathBuf)>> {
+        for (role, child) in &mut self.children.0 {
+            if let Some(status) = child.try_wait()? {
+                return Ok(Some((*role, status, self.out.join(format!("{role}.log")))));
+            }
+        }
+        Ok(None)
+    }
+
+    /// Of the processes that have exited, the one that caused the others to: killed by a
+    /// signal rather than stopped by an error (a process whose peer dies stops with one).
+    pub(super) fn cause(&mut self) -> Result<(&'static str, std::process::ExitStatus, PathBuf)> {
+        use std::os::unix::process::ExitStatusExt;
+        let mut first = None;
+        for (role, child) in &mut self.children.0 {
+            if let Some(status) = child.try_wait()? {
+                let found = (*role, status, self.out.join(format!("{role}.log")));
+                if status.signal().is_some() {
+                    return Ok(found);
+                }
+                first.get_or_insert(found);
+            }
+        }
+        first.ok_or_else(|| anyhow!("a process exited and could not be found again"))
+    }
+
+    /// Waits for every process to exit after the end of the run.
+    pub(super) fn reap(&mut self) -> Result<()> {
+        let deadline = Instant::now() + Duration::from_secs(10);
+        for (role, child) in &mut self.children.0 {
+            loop {
+                if let Some(status) = child.try_wait()? {
+                    if !status.success() {
+                        let log = self.out.join(format!("{role}.log"));
+                        bail!(
+                            "the {role} process failed ({status}); last lines of {}:\n{}",
+                            log.display(),
+                            log_tail(&log)
+                        );
+                    }
+                    break;
+                }
+                if Instant::now() > deadline {
+                    bail!("the {role} process did not exit after the end of the run");
+                }
+                std::thread::sleep(Duration::from_millis(5));
+            }
+        }
+        self.children.0.clear();
+        Ok(())
+    }
+
+    /// How far the run got, and how to continue it.
+    pub(super) fn resume_hint(&self) -> String {
+        format!(
+            "{} completed trials are in returns.csv; continue with `rig run --resume {}`",
+            self.returns.records.len(),
+            self.out.display()
+        )
+    }
+
+    pub(super) fn supervise(&mut self, bar: &ProgressBar) -> Result<()> {
+        loop {
+            if self.drain(bar)? {
+                break;
+            }
+            if self.bus.interrupted() {
+                bail!(
+                    "interrupted: stopped the plant, observer and agent processes; {}",
+                    self.resume_hint()
+                );
+            }
+            if let Some((_, status, _)) = self.exited()? {
+                // A process that ends cleanly after its last message can be seen to exit
+                // before that message is read: look once more.
+                if status.success() && self.drain(bar)? {
+                    break;
+                }
+                // Go on recording for a while: the plant's reaction (realtime), and the
+                // peers' exits, to tell the cause from its consequences.
+                let end = Instant::now() + self.grace.unwrap_or_default().max(CAUSE_WINDOW);
+                let mut done = false;
+                while Instant::now() < end {
+                    // Errors here are consequences of the death reported below.
+                    match self.drain(bar) {
+                        Ok(false) => {}
+                        Ok(true) => {
+                            done = true;
+                            break;
+                        }
+                        Err(_) => break,
+                    }
+                }
+                if done && self.cause().is_ok_and(|(_, s, _)| s.success()) {
+                    // The run's end came after all: processes exit as it passes.
+                    break;
+                }
+                let (role, status, log) = self.cause()?;
+                bail!(
+                    "the {role} process exited ({status}) before the run finished; {}; last lines of {}:\n{}",
+                    self.resume_hint(),
+                    log.display(),
+                    log_tail(&log)
+                );
+            }
+        }
+        self.reap()?;
+        self.returns.flush()
+    }
+}
