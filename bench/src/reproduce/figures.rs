@@ -32,9 +32,6 @@ pub(super) struct Figure {
     /// The thesis's numbers for the table, per curve label.
     pub(super) thesis: &'static [(&'static str, &'static str)],
     pub(super) claims: Vec<Claim>,
-    /// One sentence on agreement, or the reason for a difference, written for the run
-    /// committed in `docs/reproduction` (seed 1; another seed may read differently).
-    pub(super) discussion: &'static str,
 }
 
 pub(super) fn preset(
@@ -84,7 +81,6 @@ pub(super) fn figures() -> Vec<Figure> {
         Figure {
             id: "3.12",
             title: "Figure 3.12: SAC with tile coding, RBF and LLR (pendulum)",
-            discussion: "Agrees on the final level (all three within a few per cent of each other) and on the learning dips of tile coding and RBFs in the first minute (Figure 3.10); SAC/LLR has no dip, leads for the first two minutes and its rise time matches the thesis's \"about 3 min\", but tile coding reaches the common level just as early, so LLR is \"on top\" only in the early phase.",
             curves: vec![
                 c("SAC/tiles", preset(Pendulum, Sac, Tiles, Infinite)),
                 c("SAC/RBF", preset(Pendulum, Sac, Rbf, Infinite)),
@@ -110,7 +106,6 @@ pub(super) fn figures() -> Vec<Figure> {
         Figure {
             id: "3.17",
             title: "Figure 3.17: MLAC with RBF and LLR (pendulum)",
-            discussion: "Agrees: MLAC/LLR converges in less than half MLAC/RBF's time and ends better; ignoring the input saturation ruins MLAC/LLR, as §3.7 warns, while MLAC/RBF is hardly affected (why was not investigated), so the claim holds for LLR only.",
             curves: vec![
                 c("MLAC/RBF", preset(Pendulum, Mlac, Rbf, Infinite)),
                 c("MLAC/LLR", preset(Pendulum, Mlac, Llr, Infinite)),
@@ -154,7 +149,6 @@ pub(super) fn figures() -> Vec<Figure> {
         Figure {
             id: "3.22",
             title: "Figure 3.22: RMAC with RBF and LLR (pendulum)",
-            discussion: "Agrees: RMAC/LLR is the faster of the two and ends worse, with a much larger spread (a few runs end in a poor policy), as §3.6.3 describes.",
             curves: vec![
                 c("RMAC/RBF", preset(Pendulum, Rmac, Rbf, Infinite)),
                 c("RMAC/LLR", preset(Pendulum, Rmac, Llr, Infinite)),
@@ -177,7 +171,6 @@ pub(super) fn figures() -> Vec<Figure> {
         Figure {
             id: "3.23",
             title: "Figure 3.23: SAC, MLAC and RMAC with RBF and LLR (pendulum)",
-            discussion: "Partly agrees: LLR speeds up every algorithm and MLAC/LLR learns fastest of all, but our RBF versions end as well as (SAC) or nearly as well as (MLAC) the LLR ones where the thesis found LLR clearly better at the end, and RMAC/LLR is not faster than SAC/LLR.",
             curves: vec![
                 c("SAC/RBF", preset(Pendulum, Sac, Rbf, Infinite)),
                 c("SAC/LLR", preset(Pendulum, Sac, Llr, Infinite)),
@@ -257,7 +250,6 @@ pub(super) fn figures() -> Vec<Figure> {
         Figure {
             id: "4.4",
             title: "Figure 4.4: SAC-FH, MLAC-FH and RMAC-FH (pendulum, finite horizon)",
-            discussion: "The means are ordered as in Table 4.1 (SAC-FH worst) and MLAC-FH learns fastest, but our spread is larger: the medians are ordered as the thesis's means and close to them, while three or four runs per learner end in a poorer policy (see the worst runs) — runs the thesis's table does not show.",
             curves: vec![
                 c("SAC-FH", preset(Pendulum, Sac, Rbf, Finite)),
                 c("MLAC-FH", preset(Pendulum, Mlac, Rbf, Finite)),
@@ -284,7 +276,6 @@ pub(super) fn figures() -> Vec<Figure> {
         Figure {
             id: "5.5",
             title: "Figure 5.5: two-link arm, Case I (vertical, damping injection)",
-            discussion: "Agrees on the order of learning speed; SAC/RBF ends best by the mean, as the thesis says, but only because one MLAC/LLR run degrades late (its worst run): MLAC/LLR's median run ends better than SAC/RBF's.",
             curves: vec![
                 c("SAC/RBF", preset(ArmVertical, Sac, Rbf, Infinite)),
                 c("SAC/LLR", preset(ArmVertical, Sac, Llr, Infinite)),
@@ -327,7 +318,6 @@ pub(super) fn figures() -> Vec<Figure> {
         Figure {
             id: "5.9",
             title: "Figure 5.9: two-link arm, Case II (horizontal, reaching)",
-            discussion: "Agrees on the order of learning speed; in final return MLAC/LLR beats SAC/RBF too (the thesis has it slightly behind): within the 600 trials about half of the SAC/RBF runs have not yet learned to reach the reference (wide spread, poor median), while its best runs end ahead of MLAC/LLR's.",
             curves: vec![
                 c("SAC/RBF", preset(ArmHorizontal, Sac, Rbf, Infinite)),
                 c("SAC/LLR", preset(ArmHorizontal, Sac, Llr, Infinite)),
@@ -371,7 +361,6 @@ pub(super) fn figures() -> Vec<Figure> {
         Figure {
             id: "6.1",
             title: "Figure 6.1: MLAC, VGBP-LLR, VGBP-LSTD and SARSA (pendulum)",
-            discussion: "Agrees on speed (VGBP-LSTD fastest, VGBP-LLR ahead of MLAC, SARSA last); differs at the end: VGBP-LSTD ends best where the thesis has MLAC best, and every VGBP-LSTD final policy swings up with one swing where the thesis saw two or three — plausibly because our preset chooses the action by a search of Eq. 6.6 over V itself (README, Chapter 6) rather than by Eq. 6.21 alone, whose value gradient §6.5 blames for the variance.",
             curves: vec![
                 c("MLAC/LLR", mlac_chapter6()),
                 c("VGBP-LLR", preset(Pendulum, Vgbp, Llr, Infinite)),
@@ -441,7 +430,6 @@ pub(super) fn figures() -> Vec<Figure> {
         Figure {
             id: "6.5",
             title: "Figure 6.5: VGBP-LSTD on the 2-DOF manipulator (§6.4.2)",
-            discussion: "Agrees qualitatively: VGBP-LSTD takes the extreme actions the thesis describes, leaves the operating range in many early trials and settles within minutes; the thesis gives no numbers to compare the final return with.",
             curves: vec![c("VGBP-LSTD", preset(Arm64, Vgbp, Lstd, Infinite))],
             thesis: &[(
                 "VGBP-LSTD",

@@ -121,11 +121,7 @@ pub(super) fn write_report(
                 if *ok { "confirmed" } else { "not confirmed" }
             );
         }
-        let _ = writeln!(
-            s,
-            "\n*Discussion (written for the committed run, seed 1):* {}\n",
-            fig.discussion
-        );
+        s.push('\n');
     }
     if let Some(sens) = sensitivity {
         write_sensitivity(&mut s, sens);
