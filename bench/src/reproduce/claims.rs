@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use super::*;
+use super::measures::{Measured, common_target};
 
 pub(super) fn find<'a>(m: &'a [Measured], label: &str) -> &'a Measured {
     m.iter()

@@ -8,7 +8,10 @@ use plant::SystemName;
 
 use runtime::config::{ExperimentConfig, Overrides, resolve};
 
-use super::*;
+use super::claims::{
+    better, clearly_better, faster, fastest, find, llr_share, not, rbf_dip, swing_counts,
+};
+use super::measures::Measured;
 
 /// One learning curve of a figure.
 pub(super) struct Curve {

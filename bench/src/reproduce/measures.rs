@@ -199,3 +199,57 @@ pub(super) fn swings(response: &[runtime::experiment::Sample]) -> Option<usize> 
     }
     None
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use runtime::experiment::Sample;
+
+    fn response(states: &[(f64, f64)]) -> Vec<Sample> {
+        states
+            .iter()
+            .enumerate()
+            .map(|(k, &(phi, omega))| Sample {
+                t: 0.03 * k as f64,
+                x: vec![phi, omega],
+                u: vec![0.0],
+                reward: 0.0,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn swings_count_the_reversals_before_the_pendulum_is_up() {
+        // Pushed one way, back through the bottom (1), back again (2) and up.
+        let two = response(&[
+            (3.1, 0.0),
+            (2.8, -3.0),
+            (2.5, -1.0),
+            (2.6, 2.0),
+            (3.0, 4.0),
+            (-2.9, 5.0),
+            (-2.5, 0.5),
+            (-2.8, -1.0),
+            (2.0, -6.0),
+            (0.2, -3.0),
+        ]);
+        assert_eq!(swings(&two), Some(2));
+        // Straight up without a reversal.
+        assert_eq!(
+            swings(&response(&[(3.0, 0.0), (1.0, -5.0), (0.1, -1.0)])),
+            Some(0)
+        );
+        // Never within 0.3 rad of upright.
+        assert_eq!(
+            swings(&response(&[(3.0, 0.0), (2.0, 1.0), (0.4, 2.0)])),
+            None
+        );
+    }
+
+    #[test]
+    fn the_rise_time_target_is_ninety_percent_of_the_improvement() {
+        assert_eq!(rise_target(-4000.0, -1000.0), -1300.0);
+        // No improvement: the final level itself.
+        assert_eq!(rise_target(-1000.0, -2000.0), -2000.0);
+    }
+}

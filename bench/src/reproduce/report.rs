@@ -11,7 +11,10 @@ use plant::SystemName;
 
 use runtime::learn::write_atomic;
 
-use super::*;
+use super::FigureResult;
+use super::figures::Figure;
+use super::measures::Measured;
+use super::sensitivity::{FACTORS, Sensitivity};
 
 pub(super) fn write_summary(path: &Path, m: &[Measured], optimum: Option<f64>) -> Result<()> {
     let mut s = String::from(

@@ -11,7 +11,9 @@ use plant::SystemName;
 use runtime::config::ExperimentConfig;
 use runtime::learn::write_atomic;
 
-use super::*;
+use super::Runner;
+use super::figures::preset;
+use super::measures::Measured;
 
 /// The parameters the sensitivity analysis varies, and how.
 /// Scales a parameter of a configuration by a factor.
