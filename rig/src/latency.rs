@@ -29,6 +29,8 @@ pub struct Args {
     raw_samples: usize,
     #[command(flatten)]
     scheduling: runtime::process::Scheduling,
+    #[command(flatten)]
+    spin: runtime::process::Spin,
     /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
     /// until one misses a deadline; writes DIR/sweep.csv and names the fastest period
     /// sustained for `--cycles` cycles without a miss.
@@ -49,6 +51,7 @@ pub fn main(args: &Args) -> ExitCode {
         mode: args.observer_mode,
         raw_samples: args.raw_samples,
         scheduling: args.scheduling,
+        spin: args.spin,
         verbose: true,
     };
     let done = if args.sweep {

@@ -32,6 +32,8 @@ pub struct Args {
     speed: f64,
     #[command(flatten)]
     scheduling: runtime::process::Scheduling,
+    #[command(flatten)]
+    spin: runtime::process::Spin,
     /// `sim`: the plant process simulates the system. `external`: a driver someone else
     /// started (docs/driver.md; e.g. examples/python_driver/driver.py) is the system and
     /// the clock; `rig run` waits for it, and the plant process resets it before each
@@ -115,6 +117,7 @@ pub fn main(args: &Args) -> ExitCode {
         driver,
         cycles_out: None,
         scheduling: args.scheduling,
+        spin: args.spin,
     };
     match run(&cfg, &opts) {
         Ok(s) => {

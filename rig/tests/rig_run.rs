@@ -677,8 +677,9 @@ fn a_second_run_with_the_same_run_id_is_refused_and_the_first_goes_on() {
 fn angle_sensing_and_observers_over_the_wire_reproduce_rig_learn() {
     // The plant process measures with the encoder (noise from the run seed's stream 2, as
     // in process), the observer process estimates the velocities: the returns are those
-    // of `rig learn`, byte for byte — with and without sensor noise, and with a finite
-    // horizon, whose τ_N(x_N) is taken of the ground truth.
+    // of `rig learn`, byte for byte — with and without sensor noise, in predictive timing
+    // (whose repeated start sample is known, not measured), and with a finite horizon,
+    // whose τ_N(x_N) is taken of the ground truth.
     let dir = tmp("angle");
     let noisy = dir.join("noisy.toml");
     std::fs::write(&noisy, "[observer]\nnoise_std = 0.003\n").unwrap();
@@ -686,7 +687,7 @@ fn angle_sensing_and_observers_over_the_wire_reproduce_rig_learn() {
     std::fs::write(&known, "[observer]\nmodel = \"known\"\nnoise_std = 0.002\n").unwrap();
     let noisy = noisy.to_str().unwrap();
     let known = known.to_str().unwrap();
-    let cases: [(&str, &[&str]); 5] = [
+    let cases: [(&str, &[&str]); 6] = [
         ("fd", &["--observer", "finite-difference"]),
         ("pred", &["--observer", "predictive"]),
         (
@@ -696,6 +697,17 @@ fn angle_sensing_and_observers_over_the_wire_reproduce_rig_learn() {
         (
             "pred-noise",
             &["--observer", "predictive", "--config", noisy],
+        ),
+        (
+            "pred-noise-timing",
+            &[
+                "--observer",
+                "predictive",
+                "--observer-mode",
+                "predictive",
+                "--config",
+                noisy,
+            ],
         ),
         (
             "known-fh",

@@ -1,5 +1,5 @@
 //! The command lines of the nodes: what every node takes ([`NodeArgs`]: run id,
-//! configuration, scheduling) and what each adds ([`PlantArgs`], [`ObserverArgs`],
+//! configuration, operating-system scheduling) and what each adds ([`PlantArgs`], [`ObserverArgs`],
 //! [`AgentArgs`]).
 
 use std::path::PathBuf;
@@ -12,15 +12,10 @@ use crate::config::{ExperimentConfig, Overrides, resolve};
 /// The realtime plant's default spin before each sampling instant \[µs\] (`--spin-us`).
 pub const SPIN_US: u64 = 100;
 
-/// How the realtime loop is scheduled: flags of `rig run`, `rig latency` and of each
-/// node (which `rig run` passes on, [`Scheduling::process_args`]).
+/// How a node is scheduled by the operating system: flags of `rig run`, `rig latency`
+/// and of each node (which `rig run` passes on, [`Scheduling::process_args`]).
 #[derive(Args, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Scheduling {
-    /// Realtime: the plant spins (a busy core) instead of sleeping for the last this many
-    /// µs before each sampling instant, so that the instant does not depend on the
-    /// operating system's wake-up latency; larger values trade CPU for less jitter.
-    #[arg(long, value_name = "US", default_value_t = SPIN_US)]
-    pub spin_us: u64,
     /// Run the processes under the real-time scheduling policy SCHED_FIFO at this
     /// priority (1–99; the plant, the clock, one above the observer and the agent), ahead
     /// of all ordinary work on the machine, their memory locked (mlockall); needs root,
@@ -35,8 +30,7 @@ pub struct Scheduling {
 }
 
 impl Scheduling {
-    /// The flags that give a node this scheduling (`--spin-us` is the plant's only,
-    /// see [`PlantArgs`]).
+    /// The flags that give a node this scheduling.
     pub fn process_args(&self) -> Vec<String> {
         let mut args = Vec::new();
         if self.pin_cpus {
@@ -46,6 +40,23 @@ impl Scheduling {
             args.extend(["--rt-priority".to_string(), p.to_string()]);
         }
         args
+    }
+}
+
+/// How the realtime plant waits for a sampling instant: a flag of `rig run`,
+/// `rig latency` and the plant node.
+#[derive(Args, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Spin {
+    /// Realtime: the plant spins (a busy core) instead of sleeping for the last this many
+    /// µs before each sampling instant, so that the instant does not depend on the
+    /// operating system's wake-up latency; larger values trade CPU for less jitter.
+    #[arg(long, value_name = "US", default_value_t = SPIN_US)]
+    pub spin_us: u64,
+}
+
+impl Default for Spin {
+    fn default() -> Self {
+        Self { spin_us: SPIN_US }
     }
 }
 
@@ -97,6 +108,9 @@ pub struct PlantArgs {
     /// Realtime: how many times faster than real time (Ts / speed per sample).
     #[arg(long, default_value_t = 1.0)]
     pub speed: f64,
+    /// Realtime: how the plant waits for a sampling instant.
+    #[command(flatten)]
+    pub spin: Spin,
     /// Write the time from publishing each measurement to receiving its action (ns, one
     /// per line) to this file.
     #[arg(long, value_name = "FILE")]

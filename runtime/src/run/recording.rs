@@ -1,13 +1,16 @@
 //! The run's MCAP recording: one channel per topic, the wall-clock stamps on their
 //! own `/timing/...` channels, log time simulated (lockstep) or the plant's (realtime).
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use driver::contract::{DriverCommand, DriverSample};
 use wire::{Action, Estimate, Header, Measurement, Truth};
 
+use crate::config::ExperimentConfig;
 use crate::record::{ChannelId, Field, FieldKind, Recorder, Value};
+use crate::resume::ResumePoint;
 
 /// The MCAP recording: one channel per topic, and one `/timing/...` channel per topic
 /// for the wall-clock timestamps, which differ from run to run by nature. Log time is
@@ -31,6 +34,36 @@ pub(super) struct Recording {
     pub(super) realtime: bool,
     /// The current sample's plant sample time (monotonic ns).
     pub(super) t_sample_ns: u64,
+}
+
+/// The recording's metadata `run`.
+fn metadata(about: &About) -> BTreeMap<String, String> {
+    let (cfg, task) = (about.cfg, about.task);
+    [
+        ("run_id", about.run_id.to_string()),
+        ("seed", cfg.run.seed.to_string()),
+        ("system", cfg.system.to_string()),
+        ("algo", cfg.agent.algo.to_string()),
+        ("approx", cfg.agent.approx.to_string()),
+        ("horizon", cfg.agent.horizon.to_string()),
+        ("timing", about.timing.clone()),
+        ("rig_version", env!("CARGO_PKG_VERSION").to_string()),
+        // The reward's weights, so that a reader can recompute a finite horizon's
+        // terminal reward τ_N(x_N) = −eᵀQe (Eq. 4.1; tests/python/check_mcap.py).
+        ("reward_q", join(&task.reward.q)),
+        ("reward_reference", join(&task.reward.reference)),
+        (
+            "reward_angles",
+            join(task.reward.angle_mask.iter().map(|&a| u8::from(a))),
+        ),
+        (
+            "resumed_after_trial",
+            about.point.map_or("-".to_string(), |p| p.trial.to_string()),
+        ),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect()
 }
 
 /// `a,b,c`: values in Rust's shortest round-trip form, which a reader parses exactly.
@@ -58,7 +91,68 @@ pub(super) fn timing_fields(names: &[&str]) -> Vec<Field> {
         .collect()
 }
 
+/// What a run's recording describes beside its messages.
+pub(super) struct About<'a> {
+    pub(super) cfg: &'a ExperimentConfig,
+    pub(super) task: &'a plant::Task,
+    pub(super) run_id: &'a str,
+    /// Lockstep, realtime or the external driver's clock, in words.
+    pub(super) timing: String,
+    /// Log times are the plant's sample times (realtime or an external driver).
+    pub(super) realtime: bool,
+    /// An external driver's traffic is recorded too.
+    pub(super) driver: bool,
+    /// Where a resumed run continues.
+    pub(super) point: Option<&'a ResumePoint>,
+}
+
 impl Recording {
+    /// Creates `DIR/run.mcap` for the run `about` describes: its channels, the
+    /// configuration attached, the metadata `run`, and, when resumed, the messages of the
+    /// trials it keeps (the old recording is replaced).
+    pub(super) fn open(dir: &Path, about: &About) -> Result<Self> {
+        let (cfg, task) = (about.cfg, about.task);
+        let path = dir.join("run.mcap");
+        // Written as `run.mcap.part` until finished: a resumed run's old recording,
+        // which holds what it keeps, stays until copied.
+        let mut r = Self::create(&path, task.state_dim(), task.action_dim())?;
+        r.realtime = about.realtime;
+        if about.driver {
+            r.add_driver()?;
+        }
+        if cfg.observer.sensor != ::observer::config::SensorKind::Full {
+            r.add_truth()?;
+        }
+        r.rec
+            .attach("config.toml", "application/toml", cfg.to_toml().as_bytes())?;
+        r.rec.metadata("run", &metadata(about))?;
+        if let Some(p) = about.point {
+            r.keep(p, &path)?;
+        }
+        Ok(r)
+    }
+
+    /// Copies the messages a resumed run keeps from `old` into this recording, then
+    /// removes `old` (so that only the new one holds them).
+    fn keep(&mut self, p: &ResumePoint, old: &Path) -> Result<()> {
+        for m in &p.messages {
+            self.rec
+                .write_encoded(&m.topic, m.log_time, m.publish_time, &m.data)
+                .with_context(|| {
+                    format!(
+                        "cannot keep the recorded trials: {} was recorded with another channel layout",
+                        old.display()
+                    )
+                })?;
+        }
+        self.rec.flush()?;
+        if old.exists() {
+            std::fs::remove_file(old)
+                .with_context(|| format!("cannot remove {}", old.display()))?;
+        }
+        Ok(())
+    }
+
     pub(super) fn create(path: &Path, n: usize, m: usize) -> Result<Self> {
         let mut rec = Recorder::create(path)?;
         let state = |name| {

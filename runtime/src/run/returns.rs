@@ -4,18 +4,22 @@
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
+use std::path::Path;
+use std::sync::Arc;
 
 use ::agent::horizon::Horizon;
-use anyhow::{Result, anyhow};
+use anyhow::{Context, Result, anyhow};
 use wire::flags;
 
+use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
-use crate::learn::write_row;
+use crate::learn::{RUNS_HEADER, write_row};
+use crate::resume::ResumePoint;
 
 /// Builds `returns.csv` rows from the plant's measurements.
 pub(super) struct Returns {
     pub(super) out: BufWriter<File>,
-    pub(super) task: std::sync::Arc<plant::Task>,
+    pub(super) task: Arc<plant::Task>,
     pub(super) steps_per_trial: u64,
     /// Samples not run because trials ended early (left the operating range).
     pub(super) skipped_samples: u64,
@@ -37,6 +41,40 @@ pub(super) struct Returns {
 }
 
 impl Returns {
+    /// Creates `path` with the header and the trials a resumed run keeps (`point`).
+    pub(super) fn create(
+        path: &Path,
+        cfg: &ExperimentConfig,
+        task: Arc<plant::Task>,
+        point: Option<&ResumePoint>,
+    ) -> Result<Self> {
+        let mut out = BufWriter::new(
+            File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
+        );
+        writeln!(out, "{RUNS_HEADER}")?;
+        let kept = point.map_or(&[][..], |p| &p.records[..]);
+        for r in kept {
+            write_row(&mut out, r)?;
+        }
+        out.flush()?;
+        let (after, sim_time) = point.map_or((0, 0.0), |p| (p.trial, p.sim_time_s));
+        Ok(Self {
+            out,
+            steps_per_trial: task.steps_per_trial() as u64,
+            skipped_samples: task.skipped_samples(after.into(), sim_time),
+            horizon: cfg.agent.horizon.of(&task),
+            reward: task.reward.clone(),
+            pending: None,
+            pending_ended: false,
+            eval_starts: task.initial_states.len() as u32,
+            eval_every: cfg.run.eval_every,
+            greedy_trial: 0.0,
+            greedy: (0.0, 0),
+            records: kept.to_vec(),
+            task,
+        })
+    }
+
     /// Accounts for the sample with header `h` and reward `reward`; `x` is its state for
     /// a finite horizon's terminal reward. From the plant's measurements: the true state
     /// (the measurement's `y` with full-state sensing); with [`flags::ESTIMATED_REWARD`]

@@ -11,6 +11,7 @@ use driver::contract::DriverWatch;
 use indicatif::ProgressBar;
 use wire::{Action, Bus, Estimate, Measurement, Truth, flags, topic};
 
+use crate::experiment::TrialRecord;
 use crate::process::wire_err;
 
 use super::recording::Recording;
@@ -85,6 +86,44 @@ pub(super) struct Supervisor {
 }
 
 impl Supervisor {
+    /// Subscribes to every topic of the run on `bus` (before its processes start, so
+    /// that no message is missed); the processes come later ([`Self::children`]).
+    pub(super) fn new(
+        bus: Bus,
+        recording: Recording,
+        returns: Returns,
+        out: &Path,
+        first_seq: u64,
+        driver: Option<DriverWatch>,
+        grace: Option<Duration>,
+    ) -> Result<Self> {
+        let truths = if recording.truth.is_some() {
+            Some(bus.rx::<Truth>(topic::TRUTH).map_err(wire_err)?)
+        } else {
+            None
+        };
+        Ok(Self {
+            measurements: bus
+                .rx::<Measurement>(topic::MEASUREMENT)
+                .map_err(wire_err)?,
+            estimates: bus.rx::<Estimate>(topic::ESTIMATE).map_err(wire_err)?,
+            actions: bus.rx::<Action>(topic::ACTION).map_err(wire_err)?,
+            truths,
+            bus,
+            batch: Vec::new(),
+            truth_queue: std::collections::VecDeque::new(),
+            recording,
+            returns,
+            children: Children(Vec::new()),
+            out: out.to_owned(),
+            messages: 0,
+            continuity: std::array::from_fn(|_| Continuity { next: first_seq }),
+            deadline_misses: 0,
+            driver,
+            grace,
+        })
+    }
+
     /// Records everything waiting; returns whether the run's end came by.
     pub(super) fn drain(&mut self, bar: &ProgressBar) -> Result<bool> {
         let mut done = false;
@@ -232,6 +271,19 @@ impl Supervisor {
             self.returns.records.len(),
             self.out.display()
         )
+    }
+
+    /// Ends the run whatever its `outcome`: stops the processes (on failure), writes
+    /// the complete trials, and finishes the recording, so that `run.mcap` is readable
+    /// after any outcome. Returns the trials, the messages received and the deadline
+    /// misses.
+    pub(super) fn finish(mut self, outcome: Result<()>) -> Result<(Vec<TrialRecord>, u64, u64)> {
+        drop(std::mem::replace(&mut self.children, Children(Vec::new())));
+        let _ = self.returns.flush_complete();
+        let finished = self.recording.rec.finish();
+        outcome?;
+        finished?;
+        Ok((self.returns.records, self.messages, self.deadline_misses))
     }
 
     pub(super) fn supervise(&mut self, bar: &ProgressBar) -> Result<()> {

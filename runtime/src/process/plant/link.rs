@@ -80,8 +80,9 @@ impl Link {
     }
 
     /// Publishes a sample of the true state `x`: the ground truth first (if published),
-    /// then the sensor's measurement of `x` — at a trial start `x` itself, as in process
-    /// (the state is known there; the sensor, and its noise stream, are not used).
+    /// then the sensor's measurement of `x` — at a trial start (and its repetition,
+    /// primed, in predictive timing) `x` itself, as in process (the state is known there;
+    /// the sensor, and its noise stream, are not used).
     /// Returns when the measurement was published (monotonic ns).
     pub(super) fn publish(
         &mut self,
@@ -96,7 +97,7 @@ impl Link {
             flags: header.flags | self.run_flags,
             ..header
         };
-        if header.flags & flags::START != 0 {
+        if header.flags & (flags::START | flags::PRIMED) != 0 {
             self.y.copy_from_slice(&x[..n]);
         } else {
             self.sensor.measure(&x[..n], &mut self.y);

@@ -133,7 +133,7 @@ fn runner(
             episode,
             &task,
             args.speed,
-            args.node.scheduling.spin_us,
+            args.spin.spin_us,
             args.cycles_out.is_some(),
         ))
     } else {

@@ -1,0 +1,261 @@
+//! `rig check-driver`: a conformance check against a running driver (`docs/driver.md`).
+//!
+//! It connects as the rig would (so a driver with incompatible payloads is a one-line
+//! error naming the service and both layouts), then, with real messages and the
+//! driver's own clock:
+//!
+//! 1. *info* — protocol version, dimensions, sample time, limits, watchdog, against the
+//!    task of `--system`;
+//! 2. *reset* — RESET to the task's start state; READY within `--reset-timeout`, near it;
+//! 3. *samples* — well-formed: READY, finite (or all velocities NaN in every sample: a
+//!    driver measuring positions only), stamped on this host's monotonic clock;
+//! 4. *sample rate* — for `--rate-seconds`, answering every sample with zero: the mean
+//!    period, the jitter (p99 of each sample's lateness against a regular grid, against
+//!    `--max-jitter`), missed periods
+//!    (against `--max-missed`), and whether each action shows as applied in the next
+//!    sample;
+//! 5. *step response* — a small step for ten periods moves the state clearly more than
+//!    ten periods of zero input did, and is reported as applied;
+//! 6. *watchdog* — actions stop: the driver applies zero, with the WATCHDOG status, by
+//!    two periods after the last action;
+//! 7. *out-of-range actions* — clamped to the limits and counted;
+//! 8. *non-finite and malformed actions* — NaN, ±inf and a wrong `n_u` rejected: zero
+//!    applied, counted.
+
+use std::time::Duration;
+
+use anyhow::{Result, anyhow};
+use driver::contract::{DriverCommand, DriverInfo, DriverLink, DriverSample, service};
+use plant::angle::wrap;
+use plant::{SystemName, Task};
+use wire::{Bus, MAX_U, type_name_of};
+
+mod clock;
+mod phases;
+
+/// Periods of the step input.
+const STEP_PERIODS: usize = 10;
+
+/// What to check and the bounds.
+#[derive(Clone, Debug)]
+pub struct CheckOptions {
+    /// The driver id.
+    pub driver: String,
+    /// The task the driver must fit.
+    pub system: SystemName,
+    /// How long to wait for the driver's info.
+    pub timeout: Duration,
+    /// How long one reset may take.
+    pub reset_timeout: Duration,
+    /// How long to measure the sample rate \[s\].
+    pub rate_seconds: f64,
+    /// Largest p99 of the samples' lateness against a regular grid, as a fraction of
+    /// the period.
+    pub max_jitter: f64,
+    /// Largest fraction of periods without a sample.
+    pub max_missed: f64,
+    /// Step size, as a fraction of the way from the middle of the action range to its
+    /// upper limit.
+    pub step: f64,
+}
+
+/// One line of the report.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Outcome {
+    /// What was checked.
+    pub name: &'static str,
+    /// Whether it passed.
+    pub pass: bool,
+    /// What was measured, and the bound.
+    pub detail: String,
+}
+
+impl std::fmt::Display for Outcome {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let verdict = if self.pass { "PASS" } else { "FAIL" };
+        write!(f, "{verdict}  {:<34} {}", self.name, self.detail)
+    }
+}
+
+/// Runs the check against a running driver; `report` sees each outcome as soon as it is
+/// known. An error means the check could not start: no driver, incompatible payloads, the
+/// driver in use by another rig process.
+pub fn check(opts: &CheckOptions, report: &mut dyn FnMut(&Outcome)) -> Result<Vec<Outcome>> {
+    let bus = Bus::join(&format!("check-{}", std::process::id()), "check-driver")
+        .map_err(|e| anyhow!("{e}"))?;
+    let link = DriverLink::connect(&bus, &opts.driver).map_err(|e| anyhow!("{e}"))?;
+    let info = link
+        .wait_info(&bus, opts.timeout)
+        .map_err(|e| anyhow!("{e}"))?;
+    let task = Task::new(opts.system);
+    let mut s = Probe {
+        silence: (info.period() * 20).max(Duration::from_secs(1)),
+        bus,
+        link,
+        info,
+        task,
+        reset_id: 0,
+        outcomes: Vec::new(),
+        report,
+        opts: opts.clone(),
+        drift: 0.0,
+        t_last_action: 0,
+    };
+    s.record(
+        "payload types",
+        true,
+        format!(
+            "{} ({} B), {} ({} B), {} ({} B) on {}",
+            type_name_of::<DriverInfo>(),
+            size_of::<DriverInfo>(),
+            type_name_of::<DriverSample>(),
+            size_of::<DriverSample>(),
+            type_name_of::<DriverCommand>(),
+            size_of::<DriverCommand>(),
+            service(&opts.driver, "{info,sample,command}")
+        ),
+    );
+    if s.info_check() {
+        s.run_phases();
+    }
+    Ok(s.outcomes)
+}
+
+/// One check of a driver: the connection, what the driver advertised, and the outcomes
+/// so far.
+struct Probe<'r> {
+    bus: Bus,
+    link: DriverLink,
+    info: DriverInfo,
+    task: Task,
+    silence: Duration,
+    reset_id: u64,
+    outcomes: Vec<Outcome>,
+    report: &'r mut dyn FnMut(&Outcome),
+    opts: CheckOptions,
+    /// The largest change of the state over the step's horizon with zero input.
+    drift: f64,
+    /// When the last action of the step was sent (monotonic ns).
+    t_last_action: u64,
+}
+
+/// `[a, b]` with four decimals.
+fn vector(v: &[f64]) -> String {
+    let parts: Vec<String> = v.iter().map(|x| format!("{x:.4}")).collect();
+    format!("[{}]", parts.join(", "))
+}
+
+/// What a sample measures, in words.
+fn measures(s: &DriverSample) -> &'static str {
+    if s.positions_only() {
+        "positions only"
+    } else {
+        "the full state"
+    }
+}
+
+fn same(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| (x - y).abs() <= 1e-9 * (1.0 + y.abs()))
+}
+
+impl Probe<'_> {
+    fn record(&mut self, name: &'static str, pass: bool, detail: String) {
+        let o = Outcome { name, pass, detail };
+        (self.report)(&o);
+        self.outcomes.push(o);
+    }
+
+    /// Records a check that passes when `problems` is empty (then saying `ok`).
+    fn record_problems(&mut self, name: &'static str, problems: Vec<String>, ok: String) {
+        let pass = problems.is_empty();
+        self.record(name, pass, if pass { ok } else { problems.join("; ") });
+    }
+
+    fn period_ns(&self) -> f64 {
+        self.info.period_ns as f64
+    }
+
+    fn n_u(&self) -> usize {
+        self.info.n_u as usize
+    }
+
+    /// The next sample, in order, well-formed (dimensions, finite values).
+    fn sample(&self) -> Result<DriverSample> {
+        let s = self
+            .link
+            .next_sample(&self.bus, self.silence)
+            .map_err(|e| anyhow!("{e}"))?;
+        s.validate(&self.info).map_err(|e| anyhow!("{e}"))?;
+        Ok(s)
+    }
+
+    fn act(&self, u: &[f64], answering: &DriverSample) -> Result<u64> {
+        self.link.act(u, answering.seq).map_err(|e| anyhow!("{e}"))
+    }
+
+    /// The task's action `fraction` of the way from the middle of the range to the upper
+    /// limit.
+    fn action(&self, fraction: f64) -> Vec<f64> {
+        (0..self.n_u())
+            .map(|j| {
+                let (lo, hi) = (self.info.u_min[j], self.info.u_max[j]);
+                let mid = 0.5 * (lo + hi);
+                mid + fraction * (hi - mid)
+            })
+            .collect()
+    }
+
+    /// The largest change between two states (unmeasured components, NaN, ignored), each component relative to the width of
+    /// the task's state range (angles wrapped).
+    fn change(&self, a: &[f64], b: &[f64]) -> f64 {
+        (0..a.len())
+            .map(|i| {
+                let d = b[i] - a[i];
+                let d = if self.task.angle_mask[i] { wrap(d) } else { d };
+                let (lo, hi) = self.task.state_range[i];
+                d.abs() / (hi - lo)
+            })
+            .filter(|c| !c.is_nan())
+            .fold(0.0, f64::max)
+    }
+
+    fn info_check(&mut self) -> bool {
+        let i = self.info;
+        let fits = i
+            .validate()
+            .map(|()| driver::fits_task(&i, &self.task).err());
+        let text = format!(
+            "{}, n_x {}, n_u {}, Ts {:.3} ms (period {:.3} ms × time scale {}), u_min {}, u_max {}, watchdog {} period(s)",
+            i.system_name(),
+            i.n_x,
+            i.n_u,
+            i.ts() * 1e3,
+            i.period_ns as f64 * 1e-6,
+            i.time_scale,
+            vector(&i.u_min[..(i.n_u as usize).min(MAX_U)]),
+            vector(&i.u_max[..(i.n_u as usize).min(MAX_U)]),
+            i.watchdog_periods
+        );
+        match fits {
+            Err(e) => {
+                self.record(
+                    "info",
+                    false,
+                    format!("{e}; the other checks need a valid info"),
+                );
+                false
+            }
+            Ok(Some(e)) => {
+                self.record("info", false, format!("{text}: does not fit the task: {e}"));
+                true
+            }
+            Ok(None) => {
+                self.record("info", true, text);
+                true
+            }
+        }
+    }
+}

@@ -1,0 +1,344 @@
+//! `run.mcap`: every message of a rig run, recorded for Foxglove and for replay.
+//!
+//! The supervising process (`rig run`) owns one [`Recorder`]; it declares one channel per
+//! topic with [`Recorder::channel`] and hands every message it sees to [`Recorder::write`].
+//!
+//! File layout (MCAP, written with the official `mcap` crate):
+//! - messages are JSON objects (`message_encoding = "json"`) with flat numeric fields, in
+//!   the order the channel declared them; array fields of the wire structs are flattened to
+//!   `x_0, x_1, ...` ([`Field::array`]);
+//! - each channel has a schema with `encoding = "jsonschema"` whose data is
+//!   `{"type":"object","properties":{"seq":{"type":"integer"},"x_0":{"type":"number"},...}}`:
+//!   flat `integer` / `number` properties only, no `$ref`, so Foxglove plots every field;
+//! - chunked, uncompressed, with chunk, data-section and summary CRCs, message indexes and
+//!   a summary section (statistics, chunk, attachment and metadata indexes);
+//! - the resolved configuration as an attachment ([`Recorder::attach`]) and the seed,
+//!   versions and run id as metadata ([`Recorder::metadata`]).
+//!
+//! Numbers: integers are written in decimal; finite `f64` in shortest round-trip form
+//! (`0.1`, `1.0`, `1e300`), so parsing the JSON gives back exactly the same `f64` and two
+//! identical runs give byte-identical messages. NaN and ±∞ are not JSON numbers: they are
+//! written as `null`.
+//!
+//! Determinism: the writer reads no clock and no environment. The header's `library`
+//! field is the `mcap` crate's constant `mcap-rust/<version>`, attachment times are 0, and
+//! the summary is written in id order; the same sequence of calls gives the same bytes.
+//!
+//! Crash behaviour: the file is written as `PATH.part` and renamed to `PATH` by
+//! [`Recorder::finish`], so `PATH` exists only when complete. A recorder dropped without
+//! `finish` (an error returned with `?`, a panic that unwinds) still gets its summary
+//! written by the `mcap` writer's `Drop`, but keeps the `.part` name. A process killed
+//! mid-run (SIGKILL, abort, power loss) leaves a `.part` file holding the chunks completed
+//! so far, then the start of an unfinished chunk whose header still has its placeholder
+//! length (2⁶⁴ − 1), and no summary or footer; up to one chunk (1 MiB of messages) plus
+//! 64 KiB of write buffer is lost. What readers make of such a file (measured with mcap
+//! 0.26 and Python mcap 1.6.0 on a run aborted after 120 000 messages, 118 532 readable):
+//! - anything that starts from the footer fails at once: Rust `mcap::Summary::read`
+//!   (`BadMagic`), Python `make_reader(f).get_summary()` / `.iter_messages()`
+//!   (`RecordLengthLimitExceeded`), and so Foxglove's indexed loading;
+//! - streaming readers return every message of the completed chunks, in file order, then
+//!   fail at the unfinished chunk: Rust `mcap::MessageStream` ("Chunk ended in the middle
+//!   of a record") and Python `NonSeekingReader(f).iter_messages(log_time_order=False)`
+//!   (`RecordLengthLimitExceeded`). With the default `log_time_order=True` the Python
+//!   reader sorts all messages before yielding any, so it yields none.
+//!
+//! [`Recorder::flush`] closes the current chunk and writes it out, which bounds what a
+//! crash can lose; without it a chunk closes every 1 MiB of messages.
+
+use std::collections::{BTreeMap, HashSet};
+use std::ffi::OsString;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow, bail, ensure};
+use mcap::records::MessageHeader;
+use serde_json::ser::{CompactFormatter, Formatter};
+
+/// Message encoding of every channel.
+const MESSAGE_ENCODING: &str = "json";
+/// Schema encoding of every channel.
+const SCHEMA_ENCODING: &str = "jsonschema";
+/// Target uncompressed size of a chunk, in bytes.
+const CHUNK_SIZE: u64 = 1024 * 1024;
+
+mod schema;
+#[cfg(test)]
+mod tests;
+
+pub use schema::{Field, FieldKind, Value};
+use schema::{json_schema, json_string};
+/// A channel of a [`Recorder`], returned by [`Recorder::channel`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ChannelId(usize);
+
+/// What the recorder keeps per channel to encode its messages.
+struct Channel {
+    /// The MCAP channel id.
+    id: u16,
+    /// The topic, for error messages.
+    topic: String,
+    /// Per field, its kind and its JSON key with separators: `"seq":`, `,"x_0":`, ...
+    fields: Vec<(FieldKind, Box<[u8]>)>,
+    /// The MCAP sequence number of the next message.
+    sequence: u32,
+}
+
+/// Records a run's messages into an MCAP file; see the module documentation.
+pub struct Recorder {
+    writer: mcap::Writer<BufWriter<File>>,
+    channels: Vec<Channel>,
+    /// Schema name → schema data, to refuse one name with two different field lists.
+    schemas: BTreeMap<String, Vec<u8>>,
+    /// Where the file is written until `finish`.
+    part: PathBuf,
+    /// Where `finish` moves it.
+    path: PathBuf,
+    /// The message being encoded (reused: no allocation per message).
+    buf: Vec<u8>,
+}
+
+impl Recorder {
+    /// Starts an MCAP file that [`finish`](Self::finish) will move to `path`; until then
+    /// it is written as `path` with `.part` appended (replacing any file of that name).
+    pub fn create(path: &Path) -> Result<Recorder> {
+        let mut part = OsString::from(path.as_os_str());
+        part.push(".part");
+        let part = PathBuf::from(part);
+        let file =
+            File::create(&part).with_context(|| format!("cannot create {}", part.display()))?;
+        // Set every option that shapes the bytes explicitly, so the file does not change if
+        // another crate in the build enables the `mcap` crate's compression features.
+        let options = mcap::WriteOptions::new()
+            .compression(None)
+            .profile("")
+            .chunk_size(Some(CHUNK_SIZE))
+            .use_chunks(true);
+        let writer = options
+            .create(BufWriter::with_capacity(1 << 16, file))
+            .with_context(|| format!("cannot write {}", part.display()))?;
+        Ok(Recorder {
+            writer,
+            channels: Vec::new(),
+            schemas: BTreeMap::new(),
+            part,
+            path: path.to_owned(),
+            buf: Vec::with_capacity(1024),
+        })
+    }
+
+    /// Declares a topic whose messages have `fields`, in this order, under a
+    /// `jsonschema` schema called `schema_name` (channels may share a schema). Topics must
+    /// be unique, field names non-empty and unique within a channel.
+    pub fn channel(
+        &mut self,
+        topic: &str,
+        schema_name: &str,
+        fields: &[Field],
+    ) -> Result<ChannelId> {
+        ensure!(
+            self.channels.iter().all(|c| c.topic != topic),
+            "topic {topic} is declared twice"
+        );
+        let mut seen = HashSet::new();
+        for f in fields {
+            ensure!(!f.name.is_empty(), "topic {topic}: empty field name");
+            ensure!(
+                seen.insert(f.name.as_str()),
+                "topic {topic}: field {} appears twice",
+                f.name
+            );
+        }
+        let schema = json_schema(fields);
+        match self.schemas.get(schema_name) {
+            Some(existing) if *existing != schema => {
+                bail!("schema {schema_name} is declared twice with different fields")
+            }
+            Some(_) => {}
+            None => {
+                self.schemas.insert(schema_name.to_owned(), schema.clone());
+            }
+        }
+        let schema_id = self
+            .writer
+            .add_schema(schema_name, SCHEMA_ENCODING, &schema)?;
+        let id = self
+            .writer
+            .add_channel(schema_id, topic, MESSAGE_ENCODING, &BTreeMap::new())?;
+        let fields = fields
+            .iter()
+            .enumerate()
+            .map(|(i, f)| {
+                let mut key = Vec::with_capacity(f.name.len() + 4);
+                if i > 0 {
+                    key.push(b',');
+                }
+                key.extend_from_slice(json_string(&f.name).as_bytes());
+                key.push(b':');
+                (f.kind, key.into_boxed_slice())
+            })
+            .collect();
+        self.channels.push(Channel {
+            id,
+            topic: topic.to_owned(),
+            fields,
+            sequence: 0,
+        });
+        Ok(ChannelId(self.channels.len() - 1))
+    }
+
+    /// Records one message on `channel`: `values` are the channel's fields, in order (a
+    /// [`Value::Int`] may fill a `Number` field, not the other way round). Its MCAP
+    /// sequence number is the count of messages recorded on the channel before it (0, 1,
+    /// 2, ...; wrapping after 2³²). Times are nanoseconds, as the caller defines them.
+    pub fn write(
+        &mut self,
+        channel: ChannelId,
+        log_time_ns: u64,
+        publish_time_ns: u64,
+        values: &[Value],
+    ) -> Result<()> {
+        let ch = self
+            .channels
+            .get_mut(channel.0)
+            .ok_or_else(|| anyhow!("unknown channel {channel:?}"))?;
+        if values.len() != ch.fields.len() {
+            bail!(
+                "topic {}: {} values for {} fields",
+                ch.topic,
+                values.len(),
+                ch.fields.len()
+            );
+        }
+        let buf = &mut self.buf;
+        buf.clear();
+        buf.push(b'{');
+        for ((kind, key), value) in ch.fields.iter().zip(values) {
+            buf.extend_from_slice(key);
+            match (kind, *value) {
+                (_, Value::Int(i)) => CompactFormatter.write_u64(buf, i)?,
+                (FieldKind::Number, Value::Num(x)) if x.is_finite() => {
+                    CompactFormatter.write_f64(buf, x)?
+                }
+                (FieldKind::Number, Value::Num(_)) => buf.extend_from_slice(b"null"),
+                (FieldKind::Integer, Value::Num(x)) => {
+                    let name = String::from_utf8_lossy(&key[usize::from(key[0] == b',')..]);
+                    bail!(
+                        "topic {}: integer field {name} given the number {x}",
+                        ch.topic
+                    )
+                }
+            }
+        }
+        buf.push(b'}');
+        let buf = std::mem::take(&mut self.buf);
+        let written = self.put(channel.0, log_time_ns, publish_time_ns, &buf);
+        self.buf = buf;
+        written
+    }
+
+    /// Writes an encoded message on channel `index`, with the channel's next sequence
+    /// number.
+    fn put(
+        &mut self,
+        index: usize,
+        log_time_ns: u64,
+        publish_time_ns: u64,
+        data: &[u8],
+    ) -> Result<()> {
+        let ch = &mut self.channels[index];
+        let header = MessageHeader {
+            channel_id: ch.id,
+            sequence: ch.sequence,
+            log_time: log_time_ns,
+            publish_time: publish_time_ns,
+        };
+        self.writer
+            .write_to_known_channel(&header, data)
+            .with_context(|| format!("cannot write {}", self.part.display()))?;
+        ch.sequence = ch.sequence.wrapping_add(1);
+        Ok(())
+    }
+
+    /// Whether a channel of `topic` is declared.
+    pub fn has_topic(&self, topic: &str) -> bool {
+        self.channels.iter().any(|c| c.topic == topic)
+    }
+
+    /// Records a message already encoded for the channel of `topic` — one copied from an
+    /// earlier recording with the same channel layout (`rig run --resume`).
+    pub fn write_encoded(
+        &mut self,
+        topic: &str,
+        log_time_ns: u64,
+        publish_time_ns: u64,
+        data: &[u8],
+    ) -> Result<()> {
+        let index = self
+            .channels
+            .iter()
+            .position(|c| c.topic == topic)
+            .ok_or_else(|| anyhow!("the recording has no topic {topic}"))?;
+        self.put(index, log_time_ns, publish_time_ns, data)
+    }
+
+    /// Stores a file in the recording (e.g. the resolved `config.toml`, `text/x-toml`), with
+    /// log and create times 0. Closes the current chunk.
+    pub fn attach(&mut self, name: &str, media_type: &str, data: &[u8]) -> Result<()> {
+        // The low-level calls avoid copying `data` into an `mcap::Attachment`.
+        let header = mcap::records::AttachmentHeader {
+            log_time: 0,
+            create_time: 0,
+            name: name.to_owned(),
+            media_type: media_type.to_owned(),
+        };
+        self.writer.start_attachment(data.len() as u64, header)?;
+        self.writer.put_attachment_bytes(data)?;
+        self.writer.finish_attachment()?;
+        Ok(())
+    }
+
+    /// Stores a named set of key–value strings (seed, versions, run id) as an MCAP metadata
+    /// record. Closes the current chunk.
+    pub fn metadata(&mut self, name: &str, entries: &BTreeMap<String, String>) -> Result<()> {
+        let metadata = mcap::records::Metadata {
+            name: name.to_owned(),
+            metadata: entries.clone(),
+        };
+        self.writer.write_metadata(&metadata)?;
+        Ok(())
+    }
+
+    /// Closes the current chunk and hands everything written so far to the operating
+    /// system, so that a crash after this point loses nothing before it (see the module
+    /// documentation). Calling it often makes smaller chunks; the summary is still written
+    /// only by [`finish`](Self::finish).
+    pub fn flush(&mut self) -> Result<()> {
+        self.writer.flush()?;
+        Ok(())
+    }
+
+    /// Writes the summary section and footer, syncs the file to disk and renames it to the
+    /// path given to [`create`](Self::create).
+    pub fn finish(self) -> Result<()> {
+        let Recorder {
+            mut writer,
+            part,
+            path,
+            ..
+        } = self;
+        writer
+            .finish()
+            .with_context(|| format!("cannot finish {}", part.display()))?;
+        let file = writer
+            .into_inner()
+            .into_inner()
+            .map_err(|e| e.into_error())
+            .with_context(|| format!("cannot write {}", part.display()))?;
+        file.sync_all()
+            .with_context(|| format!("cannot sync {}", part.display()))?;
+        drop(file);
+        std::fs::rename(&part, &path)
+            .with_context(|| format!("cannot rename {} to {}", part.display(), path.display()))
+    }
+}
