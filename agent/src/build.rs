@@ -8,9 +8,10 @@ use crate::approx::llr::{Eviction, Llr, LlrParams, Search};
 use crate::approx::rbf::{Rbf, RbfParams};
 use crate::approx::tiles::{Tiles, TilesParams};
 use crate::approx::{Approximator, Differentiable, ValueFunction};
-use crate::config::{AgentConfig, Algo, Component, LstdPrior};
+use crate::config::{AgentConfig, Algo, Component, LstdPrior, SarsaConfig};
 use crate::critic::{Critic, TdLambda};
 use crate::explore::Exploration;
+use crate::horizon::Horizon;
 use crate::lstd::Lstd;
 use crate::mlac::Mlac;
 use crate::model::ProcessModel;
@@ -159,73 +160,102 @@ impl crate::approx::Traced for GradientFree {
 /// The agent `cfg` describes, for `task`, with every random stream derived from
 /// `run_seed`.
 pub fn build(task: &Task, cfg: &AgentConfig, run_seed: u64) -> Box<dyn Agent> {
-    let horizon = cfg.horizon.of(task);
+    let spaces = Spaces {
+        task,
+        horizon: cfg.horizon.of(task),
+    };
+    if let Some(s) = &cfg.sarsa {
+        return sarsa(&spaces, cfg, s, run_seed);
+    }
     let info = TaskInfo {
-        horizon,
+        horizon: spaces.horizon,
         ..TaskInfo::of(task)
     };
-    let (n, m) = (task.state_dim(), task.action_dim());
-    // Actors, critics and reference models read the state, and time if the horizon is
-    // finite (Eq. 4.6).
-    let state = |outputs, bounds| Space {
-        range: task
-            .state_range
-            .iter()
-            .copied()
-            .chain(horizon.time_range())
-            .collect(),
-        periodic: task
-            .angle_mask
-            .iter()
-            .copied()
-            .chain(horizon.time_range().map(|_| false))
-            .collect(),
-        outputs,
-        bounds,
-    };
     let l = &cfg.learning;
-    if let Some(s) = &cfg.sarsa {
-        let actions = Sarsa::action_set(&s.actions, m);
-        let Built::Rbf(q) = make(&cfg.critic, &state(actions.len(), None)) else {
-            unreachable!("validated: SARSA's Q-function is an RBF grid")
-        };
-        return Box::new(Sarsa::new(
-            *q,
-            actions,
-            cfg.critic.alpha(),
-            l.gamma,
-            l.lambda,
-            Epsilon {
-                decay: s.epsilon_decay,
-                min: s.epsilon_min,
-            },
-            run_seed,
-        ));
+    Box::new(ActorCritic::new(
+        info.clone(),
+        Learning {
+            gamma: l.gamma,
+            lambda: l.lambda,
+        },
+        critic(&spaces, cfg),
+        improver(&spaces, cfg, info),
+        Exploration::new(l.sigma, l.explore_every, run_seed),
+    ))
+}
+
+/// The input spaces of a task's approximators.
+struct Spaces<'a> {
+    task: &'a Task,
+    horizon: Horizon,
+}
+
+impl Spaces<'_> {
+    /// The space of actors, critics and reference models: the state, and time if the
+    /// horizon is finite (Eq. 4.6); `outputs` outputs, within `bounds` if given.
+    fn state(&self, outputs: usize, bounds: Option<(Vec<f64>, Vec<f64>)>) -> Space {
+        let (task, time) = (self.task, self.horizon.time_range());
+        Space {
+            range: task.state_range.iter().copied().chain(time).collect(),
+            periodic: task
+                .angle_mask
+                .iter()
+                .copied()
+                .chain(time.map(|_| false))
+                .collect(),
+            outputs,
+            bounds,
+        }
     }
-    let action_range: Vec<(f64, f64)> = (0..m)
-        .map(|j| (task.action_low[j], task.action_high[j]))
-        .collect();
-    let model_space = Space {
-        range: task
-            .state_range
-            .iter()
-            .copied()
-            .chain(action_range)
-            .collect(),
-        periodic: task
-            .angle_mask
-            .iter()
-            .copied()
-            .chain(std::iter::repeat_n(false, m))
-            .collect(),
-        outputs: n,
-        bounds: None,
+
+    /// The process model's space: state and action in, the next state out.
+    fn model(&self) -> Space {
+        let task = self.task;
+        let m = task.action_dim();
+        let action_range = (0..m).map(|j| (task.action_low[j], task.action_high[j]));
+        Space {
+            range: task
+                .state_range
+                .iter()
+                .copied()
+                .chain(action_range)
+                .collect(),
+            periodic: task
+                .angle_mask
+                .iter()
+                .copied()
+                .chain(std::iter::repeat_n(false, m))
+                .collect(),
+            outputs: task.state_dim(),
+            bounds: None,
+        }
+    }
+}
+
+/// SARSA (§6.4.1): an RBF Q-function with one output per action of the set.
+fn sarsa(spaces: &Spaces, cfg: &AgentConfig, s: &SarsaConfig, run_seed: u64) -> Box<dyn Agent> {
+    let actions = Sarsa::action_set(&s.actions, spaces.task.action_dim());
+    let Built::Rbf(q) = make(&cfg.critic, &spaces.state(actions.len(), None)) else {
+        unreachable!("validated: SARSA's Q-function is an RBF grid")
     };
-    let action_bounds = cfg
-        .learning
-        .bounded_actor
-        .then(|| (task.action_low.clone(), task.action_high.clone()));
-    let critic: Box<dyn Critic> = match (&cfg.critic, make(&cfg.critic, &state(1, None))) {
+    Box::new(Sarsa::new(
+        *q,
+        actions,
+        cfg.critic.alpha(),
+        cfg.learning.gamma,
+        cfg.learning.lambda,
+        Epsilon {
+            decay: s.epsilon_decay,
+            min: s.epsilon_min,
+        },
+        run_seed,
+    ))
+}
+
+/// The critic: TD(λ) on any approximator, or LSTD (§6.4.1) on an RBF grid, optionally
+/// with the reward prior.
+fn critic(spaces: &Spaces, cfg: &AgentConfig) -> Box<dyn Critic> {
+    match (&cfg.critic, make(&cfg.critic, &spaces.state(1, None))) {
         (Component::Lstd(c), Built::Rbf(v)) => {
             let prior = (c.prior == LstdPrior::Reward).then(|| {
                 // θ_0 = ρ(c, 0) / (1 − γ): the value of staying at each centre.
@@ -233,21 +263,32 @@ pub fn build(task: &Task, cfg: &AgentConfig, run_seed: u64) -> Box<dyn Agent> {
                 (0..v.len())
                     .map(|i| {
                         v.centre(i, &mut centre);
-                        task.reward.state_reward(&centre) / (1.0 - cfg.learning.gamma)
+                        spaces.task.reward.state_reward(&centre) / (1.0 - cfg.learning.gamma)
                     })
                     .collect()
             });
             Box::new(Lstd::new(*v, c.initial_a, prior))
         }
         (c, built) => Box::new(TdLambda::new(built.value_function(), c.alpha())),
-    };
+    }
+}
+
+/// The algorithm's actor update: SAC, MLAC, RMAC or VGBP, with its actor (or reference
+/// model) and process model.
+fn improver(spaces: &Spaces, cfg: &AgentConfig, info: TaskInfo) -> Box<dyn Improver> {
+    let task = spaces.task;
+    let (n, m) = (task.state_dim(), task.action_dim());
+    let l = &cfg.learning;
+    let action_bounds = l
+        .bounded_actor
+        .then(|| (task.action_low.clone(), task.action_high.clone()));
     let model = || {
         let c = cfg
             .model
             .as_ref()
             .expect("validated: MLAC, RMAC and VGBP have a model");
         ProcessModel::new(
-            make(c, &model_space).differentiable(),
+            make(c, &spaces.model()).differentiable(),
             task.angle_mask.clone(),
             c.alpha(),
         )
@@ -257,9 +298,9 @@ pub fn build(task: &Task, cfg: &AgentConfig, run_seed: u64) -> Box<dyn Agent> {
             .actor
             .as_ref()
             .expect("validated: SAC, MLAC and RMAC have an actor");
-        (make(c, &state(outputs, bounds)).any(), c.alpha())
+        (make(c, &spaces.state(outputs, bounds)).any(), c.alpha())
     };
-    let improver: Box<dyn Improver> = match cfg.algo {
+    match cfg.algo {
         Algo::Sac => {
             let (a, alpha) = actor(m, action_bounds);
             Box::new(Sac::new(a, alpha))
@@ -267,7 +308,7 @@ pub fn build(task: &Task, cfg: &AgentConfig, run_seed: u64) -> Box<dyn Agent> {
         Algo::Mlac => {
             let (a, alpha) = actor(m, action_bounds);
             Box::new(Mlac::new(
-                info.clone(),
+                info,
                 a,
                 model(),
                 alpha,
@@ -277,11 +318,11 @@ pub fn build(task: &Task, cfg: &AgentConfig, run_seed: u64) -> Box<dyn Agent> {
         }
         Algo::Rmac => {
             let (a, alpha) = actor(n, None);
-            Box::new(Rmac::new(info.clone(), a, model(), alpha))
+            Box::new(Rmac::new(info, a, model(), alpha))
         }
         Algo::Vgbp => Box::new(
             Vgbp::new(
-                info.clone(),
+                info,
                 model(),
                 l.gamma,
                 cfg.vgbp.as_ref().map_or(0, |v| v.lookahead),
@@ -289,16 +330,6 @@ pub fn build(task: &Task, cfg: &AgentConfig, run_seed: u64) -> Box<dyn Agent> {
             .with_action_grid(cfg.vgbp.as_ref().map_or(0, |v| v.grid))
             .with_fit_at_zero_action(cfg.vgbp.as_ref().is_some_and(|v| v.fit_at_zero_action)),
         ),
-        Algo::Sarsa => unreachable!("built above"),
-    };
-    Box::new(ActorCritic::new(
-        info,
-        Learning {
-            gamma: l.gamma,
-            lambda: l.lambda,
-        },
-        critic,
-        improver,
-        Exploration::new(l.sigma, l.explore_every, run_seed),
-    ))
+        Algo::Sarsa => unreachable!("built by `sarsa`"),
+    }
 }

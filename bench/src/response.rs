@@ -9,7 +9,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use runtime::experiment::Sample;
-use runtime::report::plot::{Drawing, colours, padded_range, render, tick_label};
+use runtime::report::plot::{Drawing, colours, draw_legend, padded_range, render, tick_label};
 
 /// Plots the time responses `(label, samples)` into a PNG and an SVG image.
 ///
@@ -99,13 +99,7 @@ impl Drawing for Responses<'_> {
                     .label(*label)
                     .legend(move |(x, y)| PathElement::new([(x, y), (x + 24, y)], style));
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .label_font(("sans-serif", 14))
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK.mix(0.4))
-                .draw()?;
+            draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 14)?;
         }
         root.present()?;
         Ok(())

@@ -9,7 +9,9 @@ use anyhow::{Result, ensure};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use runtime::report::plot::{Drawing, KEY_WIDTH, colours, padded_range, render, tick_label};
+use runtime::report::plot::{
+    Drawing, KEY_WIDTH, colours, draw_legend, padded_range, render, tick_label,
+};
 
 /// One parameter's line: `(factor, final greedy return, rise time [min])` per point,
 /// ordered by factor.
@@ -115,13 +117,7 @@ impl Drawing for Sensitivity<'_> {
                     chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, colour.filled())))?;
                 }
                 if r == 0 && c == 0 {
-                    chart
-                        .configure_series_labels()
-                        .position(SeriesLabelPosition::LowerLeft)
-                        .background_style(WHITE.mix(0.85))
-                        .border_style(BLACK.mix(0.3))
-                        .label_font(("sans-serif", 13))
-                        .draw()?;
+                    draw_legend(&mut chart, SeriesLabelPosition::LowerLeft, 13)?;
                 }
             }
         }

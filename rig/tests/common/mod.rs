@@ -2,6 +2,7 @@
 //! and signalling the processes a `rig run` started.
 #![allow(dead_code)]
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
@@ -83,4 +84,55 @@ pub fn signal(pid: u32, signal: &str) {
         .args([signal, &pid.to_string()])
         .status()
         .unwrap();
+}
+
+/// Messages per topic: (log time, data) in order.
+pub fn messages(mcap_path: &Path) -> BTreeMap<String, Vec<(u64, Vec<u8>)>> {
+    let bytes = std::fs::read(mcap_path).unwrap();
+    let mut out: BTreeMap<String, Vec<(u64, Vec<u8>)>> = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        out.entry(m.channel.topic.clone())
+            .or_default()
+            .push((m.log_time, m.data.to_vec()));
+    }
+    out
+}
+
+/// Per sample `seq`: a field of a recorded JSON message on `topic`.
+pub fn field(
+    msgs: &BTreeMap<String, Vec<(u64, Vec<u8>)>>,
+    topic: &str,
+    key: &str,
+) -> BTreeMap<u64, f64> {
+    msgs[topic]
+        .iter()
+        .map(|(_, data)| {
+            let v: serde_json::Value = serde_json::from_slice(data).unwrap();
+            (v["seq"].as_u64().unwrap(), v[key].as_f64().unwrap())
+        })
+        .collect()
+}
+
+/// Predictive timing, from a recording: the action the plant announces at sample k
+/// (`u_next`, not all zero) is the one it applies over the interval after it (as the
+/// plant saturates it, to the pendulum's ±3 V). Returns how many consecutive sample pairs
+/// were checked.
+pub fn pipelined(mcap_path: &Path) -> usize {
+    let msgs = messages(mcap_path);
+    let values = |key: &str| -> Vec<f64> {
+        field(&msgs, "/plant/measurement", key)
+            .into_values()
+            .collect()
+    };
+    let (next, applied, steps) = (values("u_next_0"), values("u_applied_0"), values("step"));
+    assert!(next.iter().any(|u| *u != 0.0));
+    let mut checked = 0;
+    for k in 0..next.len() - 1 {
+        if steps[k + 1] == steps[k] + 1.0 {
+            assert_eq!(next[k].clamp(-3.0, 3.0), applied[k + 1], "sample {k}");
+            checked += 1;
+        }
+    }
+    checked
 }

@@ -9,7 +9,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::super::curve::CurvePoint;
-use super::{Drawing, Extent, KEY_WIDTH, colours, dashed_key, render, styled_chart};
+use super::{Drawing, Extent, KEY_WIDTH, colours, dashed_key, draw_legend, render, styled_chart};
 
 /// Label of the x axis.
 pub const X_LABEL: &str = "Time [min]";
@@ -202,13 +202,7 @@ impl Drawing for Plot<'_, '_> {
                     });
             }
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerRight)
-            .label_font(("sans-serif", 16))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.4))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerRight, 16)?;
         root.present()?;
         Ok(())
     }

@@ -6,7 +6,7 @@ use anyhow::{Result, ensure};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{Drawing, KEY_WIDTH, colours, render};
+use super::{Drawing, KEY_WIDTH, colours, draw_legend, render};
 
 /// One distribution in [`plot_histograms`]: a legend entry and its values.
 pub struct Histogram<'a> {
@@ -114,13 +114,7 @@ impl Drawing for Histograms<'_> {
                 .label(h.label)
                 .legend(move |(x, y)| PathElement::new([(x, y), (x + KEY_WIDTH, y)], line));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.3))
-            .label_font(("sans-serif", 16))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 16)?;
         root.present()?;
         Ok(())
     }

@@ -27,8 +27,8 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use anyhow::{Context, Result, ensure};
-use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
+use plotters::coord::{CoordTranslate, Shift};
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, RGBColor, register_font};
@@ -168,6 +168,26 @@ pub fn tick_label(v: f64, span: f64) -> String {
 /// The palette, repeated forever.
 pub fn colours() -> impl Iterator<Item = RGBColor> {
     PALETTE.iter().copied().cycle()
+}
+
+/// The legend of `chart`'s labelled series in the house style, at `position`, its
+/// labels in `font_size` px.
+pub fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+    font_size: u32,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    chart
+        .configure_series_labels()
+        .position(position)
+        .label_font(("sans-serif", font_size))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.4))
+        .draw()?;
+    Ok(())
 }
 
 /// Legend key of a dashed line.

@@ -7,7 +7,9 @@ use anyhow::{Result, bail, ensure};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{Drawing, KEY_WIDTH, PALETTE, dashed_key, padded_range, render, styled_chart};
+use super::{
+    Drawing, KEY_WIDTH, PALETTE, dashed_key, draw_legend, padded_range, render, styled_chart,
+};
 
 /// One series of [`plot_points`]: a legend entry and its points `(x, mean, ci_low,
 /// ci_high)`, ordered by `x`.
@@ -116,13 +118,7 @@ impl Drawing for Points<'_> {
                     .map(|p| Circle::new((p.0 + dx, p.1), 4, colour.filled())),
             )?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::LowerLeft)
-            .label_font(("sans-serif", 16))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.4))
-            .draw()?;
+        draw_legend(&mut chart, SeriesLabelPosition::LowerLeft, 16)?;
         root.present()?;
         Ok(())
     }

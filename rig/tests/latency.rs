@@ -1,0 +1,141 @@
+//! `rig latency`: every stage of every cycle timed, under the scheduling asked for.
+
+use std::path::PathBuf;
+
+mod common;
+use common::{ok, pipelined, rig};
+
+fn tmp(name: &str) -> PathBuf {
+    common::tmp("latency", name)
+}
+
+#[test]
+fn latency_times_every_stage_of_every_cycle() {
+    // A short `rig latency` at 3 ms periods (the pendulum 10 × faster than real time).
+    let dir = tmp("latency");
+    let out = ok(rig()
+        .args([
+            "latency",
+            "--cycles",
+            "150",
+            "--period-ms",
+            "3",
+            "--raw-samples",
+            "500",
+            "--spin-us",
+            "500",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap());
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(summary.contains("plant spins 500 µs"), "{summary}");
+    // Predictive timing (the default): the action the plant announces at a sample
+    // instant is the one it applies over the interval after it.
+    let pipelined = pipelined(&dir.join("run/run.mcap"));
+    assert!(pipelined >= 200, "{pipelined}");
+    for stage in [
+        "plant_to_observer",
+        "observer_to_agent",
+        "agent_to_plant",
+        "slack",
+    ] {
+        assert!(summary.contains(stage), "{summary}");
+    }
+    assert!(summary.contains("deadline misses") && summary.contains("raw iceoryx2"));
+    let csv = std::fs::read_to_string(dir.join("latency.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header.len(), 1 + 9 + 9 + 1, "{header:?}");
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    // Two whole trials (101 samples each), every sample a row.
+    assert_eq!(rows.len(), 202);
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let mut met = 0;
+    for r in &rows {
+        assert_eq!(r.len(), header.len());
+        if r[col("deadline_miss")] == "1" {
+            continue;
+        }
+        met += 1;
+        let v = |name: &str| r[col(name)].parse::<u64>().unwrap();
+        // The stamps are in cycle order and the stages add up.
+        assert!(v("t_sample_ns") <= v("t_measurement_publish_ns"));
+        assert!(v("t_measurement_publish_ns") <= v("t_observer_received_ns"));
+        assert!(v("t_observer_publish_ns") <= v("t_agent_received_ns"));
+        assert!(v("t_agent_publish_ns") <= v("t_action_found_ns"));
+        assert!(v("t_action_found_ns") <= v("deadline_ns"));
+        // plant … agent_to_plant: the stages between the wake-up and the action found.
+        let parts: u64 = bench::latency::STAGES[1..7].iter().map(|s| v(s)).sum();
+        assert_eq!(parts, v("sample_to_actuation"));
+        assert_eq!(v("sample_to_actuation") + v("slack"), 3_000_000);
+    }
+    assert!(
+        met > 150,
+        "{met} of {} cycles met their deadline",
+        rows.len()
+    );
+    for f in ["latency.png", "latency.svg", "summary.txt", "run/run.mcap"] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+}
+
+/// `rig latency` for 50 cycles at 3 ms with 200 raw round trips and `extra`, into
+/// `tmp(name)`.
+fn short_latency(name: &str, extra: &[&str]) -> std::process::Output {
+    rig()
+        .args([
+            "latency",
+            "--cycles",
+            "50",
+            "--period-ms",
+            "3",
+            "--raw-samples",
+            "200",
+        ])
+        .args(extra)
+        .arg("--out")
+        .arg(tmp(name))
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn latency_pins_the_plant_to_a_cpu_of_its_own_or_says_why_not() {
+    let out = short_latency("latency-pin", &["--pin-cpus"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+    if cpus >= 2 {
+        assert!(out.status.success(), "{stderr}");
+        assert!(stdout.contains("plant pinned to its own CPU"), "{stdout}");
+    } else {
+        assert!(stderr.contains("needs at least two CPUs"), "{stderr}");
+    }
+}
+
+#[test]
+fn latency_runs_under_a_real_time_priority_or_says_why_not() {
+    let dir = tmp("latency-rt");
+    let out = short_latency("latency-rt", &["--rt-priority", "5"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    if out.status.success() {
+        // Root, CAP_SYS_NICE or an rtprio limit: every process ran under SCHED_FIFO.
+        assert!(stdout.contains("SCHED_FIFO 5"), "{stdout}");
+    } else {
+        assert!(
+            (stderr.contains("SCHED_FIFO") && stderr.contains("rtprio"))
+                || (stderr.contains("mlockall") && stderr.contains("memlock")),
+            "{stderr}"
+        );
+    }
+    let bad = rig()
+        .args(["latency", "--rt-priority", "0", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("1..=99"));
+}

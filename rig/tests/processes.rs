@@ -1,0 +1,355 @@
+//! The processes of `rig run` under faults and in real time: a dead or stalled peer,
+//! signals, two runs at once, the plant's clock and its watchdog.
+
+use std::path::PathBuf;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+mod common;
+use common::{children_of, field, messages, ok, rig, wait_for_lines};
+
+fn tmp(name: &str) -> PathBuf {
+    common::tmp("proc", name)
+}
+
+#[test]
+fn two_runs_at_once_do_not_see_each_other() {
+    let dir = tmp("parallel");
+    let spawn = |seed: &str, name: &str| {
+        rig()
+            .args([
+                "run",
+                "--trials",
+                "20",
+                "--eval-every",
+                "10",
+                "--quiet",
+                "--seed",
+                seed,
+                "--out",
+            ])
+            .arg(dir.join(name))
+            .spawn()
+            .unwrap()
+    };
+    let (mut a, mut b) = (spawn("1", "a"), spawn("2", "b"));
+    assert!(a.wait().unwrap().success() && b.wait().unwrap().success());
+    for (seed, name) in [("1", "a"), ("2", "b")] {
+        ok(rig()
+            .args([
+                "learn",
+                "--runs",
+                "1",
+                "--trials",
+                "20",
+                "--eval-every",
+                "10",
+                "--quiet",
+                "--seed",
+                seed,
+                "--out",
+            ])
+            .arg(dir.join(format!("learn-{name}")))
+            .output()
+            .unwrap());
+        let want = std::fs::read_to_string(dir.join(format!("learn-{name}/runs.csv"))).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(dir.join(format!("{name}/returns.csv"))).unwrap(),
+            want,
+            "run {name}"
+        );
+    }
+}
+
+#[test]
+fn after_kill_9_of_all_three_processes_the_next_run_just_works() {
+    let dir = tmp("kill");
+    let mut sup = rig()
+        .args(["run", "--trials", "400", "--quiet", "--out"])
+        .arg(dir.join("killed"))
+        .spawn()
+        .unwrap();
+    // Wait until learning is under way.
+    wait_for_lines(&dir.join("killed/returns.csv"), 4);
+    let kids = children_of(sup.id());
+    assert_eq!(kids.len(), 3, "plant, observer and agent");
+    for pid in &kids {
+        Command::new("kill")
+            .args(["-9", &pid.to_string()])
+            .status()
+            .unwrap();
+    }
+    let status = sup.wait().unwrap();
+    assert!(
+        !status.success(),
+        "rig run must fail when its processes die"
+    );
+    // The recording was finished: the official reader's crate reads it.
+    assert!(!messages(&dir.join("killed/run.mcap")).is_empty());
+    // And the next run starts and finishes without manual cleanup.
+    ok(rig()
+        .args(["run", "--trials", "5", "--quiet", "--out"])
+        .arg(dir.join("next"))
+        .output()
+        .unwrap());
+    assert_eq!(
+        std::fs::read_to_string(dir.join("next/returns.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        6
+    );
+}
+
+#[test]
+fn bench_loop_measures_both_loops() {
+    let dir = tmp("bench-loop");
+    let out = ok(rig()
+        .args(["bench-loop", "--samples", "1500", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.contains("raw iceoryx2 round trip") && text.contains("lockstep step"),
+        "{text}"
+    );
+    let csv = std::fs::read_to_string(dir.join("loop.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert_eq!(rows[0], "measurement,n,p50_us,p90_us,p99_us,p999_us,max_us");
+    assert!(
+        rows[1].starts_with("raw_round_trip,1500,") && rows[2].starts_with("lockstep_step,"),
+        "{csv}"
+    );
+    let p50: f64 = rows[2].split(',').nth(2).unwrap().parse().unwrap();
+    assert!(p50 > 0.0 && p50.is_finite());
+}
+
+#[test]
+fn realtime_runs_on_the_plants_clock_and_counts_misses() {
+    let dir = tmp("realtime");
+    // 3 trials of 101 samples at 20 × real time: 1.5 ms periods, ≈ 0.45 s.
+    let t0 = Instant::now();
+    let out = ok(rig()
+        .args([
+            "run",
+            "--timing",
+            "realtime",
+            "--speed",
+            "20",
+            "--trials",
+            "3",
+            "--eval-every",
+            "0",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap());
+    let wall = t0.elapsed();
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("deadline misses:"), "{text}");
+    assert!(
+        wall >= Duration::from_millis(3 * 101 * 3 / 2),
+        "the plant keeps real time: {wall:?}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("returns.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        4
+    );
+    let msgs = messages(&dir.join("run.mcap"));
+    // Log time is the plant's monotonic sample time: increasing by about a period.
+    let t: Vec<u64> = msgs["/plant/measurement"].iter().map(|m| m.0).collect();
+    assert!(t.windows(2).all(|w| w[1] >= w[0]));
+    let mean_gap = (t[t.len() - 2] - t[0]) as f64 / (t.len() - 2) as f64;
+    assert!(
+        (mean_gap - 1.5e6).abs() < 0.2e6,
+        "mean sample period {mean_gap} ns"
+    );
+    let bad = rig()
+        .args(["run", "--timing", "realtime", "--speed", "0"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+}
+
+#[test]
+fn processes_notice_a_dead_peer_and_say_which() {
+    let dir = tmp("dead-peer");
+    let config = dir.join("config.toml");
+    let preset = ok(rig().args(["config", "--trials", "400"]).output().unwrap());
+    std::fs::write(&config, &preset.stdout).unwrap();
+    let run_id = format!("deadpeer{}", std::process::id());
+    let start = |exe: &str| {
+        let log = std::fs::File::create(dir.join(format!("{exe}.log"))).unwrap();
+        Command::new(env!("CARGO_BIN_EXE_rig").replace("/rig", &format!("/{exe}")))
+            .args(["--run-id", &run_id, "--config"])
+            .arg(&config)
+            .stderr(log)
+            .spawn()
+            .unwrap()
+    };
+    let (mut agent, mut observer, mut plant) = (start("agent"), start("observer"), start("plant"));
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(plant.try_wait().unwrap().is_none(), "learning is under way");
+    agent.kill().unwrap();
+    agent.wait().unwrap();
+    let t0 = Instant::now();
+    for (name, child) in [("plant", &mut plant), ("observer", &mut observer)] {
+        let status = child.wait().unwrap();
+        assert!(!status.success(), "{name} must fail");
+        let log = std::fs::read_to_string(dir.join(format!("{name}.log"))).unwrap();
+        // The plant sees the agent die; the observer sees the agent or the plant stop.
+        let who = if name == "plant" {
+            "agent"
+        } else {
+            "of this run stopped"
+        };
+        assert!(
+            log.contains(who) && log.contains("stopped"),
+            "{name}: {log}"
+        );
+    }
+    assert!(
+        t0.elapsed() < Duration::from_secs(5),
+        "noticed in {:?}",
+        t0.elapsed()
+    );
+}
+
+#[test]
+fn sigterm_stops_the_run_and_keeps_the_recording() {
+    let dir = tmp("sigterm");
+    let sup = rig()
+        .args(["run", "--trials", "400", "--quiet", "--out"])
+        .arg(&dir)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for_lines(&dir.join("returns.csv"), 4);
+    Command::new("kill")
+        .args(["-TERM", &sup.id().to_string()])
+        .status()
+        .unwrap();
+    let out = sup.wait_with_output().unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("interrupted"), "{err}");
+    assert!(
+        !messages(&dir.join("run.mcap")).is_empty(),
+        "the recording was finished"
+    );
+    assert!(children_of(std::process::id()).iter().all(|&p| p != 0));
+}
+
+#[test]
+fn a_stalled_agent_meets_the_watchdog_within_two_periods() {
+    // Realtime at 5 × real time (6 ms periods); the agent is stopped (SIGSTOP) for about
+    // 40 periods in the second trial, then continued.
+    let dir = tmp("watchdog");
+    let mut sup = rig()
+        .args([
+            "run",
+            "--timing",
+            "realtime",
+            "--speed",
+            "5",
+            "--trials",
+            "4",
+            "--eval-every",
+            "0",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&dir)
+        .spawn()
+        .unwrap();
+    wait_for_lines(&dir.join("returns.csv"), 2);
+    std::thread::sleep(Duration::from_millis(100));
+    let agent = common::child_running(sup.id(), "agent");
+    common::signal(agent, "-STOP");
+    std::thread::sleep(Duration::from_millis(240));
+    common::signal(agent, "-CONT");
+    assert!(sup.wait().unwrap().success());
+    let msgs = messages(&dir.join("run.mcap"));
+    let sampled = field(&msgs, "/timing/plant/measurement", "t_sample_ns");
+    let applied = field(&msgs, "/plant/measurement", "u_applied_0");
+    let answered = field(&msgs, "/timing/agent/action", "t_publish_ns");
+    // Sample k's action was on time if it was published before sample k + 1.
+    let on_time = |k: u64| match (answered.get(&k), sampled.get(&(k + 1))) {
+        (Some(a), Some(s)) => a < s,
+        _ => false,
+    };
+    let seqs: Vec<u64> = sampled.keys().copied().collect();
+    // The stall: the longest run of samples without a timely answer.
+    let (mut best, mut start, mut len) = ((0, 0), 0, 0);
+    for &k in &seqs {
+        if on_time(k) {
+            len = 0;
+        } else {
+            if len == 0 {
+                start = k;
+            }
+            len += 1;
+            if len > best.1 {
+                best = (start, len);
+            }
+        }
+    }
+    let (first_late, late) = best;
+    assert!(
+        late >= 20,
+        "the stall shows as {late} late samples from {first_late}"
+    );
+    // The last action arrived in the interval after sample L = first_late − 1; the next
+    // interval had none, so from sample L + 2 on the plant applies zero: sample L + 3
+    // reports it as applied over the interval before it.
+    let l = first_late - 1;
+    assert_ne!(applied[&(l + 1)], 0.0, "the last action was in effect");
+    for k in l + 3..l + 15 {
+        assert_eq!(
+            applied[&k], 0.0,
+            "sample {k}: the safe action (stall after sample {l})"
+        );
+    }
+}
+
+#[test]
+fn a_second_run_with_the_same_run_id_is_refused_and_the_first_goes_on() {
+    let dir = tmp("same-id");
+    let id = format!("same-{}", std::process::id());
+    let mut first = rig()
+        .args([
+            "run", "--run-id", &id, "--trials", "150", "--quiet", "--out",
+        ])
+        .arg(dir.join("first"))
+        .spawn()
+        .unwrap();
+    wait_for_lines(&dir.join("first/returns.csv"), 3);
+    let second = rig()
+        .args(["run", "--run-id", &id, "--trials", "5", "--quiet", "--out"])
+        .arg(dir.join("second"))
+        .output()
+        .unwrap();
+    assert!(!second.status.success());
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert!(
+        err.contains("is in use") && err.trim().lines().count() == 1,
+        "one line: {err}"
+    );
+    assert!(!dir.join("second/config.toml").exists(), "nothing written");
+    assert!(
+        first.wait().unwrap().success(),
+        "the first run is undisturbed"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("first/returns.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        151
+    );
+}
