@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args as Flags;
-use runtime::run::{RunOptions, run};
+use runtime::config::ExperimentConfig;
+use runtime::run::{RunOptions, RunSummary, run};
 
 use crate::external::DriverArgs;
 use crate::selection::{Selection, resolve_selection, resume_selection};
@@ -60,52 +61,58 @@ pub struct Args {
 
 /// Runs the command.
 pub fn main(args: &Args) -> ExitCode {
-    let selected = match &args.resume {
-        Some(dir) => resume_selection(dir, &args.selection),
-        None => resolve_selection(&args.selection),
-    };
-    let mut cfg = match selected {
+    let (cfg, opts) = match options(args) {
         Ok(c) => c,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::from(2);
         }
     };
+    match run(&cfg, &opts) {
+        Ok(s) => {
+            if !args.quiet {
+                print_summary(&cfg, &opts, &s);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The experiment and how to run it, from the flags (and, resuming, the run's
+/// directory); an error is a usage error.
+fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
+    let mut cfg = match &args.resume {
+        Some(dir) => resume_selection(dir, &args.selection),
+        None => resolve_selection(&args.selection),
+    }
+    .map_err(|e| e.to_string())?;
     cfg.run.runs = 1;
     if !(args.speed.is_finite() && args.speed > 0.0 && args.speed <= 1000.0) {
-        eprintln!(
-            "error: `--speed` {} is out of range: must be a number in (0, 1000]",
+        return Err(format!(
+            "`--speed` {} is out of range: must be a number in (0, 1000]",
             args.speed
-        );
-        return ExitCode::from(2);
+        ));
     }
     let realtime = (args.timing == "realtime").then_some(args.speed);
     let delayed = cfg.run.delay_ms != 0.0 || !cfg.run.delay_from.is_empty();
     if delayed && (realtime.is_some() || args.plant == "external") {
-        eprintln!(
-            "error: `--delay-ms`/`--delay-from` (run.delay_ms, run.delay_from) apply in lockstep with the simulated plant only: in real time the delays are real"
-        );
-        return ExitCode::from(2);
+        return Err("`--delay-ms`/`--delay-from` (run.delay_ms, run.delay_from) apply in lockstep with the simulated plant only: in real time the delays are real".into());
     }
     let driver = if args.plant == "external" {
         if realtime.is_some() || args.speed != 1.0 {
-            eprintln!(
-                "error: `--timing`/`--speed` do not apply with `--plant external`: the driver is the clock"
+            return Err(
+                "`--timing`/`--speed` do not apply with `--plant external`: the driver is the clock"
+                    .into(),
             );
-            return ExitCode::from(2);
         }
-        match args.driver.resolve(cfg.system) {
-            Ok(d) => Some(d),
-            Err(e) => {
-                eprintln!("error: {e}");
-                return ExitCode::from(2);
-            }
-        }
+        Some(args.driver.resolve(cfg.system).map_err(|e| e.to_string())?)
+    } else if args.driver.driver.is_some() {
+        return Err("`--driver` needs `--plant external`".into());
     } else {
-        if args.driver.driver.is_some() {
-            eprintln!("error: `--driver` needs `--plant external`");
-            return ExitCode::from(2);
-        }
         None
     };
     let opts = RunOptions {
@@ -119,49 +126,43 @@ pub fn main(args: &Args) -> ExitCode {
         scheduling: args.scheduling,
         spin: args.spin,
     };
-    match run(&cfg, &opts) {
-        Ok(s) => {
-            if !args.quiet {
-                let steps = s.messages as f64 / 3.0;
-                println!(
-                    "{} {}/{} over three processes: {} trials in {:.1} s wall ({:.1} µs per sample)",
-                    cfg.system,
-                    cfg.agent.algo,
-                    cfg.agent.approx,
-                    s.records.len(),
-                    s.wall.as_secs_f64(),
-                    s.wall.as_secs_f64() * 1e6 / steps
-                );
-                if let (Some(i), Some(d)) = (&s.driver, &opts.driver) {
-                    println!(
-                        "  driver {:?} ({}): period {:.3} ms × time scale {}; deadline misses: {} of {} samples",
-                        d.id,
-                        i.system_name(),
-                        i.period_ns as f64 * 1e-6,
-                        i.time_scale,
-                        s.deadline_misses,
-                        s.messages / 3
-                    );
-                } else if realtime.is_some() {
-                    println!(
-                        "  deadline misses: {} of {} samples",
-                        s.deadline_misses,
-                        s.messages / 3
-                    );
-                }
-                if let Some(g) = s.records.iter().rev().find_map(|r| r.greedy) {
-                    println!("  last greedy return: {g:.1}");
-                }
-                println!(
-                    "  wrote {}/{{returns.csv, run.mcap, config.toml, plant.log, observer.log, agent.log}}",
-                    opts.out.display()
-                );
-            }
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+    Ok((cfg, opts))
+}
+
+/// What the run did, in a few lines.
+fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
+    let steps = s.messages as f64 / 3.0;
+    println!(
+        "{} {}/{} over three processes: {} trials in {:.1} s wall ({:.1} µs per sample)",
+        cfg.system,
+        cfg.agent.algo,
+        cfg.agent.approx,
+        s.records.len(),
+        s.wall.as_secs_f64(),
+        s.wall.as_secs_f64() * 1e6 / steps
+    );
+    if let (Some(i), Some(d)) = (&s.driver, &opts.driver) {
+        println!(
+            "  driver {:?} ({}): period {:.3} ms × time scale {}; deadline misses: {} of {} samples",
+            d.id,
+            i.system_name(),
+            i.period_ns as f64 * 1e-6,
+            i.time_scale,
+            s.deadline_misses,
+            s.messages / 3
+        );
+    } else if opts.realtime.is_some() {
+        println!(
+            "  deadline misses: {} of {} samples",
+            s.deadline_misses,
+            s.messages / 3
+        );
     }
+    if let Some(g) = s.records.iter().rev().find_map(|r| r.greedy) {
+        println!("  last greedy return: {g:.1}");
+    }
+    println!(
+        "  wrote {}/{{returns.csv, run.mcap, config.toml, plant.log, observer.log, agent.log}}",
+        opts.out.display()
+    );
 }

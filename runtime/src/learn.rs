@@ -217,34 +217,7 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
     drop(writer);
 
     let (curve, greedy_curve) = curves(&records, runs as usize, trials as usize)?;
-    report::write_curve_csv(&opts.out.join("curve.csv"), &curve)?;
-    let title = format!(
-        "{} {}/{} — {} runs",
-        cfg.system,
-        cfg.agent.algo.as_str().to_uppercase(),
-        cfg.agent.approx.as_str().to_uppercase(),
-        runs
-    );
-    let mut series = vec![Series {
-        label: "learning (with exploration)".into(),
-        points: &curve,
-        style: SeriesStyle::Band,
-    }];
-    if !greedy_curve.is_empty() {
-        report::write_curve_csv(&opts.out.join("greedy_curve.csv"), &greedy_curve)?;
-        series.push(Series {
-            label: "greedy evaluation (mean)".into(),
-            points: &greedy_curve,
-            style: SeriesStyle::Line,
-        });
-    }
-    report::plot_curves(
-        &opts.out.join("curve.png"),
-        &opts.out.join("curve.svg"),
-        &title,
-        &series,
-        None,
-    )?;
+    write_curves(cfg, &opts.out, &curve, &greedy_curve)?;
     Ok(LearnSummary {
         records,
         curve,
@@ -253,6 +226,44 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
         responses,
         acted_on_rmse,
     })
+}
+
+/// Writes the learning curve (and the greedy one, if evaluated) as `curve.csv`,
+/// `greedy_curve.csv` and the plot `curve.png`/`.svg` into `out`.
+fn write_curves(
+    cfg: &ExperimentConfig,
+    out: &Path,
+    curve: &[CurvePoint],
+    greedy_curve: &[CurvePoint],
+) -> Result<()> {
+    report::write_curve_csv(&out.join("curve.csv"), curve)?;
+    let title = format!(
+        "{} {}/{} — {} runs",
+        cfg.system,
+        cfg.agent.algo.as_str().to_uppercase(),
+        cfg.agent.approx.as_str().to_uppercase(),
+        cfg.run.runs
+    );
+    let mut series = vec![Series {
+        label: "learning (with exploration)".into(),
+        points: curve,
+        style: SeriesStyle::Band,
+    }];
+    if !greedy_curve.is_empty() {
+        report::write_curve_csv(&out.join("greedy_curve.csv"), greedy_curve)?;
+        series.push(Series {
+            label: "greedy evaluation (mean)".into(),
+            points: greedy_curve,
+            style: SeriesStyle::Line,
+        });
+    }
+    report::plot_curves(
+        &out.join("curve.png"),
+        &out.join("curve.svg"),
+        &title,
+        &series,
+        None,
+    )
 }
 
 /// Writes each run's acted-on error as `run,x_0,...` (shortest round-trip numbers).

@@ -1,0 +1,104 @@
+//! The checkpoints of a run: where they are, which there are, and the agent's writer
+//! that keeps the loop from waiting for the disk.
+
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::thread::JoinHandle;
+
+use agent::checkpoint::Checkpoint;
+use anyhow::{Context, Result, anyhow};
+
+/// The checkpoint directory of run directory `out`.
+pub fn checkpoint_dir(out: &Path) -> PathBuf {
+    out.join("checkpoints")
+}
+
+/// The checkpoint file of `trial` in checkpoint directory `dir`.
+pub fn checkpoint_path(dir: &Path, trial: u32) -> PathBuf {
+    dir.join(format!("trial-{trial:06}.ckpt"))
+}
+
+/// The trials of the checkpoint files in `dir`, ascending.
+pub fn checkpoints(dir: &Path) -> Vec<u32> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    let mut trials: Vec<u32> = entries
+        .filter_map(|e| {
+            let name = e.ok()?.file_name().into_string().ok()?;
+            name.strip_prefix("trial-")?
+                .strip_suffix(".ckpt")?
+                .parse()
+                .ok()
+        })
+        .collect();
+    trials.sort_unstable();
+    trials
+}
+
+/// Removes the checkpoints of trials before `trial`.
+pub fn prune(dir: &Path, trial: u32) {
+    for t in checkpoints(dir) {
+        if t < trial {
+            let _ = std::fs::remove_file(checkpoint_path(dir, t));
+        }
+    }
+}
+
+/// Writes checkpoints on a background thread (atomically: [`Checkpoint::write`]) and keeps
+/// the two newest. When the disk is slower than the trials, checkpoints queued behind the
+/// one being written are skipped, except the newest: the loop never waits, and a resume
+/// redoes the few trials after the newest checkpoint written.
+pub struct CheckpointWriter {
+    tx: Option<mpsc::Sender<Checkpoint>>,
+    thread: Option<JoinHandle<Result<()>>>,
+}
+
+impl CheckpointWriter {
+    /// A writer into `dir` (created if missing).
+    pub fn new(dir: &Path) -> Result<Self> {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        let (tx, rx) = mpsc::channel::<Checkpoint>();
+        let dir = dir.to_owned();
+        let thread = std::thread::spawn(move || -> Result<()> {
+            let mut previous = None;
+            while let Ok(mut c) = rx.recv() {
+                // Only the newest of those waiting.
+                if let Some(newer) = rx.try_iter().last() {
+                    c = newer;
+                }
+                let path = checkpoint_path(&dir, c.trial);
+                c.write(&path)
+                    .with_context(|| format!("cannot write checkpoint {}", path.display()))?;
+                if let Some(p) = previous.replace(c.trial) {
+                    prune(&dir, p);
+                }
+            }
+            Ok(())
+        });
+        Ok(Self {
+            tx: Some(tx),
+            thread: Some(thread),
+        })
+    }
+
+    /// Queues checkpoint `c` (of trial `c.trial`); fails if an earlier write failed.
+    pub fn save(&mut self, c: Checkpoint) -> Result<()> {
+        let sent = self.tx.as_ref().is_some_and(|tx| tx.send(c).is_ok());
+        if !sent {
+            return self.finish();
+        }
+        Ok(())
+    }
+
+    /// Waits until every queued checkpoint is written.
+    pub fn finish(&mut self) -> Result<()> {
+        drop(self.tx.take());
+        match self.thread.take() {
+            Some(t) => t
+                .join()
+                .map_err(|_| anyhow!("the checkpoint writer panicked"))?,
+            None => Ok(()),
+        }
+    }
+}

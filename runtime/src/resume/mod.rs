@@ -1,0 +1,176 @@
+//! Resuming a rig run after a crash: `rig run --resume DIR`.
+//!
+//! While a run goes on, the agent process writes a checkpoint of its learned state at the
+//! end of every learning trial ([`agent::checkpoint`], `DIR/checkpoints/trial-NNNNNN.ckpt`,
+//! atomically, from a background thread so the control loop never waits for the disk),
+//! and the supervisor keeps the last two. To resume, [`prepare`] picks the latest trial
+//! `C` that is complete everywhere:
+//!
+//! * `returns.csv` has its row (a row is written only when the trial and its greedy
+//!   evaluations are complete),
+//! * its checkpoint exists (a corrupt one, or one from another configuration, is an
+//!   error, not skipped),
+//! * `run.mcap` (or the `run.mcap.part` a killed supervisor leaves) holds every message up
+//!   to the end of that trial's evaluations, without gaps.
+//!
+//! The new run keeps rows `1..=C` and every message up to the end of trial `C` (copied
+//! into the new `run.mcap`), and continues with trial `C + 1` from the checkpoint: the
+//! plant starts there with the simulated time and the sequence numbers continuing, the
+//! agent restores its state. In lockstep the result is bit for bit that of a run never
+//! interrupted.
+
+use std::path::{Path, PathBuf};
+
+use agent::checkpoint::Checkpoint;
+use anyhow::{Result, anyhow, bail};
+
+use crate::config::ExperimentConfig;
+use crate::experiment::TrialRecord;
+
+mod checkpoints;
+mod recorded;
+
+pub use checkpoints::{CheckpointWriter, checkpoint_dir, checkpoint_path, checkpoints, prune};
+pub use recorded::RecordedMessage;
+use recorded::{Recorded, index, kept, read_recording, read_returns, same_plant};
+
+/// Where a resumed run continues, and what it keeps.
+pub struct ResumePoint {
+    /// The last trial kept (0: none; the run starts afresh).
+    pub trial: u32,
+    /// Simulated learning time at its end \[s\].
+    pub sim_time_s: f64,
+    /// Sequence number of the first new sample.
+    pub first_seq: u64,
+    /// The checkpoint to restore (none when `trial` is 0).
+    pub checkpoint: Option<PathBuf>,
+    /// The rows of `returns.csv` kept.
+    pub records: Vec<TrialRecord>,
+    /// The recorded messages kept, in file order.
+    pub messages: Vec<RecordedMessage>,
+    /// Notes for the user (a recording recovered from a `.part` file, trials redone).
+    pub notes: Vec<String>,
+}
+
+/// traffic, `/driver/...`, exactly when the run was made against one).
+/// Decides where run directory `out` (configuration `cfg`, whose `run.trials` may exceed
+/// the original) continues; see the module documentation.
+///
+/// A run with a sensor or observer other than the defaults cannot be resumed: a
+/// checkpoint holds the agent's state only, not the observer's (a learned model, a
+/// velocity filter) nor where the sensor's noise stream stands. Nor can a run continue on
+/// another plant than it was made on: `external` says whether the resumed part runs
+/// against an external driver, and must match the recording (which holds the driver's
+pub fn prepare(out: &Path, cfg: &ExperimentConfig, external: bool) -> Result<ResumePoint> {
+    resumable(out, cfg)?;
+    let mut notes = Vec::new();
+    let rows = read_returns(&out.join("returns.csv"))?;
+    let done = rows.len() as u32;
+    if done >= cfg.run.trials {
+        bail!(
+            "{}: all {} trials of the run are done; nothing to resume (pass `--trials N` with N > {done} to learn on)",
+            out.display(),
+            cfg.run.trials
+        );
+    }
+    let messages = read_recording(out, &mut notes)?;
+    same_plant(out, &messages, external)?;
+    let dir = checkpoint_dir(out);
+    let available = checkpoints(&dir);
+    let (c, first_seq) = last_complete_trial(cfg, &available, done, &index(&messages)?)
+        .ok_or_else(|| anyhow!("{}: the recording holds no complete trial", out.display()))?;
+    let checkpoint = (c > 0).then(|| checkpoint_path(&dir, c));
+    let sim_time_s = if c > 0 {
+        rows[c as usize - 1].sim_time_s
+    } else {
+        0.0
+    };
+    if let Some(path) = &checkpoint {
+        check_checkpoint(path, cfg, (c, sim_time_s), &available)?;
+    }
+    if c < done {
+        notes.push(format!(
+            "trials {}..={done} are redone: the last trial complete in the checkpoints and the recording is {c}",
+            c + 1
+        ));
+    }
+    Ok(ResumePoint {
+        trial: c,
+        sim_time_s,
+        first_seq,
+        checkpoint,
+        records: rows[..c as usize].to_vec(),
+        messages: kept(messages, first_seq),
+        notes,
+    })
+}
+
+/// Refuses a run whose state a checkpoint does not hold all of: an observer or sensor
+/// other than the defaults, or delays that cannot continue mid-run.
+fn resumable(out: &Path, cfg: &ExperimentConfig) -> Result<()> {
+    if !cfg.observer.is_default() {
+        bail!(
+            "{}: cannot resume a run with `[observer]` sensor {} / observer {}: checkpoints hold the agent's state only, not the observer's (its learned model, its filter) nor the sensor's noise stream; start a new run",
+            out.join("config.toml").display(),
+            cfg.observer.sensor,
+            cfg.observer.observer
+        );
+    }
+    crate::experiment::resumable_delays(cfg)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", out.join("config.toml").display()))
+}
+
+/// The last trial, at most `done`, that has a checkpoint (`available`; trial 0 needs
+/// none) and whose end, with its greedy evaluations, is complete in the recording; with
+/// the sequence number of the sample after it.
+fn last_complete_trial(
+    cfg: &ExperimentConfig,
+    available: &[u32],
+    done: u32,
+    recorded: &Recorded,
+) -> Option<(u32, u64)> {
+    let starts = plant::Task::new(cfg.system).initial_states.len();
+    let evals = |t: u32| {
+        if cfg.run.eval_every > 0 && t.is_multiple_of(cfg.run.eval_every) {
+            starts
+        } else {
+            0
+        }
+    };
+    available
+        .iter()
+        .copied()
+        .filter(|&t| t <= done)
+        .rev()
+        .chain(std::iter::once(0))
+        .find_map(|c| recorded.end_of(c, evals(c)).map(|q| (c, q)))
+}
+
+/// Checks that the checkpoint at `path` is of this experiment and of trial `c` ending at
+/// simulated time `sim_time_s`, as `returns.csv` says; names an older one of `available`
+/// to fall back to when it cannot be read.
+fn check_checkpoint(
+    path: &Path,
+    cfg: &ExperimentConfig,
+    (c, sim_time_s): (u32, f64),
+    available: &[u32],
+) -> Result<()> {
+    let ck =
+        Checkpoint::read(path).map_err(|e| match available.iter().rev().find(|&&t| t < c) {
+            Some(t) => {
+                anyhow!("cannot resume: {e}; remove it to resume from the checkpoint of trial {t}")
+            }
+            None => anyhow!("cannot resume: {e}"),
+        })?;
+    ck.check_origin(&cfg.origin(0))
+        .map_err(|e| anyhow!("cannot resume from {}: {e}", path.display()))?;
+    if ck.trial != c || ck.sim_time_s.to_bits() != sim_time_s.to_bits() {
+        bail!(
+            "cannot resume: {} is of trial {} at {} s, but returns.csv has trial {c} at {sim_time_s} s",
+            path.display(),
+            ck.trial,
+            ck.sim_time_s
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,222 @@
+//! What a run left behind: its `returns.csv` and its recording, read back, and where
+//! each trial ends in the recording.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use anyhow::{Context, Result, anyhow, bail};
+use serde::Deserialize;
+use wire::flags;
+
+use crate::experiment::TrialRecord;
+
+/// One message of a recording, as stored.
+pub struct RecordedMessage {
+    /// Its topic.
+    pub topic: String,
+    /// Log time \[ns\].
+    pub log_time: u64,
+    /// Publish time \[ns\].
+    pub publish_time: u64,
+    /// The JSON message.
+    pub data: Vec<u8>,
+}
+
+#[derive(Deserialize)]
+struct Head {
+    seq: u64,
+    #[serde(default)]
+    trial: u64,
+    #[serde(default)]
+    flags: u64,
+}
+
+/// Reads the rows of a `returns.csv`.
+pub(super) fn read_returns(path: &Path) -> Result<Vec<TrialRecord>> {
+    let mut reader = csv::Reader::from_path(path).with_context(|| {
+        format!(
+            "{}: cannot read (is this a `rig run` directory?)",
+            path.display()
+        )
+    })?;
+    let mut rows = Vec::new();
+    for (i, rec) in reader.records().enumerate() {
+        let line = i + 2;
+        let rec = rec.with_context(|| format!("{}:{line}: unreadable row", path.display()))?;
+        let field = |j: usize| rec.get(j).unwrap_or("");
+        let num = |j: usize| -> Result<f64> {
+            field(j)
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    anyhow!(
+                        "{}:{line}: column {} is not a number: {:?}",
+                        path.display(),
+                        j + 1,
+                        field(j)
+                    )
+                })
+        };
+        let trial: u32 = field(1).parse().map_err(|_| {
+            anyhow!(
+                "{}:{line}: trial {:?} is not a trial number",
+                path.display(),
+                field(1)
+            )
+        })?;
+        if trial as usize != rows.len() + 1 {
+            bail!(
+                "{}:{line}: trial {trial} where trial {} was expected: the file was edited",
+                path.display(),
+                rows.len() + 1
+            );
+        }
+        rows.push(TrialRecord {
+            run: 0,
+            trial,
+            sim_time_s: num(2)?,
+            ret: num(3)?,
+            greedy: if field(4).is_empty() {
+                None
+            } else {
+                Some(num(4)?)
+            },
+        });
+    }
+    Ok(rows)
+}
+
+/// Reads every message of the recording in `out` that can be read: `run.mcap`, or the
+/// `run.mcap.part` a killed supervisor leaves (its completed chunks).
+pub(super) fn read_recording(out: &Path, notes: &mut Vec<String>) -> Result<Vec<RecordedMessage>> {
+    let full = out.join("run.mcap");
+    let part = out.join("run.mcap.part");
+    let path = if full.exists() { full } else { part };
+    let bytes = std::fs::read(&path).with_context(|| {
+        format!(
+            "{}: cannot read the run's recording, so the recorded trials cannot be kept",
+            path.display()
+        )
+    })?;
+    let mut messages = Vec::new();
+    for m in mcap::MessageStream::new(&bytes)? {
+        match m {
+            Ok(m) => messages.push(RecordedMessage {
+                topic: m.channel.topic.clone(),
+                log_time: m.log_time,
+                publish_time: m.publish_time,
+                data: m.data.into_owned(),
+            }),
+            Err(e) => {
+                notes.push(format!(
+                    "{} ends in an unfinished chunk ({e}); kept the {} messages before it",
+                    path.display(),
+                    messages.len()
+                ));
+                break;
+            }
+        }
+    }
+    Ok(messages)
+}
+
+/// Refuses to continue a run on another plant than it was made on: a hardware run
+/// finished in the simulator (or the reverse) would mix two systems in one learning
+/// curve.
+pub(super) fn same_plant(out: &Path, messages: &[RecordedMessage], external: bool) -> Result<()> {
+    let recorded = messages.iter().any(|m| m.topic.starts_with("/driver/"));
+    match (recorded, external) {
+        (true, false) => bail!(
+            "{} was run against an external driver; resume it with `--plant external` and the same `--driver`",
+            out.display()
+        ),
+        (false, true) => bail!(
+            "{} was run with the simulated plant; resume it without `--plant external`",
+            out.display()
+        ),
+        _ => Ok(()),
+    }
+}
+
+/// What the recording holds, per learning trial.
+pub(super) struct Recorded {
+    /// Per main topic, the sequence numbers present.
+    seqs: [BTreeSet<u64>; 3],
+    /// `(seq, trial, flags)` of every measurement, in file order.
+    measurements: Vec<(u64, u64, u64)>,
+}
+
+const MAIN: [&str; 3] = ["/plant/measurement", "/observer/estimate", "/agent/action"];
+
+pub(super) fn index(messages: &[RecordedMessage]) -> Result<Recorded> {
+    let mut r = Recorded {
+        seqs: Default::default(),
+        measurements: Vec::new(),
+    };
+    for m in messages {
+        let Some(i) = MAIN.iter().position(|t| *t == m.topic) else {
+            continue;
+        };
+        let h: Head = serde_json::from_slice(&m.data)
+            .with_context(|| format!("run.mcap: unreadable message on {}", m.topic))?;
+        r.seqs[i].insert(h.seq);
+        if i == 0 {
+            r.measurements.push((h.seq, h.trial, h.flags));
+        }
+    }
+    Ok(r)
+}
+
+impl Recorded {
+    /// The first sequence number after trial `c` and its evaluations, if the recording
+    /// holds all of them: every sample up to there on all three topics, and the ends of
+    /// the learning trial and of its `evals` greedy trials.
+    pub(super) fn end_of(&self, c: u32, evals: usize) -> Option<u64> {
+        let c = u64::from(c);
+        let inside = |&&(_, t, f): &&(u64, u64, u64)| t <= c && f & flags::SHUTDOWN == 0;
+        let q = self
+            .measurements
+            .iter()
+            .filter(inside)
+            .map(|m| m.0 + 1)
+            .max()
+            .unwrap_or(0);
+        let ends = self
+            .measurements
+            .iter()
+            .filter(|&&(_, t, f)| t == c && f & flags::END != 0 && f & flags::SHUTDOWN == 0)
+            .count();
+        let complete = self.seqs.iter().all(|s| s.range(..q).count() as u64 == q);
+        (c == 0 || ends == 1 + evals)
+            .then_some(q)
+            .filter(|_| complete)
+    }
+}
+
+/// The recorded messages before sample `first_seq`, which the resumed run keeps: the
+/// loop's topics and their timing by sequence number (without the shutdown), the other
+/// channels (an external driver's traffic, the ground truth) up to the last kept
+/// measurement's log time.
+pub(super) fn kept(messages: Vec<RecordedMessage>, first_seq: u64) -> Vec<RecordedMessage> {
+    let last_log_time = messages
+        .iter()
+        .filter(|m| m.topic == MAIN[0])
+        .filter_map(|m| {
+            let h: Head = serde_json::from_slice(&m.data).ok()?;
+            (h.seq < first_seq).then_some(m.log_time)
+        })
+        .max()
+        .unwrap_or(0);
+    let keep = |m: &RecordedMessage| -> bool {
+        let head = || serde_json::from_slice::<Head>(&m.data).ok();
+        if MAIN.contains(&m.topic.as_str()) {
+            head().is_some_and(|h| h.seq < first_seq && h.flags & flags::SHUTDOWN == 0)
+        } else if m.topic.starts_with("/timing/") {
+            head().is_some_and(|h| h.seq < first_seq)
+        } else {
+            first_seq > 0 && m.log_time <= last_log_time
+        }
+    };
+    messages.into_iter().filter(keep).collect()
+}
