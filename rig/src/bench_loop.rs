@@ -1,41 +1,59 @@
-//! `rig bench-loop`: the lockstep loop next to a raw iceoryx2 ping-pong, and the
-//! ping-pong's echo side.
+//! `rig bench-loop`: the three-process loop against one process and against the
+//! transport's limits; and the ping-pong's processes (`rig pong`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args as Flags;
+use runtime::process::{Wait, WaitKind};
 
 #[derive(Flags)]
 pub struct Args {
-    /// Samples to time in each measurement (after 1000 / one trial of warm-up).
-    #[arg(long, default_value_t = 20_000)]
-    samples: usize,
+    /// Trials of the default experiment per run.
+    #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u32).range(2..))]
+    trials: u32,
+    /// Runs of each kind (one process, three processes, three without the recorder),
+    /// alternating; medians are reported.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=100))]
+    repetitions: u64,
+    /// Round trips timed per ping-pong (after 1000 of warm-up).
+    #[arg(long, default_value_t = 20_000, value_parser = clap::value_parser!(u64).range(1..))]
+    samples: u64,
+    /// How the processes wait (as `rig run` in lockstep).
+    #[command(flatten)]
+    wait: Wait,
     /// Output directory.
     #[arg(long, value_name = "DIR", default_value = "out/bench-loop")]
     out: PathBuf,
+    /// Print nothing but the summary.
+    #[arg(long)]
+    quiet: bool,
 }
 
 /// Runs the command.
 pub fn main(args: &Args) -> ExitCode {
-    match bench::loop_bench::bench_loop(&args.out, args.samples) {
+    let opts = bench::loop_bench::LoopOptions {
+        out: args.out.clone(),
+        trials: args.trials,
+        repetitions: args.repetitions as usize,
+        samples: args.samples as usize,
+        waiting: args.wait.waiting(crate::run::LOCKSTEP_WAIT),
+    };
+    let progress = |what: &str| {
+        if !args.quiet {
+            eprintln!("rig bench-loop: {what} ...");
+        }
+    };
+    match bench::loop_bench::bench_loop(&opts, &progress) {
         Ok(r) => {
-            let (s, w) = (&r.step, &r.raw_rtt);
-            println!(
-                "raw iceoryx2 round trip (2 hops): p50 {:.1} µs  p90 {:.1}  p99 {:.1}  p99.9 {:.1}  max {:.1}  (n = {})",
-                w.p50, w.p90, w.p99, w.p999, w.max, w.n
-            );
-            println!(
-                "lockstep step (3 hops + work):   p50 {:.1} µs  p90 {:.1}  p99 {:.1}  p99.9 {:.1}  max {:.1}  (n = {})",
-                s.p50, s.p90, s.p99, s.p999, s.max, s.n
-            );
-            println!(
-                "step / three raw one-way hops (medians): {:.2} (target ≤ 1.5); {:.0} lockstep steps/s",
-                r.ratio(),
-                1e6 / s.p50
-            );
-            println!("wrote {}/loop.csv", args.out.display());
-            ExitCode::SUCCESS
+            print!("{}", r.summary());
+            println!("wrote {}/{{loop.csv, summary.txt}}", args.out.display());
+            if r.identical {
+                ExitCode::SUCCESS
+            } else {
+                eprintln!("error: rig run and rig learn --runs 1 wrote different returns");
+                ExitCode::FAILURE
+            }
         }
         Err(e) => {
             eprintln!("error: {e:#}");
@@ -44,9 +62,36 @@ pub fn main(args: &Args) -> ExitCode {
     }
 }
 
-/// The echo side of the raw ping-pong (`rig pong`, hidden).
-pub fn pong(run_id: &str, pin_cpus: bool) -> ExitCode {
-    match bench::loop_bench::pong(run_id, pin_cpus) {
+/// One side of the ping-pong (`rig pong`, hidden).
+#[derive(Flags)]
+pub struct PongArgs {
+    /// Run id of the ping-pong.
+    #[arg(long)]
+    run_id: String,
+    /// Pin the echo to the last CPU (the plant's under `--pin-cpus`), the pinger to the
+    /// others.
+    #[arg(long)]
+    pin_cpus: bool,
+    /// How to wait for the next message.
+    #[command(flatten)]
+    wait: Wait,
+    /// Be the pinger: time this many round trips.
+    #[arg(long, requires = "rtt_out")]
+    ping: Option<usize>,
+    /// With `--ping`: write the round trips here \[ns, one per line\].
+    #[arg(long, value_name = "FILE")]
+    rtt_out: Option<PathBuf>,
+}
+
+/// Runs one side of the ping-pong.
+pub fn pong(args: &PongArgs) -> ExitCode {
+    let ping = args.ping.zip(args.rtt_out.as_deref());
+    match bench::loop_bench::pong(
+        &args.run_id,
+        args.pin_cpus,
+        args.wait.waiting(WaitKind::Block),
+        ping,
+    ) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");

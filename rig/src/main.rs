@@ -56,8 +56,10 @@ enum Command {
     /// Eq. 3.16) by dynamic programming on a grid, run the DP's policy on the plant, and
     /// write its trajectory to DIR/optimal.csv (t, angle, velocity, u, reward).
     Optimal(optimal::Args),
-    /// Measure the three-process lockstep loop (trivial agent, no recorder) next to a
-    /// raw iceoryx2 ping-pong between two processes, in the same run; writes loop.csv.
+    /// Measure what the three-process loop costs: the default experiment in one process,
+    /// as three processes with and without the recorder (wall and CPU time, their
+    /// ratios), each lockstep step, and a ping-pong of two processes waiting as the loop
+    /// does, blocking on events and busy-polling; writes loop.csv and summary.txt.
     BenchLoop(bench_loop::Args),
     /// Measure the latency budget of the three-process loop in real time (angle sensor,
     /// an observer, the default learner, recorded): per hop and per stage percentiles
@@ -73,16 +75,9 @@ enum Command {
     /// (the table and the acceptance checks at 10 ms, one-sided Welch t-test) and each
     /// cell's `rig learn` output.
     DelayStudy(delay_study::Args),
-    /// The echo side of `rig bench-loop`'s raw ping-pong.
+    /// One side of `rig bench-loop`'s ping-pong.
     #[command(hide = true)]
-    Pong {
-        /// Run id of the ping-pong.
-        #[arg(long)]
-        run_id: String,
-        /// Pin to the last CPU (the plant's under `--pin-cpus`).
-        #[arg(long)]
-        pin_cpus: bool,
-    },
+    Pong(bench_loop::PongArgs),
     /// Regenerate the thesis's learning-curve figures (3.12, 3.17, 3.22, 3.23, 4.4, 5.5,
     /// 5.9, 6.1, 6.5) from the presets with the thesis's numbers of runs, and write
     /// DIR/REPORT.md: per figure the plot (PNG, SVG), "thesis says / we measured" and the
@@ -105,7 +100,7 @@ fn main() -> ExitCode {
         Command::SimDriver(args) => sim_driver::main(&args),
         Command::Optimal(args) => optimal::main(&args),
         Command::BenchLoop(args) => bench_loop::main(&args),
-        Command::Pong { run_id, pin_cpus } => bench_loop::pong(&run_id, pin_cpus),
+        Command::Pong(args) => bench_loop::pong(&args),
         Command::Latency(args) => latency::main(&args),
         Command::DelayStudy(args) => delay_study::main(&args),
         Command::Reproduce(args) => reproduce::main(&args),

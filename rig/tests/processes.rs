@@ -102,27 +102,65 @@ fn after_kill_9_of_all_three_processes_the_next_run_just_works() {
 }
 
 #[test]
-fn bench_loop_measures_both_loops() {
-    let dir = tmp("bench-loop");
-    let out = ok(rig()
-        .args(["bench-loop", "--samples", "1500", "--out"])
-        .arg(&dir)
-        .output()
-        .unwrap());
-    let text = String::from_utf8(out.stdout).unwrap();
-    assert!(
-        text.contains("raw iceoryx2 round trip") && text.contains("lockstep step"),
-        "{text}"
-    );
-    let csv = std::fs::read_to_string(dir.join("loop.csv")).unwrap();
-    let rows: Vec<&str> = csv.lines().collect();
-    assert_eq!(rows[0], "measurement,n,p50_us,p90_us,p99_us,p999_us,max_us");
-    assert!(
-        rows[1].starts_with("raw_round_trip,1500,") && rows[2].starts_with("lockstep_step,"),
-        "{csv}"
-    );
-    let p50: f64 = rows[2].split(',').nth(2).unwrap().parse().unwrap();
-    assert!(p50 > 0.0 && p50.is_finite());
+fn bench_loop_measures_the_loop_against_one_process_and_the_transport() {
+    // A short measurement with every waiting strategy the loop may use: each run's
+    // returns equal the in-process ones (the command fails otherwise), and every
+    // measurement is in loop.csv.
+    for wait in [
+        &["--wait", "block"][..],
+        &["--wait", "yield"],
+        &["--wait", "spin", "--wait-us", "50"],
+    ] {
+        let dir = tmp(&format!("bench-loop-{}", wait[1]));
+        let out = ok(rig()
+            .args([
+                "bench-loop",
+                "--trials",
+                "4",
+                "--repetitions",
+                "2",
+                "--samples",
+                "300",
+                "--quiet",
+                "--out",
+            ])
+            .arg(&dir)
+            .args(wait)
+            .output()
+            .unwrap());
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert!(text.contains("three processes / one process: "), "{text}");
+        assert!(
+            text.contains("byte for byte") && !text.contains("DID NOT"),
+            "{text}"
+        );
+        let csv = std::fs::read_to_string(dir.join("loop.csv")).unwrap();
+        for kind in ["in_process", "three_processes", "unrecorded"] {
+            let rows: Vec<Vec<f64>> = csv
+                .lines()
+                .filter(|l| l.starts_with(&format!("{kind},")))
+                .map(|l| l.split(',').skip(2).map(|v| v.parse().unwrap()).collect())
+                .collect();
+            assert_eq!(rows.len(), 2, "{kind}: {csv}");
+            assert!(
+                rows.iter().all(|r| r[0] > 0.0 && r[1] > 0.0),
+                "{kind}: {csv}"
+            );
+        }
+        for kind in [
+            "lockstep_step,",
+            "raw_round_trip_waiting,300,",
+            "raw_round_trip_block,300,",
+            "raw_round_trip_poll,300,",
+        ] {
+            let row = csv
+                .lines()
+                .find(|l| l.starts_with(kind))
+                .unwrap_or_else(|| panic!("{kind}: {csv}"));
+            let p50: f64 = row.split(',').nth(2).unwrap().parse().unwrap();
+            assert!(p50 > 0.0 && p50.is_finite(), "{row}");
+        }
+    }
 }
 
 #[test]
@@ -174,6 +212,19 @@ fn realtime_runs_on_the_plants_clock_and_counts_misses() {
         .output()
         .unwrap();
     assert_eq!(bad.status.code(), Some(2));
+    // Polling without end leaves no process woken: the realtime plant, which sleeps
+    // until its sampling instant, would never see the action; refused in one line.
+    let bad = rig()
+        .args(["run", "--timing", "realtime", "--wait", "yield", "--out"])
+        .arg(dir.join("yield"))
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.contains("`--wait spin|yield` without `--wait-us`") && err.lines().count() == 1,
+        "{err}"
+    );
 }
 
 #[test]

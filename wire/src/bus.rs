@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use iceoryx2::prelude::*;
 
-use crate::{Error, Qos, RUN_QOS, Rx, Tx, describe_service, type_name_of};
+use crate::{Error, Qos, RUN_QOS, Rx, Tx, Waiting, describe_service, type_name_of};
 
 /// One process's connection to a run.
 pub struct Bus {
@@ -14,6 +14,8 @@ pub struct Bus {
     /// Processes of the run seen alive so far.
     seen: std::cell::RefCell<std::collections::BTreeSet<String>>,
     primed: std::cell::Cell<bool>,
+    /// How this process's receivers wait, and so whether its senders wake theirs.
+    waiting: Waiting,
 }
 
 impl Bus {
@@ -48,7 +50,17 @@ impl Bus {
             run_id: run_id.to_string(),
             seen: Default::default(),
             primed: Default::default(),
+            waiting: Waiting::Block,
         })
+    }
+
+    /// This connection with its receivers waiting as `waiting` says (default
+    /// [`Waiting::Block`]); its senders then wake their receivers only if the run's
+    /// processes may block ([`Waiting::needs_wake_up`]: all processes of a run wait the
+    /// same way).
+    pub fn with_waiting(mut self, waiting: Waiting) -> Self {
+        self.waiting = waiting;
+        self
     }
 
     /// The roles of the live processes of run `run_id`, sorted (e.g. `["agent",
@@ -167,6 +179,7 @@ impl Bus {
             publisher,
             notifier,
             service: factory,
+            wake: self.waiting.needs_wake_up(),
         })
     }
 
@@ -189,6 +202,7 @@ impl Bus {
         Ok(Rx {
             subscriber,
             listener,
+            waiting: self.waiting,
         })
     }
 

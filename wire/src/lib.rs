@@ -11,7 +11,8 @@
 //! sized for the largest system ([`MAX_X`] state and [`MAX_U`] action components), with a
 //! versioned `#[type_name]` — iceoryx2 checks only name, size and alignment, so a layout
 //! change must change the name. Each publish-subscribe service has an event service of
-//! the same name: receivers block on it instead of spinning. Service names live under
+//! the same name: receivers may block on it instead of polling ([`Waiting`]). Service
+//! names live under
 //! `rig/<run id>/`, so runs on one host never see each other.
 //!
 //! Timestamps are `CLOCK_MONOTONIC` nanoseconds ([`now_ns`]), shared by all processes on
@@ -22,12 +23,14 @@ mod clock;
 mod messages;
 mod ports;
 mod service;
+mod waiting;
 
 pub use bus::Bus;
 pub use clock::now_ns;
 pub use messages::{Action, Estimate, Header, MAX_U, MAX_X, Measurement, Truth, flags, topic};
 pub use ports::{Rx, Tx};
 pub use service::{BUFFER, Qos, RUN_QOS, describe_service, type_name_of};
+pub use waiting::{FOREVER, Waiting};
 
 /// Errors of the transport.
 pub type Error = Box<dyn std::error::Error + Send + Sync>;

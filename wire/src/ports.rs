@@ -9,7 +9,7 @@ use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 
-use crate::{Bus, Error, now_ns};
+use crate::{Bus, Error, FOREVER, Waiting, now_ns};
 
 /// Sends messages of type `T` on a topic and wakes its receivers.
 pub struct Tx<T: std::fmt::Debug + ZeroCopySend + 'static> {
@@ -17,19 +17,24 @@ pub struct Tx<T: std::fmt::Debug + ZeroCopySend + 'static> {
     pub(crate) notifier: Notifier<ipc::Service>,
     pub(crate) service:
         iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>,
+    /// Whether sending wakes the receivers (not needed when they poll).
+    pub(crate) wake: bool,
 }
 
 /// Receives messages of type `T` from a topic.
 pub struct Rx<T: std::fmt::Debug + ZeroCopySend + 'static> {
     pub(crate) subscriber: Subscriber<ipc::Service, T, ()>,
     pub(crate) listener: Listener<ipc::Service>,
+    pub(crate) waiting: Waiting,
 }
 
 impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Tx<T> {
-    /// Publishes `msg` and wakes the receivers.
+    /// Publishes `msg` and wakes the receivers (unless they poll, [`Waiting::Yield`]).
     pub fn send(&self, msg: T) -> Result<(), Error> {
         self.publisher.loan_uninit()?.write_payload(msg).send()?;
-        self.notifier.notify()?;
+        if self.wake {
+            self.notifier.notify()?;
+        }
         Ok(())
     }
 
@@ -125,41 +130,96 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
         Ok(())
     }
 
-    /// The next message, waiting as long as it takes; errors on Ctrl-C, when a process
-    /// of the run has stopped or died (checked every 100 ms of waiting), or when no
-    /// message arrives for `silence`.
+    /// The next message, waiting as long as it takes, the way the bus was told
+    /// ([`Waiting`]); errors on Ctrl-C, when a process of the run has stopped or died
+    /// (checked every 100 ms of waiting), or when no message arrives for `silence`.
     pub fn recv(&self, bus: &Bus, silence: Duration) -> Result<T, Error> {
         let t0 = std::time::Instant::now();
         loop {
-            if let Some(m) = self.recv_timeout(Duration::from_millis(100))? {
+            let m = match self.waiting {
+                Waiting::Block => self.recv_timeout(CHECK_EVERY)?,
+                Waiting::Spin(bound) => self.poll_then_block(bound, std::hint::spin_loop)?,
+                Waiting::Yield(bound) => self.poll_then_block(bound, std::thread::yield_now)?,
+            };
+            if let Some(m) = m {
                 bus.prime();
                 return Ok(m);
             }
-            if bus.interrupted() {
-                return Err("interrupted".into());
-            }
-            let lost = bus.lost_peers();
-            if !lost.is_empty() {
-                // A message sent before its sender left is in the queue by now; one that
-                // a process in between (the observer) still forwards comes within
-                // moments — the plant ends a run by sending SHUTDOWN and exiting.
-                if let Some(m) = self.recv_timeout(PASSING_ON)? {
-                    bus.prime();
-                    return Ok(m);
-                }
-                let who = match lost.as_slice() {
-                    [one] => format!("the {one} process"),
-                    [init @ .., last] => format!("the {} and {last} processes", init.join(", ")),
-                    [] => unreachable!(),
-                };
-                return Err(format!("{who} of this run stopped").into());
-            }
-            if t0.elapsed() > silence {
-                return Err(format!("no message for {silence:?}: a peer process stopped").into());
+            if let Some(m) = self.peers_gone(bus, t0, silence)? {
+                bus.prime();
+                return Ok(m);
             }
         }
     }
+
+    /// Polls for up to `bound` (at most [`CHECK_EVERY`] at a time), calling `pause`
+    /// between polls; then, unless the bound is [`FOREVER`], blocks for the rest of
+    /// [`CHECK_EVERY`].
+    fn poll_then_block(&self, bound: Duration, pause: fn()) -> Result<Option<T>, Error> {
+        if let Some(m) = self.poll(bound.min(CHECK_EVERY), pause)? {
+            if bound != FOREVER {
+                // The message's wake-up is pending: take it, so that wake-ups do not pile
+                // up while the receiver polls.
+                self.listener.try_wait(|_| {})?;
+            }
+            return Ok(Some(m));
+        }
+        if bound >= CHECK_EVERY {
+            return Ok(None);
+        }
+        self.recv_timeout(CHECK_EVERY - bound)
+    }
+
+    /// Polls for up to `bound`, calling `pause` between polls.
+    fn poll(&self, bound: Duration, pause: fn()) -> Result<Option<T>, Error> {
+        let t0 = std::time::Instant::now();
+        loop {
+            if let Some(m) = self.try_recv()? {
+                return Ok(Some(m));
+            }
+            if t0.elapsed() >= bound {
+                return Ok(None);
+            }
+            pause();
+        }
+    }
+
+    /// After a wait without a message: an error if the run was interrupted, a peer
+    /// stopped (unless what it sent last comes through after all) or nothing came since
+    /// `t0` for `silence`.
+    fn peers_gone(
+        &self,
+        bus: &Bus,
+        t0: std::time::Instant,
+        silence: Duration,
+    ) -> Result<Option<T>, Error> {
+        if bus.interrupted() {
+            return Err("interrupted".into());
+        }
+        let lost = bus.lost_peers();
+        if !lost.is_empty() {
+            // A message sent before its sender left is in the queue by now; one that a
+            // process in between (the observer) still forwards comes within moments —
+            // the plant ends a run by sending SHUTDOWN and exiting.
+            if let Some(m) = self.recv_timeout(PASSING_ON)? {
+                return Ok(Some(m));
+            }
+            let who = match lost.as_slice() {
+                [one] => format!("the {one} process"),
+                [init @ .., last] => format!("the {} and {last} processes", init.join(", ")),
+                [] => unreachable!(),
+            };
+            return Err(format!("{who} of this run stopped").into());
+        }
+        if t0.elapsed() > silence {
+            return Err(format!("no message for {silence:?}: a peer process stopped").into());
+        }
+        Ok(None)
+    }
 }
+
+/// How often a waiting receiver checks on the run's processes.
+const CHECK_EVERY: Duration = Duration::from_millis(100);
 
 #[cfg(test)]
 mod tests {

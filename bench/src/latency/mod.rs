@@ -215,7 +215,13 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     if opts.scheduling.pin_cpus {
         runtime::process::pin(runtime::process::Cpus::Rest)?;
     }
-    let mut raw = raw_round_trips(&exe, &opts.out, opts.raw_samples, opts.scheduling.pin_cpus)?;
+    let mut raw = raw_round_trips(
+        &exe,
+        &opts.out,
+        opts.raw_samples,
+        opts.scheduling.pin_cpus,
+        wire::Waiting::Block,
+    )?;
     let raw_rtt = Stats::of(&mut raw);
 
     let run_dir = opts.out.join("run");
@@ -304,6 +310,7 @@ fn run_realtime(
             cycles_out: Some(cycles_path.to_owned()),
             scheduling: opts.scheduling,
             spin: opts.spin,
+            waiting: wire::Waiting::Block,
         },
     )?;
     let machine = before.zip(Counters::read()).map(|(b, a)| {

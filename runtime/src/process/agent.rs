@@ -6,7 +6,7 @@ use ::observer::config::ObserverMode;
 use ::observer::timing::{Call, ToAgent, act};
 use ::plant::Task;
 use anyhow::{Result, anyhow, bail};
-use wire::{Action, Bus, Estimate, flags, now_ns, topic};
+use wire::{Action, Estimate, flags, now_ns, topic};
 
 use super::{AgentArgs, SILENCE, STARTUP, pack, wire_err};
 use crate::config::ExperimentConfig;
@@ -21,7 +21,7 @@ pub fn run(args: &AgentArgs) -> Result<()> {
     }
     let cfg = node.config()?;
     let mut learner = Learner::new(args, &cfg)?;
-    let bus = Bus::join(&node.run_id, "agent").map_err(wire_err)?;
+    let bus = node.join("agent")?;
     let estimates = bus.rx::<Estimate>(topic::ESTIMATE).map_err(wire_err)?;
     let out = bus.tx::<Action>(topic::ACTION).map_err(wire_err)?;
     out.wait_for_receivers(node.receivers, STARTUP, &bus)

@@ -3,9 +3,11 @@
 //! [`AgentArgs`]).
 
 use std::path::PathBuf;
+use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Args;
+use wire::{Bus, FOREVER, Waiting};
 
 use crate::config::{ExperimentConfig, Overrides, resolve};
 
@@ -60,6 +62,60 @@ impl Default for Spin {
     }
 }
 
+/// How the loop's processes wait for their next message (`--wait`, [`Waiting`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum WaitKind {
+    /// Sleep until woken: no CPU while waiting, an operating-system wake-up per message.
+    Block,
+    /// Poll with the CPU's spin hint: for a machine with a core per process.
+    Spin,
+    /// Poll, handing the CPU to the other processes between polls.
+    Yield,
+}
+
+/// How a process waits for its next message: a flag of `rig run` and of each node.
+#[derive(Args, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Wait {
+    /// How each process waits for its next message: `block` sleeps until woken (no CPU
+    /// while waiting, an operating-system wake-up per message); `spin` polls with the
+    /// CPU's spin hint (for a core per process); `yield` polls and hands the CPU to the
+    /// other processes between polls. Polling lasts `--wait-us`, then blocks [rig run's
+    /// default: yield in lockstep, block in real time and with an external driver; a
+    /// node's: block].
+    #[arg(long, value_enum, value_name = "HOW")]
+    pub wait: Option<WaitKind>,
+    /// With `--wait spin` or `yield`: how long to poll before blocking [µs; default:
+    /// poll without end, and senders do not wake their receivers].
+    #[arg(long, value_name = "US")]
+    pub wait_us: Option<u64>,
+}
+
+impl Wait {
+    /// The waiting asked for, `default` if none was.
+    pub fn waiting(&self, default: WaitKind) -> Waiting {
+        let bound = self.wait_us.map_or(FOREVER, Duration::from_micros);
+        match self.wait.unwrap_or(default) {
+            WaitKind::Block => Waiting::Block,
+            WaitKind::Spin => Waiting::Spin(bound),
+            WaitKind::Yield => Waiting::Yield(bound),
+        }
+    }
+
+    /// The flags that give a node `waiting`.
+    pub fn process_args(waiting: Waiting) -> Vec<String> {
+        let (how, bound) = match waiting {
+            Waiting::Block => ("block", None),
+            Waiting::Spin(d) => ("spin", Some(d)),
+            Waiting::Yield(d) => ("yield", Some(d)),
+        };
+        let mut args = vec!["--wait".to_string(), how.to_string()];
+        if let Some(d) = bound.filter(|&d| d != FOREVER) {
+            args.extend(["--wait-us".to_string(), d.as_micros().to_string()]);
+        }
+        args
+    }
+}
+
 /// Command-line arguments every node takes.
 #[derive(Args, Debug, Clone)]
 pub struct NodeArgs {
@@ -82,9 +138,19 @@ pub struct NodeArgs {
     /// How the realtime loop is scheduled.
     #[command(flatten)]
     pub scheduling: Scheduling,
+    /// How the process waits for its next message.
+    #[command(flatten)]
+    pub wait: Wait,
 }
 
 impl NodeArgs {
+    /// Joins the run as process `role`, waiting as `--wait` says.
+    pub fn join(&self, role: &str) -> Result<Bus> {
+        Ok(Bus::join(&self.run_id, role)
+            .map_err(super::wire_err)?
+            .with_waiting(self.wait.waiting(WaitKind::Block)))
+    }
+
     /// Reads and validates the configuration.
     pub fn config(&self) -> Result<ExperimentConfig> {
         let text = std::fs::read_to_string(&self.config)

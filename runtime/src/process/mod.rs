@@ -28,7 +28,9 @@ use std::time::Duration;
 
 use anyhow::Result;
 
-pub use args::{AgentArgs, NodeArgs, ObserverArgs, PlantArgs, SPIN_US, Scheduling, Spin};
+pub use args::{
+    AgentArgs, NodeArgs, ObserverArgs, PlantArgs, SPIN_US, Scheduling, Spin, Wait, WaitKind,
+};
 
 /// How long a process waits for a message before deciding a peer has died.
 pub const SILENCE: Duration = Duration::from_secs(10);

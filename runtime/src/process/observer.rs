@@ -9,7 +9,7 @@ use std::sync::Arc;
 use ::observer::timing::{Call, Sample};
 use ::plant::Task;
 use anyhow::Result;
-use wire::{Bus, Estimate, Measurement, flags, now_ns, topic};
+use wire::{Estimate, Measurement, flags, now_ns, topic};
 
 use super::{ObserverArgs, SILENCE, STARTUP, pack, wire_err};
 
@@ -50,7 +50,7 @@ pub fn run(args: &ObserverArgs) -> Result<()> {
     let cfg = args.config()?;
     let task = Arc::new(Task::new(cfg.system));
     let mut front = crate::experiment::front(&task, &cfg);
-    let bus = Bus::join(&args.run_id, "observer").map_err(wire_err)?;
+    let bus = args.join("observer")?;
     let measurements = bus
         .rx::<Measurement>(topic::MEASUREMENT)
         .map_err(wire_err)?;

@@ -25,7 +25,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow};
 use driver::contract::{DriverInfo, DriverWatch};
-use wire::Bus;
+use wire::{Bus, Waiting};
 
 use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
@@ -66,6 +66,8 @@ pub struct RunOptions {
     pub scheduling: Scheduling,
     /// How the plant waits for a sampling instant (realtime, simulated plant only).
     pub spin: Spin,
+    /// How the three processes wait for their next message.
+    pub waiting: Waiting,
 }
 
 /// An external driver in place of the simulated plant (`rig run --plant external`).

@@ -8,6 +8,7 @@ use std::process::{Command, Stdio};
 
 use anyhow::{Context, Result};
 
+use crate::process::Wait;
 use crate::resume::ResumePoint;
 
 use super::RunOptions;
@@ -63,9 +64,9 @@ pub(super) fn role_args(
     }
     let mut args = BTreeMap::from([("plant", plant), ("agent", agent), ("observer", Vec::new())]);
     for role in ROLES {
-        args.entry(role)
-            .or_default()
-            .extend(opts.scheduling.process_args());
+        let a = args.entry(role).or_default();
+        a.extend(opts.scheduling.process_args());
+        a.extend(Wait::process_args(opts.waiting));
     }
     args
 }

@@ -43,16 +43,10 @@ pub(super) struct Link {
 }
 
 impl Link {
-    /// Joins run `run_id` as the plant: actions in, measurements out — and, when `sensor`
+    /// The plant's topics on `bus`: actions in, measurements out — and, when `sensor`
     /// does not measure the full state, ground truth on [`topic::TRUTH`]. The first
     /// sample's sequence number is `first_seq`.
-    pub(super) fn join(
-        run_id: &str,
-        task: Arc<Task>,
-        sensor: Sensor,
-        first_seq: u64,
-    ) -> Result<Self> {
-        let bus = Bus::join(run_id, "plant").map_err(wire_err)?;
+    pub(super) fn join(bus: Bus, task: Arc<Task>, sensor: Sensor, first_seq: u64) -> Result<Self> {
         let actions = bus.rx::<Action>(topic::ACTION).map_err(wire_err)?;
         let out = bus
             .tx::<Measurement>(topic::MEASUREMENT)

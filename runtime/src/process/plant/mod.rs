@@ -55,7 +55,12 @@ pub fn run(args: &PlantArgs) -> Result<()> {
     let task = Arc::new(Task::new(cfg.system));
     let run_seed = ::agent::seed::run_seed(cfg.run.seed, args.node.run_index);
     let sensor = crate::experiment::sensor(&task, &cfg.observer, run_seed);
-    let link = Link::join(&args.node.run_id, task.clone(), sensor, args.first_seq)?;
+    let link = Link::join(
+        args.node.join("plant")?,
+        task.clone(),
+        sensor,
+        args.first_seq,
+    )?;
     let mut runner = runner(link, args, &cfg, run_seed)?;
     // A resumed run continues after trial `--after-trial`, whose simulated time tells how
     // many samples the trials before it skipped.
@@ -119,6 +124,17 @@ fn runner(
         .wait_for_receivers(args.node.receivers, STARTUP, &link.bus)
         .map_err(wire_err)?;
     let realtime = args.timing == "realtime";
+    if realtime
+        && !args
+            .node
+            .wait
+            .waiting(super::WaitKind::Block)
+            .needs_wake_up()
+    {
+        bail!(
+            "`--wait` without `--wait-us` applies in lockstep only: in real time the plant sleeps until its next sampling instant and must be woken by the action"
+        );
+    }
     if realtime && (cfg.run.delay_ms != 0.0 || !cfg.run.delay_from.is_empty()) {
         bail!(
             "`run.delay_ms`/`run.delay_from` apply in lockstep only: in real time the delays are real"
