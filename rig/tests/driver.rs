@@ -342,7 +342,7 @@ fn a_run_against_a_driver_resumes_only_against_a_driver() {
 /// trials. With the plant computing `ρ(x_{k+1}, u_k)` instead of `ρ(x_k, u_k)` the test
 /// fails at the first sample whose state has changed.
 #[test]
-fn the_rust_driver_of_the_manipulator_passes_check_driver_and_learns() {
+fn the_rust_driver_of_the_manipulator_passes_check_driver_and_runs_a_learner() {
     let d = Driver::launch(&Kind::Rust, "arm", &["--system", "arm-6.4", "--speed", "2"]);
     let out = rig()
         .args(["check-driver", "--driver", &d.id, "--system", "arm-6.4"])
