@@ -215,13 +215,17 @@ fn passes_check_driver(d: &Driver) {
 }
 
 /// `rig run --plant external` with MLAC/LLR on the pendulum, 6 trials at 10 × real time
-/// against each driver: it learns — the better of the greedy returns after trials 3 and
-/// 6 exceeds −4500, where the untrained policy (zero action, the pendulum hanging) earns
-/// −4932 — and the returns are those of the recorded samples. Measured over 6 runs per
-/// driver, the better greedy return was −2874 to −3710, and −3358 to −4081 with two
-/// busy loops competing for the two cores (up to 786 of 809 deadlines missed); with the
-/// actor's and the critic's updates zeroed (MLAC's Eq. 3.14 step, the critic's
-/// `α_c δ z`), or either alone, both evaluations return −4932 and this test fails.
+/// against each driver: it learns, and the returns are those of the recorded samples.
+/// Learning shows in the greedy returns after trials 3 and 6 — the better exceeds −4500,
+/// where the untrained policy (zero action, the pendulum hanging) earns −4932 — or, where
+/// a greedy policy still learning does worse than the untrained one (it happens: −7613
+/// and −8115 once, with other tests running), in the exploring returns: the best of
+/// trials 4 to 6 exceeds −4200. Measured over 30 runs of both drivers, some with two
+/// busy loops on the two cores (up to 786 of 809 deadlines missed): the better greedy
+/// return −2438 to −4287 but in that one run, the best exploring return −2790 to −3830
+/// in every run. With the actor's update zeroed (MLAC's Eq. 3.14 step), the critic's
+/// (`α_c δ z`) or both, both greedy returns are −4932 and the exploring ones −4493 at
+/// best (12 runs): this test fails.
 #[test]
 fn rig_run_learns_against_the_rust_and_python_drivers_and_records_them() {
     for kind in drivers() {
@@ -249,9 +253,17 @@ fn learns_and_records(d: &Driver, dir: &std::path::Path) {
     let returns = std::fs::read_to_string(dir.join("returns.csv")).unwrap();
     let rows: Vec<&str> = returns.lines().collect();
     assert_eq!(rows.len(), 7, "{returns}");
-    let greedy = |row: &str| -> f64 { row.split(',').nth(4).unwrap().parse().unwrap() };
-    let best = greedy(rows[3]).max(greedy(rows[6]));
-    assert!(best > -4500.0, "{}: no learning\n{returns}", d.id);
+    let column = |row: &str, i: usize| -> f64 { row.split(',').nth(i).unwrap().parse().unwrap() };
+    let greedy = column(rows[3], 4).max(column(rows[6], 4));
+    let exploring = rows[4..]
+        .iter()
+        .map(|r| column(r, 3))
+        .fold(f64::MIN, f64::max);
+    assert!(
+        greedy > -4500.0 || exploring > -4200.0,
+        "{}: no learning\n{returns}",
+        d.id
+    );
     // The returns are the recorded rewards, each ρ(x_k, u_k) of the driver's samples.
     let task = plant::Task::new(plant::SystemName::Pendulum);
     let trials = recorded_trials(&dir.join("run.mcap"));
