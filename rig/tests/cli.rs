@@ -202,6 +202,126 @@ fn sensor_and_observer_flags_are_validated_and_written_to_the_config() {
     );
 }
 
+/// The final greedy return (mean, sample sd) per curve of a figure's `summary.csv`
+/// (`curve,runs,trials,final_greedy_mean,final_greedy_sd,` and six more columns; a curve
+/// label may contain commas).
+fn summary_finals(csv: &str) -> Vec<(String, f64, f64)> {
+    csv.lines()
+        .skip(1)
+        .map(|line| {
+            let f: Vec<&str> = line.split(',').collect();
+            let k = f.len() - 10;
+            let label = f[..k].join(",");
+            (label, f[k + 2].parse().unwrap(), f[k + 3].parse().unwrap())
+        })
+        .collect()
+}
+
+/// The verdict one part of a claim's explanation implies, from its numbers (as printed,
+/// to 0.1): `Some(true)` if it confirms, `Some(false)` if not, `None` if the printed
+/// numbers tie. Checks what the numbers must satisfy besides: the final greedy returns
+/// and their sds are those of `summary.csv` (`finals`), and a difference and its 95 %
+/// margin (Welch, 1.96 standard errors of `runs` runs each) are those of the returns.
+///
+/// The parts (`bench/src/reproduce/claims.rs`):
+/// * `to the common level L: A t_A min, B t_B min` — A faster: `t_A < t_B`;
+/// * `final greedy return A x ± s, B y ± r` — A better: `x > y`;
+/// * the same with ` (difference d, 95 % margin e)` — A clearly better: `d > e`.
+fn claim_part(part: &str, finals: &[(String, f64, f64)], runs: f64) -> Option<bool> {
+    let num = |s: &str| -> f64 {
+        s.trim()
+            .parse()
+            .unwrap_or_else(|_| panic!("{s:?} in {part:?}"))
+    };
+    let order = |a: f64, b: f64| (a != b).then_some(a > b);
+    if let Some(rest) = part.strip_prefix("to the common level ") {
+        let (level, times) = rest.split_once(": ").expect(part);
+        assert!(num(level).is_finite(), "{part}");
+        let (a, b) = times.split_once(" min, ").expect(part);
+        let b = b.strip_suffix(" min").expect(part);
+        let t = |s: &str| num(s.rsplit_once(' ').expect(part).1);
+        return order(t(b), t(a));
+    }
+    let rest = part.strip_prefix("final greedy return ").expect(part);
+    let (pair, margin) = match rest.split_once(" (difference ") {
+        Some((pair, tail)) => {
+            let (d, e) = tail
+                .strip_suffix(')')
+                .expect(part)
+                .split_once(", 95 % margin ")
+                .expect(part);
+            (pair, Some((num(d), num(e))))
+        }
+        None => (rest, None),
+    };
+    // `A x ± s, B y ± r`; the labels hold no ` ± `.
+    let (ax, s_by) = pair.split_once(" ± ").expect(part);
+    let (s, by) = s_by.split_once(", ").expect(part);
+    let (by, r) = by.split_once(" ± ").expect(part);
+    let mut curves = Vec::new();
+    for (label_value, sd) in [(ax, s), (by, r)] {
+        let (label, value) = label_value.rsplit_once(' ').expect(part);
+        let (_, mean, s) = finals
+            .iter()
+            .find(|c| c.0 == label)
+            .unwrap_or_else(|| panic!("{label} of {part} not in summary.csv"));
+        assert_eq!(
+            format!("{mean:.1} ± {s:.1}"),
+            format!("{value} ± {sd}"),
+            "{part}"
+        );
+        curves.push((*mean, *s));
+    }
+    let [(x, sx), (y, sy)] = [curves[0], curves[1]];
+    match margin {
+        None => order(
+            num(ax.rsplit_once(' ').unwrap().1),
+            num(by.rsplit_once(' ').unwrap().1),
+        ),
+        Some((d, e)) => {
+            let se = ((sx * sx + sy * sy) / runs).sqrt();
+            assert_eq!(
+                format!("{d:.1} {e:.1}"),
+                format!("{:.1} {:.1}", x - y, 1.96 * se),
+                "{part}"
+            );
+            order(d, e)
+        }
+    }
+}
+
+/// Every claim line of `report` (`- what the thesis says — **confirmed**: why.` or
+/// `**not confirmed**`) has an explanation whose numbers are the measured ones and
+/// imply its verdict: confirmed when every part confirms, not confirmed when one does
+/// not. Returns how many claims were checked. (With `better`'s comparison inverted, or
+/// the margin computed from twice the runs, the reproduce test fails here.)
+fn check_claims(report: &str, finals: &[(String, f64, f64)], runs: f64) -> usize {
+    let mut checked = 0;
+    for line in report.lines() {
+        let (says, verdict, why) = if let Some((says, why)) = line.split_once(" — **confirmed**: ")
+        {
+            (says, true, why)
+        } else if let Some((says, why)) = line.split_once(" — **not confirmed**: ") {
+            (says, false, why)
+        } else {
+            continue;
+        };
+        assert!(says.starts_with("- ") && says.len() > 10, "{line}");
+        let why = why.strip_suffix('.').expect(line);
+        let parts: Vec<Option<bool>> = why
+            .split("; ")
+            .map(|p| claim_part(p, finals, runs))
+            .collect();
+        if parts.contains(&Some(false)) {
+            assert!(!verdict, "confirmed, but a part is not: {line}");
+        } else if parts.iter().all(|p| *p == Some(true)) {
+            assert!(verdict, "not confirmed, but every part is: {line}");
+        }
+        checked += 1;
+    }
+    checked
+}
+
 #[test]
 fn reproduce_writes_figures_a_report_and_checks_claims() {
     let dir = tmp("reproduce");
@@ -250,10 +370,17 @@ fn reproduce_writes_figures_a_report_and_checks_claims() {
     let report = std::fs::read_to_string(dir.join("REPORT.md")).unwrap();
     assert!(report.contains("![3.17](3.17/figure.png)"), "{report}");
     assert!(report.contains("| MLAC/LLR | 2 × 30 |"), "{report}");
-    // Every claim is marked one way or the other, with the numbers behind it.
+    // Every claim is marked one way or the other, with the measured numbers behind it,
+    // and the verdict is the one they imply.
     let marked =
         report.matches("**confirmed**").count() + report.matches("**not confirmed**").count();
     assert_eq!(marked, 4, "{report}");
+    let mut finals = summary_finals(&summary);
+    finals.extend(summary_finals(
+        &std::fs::read_to_string(dir.join("3.22/summary.csv")).unwrap(),
+    ));
+    assert_eq!(finals.len(), 6, "{finals:?}");
+    assert_eq!(check_claims(&report, &finals, 2.0), 4, "{report}");
     assert!(report.contains("| t₉₀ [min] |"), "{report}");
     // Each experiment's own outputs are there, with every run's final time response.
     assert!(dir.join("3.17/mlac-llr/runs.csv").is_file());

@@ -95,70 +95,147 @@ fn same_seed_same_bytes_any_thread_count_different_seed_different() {
     assert_eq!(again, cfg);
 }
 
-#[test]
-fn every_supported_combination_runs_and_stays_finite() {
-    for (algo, approx) in [
-        (Algo::Sac, ApproxKind::Tiles),
-        (Algo::Sac, ApproxKind::Rbf),
-        (Algo::Sac, ApproxKind::Llr),
-        (Algo::Mlac, ApproxKind::Rbf),
-        (Algo::Mlac, ApproxKind::Llr),
-        (Algo::Rmac, ApproxKind::Rbf),
-        (Algo::Rmac, ApproxKind::Llr),
-        (Algo::Vgbp, ApproxKind::Lstd),
-        (Algo::Vgbp, ApproxKind::Rbf),
-        (Algo::Vgbp, ApproxKind::Llr),
-        (Algo::Sarsa, ApproxKind::Rbf),
-    ] {
-        let cfg = config(algo, approx, 2, 5, 1);
-        let (_, csv) = run(&cfg, &format!("combo-{algo}-{approx}"), 2);
-        for line in csv.lines().skip(1) {
-            let ret: f64 = line.split(',').nth(3).unwrap().parse().unwrap();
-            // 100 samples of −ρ ≤ 5π² + 0.1 ω² + 9: finite and negative.
-            assert!(ret.is_finite() && ret < 0.0, "{algo}/{approx}: {line}");
-        }
-    }
+/// The best greedy evaluation of `summary`: the largest mean over runs of the greedy
+/// return at any evaluated trial.
+fn best_greedy(summary: &runtime::learn::LearnSummary) -> f64 {
+    summary
+        .greedy_curve
+        .iter()
+        .map(|g| g.mean)
+        .fold(f64::NEG_INFINITY, f64::max)
 }
 
+/// Every supported (algorithm, approximator) pair with its preset learns the swing-up:
+/// within the trials given (2 runs, seed 1, a greedy evaluation every 5 trials) the mean
+/// greedy return of some evaluation exceeds −2000, where the untrained policy (zero
+/// action, the pendulum hanging) earns −4935 per 3 s trial; the best evaluations reached
+/// here are −900 to −1550. Every return is finite.
+///
+/// The trial counts are about 1.5 times the latest first evaluation above −2000 measured
+/// for seeds 1 to 6 (SAC: tiles 45, RBF 60, LLR 25; MLAC: RBF 75, LLR 20; RMAC: RBF 60,
+/// LLR 15; VGBP: LSTD 20, RBF 20, LLR 30; SARSA 90). With the actor's and the critic's
+/// updates zeroed (SAC's `α_a δ Δu`, MLAC's Eq. 3.9/3.14 step, RMAC's reference-model
+/// update, the TD(λ) critic's `α_c δ z`, LSTD's solve, SARSA's `α δ`) every greedy
+/// evaluation stays at −4935, but SARSA's at −3529 (a constant action) and RMAC's at best
+/// −4062 (RBF) and −4716 (LLR): every pair fails. With only the critic's zeroed the best
+/// is −3455 (SAC/LLR), with only the actor's every actor-critic pair fails.
 #[test]
-fn the_arm_and_the_linear_system_run_with_their_presets() {
-    use plant::SystemName;
-    for (system, algo, approx) in [
-        (SystemName::ArmVertical, Algo::Sac, ApproxKind::Llr),
-        (SystemName::ArmVertical, Algo::Mlac, ApproxKind::Llr),
-        (SystemName::ArmHorizontal, Algo::Sac, ApproxKind::Rbf),
-        (SystemName::ArmHorizontal, Algo::Rmac, ApproxKind::Llr),
-        (SystemName::DoubleIntegrator, Algo::Mlac, ApproxKind::Llr),
-        (SystemName::DoubleIntegrator, Algo::Vgbp, ApproxKind::Lstd),
-        (SystemName::ArmHorizontal, Algo::Vgbp, ApproxKind::Lstd),
-        (SystemName::Arm64, Algo::Vgbp, ApproxKind::Lstd),
-        (SystemName::Arm64, Algo::Mlac, ApproxKind::Llr),
+fn every_supported_combination_learns_the_swing_up() {
+    let mut failed = Vec::new();
+    for (algo, approx, trials) in [
+        (Algo::Sac, ApproxKind::Tiles, 70),
+        (Algo::Sac, ApproxKind::Rbf, 90),
+        (Algo::Sac, ApproxKind::Llr, 40),
+        (Algo::Mlac, ApproxKind::Rbf, 110),
+        (Algo::Mlac, ApproxKind::Llr, 30),
+        (Algo::Rmac, ApproxKind::Rbf, 90),
+        (Algo::Rmac, ApproxKind::Llr, 25),
+        (Algo::Vgbp, ApproxKind::Lstd, 30),
+        (Algo::Vgbp, ApproxKind::Rbf, 30),
+        (Algo::Vgbp, ApproxKind::Llr, 45),
+        (Algo::Sarsa, ApproxKind::Rbf, 130),
+    ] {
+        let cfg = config(algo, approx, 2, trials, 1);
+        let summary = learn_in(&format!("combo-{algo}-{approx}"), &cfg);
+        assert_eq!(summary.records.len(), 2 * trials as usize);
+        for r in &summary.records {
+            assert!(r.ret.is_finite(), "{algo}/{approx}: {r:?}");
+        }
+        let best = best_greedy(&summary);
+        eprintln!("{algo}/{approx}: best mean greedy return in {trials} trials {best:.0}");
+        if best <= -2000.0 {
+            failed.push(format!(
+                "{algo}/{approx}: best mean greedy return in {trials} trials {best:.0}"
+            ));
+        }
+    }
+    assert!(failed.is_empty(), "no swing-up:\n{}", failed.join("\n"));
+}
+
+/// The arms and the double integrator learn with their presets (one run, seed 1, a
+/// greedy evaluation every 2 trials): within the trials given some greedy evaluation
+/// earns more than the level below, which the untrained policy (zero action) does not
+/// reach. Levels and trial counts from measurements of seeds 1 to 4 (6 for the double
+/// integrator with MLAC and the manipulator with MLAC): the best greedy return was
+///
+/// | system, learner               | trials | untrained | learned (worst seed) | level  |
+/// |-------------------------------|--------|-----------|----------------------|--------|
+/// | arm, Case I, SAC/LLR          | 10     | −2569     | −702                 | −1500  |
+/// | arm, Case I, MLAC/LLR         | 10     | −2569     | −498                 | −1500  |
+/// | double integrator, MLAC/LLR   | 30     | −60       | −22                  | −40    |
+/// | double integrator, VGBP/LSTD  | 10     | −60       | −26                  | −40    |
+/// | arm, Case II, VGBP/LSTD       | 20     | −7016     | −1906                | −3500  |
+/// | manipulator §6.4.2, VGBP/LSTD | 20     | −50000    | −8648                | −30000 |
+/// | manipulator §6.4.2, MLAC/LLR  | 20     | −50000    | −42289               | −46000 |
+///
+/// With the actor's and the critic's updates zeroed (MLAC's Eq. 3.9 step and SAC's
+/// `α_a δ Δu`, the TD(λ) critic's `α_c δ z`, LSTD's solve) every greedy evaluation is the
+/// untrained policy's and each of these fails; with only the critic's zeroed, each fails
+/// too.
+///
+/// The arm of Case II with SAC/RBF and RMAC/LLR learns in hundreds of trials (§5.4),
+/// beyond this test: there, learning must change the greedy policy — the greedy return
+/// after trial 1 or 2 differs from the untrained policy's by more than 1 % (measured:
+/// −7443 and −6952 for SAC, −6245 and −9929 for RMAC). With SAC's actor update zeroed,
+/// or RMAC's reference-model and process-model updates, the greedy return stays the
+/// untrained policy's (−7016) exactly.
+#[test]
+fn the_arm_and_the_linear_system_learn_with_their_presets() {
+    use Algo::{Mlac, Rmac, Sac, Vgbp};
+    use ApproxKind::{Llr, Lstd, Rbf};
+    use plant::SystemName::{Arm64, ArmHorizontal, ArmVertical, DoubleIntegrator};
+    let mut failed = Vec::new();
+    for (system, algo, approx, trials, level) in [
+        (ArmVertical, Sac, Llr, 10, Some(-1500.0)),
+        (ArmVertical, Mlac, Llr, 10, Some(-1500.0)),
+        (ArmHorizontal, Sac, Rbf, 2, None),
+        (ArmHorizontal, Rmac, Llr, 2, None),
+        (DoubleIntegrator, Mlac, Llr, 30, Some(-40.0)),
+        (DoubleIntegrator, Vgbp, Lstd, 10, Some(-40.0)),
+        (ArmHorizontal, Vgbp, Lstd, 20, Some(-3500.0)),
+        (Arm64, Vgbp, Lstd, 20, Some(-30000.0)),
+        (Arm64, Mlac, Llr, 20, Some(-46000.0)),
     ] {
         let o = Overrides {
             system: Some(system),
             algo: Some(algo),
             approx: Some(approx),
             runs: Some(1),
-            trials: Some(2),
-            eval_every: Some(1),
+            trials: Some(trials),
+            eval_every: Some(if level.is_some() { 2 } else { 1 }),
             ..Default::default()
         };
         let cfg = resolve(None, &o).expect("preset resolves");
-        let (_, csv) = run(&cfg, &format!("{system}-{algo}-{approx}"), 1);
-        let rows: Vec<&str> = csv.lines().skip(1).collect();
-        assert_eq!(rows.len(), 2);
-        for line in rows {
-            let f: Vec<f64> = line
-                .split(',')
-                .skip(2)
-                .map(|v| v.parse().unwrap())
-                .collect();
-            assert!(
-                f.iter().all(|v| v.is_finite()) && f[1] < 0.0,
-                "{system}: {line}"
-            );
+        let who = format!("{system} {algo}/{approx}");
+        let summary = learn_in(&format!("{system}-{algo}-{approx}"), &cfg);
+        assert_eq!(summary.records.len(), trials as usize, "{who}");
+        for r in &summary.records {
+            let g = r.greedy.unwrap_or(0.0);
+            assert!(r.ret.is_finite() && g.is_finite(), "{who}: {r:?}");
+        }
+        let best = best_greedy(&summary);
+        eprintln!("{who}: best greedy return in {trials} trials {best:.0}");
+        match level {
+            Some(level) if best <= level => failed.push(format!(
+                "{who}: best greedy return in {trials} trials {best:.0}, not above {level}"
+            )),
+            Some(_) => {}
+            None => {
+                let untrained = runtime::experiment::Experiment::new(&cfg, 0).greedy_return();
+                let changed = summary
+                    .greedy_curve
+                    .iter()
+                    .any(|g| (g.mean - untrained).abs() > 0.01 * untrained.abs());
+                if !changed {
+                    failed.push(format!(
+                        "{who}: the greedy return stays the untrained policy's {untrained:.0}: {:?}",
+                        summary.greedy_curve.iter().map(|g| g.mean).collect::<Vec<_>>()
+                    ));
+                }
+            }
         }
     }
+    assert!(failed.is_empty(), "not learning:\n{}", failed.join("\n"));
 }
 
 /// Runs `cfg` with `rig learn` on two threads into a fresh test directory.
@@ -256,13 +333,32 @@ fn shipped_configuration_files_resolve() {
     assert!(seen > 0, "no configuration files in {}", dir.display());
 }
 
+/// SAC-FH, MLAC-FH and RMAC-FH (Algorithms 4–6) learn: within 15 trials (one run, seed
+/// 1, a greedy evaluation every 5 trials) some greedy return exceeds −4000, where the
+/// untrained policy earns −4984 (τ_N included). Measured for seeds 1 to 6, the best
+/// greedy return in 15 trials was at worst −3650 (SAC-FH), −3334 (MLAC-FH) and −3688
+/// (RMAC-FH). With the actor's and the critic's updates zeroed (the actor's step of
+/// Eq. 3.1 or 3.9, RMAC's reference-model update, the critic's `α_c δ z`) the best
+/// greedy returns are −4984, −4984 and −4734: each fails. With only the critic's zeroed
+/// SAC-FH (−4184) and MLAC-FH (−4984) fail, RMAC-FH not (−3571: with a flat critic the
+/// reference model heads for one extreme action's prediction). And each return counts
+/// the terminal reward.
 #[test]
-fn finite_horizon_learners_run_and_count_the_terminal_reward() {
+fn finite_horizon_learners_learn_and_count_the_terminal_reward() {
+    let mut failed = Vec::new();
     for algo in [Algo::Sac, Algo::Mlac, Algo::Rmac] {
-        let cfg = config_with(HorizonKind::Finite, algo, ApproxKind::Rbf, 1, 3, 1);
+        let cfg = config_with(HorizonKind::Finite, algo, ApproxKind::Rbf, 1, 15, 1);
         let mut exp = runtime::experiment::Experiment::new(&cfg, 0);
+        let mut best = f64::NEG_INFINITY;
         while let Some(r) = exp.next_trial() {
-            assert!(r.ret.is_finite() && r.ret < 0.0, "{algo}: {r:?}");
+            assert!(r.ret.is_finite(), "{algo}: {r:?}");
+            best = best.max(r.greedy.unwrap_or(f64::NEG_INFINITY));
+        }
+        eprintln!("{algo}-FH: best greedy return in 15 trials {best:.0}");
+        if best <= -4000.0 {
+            failed.push(format!(
+                "{algo}-FH: best greedy return in 15 trials {best:.0}"
+            ));
         }
         // Eq. 4.1: the return is the rewards plus τ_N(x_N) = −x_Nᵀ Q x_N of the state the
         // trial ends in (the greedy trial is deterministic, so both calls see the same one).
@@ -273,6 +369,7 @@ fn finite_horizon_learners_run_and_count_the_terminal_reward() {
             -(5.0 * std::f64::consts::PI.powi(2) + 0.1 * (8.0 * std::f64::consts::PI).powi(2));
         assert!(tau < 0.0 && tau > worst, "{algo}: τ_N = {tau}");
     }
+    assert!(failed.is_empty(), "not learning:\n{}", failed.join("\n"));
 }
 
 #[test]
