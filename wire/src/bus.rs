@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use iceoryx2::prelude::*;
 
-use crate::{Error, Qos, RUN_QOS, Rx, Tx, Waiting, describe_service, type_name_of};
+use crate::{Error, Qos, RUN_QOS, Recorded, Rx, Tx, Waiting, describe_service, type_name_of};
 
 /// One process's connection to a run.
 pub struct Bus {
@@ -139,6 +139,16 @@ impl Bus {
             .event()
             .open_or_create()
             .map_err(|e| format!("event service {service}: {e:?}"))?)
+    }
+
+    /// The run's [`Recorded`] signal (both ends; a process of a recorded run opens it
+    /// when it starts, so that the announcement, made once, reaches it).
+    pub fn recorded(&self) -> Result<Recorded, Error> {
+        let event = self.event(&self.run_service("recorded"))?;
+        Ok(Recorded {
+            notifier: event.notifier_builder().create()?,
+            listener: event.listener_builder().create()?,
+        })
     }
 
     /// A sender on run topic `topic`.

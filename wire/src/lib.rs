@@ -28,7 +28,7 @@ mod waiting;
 pub use bus::Bus;
 pub use clock::now_ns;
 pub use messages::{Action, Estimate, Header, MAX_U, MAX_X, Measurement, Truth, flags, topic};
-pub use ports::{Rx, Tx};
+pub use ports::{Recorded, Rx, Tx};
 pub use service::{BUFFER, Qos, RUN_QOS, describe_service, type_name_of};
 pub use waiting::{FOREVER, Waiting};
 

@@ -64,6 +64,46 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Tx<T> {
     }
 }
 
+/// The run's signal that the recorder has read every message (`rig/<run id>/recorded`):
+/// a process of a recorded run waits for it before it exits, since what a process sent
+/// may be gone from the recorder's queue once the process is ([`Bus::recorded`]).
+pub struct Recorded {
+    pub(crate) notifier: Notifier<ipc::Service>,
+    pub(crate) listener: Listener<ipc::Service>,
+}
+
+impl Recorded {
+    /// Tells the run's processes that everything is recorded.
+    pub fn announce(&self) -> Result<(), Error> {
+        self.notifier.notify()?;
+        Ok(())
+    }
+
+    /// Waits until the recorder announces that everything is recorded, at most
+    /// `timeout`, or until the recorder's process (role `rig`) is gone; whether it was
+    /// announced.
+    pub fn wait(&self, bus: &Bus, timeout: Duration) -> Result<bool, Error> {
+        let t0 = std::time::Instant::now();
+        while t0.elapsed() < timeout {
+            let mut announced = false;
+            match self
+                .listener
+                .timed_wait(|_| announced = true, Duration::from_millis(20))
+            {
+                Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) | Ok(_) => {}
+                Err(e) => return Err(e.into()),
+            }
+            if announced {
+                return Ok(true);
+            }
+            if bus.interrupted() || bus.lost_peers().iter().any(|p| p == "rig") {
+                return Ok(false);
+            }
+        }
+        Ok(false)
+    }
+}
+
 /// How long a receiver still waits for a message after a peer process has left: what the
 /// peer sent last may still be passed on by a process in between.
 const PASSING_ON: Duration = Duration::from_millis(250);

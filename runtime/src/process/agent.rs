@@ -24,6 +24,7 @@ pub fn run(args: &AgentArgs) -> Result<()> {
     let bus = node.join("agent")?;
     let estimates = bus.rx::<Estimate>(topic::ESTIMATE).map_err(wire_err)?;
     let out = bus.tx::<Action>(topic::ACTION).map_err(wire_err)?;
+    let linger = super::Linger::open(&bus, node.receivers)?;
     out.wait_for_receivers(node.receivers, STARTUP, &bus)
         .map_err(wire_err)?;
     loop {
@@ -49,7 +50,7 @@ pub fn run(args: &AgentArgs) -> Result<()> {
             if let Some(w) = &mut learner.checkpoints {
                 w.finish()?;
             }
-            return Ok(());
+            return linger.wait(&bus);
         }
     }
 }

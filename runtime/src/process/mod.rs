@@ -138,3 +138,33 @@ pub fn pack<const N: usize>(v: &[f64]) -> [f64; N] {
 pub fn wire_err(e: wire::Error) -> anyhow::Error {
     anyhow::anyhow!("{e}")
 }
+
+/// How long a process of a recorded run waits, after its last message, for the recorder
+/// to have read everything ([`Linger`]).
+const LINGER: Duration = Duration::from_secs(10);
+
+/// A process's last duty in a recorded run (`--receivers 2`): after its last message it
+/// waits until the recorder announces that it has read everything ([`wire::Recorded`]),
+/// since what the process sent may be gone from the recorder's queue once the process
+/// is.
+pub struct Linger(Option<wire::Recorded>);
+
+impl Linger {
+    /// Opens the run's signal on `bus` if a recorder listens (`receivers` ≥ 2).
+    pub fn open(bus: &wire::Bus, receivers: usize) -> Result<Self> {
+        Ok(Self(if receivers >= 2 {
+            Some(bus.recorded().map_err(wire_err)?)
+        } else {
+            None
+        }))
+    }
+
+    /// Waits for the recorder's announcement (at most [`LINGER`], or until the
+    /// recorder's process is gone).
+    pub fn wait(&self, bus: &wire::Bus) -> Result<()> {
+        if let Some(r) = &self.0 {
+            r.wait(bus, LINGER).map_err(wire_err)?;
+        }
+        Ok(())
+    }
+}

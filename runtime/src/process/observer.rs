@@ -55,6 +55,7 @@ pub fn run(args: &ObserverArgs) -> Result<()> {
         .rx::<Measurement>(topic::MEASUREMENT)
         .map_err(wire_err)?;
     let out = bus.tx::<Estimate>(topic::ESTIMATE).map_err(wire_err)?;
+    let linger = super::Linger::open(&bus, args.receivers)?;
     out.wait_for_receivers(args.receivers, STARTUP, &bus)
         .map_err(wire_err)?;
     loop {
@@ -94,7 +95,7 @@ pub fn run(args: &ObserverArgs) -> Result<()> {
         e.t_publish_ns = now_ns();
         out.send(e).map_err(wire_err)?;
         if f & flags::SHUTDOWN != 0 {
-            return Ok(());
+            return linger.wait(&bus);
         }
     }
 }

@@ -79,6 +79,8 @@ pub(super) struct Supervisor {
     pub(super) deadline_misses: u64,
     /// The external driver's traffic, recorded.
     pub(super) driver: Option<DriverWatch>,
+    /// The announcement that everything is recorded, which the processes wait for.
+    pub(super) recorded: wire::Recorded,
     /// Realtime and external driver: how long to go on recording after a process died,
     /// so that the recording shows the plant's reaction (its watchdog, or the driver's,
     /// applying the safe action within two periods).
@@ -103,6 +105,7 @@ impl Supervisor {
             None
         };
         Ok(Self {
+            recorded: bus.recorded().map_err(wire_err)?,
             measurements: bus
                 .rx::<Measurement>(topic::MEASUREMENT)
                 .map_err(wire_err)?,
@@ -331,6 +334,8 @@ impl Supervisor {
                 );
             }
         }
+        // Everything is read: the processes, waiting for this, may exit.
+        self.recorded.announce().map_err(wire_err)?;
         self.reap()?;
         self.returns.flush()
     }

@@ -61,6 +61,7 @@ pub fn run(args: &PlantArgs) -> Result<()> {
         sensor,
         args.first_seq,
     )?;
+    let linger = super::Linger::open(&link.bus, args.node.receivers)?;
     let mut runner = runner(link, args, &cfg, run_seed)?;
     // A resumed run continues after trial `--after-trial`, whose simulated time tells how
     // many samples the trials before it skipped.
@@ -79,7 +80,8 @@ pub fn run(args: &PlantArgs) -> Result<()> {
     let link = runner.link();
     // The end of the run, stamped with the run's final simulated time.
     link.shutdown(task.sim_time(cfg.run.trials.into(), schedule.skipped_samples()))?;
-    write_timing(link, args)
+    write_timing(link, args)?;
+    linger.wait(&link.bus)
 }
 
 /// Puts the plant, the clock, one level above the observer and the agent
