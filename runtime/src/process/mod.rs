@@ -139,6 +139,20 @@ pub fn wire_err(e: wire::Error) -> anyhow::Error {
     anyhow::anyhow!("{e}")
 }
 
+/// Marks the calling thread as batch work (SCHED_BATCH: a fair share of the CPU, but
+/// no preemption of the running process when it wakes up), for work beside the lockstep
+/// loop — the recorder, the checkpoint writer — so that on a machine with fewer cores
+/// than processes a wake-up of theirs does not stall the loop process on that core.
+/// Silently nothing where the operating system refuses.
+pub fn batch_thread() {
+    let param = libc::sched_param { sched_priority: 0 };
+    // SAFETY: `sched_setscheduler` reads the parameter struct for the calling thread
+    // (pid 0) and has no other effect on memory.
+    unsafe {
+        libc::sched_setscheduler(0, libc::SCHED_BATCH, &param);
+    }
+}
+
 /// How long a process of a recorded run waits, after its last message, for the recorder
 /// to have read everything ([`Linger`]).
 const LINGER: Duration = Duration::from_secs(10);

@@ -61,6 +61,8 @@ impl CheckpointWriter {
         let (tx, rx) = mpsc::channel::<Checkpoint>();
         let dir = dir.to_owned();
         let thread = std::thread::spawn(move || -> Result<()> {
+            // Beside the loop: never preempting it (and never real-time).
+            crate::process::batch_thread();
             let mut previous = None;
             while let Ok(mut c) = rx.recv() {
                 // Only the newest of those waiting.

@@ -157,6 +157,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     }
     let args = spawn::role_args(opts, point.as_ref(), &checkpoints);
     sup.children = spawn::processes(&run_id, &config_path, &opts.out, &args)?;
+    if opts.realtime.is_none() && opts.driver.is_none() {
+        crate::process::batch_thread();
+    }
 
     let after = point.as_ref().map_or(0, |p| p.trial);
     let evals = |trials: u32| trials.checked_div(cfg.run.eval_every).unwrap_or(0);
