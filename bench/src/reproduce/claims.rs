@@ -113,6 +113,17 @@ pub(super) fn not(r: std::result::Result<String, String>) -> std::result::Result
 
 /// `a` reaches the common target ([`common_target`]) of all curves first.
 pub(super) fn fastest(m: &[Measured], a: &str) -> std::result::Result<String, String> {
+    fastest_of(m, a, "")
+}
+
+/// As [`fastest`], among the curves but `left_out` (a variant not in the comparison).
+pub(super) fn fastest_of(
+    m: &[Measured],
+    a: &str,
+    left_out: &str,
+) -> std::result::Result<String, String> {
+    let kept: Vec<Measured> = m.iter().filter(|c| c.label != left_out).cloned().collect();
+    let m = &kept[..];
     let level = common_target(m);
     let best = find(m, a).minutes_to(level);
     let text = format!(
