@@ -84,6 +84,12 @@ fn reads_back() {
     assert_eq!(stats.message_count, 10);
     assert_eq!((stats.channel_count, stats.schema_count), (2, 2));
     assert_eq!((stats.attachment_count, stats.metadata_count), (1, 1));
+    // Every chunk compressed with zstd, and smaller than its messages.
+    assert!(!summary.chunk_indexes.is_empty());
+    for c in &summary.chunk_indexes {
+        assert_eq!(c.compression, "zstd");
+        assert!(c.compressed_size < c.uncompressed_size, "{c:?}");
+    }
     let mut topics: Vec<_> = summary.channels.values().map(|c| c.topic.clone()).collect();
     topics.sort();
     assert_eq!(topics, ["/agent/action", "/plant/measurement"]);
