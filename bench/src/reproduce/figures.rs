@@ -113,10 +113,10 @@ pub(super) fn figures() -> Vec<Figure> {
                 c("SAC/LLR", preset(Pendulum, Sac, Llr, Infinite)),
             ],
             thesis: &[
-                ("SAC/RBF", "learning dip at the start (Fig. 3.10)"),
+                ("SAC/RBF", "learning dip at the start (§3.6.1, Fig. 3.10)"),
                 (
                     "SAC/LLR",
-                    "no learning dip; converged in about 3 min (§3.6.3)",
+                    "no learning dip; converged in about 3 min (§3.6.1, §3.6.2)",
                 ),
             ],
             claims: vec![Claim {
@@ -145,10 +145,10 @@ pub(super) fn figures() -> Vec<Figure> {
                 ),
             ],
             thesis: &[
-                ("MLAC/RBF", "converges in over 10 min"),
+                ("MLAC/RBF", "converges in over 10 min (§3.6.2)"),
                 (
                     "MLAC/LLR",
-                    "converges in just over 3 min; maximum after about 2–2.5 min",
+                    "converges in just over 3 min; maximum after about 2–2.5 min (§3.6.2)",
                 ),
             ],
             claims: vec![
@@ -180,8 +180,14 @@ pub(super) fn figures() -> Vec<Figure> {
                 c("RMAC/LLR", preset(Pendulum, Rmac, Llr, Infinite)),
             ],
             thesis: &[
-                ("RMAC/RBF", "a tad slower than LLR, better final policy"),
-                ("RMAC/LLR", "faster, but a final policy not near as good"),
+                (
+                    "RMAC/RBF",
+                    "a tad slower than LLR, better final policy (§3.6.3)",
+                ),
+                (
+                    "RMAC/LLR",
+                    "faster, but a final policy not near as good (§3.6.3)",
+                ),
             ],
             claims: vec![
                 Claim {
@@ -308,9 +314,12 @@ pub(super) fn figures() -> Vec<Figure> {
                 c("MLAC/LLR", preset(ArmVertical, Mlac, Llr, Infinite)),
             ],
             thesis: &[
-                ("SAC/RBF", "reaches it after more than 45 min"),
-                ("SAC/LLR", "a similar result after 10 min"),
-                ("MLAC/LLR", "close to its final result in less than 3 min"),
+                ("SAC/RBF", "reaches it after more than 45 min (§5.3.2)"),
+                ("SAC/LLR", "a similar result after 10 min (§5.3.2)"),
+                (
+                    "MLAC/LLR",
+                    "close to its final result in less than 3 min (§5.3.2)",
+                ),
             ],
             claims: vec![
                 Claim {
@@ -352,13 +361,13 @@ pub(super) fn figures() -> Vec<Figure> {
             thesis: &[
                 (
                     "SAC/RBF",
-                    "≥ 40 min more than MLAC/LLR to an equivalent return",
+                    "≥ 40 min more than MLAC/LLR to an equivalent return (§5.4.2)",
                 ),
                 (
                     "SAC/LLR",
-                    "≥ 20 min more than MLAC/LLR to an equivalent return",
+                    "≥ 20 min more than MLAC/LLR to an equivalent return (§5.4.2)",
                 ),
-                ("MLAC/LLR", "close to its final policy after 5 min"),
+                ("MLAC/LLR", "close to its final policy after 5 min (§5.4.2)"),
             ],
             claims: vec![
                 Claim {
@@ -399,10 +408,10 @@ pub(super) fn figures() -> Vec<Figure> {
                 ),
             ],
             thesis: &[
-                ("MLAC/LLR", "converges in about 9 min"),
+                ("MLAC/LLR", "converges in about 9 min (§6.4.1)"),
                 (
                     "VGBP-LLR",
-                    "converges after 3 min; final slightly worse than MLAC",
+                    "converges after 3 min; final slightly worse than MLAC (§6.4.1)",
                 ),
                 (
                     EQ_6_21,
@@ -411,7 +420,7 @@ pub(super) fn figures() -> Vec<Figure> {
                 (SEARCH, "— (not in the thesis)"),
                 (
                     "SARSA",
-                    "needs more interaction; final slightly better than VGBP-LLR",
+                    "needs more interaction; final slightly better than VGBP-LLR (§6.4.1)",
                 ),
             ],
             claims: vec![
@@ -464,7 +473,7 @@ pub(super) fn figures() -> Vec<Figure> {
             curves: vec![c("VGBP-LSTD", preset(Arm64, Vgbp, Lstd, Infinite))],
             thesis: &[(
                 "VGBP-LSTD",
-                "a proper policy in a short time; a low minimum bound from runs leaving the range",
+                "a proper policy in a short time; a low minimum bound from runs leaving the range (§6.4.2)",
             )],
             claims: vec![
                 Claim {
@@ -539,5 +548,23 @@ mod tests {
         let said: Vec<&str> = f.thesis.iter().map(|(label, _)| *label).collect();
         assert!(said.contains(&EQ_6_21) && said.contains(&SEARCH));
         assert!(f.thesis.iter().all(|(_, says)| !says.contains("−1000")));
+    }
+
+    /// What the report says the thesis says names where the thesis says it.
+    #[test]
+    fn every_thesis_statement_and_claim_cites_its_section() {
+        let cited = |s: &str| s.contains('§') || s.contains("Table");
+        for f in figures() {
+            for (label, says) in f.thesis {
+                assert!(
+                    cited(says) || label.contains("this project"),
+                    "{}: {says}",
+                    f.id
+                );
+            }
+            for c in &f.claims {
+                assert!(cited(c.says), "{}: {}", f.id, c.says);
+            }
+        }
     }
 }
