@@ -15,7 +15,7 @@ const WARM_UP: usize = 1000;
 
 /// One side of the ping-pong (`rig pong`). The echo returns every message on `pong`
 /// until a message with `seq == u64::MAX`; with `ping = Some((n, file))` this side sends
-/// instead, times `n` round trips after [`WARM_UP`] and writes them to `file` \[ns, one
+/// instead, times `n` round trips after 1000 of warm-up and writes them to `file` \[ns, one
 /// per line\]. With `pin_cpus` the echo is pinned to the plant's CPU, the pinger to the
 /// others.
 pub fn pong(

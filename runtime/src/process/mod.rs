@@ -173,7 +173,7 @@ impl Linger {
         }))
     }
 
-    /// Waits for the recorder's announcement (at most [`LINGER`], or until the
+    /// Waits for the recorder's announcement (at most 10 s, or until the
     /// recorder's process is gone).
     pub fn wait(&self, bus: &wire::Bus) -> Result<()> {
         if let Some(r) = &self.0 {

@@ -10,7 +10,7 @@
 //! - each channel has a schema with `encoding = "jsonschema"` whose data is
 //!   `{"type":"object","properties":{"seq":{"type":"integer"},"x_0":{"type":"number"},...}}`:
 //!   flat `integer` / `number` properties only, no `$ref`, so Foxglove plots every field;
-//! - chunked, each chunk compressed with zstd (level [`COMPRESSION_LEVEL`], one thread),
+//! - chunked, each chunk compressed with zstd (level 5, one thread),
 //!   with chunk, data-section and summary CRCs, message indexes and
 //!   a summary section (statistics, chunk, attachment and metadata indexes);
 //! - the resolved configuration as an attachment ([`Recorder::attach`]) and the seed,
