@@ -31,6 +31,10 @@ pub struct Args {
     scheduling: runtime::process::Scheduling,
     #[command(flatten)]
     spin: runtime::process::Spin,
+    /// How the processes wait for their next message (`--wait-us` is needed with
+    /// `spin` and `yield` in real time) [default: block].
+    #[command(flatten)]
+    wait: runtime::process::Wait,
     /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
     /// until one misses a deadline; writes DIR/sweep.csv and names the fastest period
     /// sustained for `--cycles` cycles without a miss.
@@ -52,6 +56,7 @@ pub fn main(args: &Args) -> ExitCode {
         raw_samples: args.raw_samples,
         scheduling: args.scheduling,
         spin: args.spin,
+        waiting: args.wait.waiting(runtime::process::WaitKind::Block),
         verbose: true,
     };
     let done = if args.sweep {

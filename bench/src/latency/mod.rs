@@ -79,6 +79,8 @@ pub struct LatencyOptions {
     pub scheduling: Scheduling,
     /// How the plant waits for a sampling instant.
     pub spin: Spin,
+    /// How the processes wait for their next message.
+    pub waiting: wire::Waiting,
     /// Print the summary.
     pub verbose: bool,
 }
@@ -310,7 +312,7 @@ fn run_realtime(
             cycles_out: Some(cycles_path.to_owned()),
             scheduling: opts.scheduling,
             spin: opts.spin,
-            waiting: wire::Waiting::Block,
+            waiting: opts.waiting,
         },
     )?;
     let machine = before.zip(Counters::read()).map(|(b, a)| {
