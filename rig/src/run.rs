@@ -130,9 +130,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
     } else {
         WaitKind::Block
     });
-    if !lockstep && !waiting.needs_wake_up() {
-        return Err("`--wait spin|yield` without `--wait-us` applies in lockstep only: in real time and with an external driver the plant sleeps until its next sample and must be woken".into());
-    }
+    runtime::run::check_waiting(lockstep, waiting)?;
     let opts = RunOptions {
         out: args.resume.clone().unwrap_or_else(|| args.out.clone()),
         resume: args.resume.is_some(),
