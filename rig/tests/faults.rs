@@ -5,7 +5,7 @@
 //!   readable, no completed trial is lost, and `--resume` continues so that
 //!   `returns.csv` and every recorded message equal those of a run never interrupted.
 //! * Realtime: the plant's samples after the death show the safe action (zero) within
-//!   two periods of the last action, on the plant's clock.
+//!   two periods of the last action's arrival, on the plant's clock.
 //! * Bad resumes: one-line errors naming the file and the problem.
 
 use std::collections::BTreeMap;
@@ -36,8 +36,10 @@ fn wait_for_rows(dir: &Path, n: usize) {
 }
 
 /// Kills (`kill -9`) the child of `sup` that runs `role`.
-fn kill_role(sup: &Child, role: &str) {
+/// Returns the time (`CLOCK_MONOTONIC`, the plant's clock) at which the process was dead.
+fn kill_role(sup: &Child, role: &str) -> u64 {
     signal(child_running(sup.id(), role), "-9");
+    wire::now_ns()
 }
 
 /// Messages per topic, in file order: (MCAP sequence, log time, data).
@@ -303,7 +305,8 @@ fn field(msgs: &Messages, topic: &str, key: &str) -> BTreeMap<u64, f64> {
 
 /// A realtime run at 3 × real time (10 ms periods) into `dir` whose `role` process is
 /// killed `after_ms` after the third trial started; asserts that `rig run` names it.
-fn realtime_run_killed(dir: &Path, role: &str, after_ms: u64) {
+/// Returns the time of the death on the plant's clock.
+fn realtime_run_killed(dir: &Path, role: &str, after_ms: u64) -> u64 {
     let sup = rig()
         .args([
             "run", "--timing", "realtime", "--speed", "3", "--trials", "400",
@@ -315,7 +318,7 @@ fn realtime_run_killed(dir: &Path, role: &str, after_ms: u64) {
         .unwrap();
     wait_for_rows(dir, 3);
     std::thread::sleep(Duration::from_millis(after_ms));
-    kill_role(&sup, role);
+    let dead_ns = kill_role(&sup, role);
     let died = sup.wait_with_output().unwrap();
     let err = stderr(&died);
     assert!(!died.status.success(), "{role}");
@@ -323,8 +326,12 @@ fn realtime_run_killed(dir: &Path, role: &str, after_ms: u64) {
         err.contains(&format!("the {role} process exited (signal: 9")),
         "{err}"
     );
+    dead_ns
 }
 
+/// The plant's own record says when the last action arrived (`t_action_ns`), so the
+/// bound is exact: a watchdog that tripped one period later fails it (sample j + 3 still
+/// holds the last action).
 #[test]
 fn a_process_killed_in_realtime_leaves_the_plant_in_the_safe_action_within_two_periods() {
     // 3 × real time: 10 ms periods.
@@ -332,47 +339,69 @@ fn a_process_killed_in_realtime_leaves_the_plant_in_the_safe_action_within_two_p
     for (i, role) in ["agent", "observer"].into_iter().enumerate() {
         let dir = tmp(&format!("realtime-{role}"));
         // Mid-trial, at a different moment for each role.
-        realtime_run_killed(&dir, role, 400 + 300 * i as u64);
+        let dead_ns = realtime_run_killed(&dir, role, 400 + 300 * i as u64);
 
         let msgs = recording(&dir.join("run.mcap"));
         let sampled = field(&msgs, "/timing/plant/measurement", "t_sample_ns");
         let applied = field(&msgs, "/plant/measurement", "u_applied_0");
-        // The last action the plant can have received: the agent's last one. It arrived
-        // in the interval [t_a, t_{a+1}) that holds its publication time (normally the
-        // interval of the sample it answers; later under load).
-        let last = *field(&msgs, "/agent/action", "u_0").keys().max().unwrap();
-        let published = field(&msgs, "/timing/agent/action", "t_publish_ns")[&last];
-        let a = *sampled
+        let interval_of = |t: f64| {
+            *sampled
+                .iter()
+                .filter(|(_, t_k)| **t_k <= t)
+                .map(|(k, _)| k)
+                .max()
+                .unwrap()
+        };
+        // The last action reached the plant within interval [t_j, t_{j+1}): sample j + 1
+        // is the last whose `t_action_ns` is set.
+        let arrived = field(&msgs, "/timing/plant/measurement", "t_action_ns");
+        let j = arrived
             .iter()
-            .filter(|(_, t)| **t <= published)
+            .filter(|(_, t)| **t > 0.0)
             .map(|(k, _)| k)
             .max()
-            .unwrap();
+            .unwrap()
+            - 1;
         assert!(
-            (a.saturating_sub(5)..=a + 1).any(|k| applied.get(&k).is_some_and(|u| *u != 0.0)),
+            (sampled[&j]..sampled[&(j + 1)]).contains(&arrived[&(j + 1)]),
+            "{role}: t_action_ns of sample {} is in the interval before it",
+            j + 1
+        );
+        assert!(
+            (j.saturating_sub(5)..=j + 1).any(|k| applied.get(&k).is_some_and(|u| *u != 0.0)),
             "{role}: actions were being applied before the kill"
         );
-        // The next interval has no action: from t_{a+2} on the plant applies zero, and
-        // sample a + 3 reports it (applied over [t_{a+2}, t_{a+3})).
-        let safe: Vec<u64> = applied.range(a + 3..).map(|(&k, _)| k).collect();
+        // It came from a process alive then: no arrival after the interval of the
+        // death, d, but the one the agent may have sent in it (if the observer died, the
+        // agent answers its last estimate).
+        let d = interval_of(dead_ns as f64);
+        assert!(
+            j <= d + 1,
+            "{role}: an action arrived in interval {j}, after the death in {d}"
+        );
+        // Interval j + 1 has no action: from t_{j+2} on the plant applies zero, and
+        // sample j + 3 reports it (applied over [t_{j+2}, t_{j+3})).
+        let safe: Vec<u64> = applied.range(j + 3..).map(|(&k, _)| k).collect();
         assert!(
             !safe.is_empty(),
-            "{role}: the recording must show the plant after the death (last action in interval {a}, last sample {:?})",
+            "{role}: the recording must show the plant after the death (last action in interval {j}, last sample {:?})",
             applied.keys().max()
         );
         for k in safe {
             assert_eq!(
-                applied[&k], 0.0,
-                "{role}: sample {k} (last action in interval {a})"
+                applied[&k],
+                0.0,
+                "{role}: sample {k} (last action in interval {j}, death in {d}): applied {:?}",
+                applied.range(j.saturating_sub(2)..=k).collect::<Vec<_>>()
             );
         }
-        // On the plant's clock: zero from t_{a+2}, at most two periods after the action
-        // arrived (at or after t_a).
-        let (t_a, t_safe) = (sampled[&a], sampled[&(a + 2)]);
+        // On the plant's clock: zero from t_{j+2}, at most two periods after the last
+        // action arrived (at or after t_j).
+        let (t_j, t_safe) = (sampled[&j], sampled[&(j + 2)]);
         assert!(
-            t_safe - t_a <= 2.5 * period_ns,
+            t_safe - t_j <= 2.5 * period_ns,
             "{role}: safe action {} ms after the start of the last action's interval",
-            (t_safe - t_a) * 1e-6
+            (t_safe - t_j) * 1e-6
         );
         resume_two_more(&dir);
     }

@@ -59,7 +59,7 @@ pub struct Header {
 /// Plant → observer: what the sensor measured at sample `step`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("rig.Measurement.v3")]
+#[type_name("rig.Measurement.v4")]
 pub struct Measurement {
     /// Sample identification.
     pub header: Header,
@@ -91,6 +91,10 @@ pub struct Measurement {
     pub t_sample_ns: u64,
     /// Monotonic time at which the plant published \[ns\].
     pub t_publish_ns: u64,
+    /// Monotonic time at which the last action that arrived within the interval before
+    /// this sample reached the plant \[ns\]; 0 if none arrived in it (the plant held its
+    /// action or applied the safe one) and at a trial start.
+    pub t_action_ns: u64,
     /// Deadlines missed so far in the run (realtime timing: no action arrived within a
     /// sample interval; always 0 in lockstep).
     pub deadline_misses: u64,
@@ -183,10 +187,10 @@ mod tests {
     fn layouts_are_fixed() {
         // Changing a layout must change the type name's version: these sizes pin them.
         assert_eq!(std::mem::size_of::<Header>(), 40);
-        // v3: + u_next, delay_s.
+        // v3: + u_next, delay_s; v4: + t_action_ns.
         assert_eq!(
             std::mem::size_of::<Measurement>(),
-            40 + 3 * 8 + 8 * 8 + 2 * 4 * 8 + 8 + 24
+            40 + 3 * 8 + 8 * 8 + 2 * 4 * 8 + 8 + 32
         );
         assert_eq!(
             std::mem::size_of::<Estimate>(),

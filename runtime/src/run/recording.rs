@@ -184,7 +184,7 @@ impl Recording {
         let t_measurement = rec.channel(
             "/timing/plant/measurement",
             "rig.Timing.Measurement",
-            &timing_fields(&["t_sample_ns", "t_publish_ns"]),
+            &timing_fields(&["t_sample_ns", "t_publish_ns", "t_action_ns"]),
         )?;
         let t_estimate = rec.channel(
             "/timing/observer/estimate",
@@ -263,7 +263,7 @@ impl Recording {
             t,
             self.t_measurement,
             msg.header.seq,
-            &[msg.t_sample_ns, msg.t_publish_ns],
+            &[msg.t_sample_ns, msg.t_publish_ns, msg.t_action_ns],
         )
     }
 

@@ -128,7 +128,8 @@ impl Bridge {
     fn action(&mut self, seq: u64, t_publish_ns: u64) -> Result<Vec<f64>> {
         let l = &mut self.link;
         let a = l.actions.recv(&l.bus, SILENCE).map_err(wire_err)?;
-        l.latencies.push(now_ns() - t_publish_ns);
+        l.t_action_ns = now_ns();
+        l.latencies.push(l.t_action_ns - t_publish_ns);
         Link::check_answer(&a, seq)?;
         Ok(a.u[..l.task.action_dim()].to_vec())
     }

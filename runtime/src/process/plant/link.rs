@@ -30,6 +30,9 @@ pub(super) struct Link {
     pub(super) u_next: Vec<f64>,
     /// What the next measurement reports as [`Measurement::delay_s`].
     pub(super) delay_s: f64,
+    /// What the next measurement reports as [`Measurement::t_action_ns`]; 0 again once
+    /// published.
+    pub(super) t_action_ns: u64,
     /// Publish-to-action time of every sample \[ns\].
     pub(super) latencies: Vec<u64>,
     /// Realtime: per sample `[seq, t_sample_ns, t_woke_ns, t_action_ns]` (see
@@ -66,6 +69,7 @@ impl Link {
             actions,
             seq: first_seq,
             delay_s: 0.0,
+            t_action_ns: 0,
             latencies: Vec::new(),
             cycles: Vec::new(),
             misses: 0,
@@ -117,6 +121,10 @@ impl Link {
             delay_s: self.delay_s,
             t_sample_ns,
             t_publish_ns: now_ns(),
+            t_action_ns: match std::mem::take(&mut self.t_action_ns) {
+                _ if header.flags & flags::START != 0 => 0,
+                t => t,
+            },
             deadline_misses: self.misses,
         };
         self.out.send(m).map_err(wire_err)?;

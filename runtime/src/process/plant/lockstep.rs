@@ -79,7 +79,8 @@ fn exchange(
         now_ns(),
     )?;
     let a = link.actions.recv(&link.bus, SILENCE).map_err(wire_err)?;
-    link.latencies.push(now_ns() - t_publish_ns);
+    link.t_action_ns = now_ns();
+    link.latencies.push(link.t_action_ns - t_publish_ns);
     Link::check_answer(&a, header.seq)?;
     u.copy_from_slice(&a.u[..u.len()]);
     Ok(())

@@ -171,6 +171,7 @@ impl Realtime {
             }
         };
         Link::check_answer(&a, h.seq)?;
+        self.link.t_action_ns = now_ns();
         let m = held.u.len();
         held.u.copy_from_slice(&a.u[..m]);
         self.link.u_next.clone_from(&held.u);
@@ -206,6 +207,7 @@ impl Realtime {
         if pipelined {
             self.link.u_next.copy_from_slice(held.next());
         }
+        self.link.t_action_ns = arrivals.list.last().map_or(0, |&(t_a, _)| t_a);
         step
     }
 }
