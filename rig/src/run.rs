@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use clap::Args as Flags;
 use runtime::config::ExperimentConfig;
-use runtime::process::WaitKind;
+use runtime::process::{Layout, WaitKind};
 use runtime::run::{RunOptions, RunSummary, run};
 
 use crate::external::DriverArgs;
@@ -131,6 +131,10 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
         WaitKind::Block
     });
     runtime::run::check_waiting(lockstep, waiting)?;
+    let mut scheduling = args.scheduling;
+    if lockstep && scheduling.layout().is_none() {
+        scheduling.cpus = Some(Layout::lockstep(waiting));
+    }
     let opts = RunOptions {
         out: args.resume.clone().unwrap_or_else(|| args.out.clone()),
         resume: args.resume.is_some(),
@@ -139,7 +143,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
         realtime,
         driver,
         cycles_out: None,
-        scheduling: args.scheduling,
+        scheduling,
         spin: args.spin,
         waiting,
     };

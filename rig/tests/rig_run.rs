@@ -48,6 +48,26 @@ fn three_processes_reproduce_the_in_process_run_byte_for_byte() {
     }
 }
 
+/// Where the processes run changes nothing in what they compute: every `--cpus` layout
+/// gives `rig learn`'s bytes (on a machine of one CPU the layouts that set one apart are
+/// refused with a one-line error instead).
+#[test]
+fn every_cpu_layout_reproduces_the_in_process_run() {
+    let dir = tmp("cpus");
+    let online = std::thread::available_parallelism().map_or(1, |n| n.get());
+    for layout in ["shared", "plant-alone", "recorder-alone"] {
+        let args = [
+            "--cpus", layout, "--trials", "6", "--seed", "5", "--quiet", "--out",
+        ];
+        if online < 2 && layout != "shared" {
+            run_error(&dir, &args[..2], "at least two CPUs");
+            continue;
+        }
+        let ran = learn_and_run_as(&dir, &format!("-{layout}"), &args[2..], &args[..2]);
+        assert_eq!(ran.lines().count(), 7, "{layout}");
+    }
+}
+
 /// A sample-to-actuation delay (the delay studies') is deterministic in lockstep:
 /// both drivers give the same bytes, and the delay changes what is learned.
 #[test]
@@ -206,6 +226,12 @@ fn a_second_run_records_the_same_messages_except_timing() {
 /// `dir/learn{tag}` and with `rig run` into `dir/run{tag}`, asserts that `runs.csv` and
 /// `returns.csv` are byte-identical, and returns them.
 fn learn_and_run(dir: &Path, tag: &str, args: &[&str]) -> String {
+    learn_and_run_as(dir, tag, args, &[])
+}
+
+/// [`learn_and_run`], with `rig run` also given `run_only` (flags `rig learn` does not
+/// take).
+fn learn_and_run_as(dir: &Path, tag: &str, args: &[&str], run_only: &[&str]) -> String {
     ok(rig()
         .args(["learn", "--runs", "1"])
         .args(args)
@@ -214,13 +240,14 @@ fn learn_and_run(dir: &Path, tag: &str, args: &[&str]) -> String {
         .unwrap());
     ok(rig()
         .arg("run")
+        .args(run_only)
         .args(args)
         .arg(dir.join(format!("run{tag}")))
         .output()
         .unwrap());
     let learned = std::fs::read_to_string(dir.join(format!("learn{tag}/runs.csv"))).unwrap();
     let ran = std::fs::read_to_string(dir.join(format!("run{tag}/returns.csv"))).unwrap();
-    assert_eq!(learned, ran, "{args:?}");
+    assert_eq!(learned, ran, "{args:?} {run_only:?}");
     ran
 }
 

@@ -2,8 +2,10 @@
 
 use iceoryx2::prelude::*;
 
-/// Subscriber buffer of every service: the recorder may lag this many samples behind.
-pub const BUFFER: usize = 4096;
+/// Subscriber buffer of every run topic: the recorder may lag this many samples behind
+/// (about a quarter of a second of the default lockstep experiment; a recorder that lags further loses
+/// the oldest, and `rig run` stops with an error naming the topic).
+pub const BUFFER: usize = 16384;
 
 /// Publish-subscribe settings of a service. Both ends must use the same values:
 /// iceoryx2 refuses to open a service whose settings cannot serve the opener's.

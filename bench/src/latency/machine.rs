@@ -113,7 +113,7 @@ mod tests {
                 .collect(),
         };
         let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) } as f64;
-        let pinned = now.until(&later, Some(runtime::process::clock_cpu()));
+        let pinned = now.until(&later, Some(runtime::process::cpus::last_cpu()));
         assert_eq!(pinned.load_avg, now.load_avg);
         assert!((pinned.steal_ms - 3e3 / hz).abs() < 1e-9);
         assert_eq!(pinned.plant_cpu, Some(online - 1));

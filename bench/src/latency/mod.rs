@@ -53,7 +53,7 @@ use machine::Counters;
 pub use machine::MachineLoad;
 use runtime::config::Overrides;
 use runtime::learn::write_atomic;
-use runtime::process::{Scheduling, Spin};
+use runtime::process::{CpuSet, Layout, Scheduling, Spin};
 use runtime::report::plot::{Histogram, plot_histograms};
 use runtime::run::{RunOptions, run};
 pub use sweep::{SweepPoint, sweep};
@@ -157,7 +157,7 @@ impl LatencyReport {
                 .map_or("ordinary scheduling".to_string(), |p| format!(
                     "SCHED_FIFO {p}"
                 )),
-            if self.scheduling.pin_cpus {
+            if self.scheduling.layout() == Some(Layout::PlantAlone) {
                 ", plant pinned to its own CPU"
             } else {
                 ""
@@ -214,14 +214,15 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     let exe = std::env::current_exe().context("cannot find the rig executable")?;
     // The baseline under the same policy: the ping-pong's partner process inherits it.
     runtime::process::set_rt_priority(opts.scheduling.rt_priority)?;
-    if opts.scheduling.pin_cpus {
-        runtime::process::pin(runtime::process::Cpus::Rest)?;
+    let plant_alone = opts.scheduling.layout() == Some(Layout::PlantAlone);
+    if plant_alone {
+        runtime::process::cpus::pin(CpuSet::Others)?;
     }
     let mut raw = raw_round_trips(
         &exe,
         &opts.out,
         opts.raw_samples,
-        opts.scheduling.pin_cpus,
+        plant_alone,
         wire::Waiting::Block,
     )?;
     let raw_rtt = Stats::of(&mut raw);
@@ -318,7 +319,8 @@ fn run_realtime(
     let machine = before.zip(Counters::read()).map(|(b, a)| {
         b.until(
             &a,
-            opts.scheduling.pin_cpus.then(runtime::process::clock_cpu),
+            (opts.scheduling.layout() == Some(Layout::PlantAlone))
+                .then(runtime::process::cpus::last_cpu),
         )
     });
     Ok(((task.ts * 1e9 / speed).round() as u64, machine))

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
-use runtime::process::{Cpus, Wait, wire_err};
+use runtime::process::{CpuSet, Wait, wire_err};
 use wire::{Bus, Measurement, Waiting, now_ns};
 
 use super::{Kill, spawn};
@@ -25,10 +25,10 @@ pub fn pong(
     ping: Option<(usize, &Path)>,
 ) -> Result<()> {
     if pin_cpus {
-        runtime::process::pin(if ping.is_some() {
-            Cpus::Rest
+        runtime::process::cpus::pin(if ping.is_some() {
+            CpuSet::Others
         } else {
-            Cpus::Clock
+            CpuSet::Last
         })?;
     }
     let role = if ping.is_some() { "ping" } else { "pong" };

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow, bail};
 use runtime::learn::write_atomic;
-use runtime::process::Wait;
+use runtime::process::{Layout, Wait};
 use wire::Waiting;
 
 use super::{Kill, spawn};
@@ -95,7 +95,8 @@ pub fn three_processes(exe: &Path, dir: &Path, trials: u32, waiting: Waiting) ->
 }
 
 /// The plant, observer and agent processes of the default experiment with `trials`
-/// trials, started directly (no recorder), waiting as `waiting` says; with every
+/// trials, started directly (no recorder), waiting as `waiting` says and placed as
+/// `rig run` places them in lockstep ([`Layout::lockstep`]); with every
 /// sample's time from publishing the measurement to receiving its action \[ns\],
 /// without the first trial.
 pub fn unrecorded(
@@ -116,6 +117,7 @@ pub fn unrecorded(
     let mut common = vec!["--run-id", run_id.as_str(), "--config", &config_s];
     let wait = Wait::process_args(waiting);
     common.extend(wait.iter().map(String::as_str));
+    common.extend(["--cpus", Layout::lockstep(waiting).name()]);
     let (cpu0, t0) = (children_cpu(), Instant::now());
     let mut kids = Kill(Vec::new());
     let start = |role: &[&str], kids: &mut Vec<Child>| -> Result<()> {

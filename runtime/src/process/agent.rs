@@ -16,9 +16,7 @@ use crate::resume::CheckpointWriter;
 pub fn run(args: &AgentArgs) -> Result<()> {
     let node = &args.node;
     super::set_rt_priority(node.scheduling.rt_priority)?;
-    if node.scheduling.pin_cpus {
-        super::pin(super::Cpus::Rest)?;
-    }
+    node.scheduling.place(super::Part::Node)?;
     let cfg = node.config()?;
     let mut learner = Learner::new(args, &cfg)?;
     let bus = node.join("agent")?;
@@ -92,7 +90,7 @@ impl Learner {
         let checkpoints = args
             .checkpoints
             .as_deref()
-            .map(CheckpointWriter::new)
+            .map(|dir| CheckpointWriter::new(dir, args.node.scheduling.layout()))
             .transpose()?;
         Ok(Self {
             agent,

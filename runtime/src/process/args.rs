@@ -9,6 +9,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use wire::{Bus, FOREVER, Waiting};
 
+use super::{Layout, Part};
 use crate::config::{ExperimentConfig, Overrides, resolve};
 
 /// The realtime plant's default spin before each sampling instant \[µs\] (`--spin-us`).
@@ -26,17 +27,39 @@ pub struct Scheduling {
     pub rt_priority: Option<u8>,
     /// Pin the plant (the clock) alone on the last CPU and the observer, the agent and
     /// the recorder on the others, so that the rig's own work does not disturb the
-    /// sampling instants (sched_setaffinity; needs at least two CPUs).
-    #[arg(long)]
+    /// sampling instants (the same as `--cpus plant-alone`).
+    #[arg(long, conflicts_with = "cpus")]
     pub pin_cpus: bool,
+    /// Where the processes run (sched_setaffinity; the layouts that set a CPU apart need
+    /// at least two): `shared` wherever the operating system puts them; `plant-alone` the
+    /// plant alone on the last CPU, for real time; `recorder-alone` the recorder and the
+    /// checkpoint writer alone on the last CPU and the loop on the others [rig run's
+    /// default: recorder-alone in lockstep when the processes poll without end on a
+    /// machine of 2 or 3 CPUs, otherwise shared; a node's: shared].
+    #[arg(long, value_enum, value_name = "LAYOUT")]
+    pub cpus: Option<Layout>,
 }
 
 impl Scheduling {
+    /// The layout asked for (`--cpus`, `--pin-cpus`), if any.
+    pub fn layout(&self) -> Option<Layout> {
+        if self.pin_cpus {
+            Some(Layout::PlantAlone)
+        } else {
+            self.cpus
+        }
+    }
+
+    /// Places the calling process's `part` as [`Scheduling::layout`] says.
+    pub fn place(&self, part: Part) -> Result<()> {
+        self.layout().unwrap_or(Layout::Shared).place(part)
+    }
+
     /// The flags that give a node this scheduling.
     pub fn process_args(&self) -> Vec<String> {
         let mut args = Vec::new();
-        if self.pin_cpus {
-            args.push("--pin-cpus".to_string());
+        if let Some(l) = self.layout() {
+            args.extend(["--cpus".to_string(), l.name().to_string()]);
         }
         if let Some(p) = self.rt_priority {
             args.extend(["--rt-priority".to_string(), p.to_string()]);

@@ -21,12 +21,15 @@
 
 pub mod agent;
 mod args;
+pub mod cpus;
 pub mod observer;
 pub mod plant;
 
 use std::time::Duration;
 
 use anyhow::Result;
+
+pub use cpus::{CpuSet, Layout, Part};
 
 pub use args::{
     AgentArgs, NodeArgs, ObserverArgs, PlantArgs, SPIN_US, Scheduling, Spin, Wait, WaitKind,
@@ -61,58 +64,6 @@ pub fn set_rt_priority(priority: Option<u8>) -> Result<()> {
     if unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } != 0 {
         anyhow::bail!(
             "cannot lock this process's memory (mlockall) for --rt-priority {p}: {} (needs root, CAP_IPC_LOCK or a memlock limit in /etc/security/limits.conf)",
-            std::io::Error::last_os_error()
-        );
-    }
-    Ok(())
-}
-
-/// Where `--pin-cpus` puts a process.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Cpus {
-    /// The last CPU: the plant, the clock (and the echo side of `rig latency`'s raw
-    /// ping-pong, so that the baseline crosses cores as plant → observer does).
-    Clock,
-    /// Every other CPU: the observer, the agent and the recording supervisor.
-    Rest,
-}
-
-/// The CPU `--pin-cpus` gives the plant (the clock): the last one online.
-pub fn clock_cpu() -> usize {
-    // SAFETY: `sysconf` reads a system constant.
-    let online = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) };
-    online.max(1) as usize - 1
-}
-
-/// Pins this process to `cpus` (`--pin-cpus`, `sched_setaffinity`): the clock gets a CPU
-/// that none of the rig's other work runs on (measured in `docs/results/latency.md`).
-pub fn pin(cpus: Cpus) -> Result<()> {
-    let last = clock_cpu();
-    if last < 1 {
-        anyhow::bail!(
-            "--pin-cpus needs at least two CPUs; {} are online",
-            last + 1
-        );
-    }
-    let range = match cpus {
-        Cpus::Clock => last..last + 1,
-        Cpus::Rest => 0..last,
-    };
-    // SAFETY: `cpu_set_t` is plain data (all zeros: the empty set); `CPU_SET` writes a bit
-    // of it for CPUs below `CPU_SETSIZE`; `sched_setaffinity` reads the set for this
-    // process (pid 0).
-    let ok = unsafe {
-        let mut set: libc::cpu_set_t = std::mem::zeroed();
-        for c in range.clone() {
-            libc::CPU_SET(c, &mut set);
-        }
-        libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set) == 0
-    };
-    if !ok {
-        anyhow::bail!(
-            "cannot pin this process to CPUs {}–{} (--pin-cpus): {}",
-            range.start,
-            range.end - 1,
             std::io::Error::last_os_error()
         );
     }

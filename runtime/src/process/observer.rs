@@ -44,9 +44,7 @@ pub fn call_of(f: u64) -> Call {
 pub fn run(args: &ObserverArgs) -> Result<()> {
     let args = &args.node;
     super::set_rt_priority(args.scheduling.rt_priority)?;
-    if args.scheduling.pin_cpus {
-        super::pin(super::Cpus::Rest)?;
-    }
+    args.scheduling.place(super::Part::Node)?;
     let cfg = args.config()?;
     let task = Arc::new(Task::new(cfg.system));
     let mut front = crate::experiment::front(&task, &cfg);

@@ -8,6 +8,8 @@ use std::thread::JoinHandle;
 use agent::checkpoint::Checkpoint;
 use anyhow::{Context, Result, anyhow};
 
+use crate::process::{Layout, Part};
+
 /// The checkpoint directory of run directory `out`.
 pub fn checkpoint_dir(out: &Path) -> PathBuf {
     out.join("checkpoints")
@@ -55,14 +57,19 @@ pub struct CheckpointWriter {
 }
 
 impl CheckpointWriter {
-    /// A writer into `dir` (created if missing).
-    pub fn new(dir: &Path) -> Result<Self> {
+    /// A writer into `dir` (created if missing), its thread placed as `layout` places
+    /// the checkpoint writer.
+    pub fn new(dir: &Path, layout: Option<Layout>) -> Result<Self> {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
         let (tx, rx) = mpsc::channel::<Checkpoint>();
         let dir = dir.to_owned();
         let thread = std::thread::spawn(move || -> Result<()> {
             // Beside the loop: never preempting it (and never real-time).
             crate::process::batch_thread();
+            // Where it cannot be pinned it runs on the agent's CPUs: no reason to stop.
+            if let Some(l) = layout {
+                let _ = l.place(Part::CheckpointWriter);
+            }
             let mut previous = None;
             while let Ok(mut c) = rx.recv() {
                 // Only the newest of those waiting.

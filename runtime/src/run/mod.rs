@@ -61,8 +61,8 @@ pub struct RunOptions {
     /// Realtime, simulated plant: the plant writes every sample's timing to this file
     /// (`rig plant --cycles-out`, for `rig latency`).
     pub cycles_out: Option<PathBuf>,
-    /// How the three processes are scheduled (`--pin-cpus` also pins this process with
-    /// the observer and the agent).
+    /// How the three processes are scheduled; the layout (`--cpus`) places this
+    /// process, the recorder, too.
     pub scheduling: Scheduling,
     /// How the plant waits for a sampling instant (realtime, simulated plant only).
     pub spin: Spin,
@@ -168,11 +168,10 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let first_seq = point.as_ref().map_or(0, |p| p.first_seq);
     let mut sup = Supervisor::new(bus, recording, returns, &opts.out, first_seq, watch, grace)?;
 
-    if opts.scheduling.pin_cpus {
-        crate::process::pin(crate::process::Cpus::Rest)?;
-    }
     let args = spawn::role_args(opts, point.as_ref(), &checkpoints);
     sup.children = spawn::processes(&run_id, &config_path, &opts.out, &args)?;
+    // Placed after the processes started: they place themselves, from anywhere.
+    opts.scheduling.place(crate::process::Part::Recorder)?;
     if opts.realtime.is_none() && opts.driver.is_none() {
         crate::process::batch_thread();
     }

@@ -86,13 +86,10 @@ pub fn run(args: &PlantArgs) -> Result<()> {
 
 /// Puts the plant, the clock, one level above the observer and the agent
 /// (`--rt-priority`), so that its sampling instant is not held up by their compute on
-/// the same core, and alone on its CPU (`--pin-cpus`).
+/// the same core, and where the layout puts it (`--cpus`, `--pin-cpus`).
 fn schedule_clock(s: &Scheduling) -> Result<()> {
     super::set_rt_priority(s.rt_priority.map(|p| p.saturating_add(1).min(99)))?;
-    if s.pin_cpus {
-        super::pin(super::Cpus::Clock)?;
-    }
-    Ok(())
+    s.place(super::Part::Plant)
 }
 
 /// Runs trials: the simulation in lockstep or in real time, or an external driver

@@ -1,0 +1,213 @@
+//! Where a run's processes sit on the machine's CPUs (`--cpus`, `sched_setaffinity`).
+//!
+//! Two layouts set one CPU apart — the last one this process may use — and put the
+//! rest of the rig on the others:
+//!
+//! - [`Layout::PlantAlone`] (real time, `--pin-cpus`): the plant, the clock, alone, so
+//!   that the rig's own work does not disturb the sampling instants;
+//! - [`Layout::RecorderAlone`] (lockstep): the recorder and the checkpoint writer alone,
+//!   so that their work does not take the CPU a polling loop process needs. On a machine
+//!   with fewer CPUs than the loop's three processes and the recorder, the loop then
+//!   shares its CPUs and hands each message on with a context switch instead of waiting
+//!   for the recorder's time slice to end (`docs/results/speed.md`).
+
+use anyhow::{Result, bail};
+use wire::{FOREVER, Waiting};
+
+/// Where the processes of a run are placed (`--cpus`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Layout {
+    /// Wherever the operating system puts them.
+    Shared,
+    /// The plant (the clock) alone on the last CPU; the observer, the agent and the
+    /// recorder on the others.
+    PlantAlone,
+    /// The recorder and the checkpoint writer alone on the last CPU; the plant, the
+    /// observer and the agent on the others.
+    RecorderAlone,
+}
+
+/// A part of a run, as far as its placement goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    /// The plant process.
+    Plant,
+    /// The observer or the agent process.
+    Node,
+    /// The recording supervisor (`rig run`).
+    Recorder,
+    /// The agent's checkpoint writer thread.
+    CheckpointWriter,
+}
+
+/// A set of CPUs relative to those this process may use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CpuSet {
+    /// The last of them.
+    Last,
+    /// All but the last.
+    Others,
+}
+
+impl Layout {
+    /// The `--cpus` value of this layout.
+    pub fn name(self) -> &'static str {
+        match self {
+            Layout::Shared => "shared",
+            Layout::PlantAlone => "plant-alone",
+            Layout::RecorderAlone => "recorder-alone",
+        }
+    }
+
+    /// Where `part` goes; `None`: where the operating system (or the parent) put it.
+    pub fn cpus(self, part: Part) -> Option<CpuSet> {
+        use {CpuSet::*, Part::*};
+        match (self, part) {
+            (Layout::Shared, _) => None,
+            (Layout::PlantAlone, Plant) => Some(Last),
+            (Layout::PlantAlone, Node | Recorder) => Some(Others),
+            // A thread of the agent: on the agent's CPUs.
+            (Layout::PlantAlone, CheckpointWriter) => None,
+            (Layout::RecorderAlone, Plant | Node) => Some(Others),
+            (Layout::RecorderAlone, Recorder | CheckpointWriter) => Some(Last),
+        }
+    }
+
+    /// Pins the calling thread as this layout places `part` (nothing for
+    /// [`Layout::Shared`]).
+    pub fn place(self, part: Part) -> Result<()> {
+        match self.cpus(part) {
+            Some(set) => pin(set),
+            None => Ok(()),
+        }
+    }
+
+    /// The layout of a lockstep run whose processes wait as `waiting` says: the recorder
+    /// alone when the loop polls without end (it wants a CPU whenever it has a message)
+    /// on a machine of two or three CPUs, fewer than the four processes, all of which
+    /// this process may use; shared otherwise.
+    pub fn lockstep(waiting: Waiting) -> Layout {
+        let polls = matches!(waiting, Waiting::Yield(b) | Waiting::Spin(b) if b == FOREVER);
+        let n = online();
+        if polls && (2..=3).contains(&n) && allowed().len() == n {
+            Layout::RecorderAlone
+        } else {
+            Layout::Shared
+        }
+    }
+}
+
+/// CPUs online: a layout's CPUs are numbered among them (the last set apart).
+pub fn online() -> usize {
+    // SAFETY: `sysconf` reads a system constant.
+    let n = unsafe { libc::sysconf(libc::_SC_NPROCESSORS_ONLN) };
+    n.max(1) as usize
+}
+
+/// The CPU a layout sets apart: the last one online.
+pub fn last_cpu() -> usize {
+    online() - 1
+}
+
+/// The CPUs this thread may run on, in increasing order.
+pub fn allowed() -> Vec<usize> {
+    // SAFETY: `cpu_set_t` is plain data; `sched_getaffinity` writes the calling thread's
+    // set into it; `CPU_ISSET` reads bits below `CPU_SETSIZE`.
+    unsafe {
+        let mut set: libc::cpu_set_t = std::mem::zeroed();
+        if libc::sched_getaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &mut set) != 0 {
+            return Vec::new();
+        }
+        (0..libc::CPU_SETSIZE as usize)
+            .filter(|&c| libc::CPU_ISSET(c, &set))
+            .collect()
+    }
+}
+
+/// Pins the calling thread (and the threads and processes it starts afterwards) to
+/// `set` of the CPUs online; an error if fewer than two are online or the operating
+/// system refuses (a CPU outside this process's cgroup or `taskset`).
+pub fn pin(set: CpuSet) -> Result<()> {
+    let last = last_cpu();
+    if last < 1 {
+        bail!("--cpus needs at least two CPUs; 1 is online");
+    }
+    let chosen = match set {
+        CpuSet::Last => last..last + 1,
+        CpuSet::Others => 0..last,
+    };
+    // SAFETY: `cpu_set_t` is plain data (all zeros: the empty set); `CPU_SET` writes bits
+    // below `CPU_SETSIZE`; `sched_setaffinity` reads the set for the calling thread
+    // (pid 0).
+    let ok = unsafe {
+        let mut mask: libc::cpu_set_t = std::mem::zeroed();
+        for c in chosen.clone() {
+            libc::CPU_SET(c, &mut mask);
+        }
+        libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &mask) == 0
+    };
+    if !ok {
+        bail!(
+            "cannot pin this process to CPUs {}–{} (--cpus): {}",
+            chosen.start,
+            chosen.end - 1,
+            std::io::Error::last_os_error()
+        );
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_layout_sets_one_part_apart() {
+        use {CpuSet::*, Part::*};
+        let parts = [Plant, Node, Recorder, CheckpointWriter];
+        let on = |l: Layout| parts.map(|p| l.cpus(p));
+        assert_eq!(on(Layout::Shared), [None; 4]);
+        assert_eq!(
+            on(Layout::PlantAlone),
+            [Some(Last), Some(Others), Some(Others), None]
+        );
+        assert_eq!(
+            on(Layout::RecorderAlone),
+            [Some(Others), Some(Others), Some(Last), Some(Last)]
+        );
+    }
+
+    #[test]
+    fn a_lockstep_run_sets_the_recorder_apart_only_when_it_polls_on_few_cpus() {
+        let few = (2..=3).contains(&online()) && allowed().len() == online();
+        let apart = if few {
+            Layout::RecorderAlone
+        } else {
+            Layout::Shared
+        };
+        assert_eq!(Layout::lockstep(Waiting::Yield(FOREVER)), apart);
+        assert_eq!(Layout::lockstep(Waiting::Spin(FOREVER)), apart);
+        assert_eq!(Layout::lockstep(Waiting::Block), Layout::Shared);
+        let bounded = std::time::Duration::from_micros(100);
+        assert_eq!(Layout::lockstep(Waiting::Yield(bounded)), Layout::Shared);
+    }
+
+    #[test]
+    fn pinning_puts_the_thread_on_the_cpus_of_its_set() {
+        // In threads of their own: the test harness's threads keep their CPUs.
+        let on = |set| {
+            std::thread::spawn(move || pin(set).map(|()| allowed()).map_err(|e| e.to_string()))
+                .join()
+                .unwrap()
+        };
+        if online() < 2 {
+            let e = on(CpuSet::Last).unwrap_err();
+            assert!(e.contains("at least two CPUs"), "{e}");
+            return;
+        }
+        if allowed().len() == online() {
+            assert_eq!(on(CpuSet::Last), Ok(vec![last_cpu()]));
+            assert_eq!(on(CpuSet::Others), Ok((0..last_cpu()).collect()));
+        }
+    }
+}
