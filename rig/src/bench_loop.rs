@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args as Flags;
-use runtime::process::{Wait, WaitKind};
+use runtime::process::{Layout, Wait, WaitKind};
 
 #[derive(Flags)]
 pub struct Args {
@@ -22,6 +22,11 @@ pub struct Args {
     /// How the processes wait (as `rig run` in lockstep).
     #[command(flatten)]
     wait: Wait,
+    /// Where the three processes and the recorder run (`shared`, `plant-alone`,
+    /// `recorder-alone`; as `rig run --cpus`) [default: as `rig run` places a lockstep
+    /// run that waits so].
+    #[arg(long, value_enum, value_name = "LAYOUT")]
+    cpus: Option<Layout>,
     /// Output directory.
     #[arg(long, value_name = "DIR", default_value = "out/bench-loop")]
     out: PathBuf,
@@ -32,12 +37,14 @@ pub struct Args {
 
 /// Runs the command.
 pub fn main(args: &Args) -> ExitCode {
+    let waiting = args.wait.waiting(crate::run::LOCKSTEP_WAIT);
     let opts = bench::loop_bench::LoopOptions {
         out: args.out.clone(),
         trials: args.trials,
         repetitions: args.repetitions as usize,
         samples: args.samples as usize,
-        waiting: args.wait.waiting(crate::run::LOCKSTEP_WAIT),
+        waiting,
+        layout: args.cpus.unwrap_or_else(|| Layout::lockstep(waiting)),
     };
     let progress = |what: &str| {
         if !args.quiet {

@@ -130,6 +130,7 @@ fn bench_loop_measures_the_loop_against_one_process_and_the_transport() {
             .unwrap());
         let text = String::from_utf8(out.stdout).unwrap();
         assert!(text.contains("three processes / one process: "), "{text}");
+        assert!(text.contains("three processes placed --cpus "), "{text}");
         assert!(
             text.contains("byte for byte") && !text.contains("DID NOT"),
             "{text}"

@@ -20,6 +20,7 @@ use std::process::{Child, Command, Stdio};
 
 use anyhow::{Context, Result};
 use runtime::learn::write_atomic;
+use runtime::process::Layout;
 use wire::{FOREVER, Waiting};
 
 mod raw;
@@ -105,11 +106,15 @@ pub struct LoopOptions {
     pub samples: usize,
     /// How the processes wait for their next message.
     pub waiting: Waiting,
+    /// Where the three processes and the recorder run.
+    pub layout: Layout,
 }
 
 /// What `rig bench-loop` measured.
 #[derive(Clone, Debug)]
 pub struct LoopReport {
+    /// Where the processes ran.
+    pub layout: Layout,
     /// `rig learn --runs 1`, per repetition.
     pub in_process: Vec<Timed>,
     /// `rig run`, per repetition.
@@ -173,7 +178,8 @@ impl LoopReport {
         };
         let un = median(&self.unrecorded).wall.as_secs_f64();
         format!(
-            "{}{}{}three processes / one process: {:.2} (medians of wall time); recorder's share: {:.2} × the loop without it; rig run {} rig learn's runs.csv byte for byte\n{}{}{}{}",
+            "three processes placed --cpus {}\n{}{}{}three processes / one process: {:.2} (medians of wall time); recorder's share: {:.2} × the loop without it; rig run {} rig learn's runs.csv byte for byte\n{}{}{}{}",
+            self.layout.name(),
             row("one process (rig learn --runs 1)", &self.in_process),
             row("three processes (rig run)", &self.three_processes),
             row("three processes, no recorder", &self.unrecorded),
@@ -249,12 +255,14 @@ pub fn bench_loop(opts: &LoopOptions, progress: &dyn Fn(&str)) -> Result<LoopRep
             &run,
             opts.trials,
             opts.waiting,
+            opts.layout,
         )?);
         let (t, s) = runs::unrecorded(
             &exe,
             &out.join(format!("loop-{i}")),
             opts.trials,
             opts.waiting,
+            opts.layout,
         )?;
         unrecorded.push(t);
         steps.extend(s);
@@ -274,6 +282,7 @@ pub fn bench_loop(opts: &LoopOptions, progress: &dyn Fn(&str)) -> Result<LoopRep
         runtime::config::resolve(None, &Default::default()).map_err(|e| anyhow::anyhow!("{e}"))?;
     let samples_per_run = samples_per_run(&cfg, opts.trials);
     let report = LoopReport {
+        layout: opts.layout,
         in_process,
         three_processes: three,
         unrecorded,

@@ -84,19 +84,26 @@ pub fn in_process(exe: &Path, dir: &Path, trials: u32) -> Result<Timed> {
 }
 
 /// `rig run` of the default experiment with `trials` trials into `dir`, its processes
-/// waiting as `waiting` says.
-pub fn three_processes(exe: &Path, dir: &Path, trials: u32, waiting: Waiting) -> Result<Timed> {
+/// waiting as `waiting` says, placed as `layout` says.
+pub fn three_processes(
+    exe: &Path,
+    dir: &Path,
+    trials: u32,
+    waiting: Waiting,
+    layout: Layout,
+) -> Result<Timed> {
     let t = trials.to_string();
     let d = dir.to_string_lossy();
     let wait = Wait::process_args(waiting);
     let mut args = vec!["run", "--trials", &t, "--quiet", "--out", &d];
     args.extend(wait.iter().map(String::as_str));
+    args.extend(["--cpus", layout.name()]);
     timed(exe, &args, &dir.with_extension("log"))
 }
 
 /// The plant, observer and agent processes of the default experiment with `trials`
 /// trials, started directly (no recorder), waiting as `waiting` says and placed as
-/// `rig run` places them in lockstep ([`Layout::lockstep`]); with every
+/// `layout` says; with every
 /// sample's time from publishing the measurement to receiving its action \[ns\],
 /// without the first trial.
 pub fn unrecorded(
@@ -104,6 +111,7 @@ pub fn unrecorded(
     dir: &Path,
     trials: u32,
     waiting: Waiting,
+    layout: Layout,
 ) -> Result<(Timed, Vec<u64>)> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let mut cfg =
@@ -117,7 +125,7 @@ pub fn unrecorded(
     let mut common = vec!["--run-id", run_id.as_str(), "--config", &config_s];
     let wait = Wait::process_args(waiting);
     common.extend(wait.iter().map(String::as_str));
-    common.extend(["--cpus", Layout::lockstep(waiting).name()]);
+    common.extend(["--cpus", layout.name()]);
     let (cpu0, t0) = (children_cpu(), Instant::now());
     let mut kids = Kill(Vec::new());
     let start = |role: &[&str], kids: &mut Vec<Child>| -> Result<()> {
