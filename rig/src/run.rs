@@ -132,8 +132,10 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
     });
     runtime::run::check_waiting(lockstep, waiting)?;
     let mut scheduling = args.scheduling;
-    if lockstep && scheduling.layout().is_none() {
-        scheduling.cpus = Some(Layout::lockstep(waiting));
+    match scheduling.layout() {
+        Some(layout) => layout.check().map_err(|e| e.to_string())?,
+        None if lockstep => scheduling.cpus = Some(Layout::lockstep(waiting)),
+        None => {}
     }
     let opts = RunOptions {
         out: args.resume.clone().unwrap_or_else(|| args.out.clone()),

@@ -268,6 +268,9 @@ fn validate(opts: &LatencyOptions) -> Result<()> {
     if opts.cycles == 0 {
         bail!("`--cycles` must be at least 1");
     }
+    if let Some(layout) = opts.scheduling.layout() {
+        layout.check()?;
+    }
     if opts.mode == ObserverMode::Predictive && opts.observer != ObserverKind::Predictive {
         bail!(
             "`--observer-mode predictive` (rig latency's default) needs `--observer predictive` (its process model predicts x̂_(k+1|k)); with `--observer {}` add `--observer-mode direct`",

@@ -73,6 +73,18 @@ impl Layout {
         }
     }
 
+    /// An error if this layout cannot be had here: one that sets a CPU apart on a
+    /// machine with one CPU online.
+    pub fn check(self) -> Result<()> {
+        if self != Layout::Shared && online() < 2 {
+            bail!(
+                "--cpus {} needs at least two CPUs; 1 is online",
+                self.name()
+            );
+        }
+        Ok(())
+    }
+
     /// Pins the calling thread as this layout places `part` (nothing for
     /// [`Layout::Shared`]).
     pub fn place(self, part: Part) -> Result<()> {
