@@ -103,9 +103,8 @@ pub fn three_processes(
 
 /// The plant, observer and agent processes of the default experiment with `trials`
 /// trials, started directly (no recorder), waiting as `waiting` says and placed as
-/// `layout` says; with every
-/// sample's time from publishing the measurement to receiving its action \[ns\],
-/// without the first trial.
+/// `layout` says; with every sample's time from publishing the measurement to receiving
+/// its action \[ns\], without the first trial.
 pub fn unrecorded(
     exe: &Path,
     dir: &Path,

@@ -1,7 +1,7 @@
 //! Where a run's processes sit on the machine's CPUs (`--cpus`, `sched_setaffinity`).
 //!
-//! Two layouts set one CPU apart — the last one this process may use — and put the
-//! rest of the rig on the others:
+//! Two layouts set one CPU apart — the last one online — and put the rest of the rig on
+//! the others:
 //!
 //! - [`Layout::PlantAlone`] (real time, `--pin-cpus`): the plant, the clock, alone, so
 //!   that the rig's own work does not disturb the sampling instants;
@@ -40,10 +40,10 @@ pub enum Part {
     CheckpointWriter,
 }
 
-/// A set of CPUs relative to those this process may use.
+/// A set of the CPUs online.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CpuSet {
-    /// The last of them.
+    /// The last one.
     Last,
     /// All but the last.
     Others,
