@@ -220,7 +220,7 @@ impl ActorCritic {
             Next::Terminal(0.0)
         } else if horizon.ends_after(self.k) {
             // After a finite horizon's last sample V(x_N, N) is τ_N(x_N)    (Eq. 4.3)
-            Next::Terminal(self.info.reward.state_reward(x_next))
+            Next::Terminal(self.info.reward.terminal_reward(x_next))
         } else {
             Next::State(&x_next_in)
         };

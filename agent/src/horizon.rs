@@ -19,8 +19,8 @@
 //! The process model stays time-invariant (footnote 2 of §4.2: the terminal reward is
 //! the sole cause of a time-varying policy): [`crate::model::ProcessModel`] predicts the
 //! state part of `(x, k)` and advances time by one step, the known dynamics of time.
-//! The terminal reward is the state part of the reward, `τ_N(x) = −xᵀQx` (§4.4,
-//! [`plant::QuadraticReward::state_reward`]).
+//! The terminal reward is `τ_N(x) = −eᵀ Q_N e`: §4.4 takes the state part of the reward,
+//! `Q_N = Q`, as every built-in task does ([`plant::QuadraticReward::terminal_reward`]).
 
 use std::ops::Deref;
 
@@ -86,7 +86,7 @@ impl Horizon {
     pub fn final_reward(self, reward: &QuadraticReward, x_n: &[f64]) -> f64 {
         match self {
             Horizon::Infinite => 0.0,
-            Horizon::Finite { .. } => reward.state_reward(x_n),
+            Horizon::Finite { .. } => reward.terminal_reward(x_n),
         }
     }
 }

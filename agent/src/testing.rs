@@ -54,6 +54,7 @@ pub fn info(bound: f64) -> TaskInfo {
             q: vec![1.0],
             p: vec![1.0],
             reference: vec![0.0],
+            terminal: vec![1.0],
             angle_mask: vec![false],
         },
         horizon: Horizon::Finite { steps: 2 },

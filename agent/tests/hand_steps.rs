@@ -110,6 +110,7 @@ fn info() -> TaskInfo {
             q: vec![1.0],
             p: vec![0.5],
             reference: vec![0.0],
+            terminal: vec![1.0],
             angle_mask: vec![false],
         },
         horizon: Horizon::Infinite,

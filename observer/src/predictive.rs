@@ -223,9 +223,10 @@ impl Predictive {
                 let mut ua = [0.0; plant::MAX_ACTION];
                 let ua = &mut ua[..u.len()];
                 self.task.saturate(u, ua);
-                let h = self.task.ts / self.task.substeps as f64;
-                for _ in 0..self.task.substeps {
-                    rk4::step(self.task.dynamics.as_ref(), &mut p[..n], ua, h);
+                let sim = self.task.simulation();
+                let h = self.task.ts / sim.substeps as f64;
+                for _ in 0..sim.substeps {
+                    rk4::step(sim.dynamics.as_ref(), &mut p[..n], ua, h);
                 }
                 true
             }

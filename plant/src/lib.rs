@@ -39,7 +39,7 @@ pub mod task;
 pub mod two_link;
 
 pub use reward::QuadraticReward;
-pub use task::{OperatingRange, SystemName, Task};
+pub use task::{OperatingRange, Simulation, SystemName, Task, TaskFile};
 
 /// Largest state dimension of any system in this crate (the two-link arm has 4; a
 /// finite-horizon learner appends time, which lives in the agent, not here).
@@ -74,7 +74,11 @@ pub struct Plant {
 
 impl Plant {
     /// A plant for `task`, at the task's first start state.
+    ///
+    /// # Panics
+    /// If the task has no simulation ([`Task::simulation`]).
     pub fn new(task: std::sync::Arc<Task>) -> Self {
+        task.simulation();
         let x = task.initial_states[0].clone();
         let applied = vec![0.0; task.action_dim()];
         Self {
@@ -135,9 +139,10 @@ impl Plant {
     pub fn step(&mut self, u: &[f64]) -> f64 {
         self.safety.admit(u, &mut self.applied);
         let r = self.task.reward.reward(&self.x, &self.applied);
-        let h = self.task.ts / self.task.substeps as f64;
-        for _ in 0..self.task.substeps {
-            rk4::step(self.task.dynamics.as_ref(), &mut self.x, &self.applied, h);
+        let sim = self.task.simulation();
+        let h = self.task.ts / sim.substeps as f64;
+        for _ in 0..sim.substeps {
+            rk4::step(sim.dynamics.as_ref(), &mut self.x, &self.applied, h);
         }
         self.settle();
         self.reward_of_transition(r)
@@ -172,11 +177,12 @@ impl Plant {
         if duration <= 0.0 {
             return;
         }
-        let h_max = self.task.ts / self.task.substeps as f64;
+        let sim = self.task.simulation();
+        let h_max = self.task.ts / sim.substeps as f64;
         let n = (duration / h_max).ceil().max(1.0) as usize;
         let h = duration / n as f64;
         for _ in 0..n {
-            rk4::step(self.task.dynamics.as_ref(), &mut self.x, &self.applied, h);
+            rk4::step(sim.dynamics.as_ref(), &mut self.x, &self.applied, h);
         }
         self.settle();
     }

@@ -17,6 +17,9 @@ pub struct QuadraticReward {
     pub p: Vec<f64>,
     /// Reference state `x_r` (zero for regulation tasks).
     pub reference: Vec<f64>,
+    /// Diagonal of `Q_N`, the terminal reward's weights `τ_N(x) = −eᵀ Q_N e` (§4.4 uses
+    /// `Q_N = Q`).
+    pub terminal: Vec<f64>,
     /// Which state components are angles whose error is wrapped.
     pub angle_mask: Vec<bool>,
 }
@@ -38,13 +41,22 @@ impl QuadraticReward {
         r
     }
 
-    /// `−eᵀ Q e`, the state part of `ρ`: also the terminal reward `τ_N(x) = −xᵀQx` of the
-    /// finite-horizon task (§4.4).
+    /// `−eᵀ Q e`, the state part of `ρ`.
     pub fn state_reward(&self, x: &[f64]) -> f64 {
+        self.weighted_error(&self.q, x)
+    }
+
+    /// The terminal reward of a finite horizon, `τ_N(x) = −eᵀ Q_N e` (§4.4: `−xᵀQx`).
+    pub fn terminal_reward(&self, x: &[f64]) -> f64 {
+        self.weighted_error(&self.terminal, x)
+    }
+
+    /// `−eᵀ diag(w) e`.
+    fn weighted_error(&self, w: &[f64], x: &[f64]) -> f64 {
         let mut r = 0.0;
-        for i in 0..self.q.len() {
+        for i in 0..w.len() {
             let e = self.error(x, i);
-            r -= self.q[i] * e * e;
+            r -= w[i] * e * e;
         }
         r
     }
@@ -73,6 +85,7 @@ mod tests {
             q: vec![5.0, 0.1],
             p: vec![1.0],
             reference: vec![0.0, 0.0],
+            terminal: vec![5.0, 0.1],
             angle_mask: vec![true, false],
         }
     }
@@ -91,6 +104,7 @@ mod tests {
             q: vec![5.0, 5.0, 0.1, 0.1],
             p: vec![1.0, 1.0],
             reference: vec![1.1, -0.5, 0.0, 0.0],
+            terminal: vec![5.0, 5.0, 0.1, 0.1],
             angle_mask: vec![true, true, false, false],
         };
         let x = [-3.0, 1.0, 0.3, -0.2];
@@ -122,6 +136,7 @@ mod tests {
             q: vec![1.0, 0.0, 0.0, 0.0],
             p: vec![0.0, 0.0],
             reference: vec![3.0, 0.0, 0.0, 0.0],
+            terminal: vec![1.0, 0.0, 0.0, 0.0],
             angle_mask: vec![true, true, false, false],
         };
         // -3 and 3 are 2π - 6 ≈ 0.283 apart on the circle, not 6.

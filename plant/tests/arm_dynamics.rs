@@ -149,8 +149,8 @@ fn the_vertical_arm_conserves_its_energy_without_input_and_friction() {
     let swing = p.energy(&x0) - p.energy(&[0.0; 4]);
     let moving = p.kinetic([x0[0], x0[1]], [x0[2], x0[3]]);
     assert!(swing > 4.0 && moving > 2.0, "{swing} J, {moving} J moving");
-    let coarse = energy_drift(task.dynamics.as_ref(), &p, x0, 2.0, 2e-3);
-    let fine = energy_drift(task.dynamics.as_ref(), &p, x0, 2.0, 1e-3);
+    let coarse = energy_drift(task.simulation().dynamics.as_ref(), &p, x0, 2.0, 2e-3);
+    let fine = energy_drift(task.simulation().dynamics.as_ref(), &p, x0, 2.0, 1e-3);
     assert!(fine < 1e-8, "energy drift {fine} J with 1 ms steps");
     assert!(
         coarse / fine > 8.0,

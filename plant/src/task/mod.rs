@@ -1,14 +1,20 @@
-//! Tasks: a system together with everything an experiment on it needs.
+//! Tasks: a system together with everything an experiment on it needs, described by a
+//! task file ([`file`]); the built-in systems' files ship in `plant/tasks/` ([`builtin`]).
 
-use std::f64::consts::PI;
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
 use crate::angle::wrap;
-use crate::double_integrator::DoubleIntegrator;
-use crate::pendulum::Pendulum;
-use crate::two_link::TwoLink;
+use crate::config::ConfigError;
 use crate::{Dynamics, QuadraticReward};
+
+pub mod builtin;
+pub mod file;
+mod number;
+
+pub use file::TaskFile;
+pub use number::Number;
 
 /// The systems an experiment can run on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -56,16 +62,15 @@ impl std::fmt::Display for SystemName {
     }
 }
 
-/// A system with its sampling, limits, reward and trial definition.
+/// A system with its sampling, limits, reward and trial definition: what a task file
+/// says ([`TaskFile`]), checked, with the built-in simulation it names, if any.
 pub struct Task {
-    /// Which system this is.
-    pub name: SystemName,
-    /// `ẋ = f(x, u)`.
-    pub dynamics: Box<dyn Dynamics>,
+    /// The task's name (the built-in systems': their `--system` spelling).
+    pub name: String,
+    /// The built-in simulation of the system; `None` for a task only a driver serves.
+    pub simulation: Option<Simulation>,
     /// Sampling time `Ts` \[s\].
     pub ts: f64,
-    /// RK4 sub-steps per sample period (see [`crate::rk4`]).
-    pub substeps: usize,
     /// Lower action bounds.
     pub action_low: Vec<f64>,
     /// Upper action bounds.
@@ -82,9 +87,21 @@ pub struct Task {
     /// tilings): `(low, high)` per state component.
     pub state_range: Vec<(f64, f64)>,
     /// Short names of the state components, for files and plots.
-    pub state_names: Vec<&'static str>,
+    pub state_names: Vec<String>,
     /// Where the system may go; leaving it ends the trial (§6.4.2). `None`: anywhere.
     pub operating_range: Option<OperatingRange>,
+    /// The task file this task was built from.
+    pub file: TaskFile,
+}
+
+/// A built-in simulation of a task's system: `ẋ = f(x, u)` integrated by RK4.
+pub struct Simulation {
+    /// Which built-in system.
+    pub system: SystemName,
+    /// `ẋ = f(x, u)`.
+    pub dynamics: Box<dyn Dynamics>,
+    /// RK4 sub-steps per sample period (see [`crate::rk4`]).
+    pub substeps: usize,
 }
 
 /// The operating range of a system with physical limits, and the penalty for leaving it.
@@ -106,178 +123,46 @@ impl OperatingRange {
 }
 
 impl Task {
-    /// The task for `name` with the thesis's settings.
+    /// The built-in system `name`, from its shipped task file (`plant/tasks/`): the
+    /// thesis's settings.
     pub fn new(name: SystemName) -> Self {
-        match name {
-            SystemName::Pendulum => Self::pendulum(),
-            SystemName::ArmVertical => Self::arm(
-                name,
-                TwoLink::vertical(),
-                vec![-1.1, 1.0, 0.0, 0.0],
-                vec![0.0; 4],
-                6.0,
-            ),
-            SystemName::ArmHorizontal => Self::arm(
-                name,
-                TwoLink::horizontal(),
-                vec![-3.0, 1.0, 0.0, 0.0],
-                vec![1.1, -0.5, 0.0, 0.0],
-                6.0,
-            ),
-            SystemName::DoubleIntegrator => Self::double_integrator(),
-            SystemName::Arm64 => Self::manipulator_6_4(),
-        }
+        builtin::task(name)
     }
 
     /// Pendulum swing-up (§3.6, Table A.1): `Ts = 0.03 s`, `u ∈ [−3, 3] V`, 3 s trials
-    /// from `[π, 0]`, reward Eq. 3.16 with `Q = diag(5, 0.1)`, `P = 1`. Parametric
-    /// approximators cover `φ̇ ∈ [−8π, 8π]`, the bound footnote 4 of §3.6 assumes.
+    /// from `[π, 0]`, reward Eq. 3.16 with `Q = diag(5, 0.1)`, `P = 1`.
     pub fn pendulum() -> Self {
-        Self {
-            name: SystemName::Pendulum,
-            dynamics: Box::new(Pendulum::default()),
-            ts: 0.03,
-            substeps: 20,
-            action_low: vec![-3.0],
-            action_high: vec![3.0],
-            angle_mask: vec![true, false],
-            reward: QuadraticReward {
-                q: vec![5.0, 0.1],
-                p: vec![1.0],
-                reference: vec![0.0, 0.0],
-                angle_mask: vec![true, false],
-            },
-            initial_states: vec![vec![PI, 0.0]],
-            trial_seconds: 3.0,
-            state_range: vec![(-PI, PI), (-8.0 * PI, 8.0 * PI)],
-            state_names: vec!["phi", "phi_dot"],
-            operating_range: None,
-        }
+        Self::new(SystemName::Pendulum)
     }
 
-    /// Two-link arm of Chapter 5 (Table A.2), `Ts = 0.03 s`, reward Eq. 5.1/5.2 with
-    /// `Q = diag(5, 5, 0.1, 0.1)`, `P = I`. The thesis gives no torque limit for this
-    /// arm; ±1 N m is used here.
-    fn arm(
-        name: SystemName,
-        arm: TwoLink,
-        x0: Vec<f64>,
-        reference: Vec<f64>,
-        trial_seconds: f64,
-    ) -> Self {
-        let angle_mask = vec![true, true, false, false];
-        Self {
-            name,
-            dynamics: Box::new(arm),
-            ts: 0.03,
-            substeps: 10,
-            action_low: vec![-1.0, -1.0],
-            action_high: vec![1.0, 1.0],
-            angle_mask: angle_mask.clone(),
-            reward: QuadraticReward {
-                q: vec![5.0, 5.0, 0.1, 0.1],
-                p: vec![1.0, 1.0],
-                reference,
-                angle_mask,
-            },
-            initial_states: vec![x0],
-            trial_seconds,
-            state_range: vec![
-                (-PI, PI),
-                (-PI, PI),
-                (-2.0 * PI, 2.0 * PI),
-                (-2.0 * PI, 2.0 * PI),
-            ],
-            state_names: vec!["phi1", "phi2", "phi1_dot", "phi2_dot"],
-            operating_range: None,
-        }
+    /// The task of the file at `path`, checked; the error names the file, the key and
+    /// what is allowed.
+    pub fn from_file(path: &Path) -> Result<Self, ConfigError> {
+        TaskFile::read(path)?.task(Some(path))
     }
 
-    /// Double integrator: `Ts = 0.05 s`, `u ∈ [−5, 5] N`, `Q = diag(1, 0.1)`, `P = 0.1`,
-    /// 3 s trials from `[1, 0]`.
-    fn double_integrator() -> Self {
-        Self {
-            name: SystemName::DoubleIntegrator,
-            dynamics: Box::new(DoubleIntegrator::default()),
-            ts: 0.05,
-            substeps: 1,
-            action_low: vec![-5.0],
-            action_high: vec![5.0],
-            angle_mask: vec![false, false],
-            reward: QuadraticReward {
-                q: vec![1.0, 0.1],
-                p: vec![0.1],
-                reference: vec![0.0, 0.0],
-                angle_mask: vec![false, false],
-            },
-            initial_states: vec![vec![1.0, 0.0]],
-            trial_seconds: 3.0,
-            state_range: vec![(-2.0, 2.0), (-2.0, 2.0)],
-            state_names: vec!["p", "v"],
-            operating_range: None,
-        }
-    }
-
-    /// The manipulator of §6.4.2 ([`TwoLink::manipulator_6_4`], Table 6.3), with the
-    /// state kept in this crate's order `x = [φ₁, φ₂, φ̇₁, φ̇₂]` (the thesis writes
-    /// `[φ₁, φ̇₁, φ₂, φ̇₂]` there; every vector below is reordered accordingly):
+    /// The built-in simulation.
     ///
-    /// * `u ∈ [−0.1, 0.1]² N m`; reward Eq. 6.20 with `Q = diag(200, 50, 1, 1)`,
-    ///   `P = diag(2, 2)`;
-    /// * operating range `φ₁, φ₂ ∈ [−1.2, 1.2] rad`: leaving it gives reward −4·10⁴ and
-    ///   ends the trial. Inside it the angles never wrap, so they are plain coordinates
-    ///   (no angle mask: RBF grids over ±1.2 rad are not periodic);
-    /// * trials of at most 10 s, starting in turn from `S₀ = {[1, 1, 0, 0], [1, −1, 0, 0],
-    ///   [−1, 1, 0, 0], [−1, −1, 0, 0]}`;
-    /// * `Ts = 0.05 s`: the text of §6.4.2 says 0.05 s and its discussion blames "the long
-    ///   sampling time", Table 6.3 prints 0.01 s. 25 RK4 sub-steps of 2 ms keep the
-    ///   friction-dominated second link (time constant ≈ 2.4 ms) stable and accurate;
-    /// * the critic's grid covers `φ ∈ [−1.2, 1.2]`, `φ̇ ∈ [−0.8, 0.8]` (Table 6.4).
-    fn manipulator_6_4() -> Self {
-        let no_mask = vec![false; 4];
-        Self {
-            name: SystemName::Arm64,
-            dynamics: Box::new(TwoLink::manipulator_6_4()),
-            ts: 0.05,
-            substeps: 25,
-            action_low: vec![-0.1, -0.1],
-            action_high: vec![0.1, 0.1],
-            angle_mask: no_mask.clone(),
-            reward: QuadraticReward {
-                q: vec![200.0, 50.0, 1.0, 1.0],
-                p: vec![2.0, 2.0],
-                reference: vec![0.0; 4],
-                angle_mask: no_mask,
-            },
-            initial_states: vec![
-                vec![1.0, 1.0, 0.0, 0.0],
-                vec![1.0, -1.0, 0.0, 0.0],
-                vec![-1.0, 1.0, 0.0, 0.0],
-                vec![-1.0, -1.0, 0.0, 0.0],
-            ],
-            trial_seconds: 10.0,
-            state_range: vec![(-1.2, 1.2), (-1.2, 1.2), (-0.8, 0.8), (-0.8, 0.8)],
-            state_names: vec!["phi1", "phi2", "phi1_dot", "phi2_dot"],
-            operating_range: Some(OperatingRange {
-                limits: vec![
-                    (-1.2, 1.2),
-                    (-1.2, 1.2),
-                    (f64::NEG_INFINITY, f64::INFINITY),
-                    (f64::NEG_INFINITY, f64::INFINITY),
-                ],
-                penalty: -4e4,
-            }),
-        }
+    /// # Panics
+    /// If the task has none: a configuration that simulates a task is refused before
+    /// (`[simulation]` is missing).
+    pub fn simulation(&self) -> &Simulation {
+        self.simulation.as_ref().unwrap_or_else(|| {
+            panic!(
+                "task \"{}\" has no [simulation]: it runs against a driver only",
+                self.name
+            )
+        })
     }
 
     /// State dimension `n`.
     pub fn state_dim(&self) -> usize {
-        self.dynamics.state_dim()
+        self.angle_mask.len()
     }
 
     /// Action dimension `m`.
     pub fn action_dim(&self) -> usize {
-        self.dynamics.action_dim()
+        self.action_low.len()
     }
 
     /// Samples per trial.

@@ -2,6 +2,8 @@
 
 use super::*;
 use crate::Plant;
+use crate::pendulum::Pendulum;
+use std::f64::consts::PI;
 use std::sync::Arc;
 
 fn trajectory(task: Task, u: impl Fn(usize) -> f64) -> Vec<Vec<f64>> {
@@ -29,7 +31,7 @@ fn halving_the_substep_changes_little() {
     };
     let coarse = trajectory(Task::pendulum(), u);
     let mut fine_task = Task::pendulum();
-    fine_task.substeps *= 2;
+    fine_task.simulation.as_mut().unwrap().substeps *= 2;
     let fine = trajectory(fine_task, u);
     let max_dev = coarse
         .iter()
@@ -49,7 +51,7 @@ fn undamped_pendulum_conserves_energy() {
         ..Pendulum::default()
     };
     let mut task = Task::pendulum();
-    task.dynamics = Box::new(p.clone());
+    task.simulation.as_mut().unwrap().dynamics = Box::new(p.clone());
     task.initial_states = vec![vec![PI - 0.5, 0.0]];
     let e0 = p.energy(&task.initial_states[0]);
     let traj = trajectory(task, |_| 0.0);
@@ -136,7 +138,7 @@ fn advancing_in_pieces_matches_a_whole_step() {
 /// The §6.4.2 manipulator under constant torques `u` from its first start state.
 fn manipulator(substeps: usize, u: [f64; 2], seconds: f64) -> Vec<Vec<f64>> {
     let mut task = Task::new(SystemName::Arm64);
-    task.substeps = substeps;
+    task.simulation.as_mut().unwrap().substeps = substeps;
     task.operating_range = None;
     let mut plant = Plant::new(Arc::new(task));
     plant.reset(&[0.0; 4]);

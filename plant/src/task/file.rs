@@ -1,0 +1,226 @@
+//! Task files: a system as the rig needs to know it, in TOML (documented key by key in
+//! `docs/tasks.md`).
+//!
+//! A task file names the states (which are angles, the range the approximators cover),
+//! the actions and their bounds, the sampling time, the trial and its start states, the
+//! quadratic reward (Eq. 3.16, 5.1, 5.2, 6.20; its gradients follow from the weights,
+//! [`crate::QuadraticReward`]), optionally an operating range whose exit ends the trial
+//! (§6.4.2), and optionally the built-in simulation that `rig learn` and `rig sim-driver`
+//! run it on. [`TaskFile::parse`] reads one; [`TaskFile::task`] checks every value and
+//! builds the [`Task`]. Every error is one line naming the file, the key and what is
+//! allowed.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::number::Number;
+use super::{OperatingRange, Simulation, SystemName, Task};
+use crate::QuadraticReward;
+use crate::config::ConfigError;
+
+mod check;
+
+/// The longest task name: it travels NUL-padded in 32 bytes of the driver contract.
+pub const MAX_NAME: usize = 31;
+/// The most state components a task may have: a finite-horizon learner appends time to
+/// the state, within [`crate::MAX_STATE`].
+pub const MAX_STATES: usize = crate::MAX_STATE - 1;
+
+/// A task file as written (numbers may be multiples of π, [`Number`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskFile {
+    /// The task's name: ASCII letters, digits, `-`, `_`, `.`; at most [`MAX_NAME`] bytes.
+    pub name: String,
+    /// A sentence on what the task is (optional).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub description: String,
+    /// The sampling time `Ts` \[s\].
+    pub sampling_time: Number,
+    /// The length of a trial \[s\].
+    pub trial_seconds: Number,
+    /// The start states: trial `i` starts in `start_states[i % len]`.
+    pub start_states: Vec<Vec<Number>>,
+    /// The state components, in the order of the state vector.
+    pub state: Vec<StateSpec>,
+    /// The action components, in the order of the action vector.
+    pub action: Vec<ActionSpec>,
+    /// The reward `ρ(x, u)`.
+    pub reward: RewardSpec,
+    /// Where the system may go; leaving it ends the trial with a penalty (optional).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub operating_range: Option<RangeSpec>,
+    /// The built-in simulation of the system (optional: a task without one runs against
+    /// a driver).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub simulation: Option<SimulationSpec>,
+}
+
+/// One state component.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StateSpec {
+    /// Its short name, for files and plots.
+    pub name: String,
+    /// Its unit (documentation only).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub unit: String,
+    /// Whether it is an angle: wrapped to [−π, π), its errors taken modulo 2π.
+    #[serde(default)]
+    pub angle: bool,
+    /// `[low, high]`, the range the parametric approximators (RBF grids, tilings) cover;
+    /// an angle's default is `[-pi, pi]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub range: Option<[Number; 2]>,
+}
+
+/// One action component.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ActionSpec {
+    /// Its short name.
+    pub name: String,
+    /// Its unit (documentation only).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub unit: String,
+    /// The lower bound: the plant saturates every action to `[low, high]`.
+    pub low: Number,
+    /// The upper bound.
+    pub high: Number,
+}
+
+/// The quadratic reward `ρ(x, u) = −(x − x_r)ᵀ Q (x − x_r) − uᵀ P u` with diagonal `Q`,
+/// `P`, and the terminal reward `τ_N(x) = −(x − x_r)ᵀ Q_N (x − x_r)` of a finite horizon.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RewardSpec {
+    /// `diag(Q)`, one weight ≥ 0 per state component.
+    pub state_weights: Vec<Number>,
+    /// `diag(P)`, one weight ≥ 0 per action component.
+    pub action_weights: Vec<Number>,
+    /// The reference state `x_r` (default: zero).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<Vec<Number>>,
+    /// `diag(Q_N)` of the terminal reward (default: `state_weights`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub terminal_weights: Option<Vec<Number>>,
+}
+
+/// The operating range: `[low[i], high[i]]` per state component (`inf`, `-inf` for no
+/// bound).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RangeSpec {
+    /// Lower bounds, one per state component.
+    pub low: Vec<Number>,
+    /// Upper bounds, one per state component.
+    pub high: Vec<Number>,
+    /// The reward of the transition that leaves the range, which ends the trial.
+    pub penalty: Number,
+}
+
+/// The built-in simulation a task runs on in `rig learn` and `rig sim-driver`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationSpec {
+    /// The simulated system: one of the built-in dynamics.
+    pub system: SystemName,
+    /// RK4 sub-steps per sample period.
+    pub substeps: u32,
+}
+
+impl TaskFile {
+    /// Reads the task file at `path`.
+    pub fn read(path: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ConfigError {
+            file: Some(path.to_path_buf()),
+            key: String::new(),
+            message: format!("cannot read: {e}"),
+        })?;
+        Self::parse(&text, Some(path))
+    }
+
+    /// Parses a task file's text (`path`, if any, is named in errors).
+    pub fn parse(text: &str, path: Option<&Path>) -> Result<Self, ConfigError> {
+        toml::from_str(text).map_err(|e| {
+            let at = e.span().map(|s| line_of(text, s.start));
+            let message = match at {
+                Some(line) => format!("line {line}: {}", e.message()),
+                None => e.message().to_string(),
+            };
+            ConfigError {
+                file: path.map(Path::to_path_buf),
+                key: String::new(),
+                message: format!("not a valid task file: {}", one_line(&message)),
+            }
+        })
+    }
+
+    /// The task: every value checked (see `docs/tasks.md`); the error names `path`, the
+    /// key and what is allowed.
+    pub fn task(&self, path: Option<&Path>) -> Result<Task, ConfigError> {
+        self.build().map_err(|mut e| {
+            e.file = path.map(Path::to_path_buf);
+            e
+        })
+    }
+
+    /// The file as TOML, numbers written out (π as 3.141592653589793).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a task file always serialises")
+    }
+
+    fn build(&self) -> Result<Task, ConfigError> {
+        let c = check::Checked::of(self)?;
+        let simulation = match &self.simulation {
+            Some(s) => Some(c.simulation(s)?),
+            None => None,
+        };
+        let angle_mask = c.angle_mask;
+        Ok(Task {
+            name: self.name.clone(),
+            simulation,
+            ts: c.ts,
+            action_low: c.action_low,
+            action_high: c.action_high,
+            reward: QuadraticReward {
+                q: c.reward.state,
+                p: c.reward.action,
+                reference: c.reward.reference,
+                terminal: c.reward.terminal,
+                angle_mask: angle_mask.clone(),
+            },
+            angle_mask,
+            initial_states: c.start_states,
+            trial_seconds: c.trial_seconds,
+            state_range: c.state_range,
+            state_names: self.state.iter().map(|s| s.name.clone()).collect(),
+            operating_range: c
+                .operating_range
+                .map(|(limits, penalty)| OperatingRange { limits, penalty }),
+            file: self.clone(),
+        })
+    }
+}
+
+impl Simulation {
+    /// The built-in dynamics of `system` with `substeps` RK4 sub-steps per sample.
+    pub fn of(system: SystemName, substeps: usize) -> Self {
+        Self {
+            system,
+            dynamics: super::builtin::dynamics(system),
+            substeps,
+        }
+    }
+}
+
+/// The 1-based line of byte `offset` in `text`.
+fn line_of(text: &str, offset: usize) -> usize {
+    text[..offset.min(text.len())].matches('\n').count() + 1
+}
+
+/// `s` with its line breaks replaced by spaces.
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
