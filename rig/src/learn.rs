@@ -4,7 +4,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args as Flags;
-use plant::Task;
 use runtime::config::ExperimentConfig;
 use runtime::learn::{LearnOptions, learn};
 
@@ -58,10 +57,10 @@ pub fn main(args: &Args) -> ExitCode {
 }
 
 fn print_summary(cfg: &ExperimentConfig, s: &runtime::learn::LearnSummary, out: &std::path::Path) {
-    let steps = s.records.len() as f64 * Task::new(cfg.system).steps_per_trial() as f64;
+    let steps = s.records.len() as f64 * cfg.task().steps_per_trial() as f64;
     println!(
         "{} {}/{}: {} runs × {} trials in {:.1} s wall ({:.2} µs per learning step, all threads)",
-        cfg.system,
+        cfg.task_name(),
         cfg.agent.algo,
         cfg.agent.approx,
         cfg.run.runs,

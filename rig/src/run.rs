@@ -157,7 +157,7 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
     let steps = s.messages as f64 / 3.0;
     println!(
         "{} {}/{} over three processes: {} trials in {:.1} s wall ({:.1} µs per sample)",
-        cfg.system,
+        cfg.task_name(),
         cfg.agent.algo,
         cfg.agent.approx,
         s.records.len(),

@@ -21,6 +21,13 @@ pub struct Selection {
     /// [default: pendulum].
     #[arg(long, value_parser = SystemName::parse)]
     system: Option<SystemName>,
+    /// A task file: the system as the rig needs to know it — states, actions and their
+    /// bounds, sampling time, trial, start states, reward, operating range (see
+    /// docs/tasks.md; the built-in systems' files are in plant/tasks/). Its
+    /// `[simulation]` names the built-in system it runs on and whose learner presets it
+    /// takes (the configuration's `task` key).
+    #[arg(long, value_name = "FILE")]
+    task: Option<PathBuf>,
     /// Algorithm: sac (Algorithm 1), mlac (Algorithm 2), rmac (Algorithm 3), vgbp
     /// (Algorithm 7) or sarsa (§6.2) [default: mlac].
     #[arg(long, value_parser = Algo::parse)]
@@ -104,6 +111,7 @@ pub fn resolve_selection(s: &Selection) -> Result<ExperimentConfig, String> {
     };
     let o = Overrides {
         system: s.system,
+        task: s.task.clone(),
         algo: s.algo,
         approx: s.approx,
         horizon: s.horizon,
@@ -134,6 +142,7 @@ pub fn resolve_selection(s: &Selection) -> Result<ExperimentConfig, String> {
 fn experiment_flags(s: &Selection) -> Vec<&'static str> {
     [
         ("--system", s.system.is_some()),
+        ("--task", s.task.is_some()),
         ("--algo", s.algo.is_some()),
         ("--approx", s.approx.is_some()),
         ("--horizon", s.horizon.is_some()),

@@ -125,7 +125,7 @@ impl Experiment {
     /// Run `run` of the experiment `cfg` describes (all random streams derived from
     /// `cfg.run.seed` and `run`).
     pub fn new(cfg: &ExperimentConfig, run: u32) -> Self {
-        let task = Arc::new(Task::new(cfg.system));
+        let task = Arc::new(cfg.task());
         let run_seed = agent::seed::run_seed(cfg.run.seed, run);
         let agent = agent::build(&task, &cfg.agent, run_seed);
         let o = &cfg.observer;

@@ -174,7 +174,7 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
         .num_threads(opts.threads.unwrap_or(0))
         .build()?;
     let t0 = Instant::now();
-    let x0 = plant::Task::new(cfg.system).initial_states[0].clone();
+    let x0 = cfg.task().initial_states[0].clone();
     let responses = Mutex::new(BTreeMap::new());
     let results: Result<Vec<Vec<TrialRecord>>> = pool.install(|| {
         (0..runs)
@@ -239,7 +239,7 @@ fn write_curves(
     report::write_curve_csv(&out.join("curve.csv"), curve)?;
     let title = format!(
         "{} {}/{} — {} runs",
-        cfg.system,
+        cfg.task_name(),
         cfg.agent.algo.as_str().to_uppercase(),
         cfg.agent.approx.as_str().to_uppercase(),
         cfg.run.runs

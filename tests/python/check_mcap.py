@@ -23,7 +23,8 @@ compared with `==` (NaN equals NaN; a `null` reward, the recorder's encoding of 
 reads as NaN). With a finite horizon (the `run` metadata's `horizon = finite`) the
 terminal reward tau_N(x_N) = -sum_i q_i e_i^2 of the trial's last state is added last
 (Eq. 4.1; e = x - reference, angles wrapped to [-pi, pi) as the rig wraps them; the
-weights are the metadata's `reward_q`, `reward_reference`, `reward_angles`; x_N is the
+weights are the metadata's `reward_terminal` (else `reward_q`), `reward_reference`,
+`reward_angles`; x_N is the
 `/plant/truth` message of the END sample when the sensor does not measure the full
 state, otherwise the END measurement's `y`). Messages without the greedy bit make the
 learning trial T's `return`; messages with it make the `greedy_return` of row T — the mean
@@ -348,7 +349,10 @@ class TerminalReward:
         if horizon != "finite":
             return None
         try:
-            q = [float(v) for v in meta["reward_q"].split(",")]
+            weights = meta.get("reward_terminal", meta.get("reward_q"))
+            if weights is None:
+                raise KeyError("reward_terminal")
+            q = [float(v) for v in weights.split(",")]
             ref = [float(v) for v in meta["reward_reference"].split(",")]
             angles = [v == "1" for v in meta["reward_angles"].split(",")]
         except (KeyError, ValueError) as e:

@@ -122,7 +122,7 @@ fn a_checkpoint_does_not_restore_into_another_learner() {
     // of the same state and action dimensions (SAC/LLR on the double integrator) has the
     // same sections and shapes; the origin, checked above, is what refuses it there.
     let learner = |cfg: &ExperimentConfig| {
-        let task = plant::Task::new(cfg.system);
+        let task = cfg.task();
         let a = &cfg.agent;
         (
             a.algo,

@@ -115,7 +115,7 @@ fn mutated_configuration_files_are_errors_or_run_but_never_panic() {
             }
             Ok(cfg) => {
                 // Accepted: it must build and learn a few samples within the limits.
-                let task = Arc::new(Task::new(cfg.system));
+                let task = Arc::new(cfg.task());
                 let mut agent = agent::build(&task, &cfg.agent, 1);
                 let mut plant = Plant::new(task.clone());
                 let mut u = vec![0.0; task.action_dim()];

@@ -299,7 +299,7 @@ fn run_realtime(
         },
     )
     .map_err(|e| anyhow!("{e}"))?;
-    let task = plant::Task::new(cfg.system);
+    let task = cfg.task();
     let per_trial = task.steps_per_trial() + 1;
     cfg.run.trials = opts.cycles.div_ceil(per_trial) as u32;
     let speed = task.ts / (opts.period_ms * 1e-3);

@@ -139,7 +139,7 @@ pub fn unrecorded(
     let text = std::fs::read_to_string(&steps)
         .with_context(|| format!("cannot read {}", steps.display()))?;
     let mut ns: Vec<u64> = text.lines().filter_map(|l| l.parse().ok()).collect();
-    let per_trial = plant::Task::new(cfg.system).steps_per_trial() + 1;
+    let per_trial = cfg.task().steps_per_trial() + 1;
     ns.drain(..per_trial.min(ns.len()));
     Ok((timed, ns))
 }

@@ -92,7 +92,7 @@ pub(super) fn measure(
         cfg.run.runs as usize,
         cfg.run.trials as usize,
     );
-    let task = plant::Task::new(cfg.system);
+    let task = cfg.task();
     let mut ended_early = 0;
     let mut by_trial: BTreeMap<u32, (f64, f64, usize)> = BTreeMap::new();
     let mut skipped = (u32::MAX, 0);

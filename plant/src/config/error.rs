@@ -27,10 +27,13 @@ impl ConfigError {
 
 impl fmt::Display for ConfigError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match &self.file {
-            Some(p) => write!(f, "{}: `{}`: {}", p.display(), self.key, self.message),
-            None => write!(f, "`{}`: {}", self.key, self.message),
+        if let Some(p) = &self.file {
+            write!(f, "{}: ", p.display())?;
         }
+        if !self.key.is_empty() {
+            write!(f, "`{}`: ", self.key)?;
+        }
+        f.write_str(&self.message)
     }
 }
 

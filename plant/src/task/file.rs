@@ -144,7 +144,11 @@ impl TaskFile {
     /// Parses a task file's text (`path`, if any, is named in errors).
     pub fn parse(text: &str, path: Option<&Path>) -> Result<Self, ConfigError> {
         toml::from_str(text).map_err(|e| {
-            let at = e.span().map(|s| line_of(text, s.start));
+            // A key missing at the top level spans the whole file: no line to name.
+            let at = e
+                .span()
+                .filter(|s| s.start > 0)
+                .map(|s| line_of(text, s.start));
             let message = match at {
                 Some(line) => format!("line {line}: {}", e.message()),
                 None => e.message().to_string(),

@@ -1,5 +1,6 @@
 //! The experiment file's layout: every key where a user writes it — the system and the
-//! learner's choices at the top level, then `[run]`, the agent's sections, `[observer]`.
+//! learner's choices at the top level, then `[run]`, the agent's sections, `[observer]`,
+//! and the task when a task file gives it (`[task]`).
 //! [`ExperimentConfig`] is read and written through it, so its TOML form is the one
 //! every configuration file and `config.toml` has.
 
@@ -7,8 +8,8 @@ use agent::config::{
     AgentConfig, Algo, ApproxKind, Component, HorizonKind, LearningConfig, SarsaConfig, VgbpConfig,
 };
 use observer::config::ObserverConfig;
-use plant::SystemName;
 use plant::config::RunConfig;
+use plant::{SystemName, TaskFile};
 use serde::{Deserialize, Serialize};
 
 use super::ExperimentConfig;
@@ -38,12 +39,16 @@ pub(super) struct Layout {
     /// Absent: full state, pass-through.
     #[serde(default, skip_serializing_if = "ObserverConfig::is_default")]
     observer: ObserverConfig,
+    /// Absent: the system's shipped task.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    task: Option<TaskFile>,
 }
 
 impl From<Layout> for ExperimentConfig {
     fn from(l: Layout) -> Self {
         Self {
             system: l.system,
+            task: l.task,
             agent: AgentConfig {
                 algo: l.algo,
                 approx: l.approx,
@@ -77,6 +82,7 @@ impl From<ExperimentConfig> for Layout {
             vgbp: a.vgbp,
             sarsa: a.sarsa,
             observer: c.observer,
+            task: c.task,
         }
     }
 }

@@ -20,7 +20,7 @@ use agent::checkpoint::{self, Origin};
 use agent::config::{AgentConfig, Algo, ApproxKind, HorizonKind};
 use observer::config::{ObserverConfig, ObserverMode};
 use plant::config::{ConfigError, RunConfig};
-use plant::{SystemName, Task};
+use plant::{SystemName, Task, TaskFile};
 use serde::{Deserialize, Serialize};
 
 /// A complete experiment. Its TOML form keeps every key where a user writes it (see
@@ -29,8 +29,12 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(from = "layout::Layout", into = "layout::Layout")]
 pub struct ExperimentConfig {
-    /// The system learned on.
+    /// The system learned on: the built-in system whose presets the learner starts from
+    /// and whose task it learns, unless `task` gives another.
     pub system: SystemName,
+    /// The task learned, when a task file gives it (`task = "FILE"` or `[task]`,
+    /// `--task`); `None`: `system`'s shipped task file.
+    pub task: Option<TaskFile>,
     /// The learner: algorithm, approximator, horizon and their sections.
     pub agent: AgentConfig,
     /// Trials, runs, seed, evaluation, delays.
@@ -51,6 +55,7 @@ impl ExperimentConfig {
         let preset = agent::preset::preset(system, algo, approx, horizon)?;
         Ok(Self {
             system,
+            task: None,
             agent: preset.agent,
             run: preset.run,
             observer: ObserverConfig::default(),
@@ -60,7 +65,7 @@ impl ExperimentConfig {
     /// Checks every value against its allowed range and the system's dimensions, section
     /// by section, then what spans sections.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let task = Task::new(self.system);
+        let task = self.checked_task()?;
         self.run.validate(&task)?;
         self.observer.validate()?;
         if self.observer.mode == ObserverMode::Predictive
@@ -72,6 +77,38 @@ impl ExperimentConfig {
             ));
         }
         self.agent.validate(&task)
+    }
+
+    /// The task learned: `task`'s, else `system`'s shipped one.
+    ///
+    /// # Panics
+    /// If `task` is invalid, which [`ExperimentConfig::validate`] refuses.
+    pub fn task(&self) -> Task {
+        self.checked_task()
+            .unwrap_or_else(|e| panic!("a validated configuration's task: {e}"))
+    }
+
+    /// The task learned, checked; an error's key is prefixed with `task.`.
+    fn checked_task(&self) -> Result<Task, ConfigError> {
+        let Some(file) = &self.task else {
+            return Ok(Task::new(self.system));
+        };
+        file.task(None).map_err(|mut e| {
+            e.key = if e.key.is_empty() {
+                "task".into()
+            } else {
+                format!("task.{}", e.key)
+            };
+            e
+        })
+    }
+
+    /// The name of the task learned.
+    pub fn task_name(&self) -> String {
+        match &self.task {
+            Some(f) => f.name.clone(),
+            None => self.system.to_string(),
+        }
     }
 
     /// The configuration as TOML.
@@ -90,7 +127,7 @@ impl ExperimentConfig {
         c.run.runs = 0;
         let a = &self.agent;
         Origin {
-            system: self.system.to_string(),
+            system: self.task_name(),
             learner: format!("{}/{}/{}", a.algo, a.approx, a.horizon),
             seed: self.run.seed,
             run,

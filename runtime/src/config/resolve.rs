@@ -4,8 +4,8 @@ use std::path::Path;
 
 use agent::config::{Algo, ApproxKind, HorizonKind, LstdPrior};
 use observer::config::{ObserverConfig, ObserverKind, ObserverMode, ObserverModel, SensorKind};
-use plant::SystemName;
 use plant::config::ConfigError;
+use plant::{SystemName, TaskFile};
 
 use super::ExperimentConfig;
 use super::merge::{check_choice, choose, merge};
@@ -15,6 +15,8 @@ use super::merge::{check_choice, choose, merge};
 pub struct Overrides {
     /// `--system`.
     pub system: Option<SystemName>,
+    /// `--task`: a task file.
+    pub task: Option<std::path::PathBuf>,
     /// `--algo`.
     pub algo: Option<Algo>,
     /// `--approx`.
@@ -91,8 +93,9 @@ struct PresetChoice {
 
 impl PresetChoice {
     /// The command line's choices, else the file's top-level keys, else the defaults
-    /// (the pendulum, MLAC, LLR, infinite horizon).
-    fn of(user: &toml::Table, o: &Overrides) -> Result<Self, ConfigError> {
+    /// (the pendulum, MLAC, LLR, infinite horizon); with a task file, the system is the
+    /// one it simulates.
+    fn of(user: &toml::Table, o: &Overrides, task: Option<&TaskFile>) -> Result<Self, ConfigError> {
         let pick = |key: &str| -> Result<Option<String>, ConfigError> {
             match user.get(key) {
                 None => Ok(None),
@@ -100,8 +103,13 @@ impl PresetChoice {
                 Some(v) => Err(ConfigError::new(key, format!("{v} must be a string"))),
             }
         };
+        let system = choose("system", o.system, pick("system")?, SystemName::Pendulum)?;
+        let explicit = o.system.is_some() || user.contains_key("system");
         Ok(Self {
-            system: choose("system", o.system, pick("system")?, SystemName::Pendulum)?,
+            system: match task {
+                Some(t) => simulated_system(t, explicit.then_some(system))?,
+                None => system,
+            },
             algo: choose("algo", o.algo, pick("algo")?, Algo::Mlac)?,
             approx: choose("approx", o.approx, pick("approx")?, ApproxKind::Llr)?,
             horizon: choose(
@@ -144,6 +152,69 @@ impl PresetChoice {
     }
 }
 
+/// The built-in system a task file simulates, which gives the learner's presets; the
+/// error says why there is none, or names the system given beside it (`explicit`) that
+/// differs.
+fn simulated_system(
+    task: &TaskFile,
+    explicit: Option<SystemName>,
+) -> Result<SystemName, ConfigError> {
+    let Some(sim) = &task.simulation else {
+        return Err(ConfigError::new(
+            "task",
+            format!(
+                "\"{}\" has no [simulation]: the learner's presets are those of the built-in system it simulates, and learning on a task only a driver serves is not supported yet",
+                task.name
+            ),
+        ));
+    };
+    match explicit {
+        Some(s) if s != sim.system => Err(ConfigError::new(
+            "system",
+            format!(
+                "\"{s}\" differs from the system task \"{}\" simulates, \"{}\": give one of --system and --task",
+                task.name, sim.system
+            ),
+        )),
+        _ => Ok(sim.system),
+    }
+}
+
+/// The task file an experiment runs on, and removes the `task` key from `user`:
+/// `--task`, else the file's `task` — a path relative to the file's folder, or a `[task]`
+/// table — else none. A task read from its own file is checked here, so that an error
+/// names that file.
+fn task_file(
+    user: &mut toml::Table,
+    o: &Overrides,
+    file: Option<&Path>,
+) -> Result<Option<TaskFile>, ConfigError> {
+    let read = |path: &Path| {
+        let f = TaskFile::read(path)?;
+        f.task(Some(path))?;
+        Ok(Some(f))
+    };
+    let key = user.remove("task");
+    if let Some(path) = &o.task {
+        return read(path);
+    }
+    match key {
+        None => Ok(None),
+        Some(toml::Value::String(s)) => {
+            let folder = file.and_then(Path::parent).unwrap_or(Path::new(""));
+            read(&folder.join(s))
+        }
+        Some(toml::Value::Table(t)) => toml::Value::Table(t)
+            .try_into()
+            .map(Some)
+            .map_err(|e: toml::de::Error| ConfigError::new("task", e.message())),
+        Some(v) => Err(ConfigError::new(
+            "task",
+            format!("{v} must be a task file's path or a [task] table"),
+        )),
+    }
+}
+
 /// Resolves preset ← file ← overrides into a validated configuration.
 pub fn resolve(
     file: Option<(&Path, &str)>,
@@ -151,10 +222,12 @@ pub fn resolve(
 ) -> Result<ExperimentConfig, ConfigError> {
     let path = file.map(|(p, _)| p.to_path_buf());
     let with_file = |mut e: ConfigError| {
-        e.file = path.clone();
+        if e.file.is_none() {
+            e.file = path.clone();
+        }
         e
     };
-    let user: toml::Table = match file {
+    let mut user: toml::Table = match file {
         Some((_, text)) => toml::from_str(text).map_err(|e| {
             with_file(ConfigError::new(
                 "",
@@ -163,7 +236,8 @@ pub fn resolve(
         })?,
         None => toml::Table::new(),
     };
-    let choice = PresetChoice::of(&user, o).map_err(with_file)?;
+    let task = task_file(&mut user, o, path.as_deref()).map_err(with_file)?;
+    let choice = PresetChoice::of(&user, o, task.as_ref()).map_err(with_file)?;
     let mut merged = choice.table().map_err(with_file)?;
     merge(&mut merged, user, "").map_err(with_file)?;
     check_choices(&merged).map_err(with_file)?;
@@ -171,6 +245,7 @@ pub fn resolve(
         .try_into()
         .map_err(|e: toml::de::Error| with_file(ConfigError::new("", e.message())))?;
     cfg.system = choice.system;
+    cfg.task = task;
     cfg.agent.algo = choice.algo;
     cfg.agent.approx = choice.approx;
     cfg.agent.horizon = choice.horizon;

@@ -4,7 +4,6 @@ use ::agent::Agent;
 use ::agent::checkpoint::{Checkpoint, Origin, Snapshot};
 use ::observer::config::ObserverMode;
 use ::observer::timing::{Call, ToAgent, act};
-use ::plant::Task;
 use anyhow::{Result, anyhow, bail};
 use wire::{Action, Estimate, flags, now_ns, topic};
 
@@ -72,7 +71,7 @@ impl Learner {
     /// The agent of run `--run-index` of `cfg`, from the checkpoint `--resume` if given.
     fn new(args: &AgentArgs, cfg: &ExperimentConfig) -> Result<Self> {
         let run = args.node.run_index;
-        let task = Task::new(cfg.system);
+        let task = cfg.task();
         let mut agent = ::agent::build(
             &task,
             &cfg.agent,

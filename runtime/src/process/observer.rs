@@ -7,7 +7,6 @@
 use std::sync::Arc;
 
 use ::observer::timing::{Call, Sample};
-use ::plant::Task;
 use anyhow::Result;
 use wire::{Estimate, Measurement, flags, now_ns, topic};
 
@@ -46,7 +45,7 @@ pub fn run(args: &ObserverArgs) -> Result<()> {
     super::set_rt_priority(args.scheduling.rt_priority)?;
     args.scheduling.place(super::Part::Node)?;
     let cfg = args.config()?;
-    let task = Arc::new(Task::new(cfg.system));
+    let task = Arc::new(cfg.task());
     let mut front = crate::experiment::front(&task, &cfg);
     let bus = args.join("observer")?;
     let measurements = bus

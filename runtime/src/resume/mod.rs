@@ -129,7 +129,7 @@ fn last_complete_trial(
     done: u32,
     recorded: &Recorded,
 ) -> Option<(u32, u64)> {
-    let starts = plant::Task::new(cfg.system).initial_states.len();
+    let starts = cfg.task().initial_states.len();
     let evals = |t: u32| {
         if cfg.run.eval_every > 0 && t.is_multiple_of(cfg.run.eval_every) {
             starts

@@ -136,7 +136,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     write_atomic(&config_path, &cfg.to_toml())?;
 
     let bus = Bus::join(&run_id, "rig").map_err(wire_err)?;
-    let task = Arc::new(plant::Task::new(cfg.system));
+    let task = Arc::new(cfg.task());
     let (watch, driver_info) = match &opts.driver {
         Some(d) => {
             let (watch, info) = wait_for_driver(&bus, d, &task, opts.progress)?;

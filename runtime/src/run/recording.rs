@@ -43,14 +43,16 @@ fn metadata(about: &About) -> BTreeMap<String, String> {
         ("run_id", about.run_id.to_string()),
         ("seed", cfg.run.seed.to_string()),
         ("system", cfg.system.to_string()),
+        ("task", cfg.task_name()),
         ("algo", cfg.agent.algo.to_string()),
         ("approx", cfg.agent.approx.to_string()),
         ("horizon", cfg.agent.horizon.to_string()),
         ("timing", about.timing.clone()),
         ("rig_version", env!("CARGO_PKG_VERSION").to_string()),
         // The reward's weights, so that a reader can recompute a finite horizon's
-        // terminal reward τ_N(x_N) = −eᵀQe (Eq. 4.1; tests/python/check_mcap.py).
+        // terminal reward τ_N(x_N) = −eᵀQ_N e (Eq. 4.1; tests/python/check_mcap.py).
         ("reward_q", join(&task.reward.q)),
+        ("reward_terminal", join(&task.reward.terminal)),
         ("reward_reference", join(&task.reward.reference)),
         (
             "reward_angles",

@@ -28,6 +28,9 @@ pub(super) struct Weights {
     pub terminal: Vec<f64>,
 }
 
+/// `(low, high)` per component.
+type Bounds = Vec<(f64, f64)>;
+
 /// The longest trial, in samples.
 const MAX_STEPS: f64 = 1e7;
 
@@ -94,7 +97,7 @@ fn check_name(key: &str, name: &str, max: usize) -> Result<(), ConfigError> {
 }
 
 /// The angle mask and the approximators' ranges of `[[state]]`.
-fn states(f: &TaskFile) -> Result<(Vec<bool>, Vec<(f64, f64)>), ConfigError> {
+fn states(f: &TaskFile) -> Result<(Vec<bool>, Bounds), ConfigError> {
     check_int("state", f.state.len() as u64, 1, MAX_STATES as u64).map_err(|_| {
         ConfigError::new(
             "state",

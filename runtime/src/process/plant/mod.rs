@@ -22,10 +22,10 @@ use std::path::Path;
 use std::sync::Arc;
 
 use ::observer::config::ObserverMode;
+use ::plant::Plant;
 use ::plant::episode::Episode;
 use ::plant::safety::SafetyCounts;
 use ::plant::schedule::{Schedule, Trial};
-use ::plant::{Plant, Task};
 use anyhow::{Result, bail};
 
 use super::{PlantArgs, STARTUP, Scheduling, wire_err};
@@ -52,7 +52,7 @@ pub const CYCLES_HEADER: &str = "seq,t_sample_ns,t_woke_ns,t_action_ns";
 pub fn run(args: &PlantArgs) -> Result<()> {
     schedule_clock(&args.node.scheduling)?;
     let cfg = args.node.config()?;
-    let task = Arc::new(Task::new(cfg.system));
+    let task = Arc::new(cfg.task());
     let run_seed = ::agent::seed::run_seed(cfg.run.seed, args.node.run_index);
     let sensor = crate::experiment::sensor(&task, &cfg.observer, run_seed);
     let link = Link::join(
