@@ -178,7 +178,7 @@ fn info(device: &impl Device, period_ns: u64, t_start_ns: u64) -> DriverInfo {
         t_publish_ns: now_ns(),
         ..Default::default()
     };
-    let name = task.name.as_str().as_bytes();
+    let name = task.name.as_bytes();
     i.system[..name.len()].copy_from_slice(name);
     i.u_min[..task.action_dim()].copy_from_slice(&task.action_low);
     i.u_max[..task.action_dim()].copy_from_slice(&task.action_high);
