@@ -305,6 +305,47 @@ fn a_finite_horizon_run_is_the_same_in_both_drivers() {
     assert_eq!(ran.lines().count(), 7);
 }
 
+/// A task file (examples/tasks/pendulum-balance.toml: three start states, an operating
+/// range, terminal weights of its own) runs the same in both drivers; the run's
+/// config.toml carries it, so the processes and a resume need no other file.
+#[test]
+fn a_task_file_runs_the_same_in_both_drivers() {
+    let dir = tmp("task");
+    let task =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/tasks/pendulum-balance.toml");
+    let task = task.to_str().unwrap();
+    let args = [
+        "--task",
+        task,
+        "--horizon",
+        "finite",
+        "--algo",
+        "mlac",
+        "--approx",
+        "rbf",
+        "--trials",
+        "6",
+        "--eval-every",
+        "3",
+        "--quiet",
+        "--out",
+    ];
+    let ran = learn_and_run(&dir, "", &args);
+    assert_eq!(ran.lines().count(), 7);
+    let config = std::fs::read_to_string(dir.join("run/config.toml")).unwrap();
+    assert!(
+        config.contains("[task]\nname = \"pendulum-balance\""),
+        "{config}"
+    );
+    // The same file without its terminal weights gives other returns: τ_N uses them.
+    let text = std::fs::read_to_string(task).unwrap();
+    let plain = dir.join("plain.toml");
+    std::fs::write(&plain, text.replace("terminal_weights = [50.0, 1.0]\n", "")).unwrap();
+    let mut args = args.to_vec();
+    args[1] = plain.to_str().unwrap();
+    assert_ne!(learn_and_run(&dir, "-plain", &args), ran);
+}
+
 #[test]
 fn angle_sensing_and_observers_over_the_wire_reproduce_rig_learn() {
     // The plant process measures with the encoder (noise from the run seed's stream 2, as

@@ -12,6 +12,8 @@ mod layout;
 mod merge;
 mod resolve;
 #[cfg(test)]
+mod task_tests;
+#[cfg(test)]
 mod tests;
 
 pub use resolve::{Overrides, resolve};

@@ -1,0 +1,117 @@
+//! Experiments on a task file: `--task`, the `task` key (a path or a `[task]` table),
+//! and the errors that name the task file.
+
+use std::path::{Path, PathBuf};
+
+use plant::SystemName;
+
+use super::*;
+
+/// The pendulum's shipped task with other reward weights, two start states and another
+/// name, written to a folder of `test`'s own; returns the folder.
+fn heavy_pendulum(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("cfg-task-{test}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = plant::task::builtin::text(SystemName::Pendulum)
+        .replace("name = \"pendulum\"", "name = \"heavy\"")
+        .replace("state_weights = [5.0, 0.1]", "state_weights = [8.0, 0.2]")
+        .replace("[[\"pi\", 0.0]]", "[[\"pi\", 0.0], [3.0, 0.5]]");
+    std::fs::write(dir.join("heavy.toml"), text).unwrap();
+    dir
+}
+
+fn with_task(path: &Path) -> Overrides {
+    Overrides {
+        task: Some(path.to_path_buf()),
+        ..Default::default()
+    }
+}
+
+#[test]
+fn a_task_file_gives_the_task_and_its_simulation_the_presets() {
+    let dir = heavy_pendulum("gives");
+    let cfg = resolve(None, &with_task(&dir.join("heavy.toml"))).unwrap();
+    assert_eq!(cfg.system, SystemName::Pendulum, "the system it simulates");
+    assert_eq!(cfg.task_name(), "heavy");
+    let task = cfg.task();
+    assert_eq!(task.reward.q, [8.0, 0.2]);
+    assert_eq!(task.initial_states.len(), 2);
+    // The learner is the pendulum's preset.
+    let preset = resolve(None, &Overrides::default()).unwrap();
+    assert_eq!(cfg.agent, preset.agent);
+    // config.toml carries the task: it resolves to itself wherever it is read.
+    let text = cfg.to_toml();
+    assert!(text.contains("[task]\nname = \"heavy\""), "{text}");
+    let again = resolve(
+        Some((Path::new("/elsewhere/config.toml"), &text)),
+        &Overrides::default(),
+    );
+    assert_eq!(again.unwrap(), cfg);
+    // A configuration file names it relative to its own folder.
+    let file = dir.join("exp.toml");
+    let from_key = resolve(
+        Some((&file, "task = \"heavy.toml\"\n")),
+        &Overrides::default(),
+    );
+    assert_eq!(from_key.unwrap(), cfg);
+    // And it is part of what a checkpoint belongs to.
+    assert_eq!(cfg.origin(0).system, "heavy");
+    assert_ne!(cfg.origin(0).fingerprint, preset.origin(0).fingerprint);
+}
+
+#[test]
+fn task_errors_name_the_task_file_or_the_key() {
+    let dir = heavy_pendulum("errors");
+    let heavy = dir.join("heavy.toml");
+    // Another system beside the task.
+    let o = Overrides {
+        system: Some(SystemName::ArmVertical),
+        ..with_task(&heavy)
+    };
+    let e = resolve(None, &o).unwrap_err().to_string();
+    assert!(
+        e.contains("`system`: \"arm-vertical\" differs from the system task \"heavy\" simulates, \"pendulum\""),
+        "{e}"
+    );
+    // The same system is no contradiction (config.toml has both).
+    let o = Overrides {
+        system: Some(SystemName::Pendulum),
+        ..with_task(&heavy)
+    };
+    resolve(None, &o).unwrap();
+    // A bad task file is named, not the configuration that points at it.
+    let bad = dir.join("bad.toml");
+    let text = std::fs::read_to_string(&heavy).unwrap();
+    std::fs::write(&bad, text.replace("low = -3.0", "low = 3.0")).unwrap();
+    let e = resolve(
+        Some((&dir.join("exp.toml"), "task = \"bad.toml\"\n")),
+        &Overrides::default(),
+    )
+    .unwrap_err();
+    assert_eq!(e.file.as_deref(), Some(bad.as_path()));
+    assert_eq!(e.key, "action[0].low");
+    // An inline table's errors carry the `task.` prefix and the configuration's name.
+    let inline = format!("{}\n", resolve(None, &with_task(&heavy)).unwrap().to_toml())
+        .replace("sampling_time = 0.03", "sampling_time = -1.0");
+    let e = resolve(Some((Path::new("c.toml"), &inline)), &Overrides::default()).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("c.toml: `task.sampling_time`: -1 is out of range"),
+        "{e}"
+    );
+    // A task without a simulation.
+    let driven = dir.join("driven.toml");
+    let text = text.split("[simulation]").next().unwrap();
+    std::fs::write(&driven, text).unwrap();
+    let e = resolve(None, &with_task(&driven)).unwrap_err().to_string();
+    assert!(e.contains("`task`: \"heavy\" has no [simulation]"), "{e}");
+    let e = resolve(
+        Some((Path::new("c.toml"), "task = 3\n")),
+        &Overrides::default(),
+    );
+    assert!(
+        e.unwrap_err()
+            .to_string()
+            .contains("must be a task file's path or a [task] table")
+    );
+}
