@@ -56,8 +56,9 @@ fn random_actions_never_actuate_outside_the_limits() {
     }
 }
 
-/// Replaces the value of a random `key = value` line of `text` by a wild one.
-fn mutate(text: &str, rng: &mut ChaCha8Rng) -> String {
+/// Replaces the value of a random `key = value` line of `text` by a wild one, or, a
+/// quarter of the time, by one of `forms`.
+fn mutate(text: &str, rng: &mut ChaCha8Rng, forms: &[&str]) -> String {
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     let keyed: Vec<usize> = (0..lines.len())
         .filter(|&i| lines[i].contains(" = "))
@@ -66,27 +67,36 @@ fn mutate(text: &str, rng: &mut ChaCha8Rng) -> String {
         let i = keyed[rng.random_range(0..keyed.len())];
         let (key, old) = lines[i].split_once(" = ").unwrap();
         let (key, old) = (key.to_string(), old.trim().to_string());
-        let value = match rng.random_range(0..16) {
-            // Plausible edits: the preset's number scaled, or a nearby integer.
-            10..=15 => match (old.parse::<i64>(), old.parse::<f64>()) {
-                (Ok(n), _) => format!("{}", n + rng.random_range(-2..=3)),
-                (_, Ok(v)) => format!("{:?}", v * rng.random_range(0.3..3.0)),
-                _ => old.clone(),
-            },
-            0 => "nan".to_string(),
-            1 => "inf".to_string(),
-            2 => "-1".to_string(),
-            3 => "0".to_string(),
-            4 => "1e308".to_string(),
-            5 => "18446744073709551615".to_string(),
-            6 => "\"pendulum\"".to_string(),
-            7 => "[]".to_string(),
-            8 => format!("[{}, 0]", rng.random_range(-3..100_000)),
-            _ => format!("{}", rng.random_range(-10.0..10.0)),
+        let value = if !forms.is_empty() && rng.random_range(0..4) == 0 {
+            forms[rng.random_range(0..forms.len())].to_string()
+        } else {
+            wild_value(&old, rng)
         };
         lines[i] = format!("{key} = {value}");
     }
     lines.join("\n")
+}
+
+/// A wild replacement of the value `old`.
+fn wild_value(old: &str, rng: &mut ChaCha8Rng) -> String {
+    match rng.random_range(0..16) {
+        // Plausible edits: the preset's number scaled, or a nearby integer.
+        10..=15 => match (old.parse::<i64>(), old.parse::<f64>()) {
+            (Ok(n), _) => format!("{}", n + rng.random_range(-2..=3)),
+            (_, Ok(v)) => format!("{:?}", v * rng.random_range(0.3..3.0)),
+            _ => old.to_string(),
+        },
+        0 => "nan".to_string(),
+        1 => "inf".to_string(),
+        2 => "-1".to_string(),
+        3 => "0".to_string(),
+        4 => "1e308".to_string(),
+        5 => "18446744073709551615".to_string(),
+        6 => "\"pendulum\"".to_string(),
+        7 => "[]".to_string(),
+        8 => format!("[{}, 0]", rng.random_range(-3..100_000)),
+        _ => format!("{}", rng.random_range(-10.0..10.0)),
+    }
 }
 
 #[test]
@@ -106,7 +116,7 @@ fn mutated_configuration_files_are_errors_or_run_but_never_panic() {
             ..Default::default()
         };
         let base = resolve(None, &o).unwrap().to_toml();
-        let text = mutate(&base, &mut rng);
+        let text = mutate(&base, &mut rng, &[]);
         let outcome = std::panic::catch_unwind(|| match resolve(Some((path, &text)), &o) {
             Err(e) => {
                 let msg = e.to_string();
@@ -137,6 +147,70 @@ fn mutated_configuration_files_are_errors_or_run_but_never_panic() {
     }
     eprintln!("mutated configurations: {accepted} accepted and run, {rejected} rejected");
     // Both branches were exercised.
+    assert!(
+        accepted > 10 && rejected > 10,
+        "{accepted} accepted, {rejected} rejected"
+    );
+}
+
+#[test]
+fn mutated_task_files_are_errors_or_run_but_never_panic() {
+    let mut rng = ChaCha8Rng::seed_from_u64(0x7A5C);
+    let path = Path::new("task.toml");
+    let (mut accepted, mut rejected) = (0, 0);
+    for case in 0..400 {
+        let system = SystemName::ALL[rng.random_range(0..SystemName::ALL.len())];
+        // Besides wild values, the forms of task files: multiples of π, ranges, infinite
+        // bounds, start states.
+        let forms = [
+            "\"-2pi\"",
+            "\"pi\"",
+            "[1, -1]",
+            "[\"pi\", 0]",
+            "-inf",
+            "[[0.0, 0.0]]",
+        ];
+        let text = mutate(plant::task::builtin::text(system), &mut rng, &forms);
+        let outcome = std::panic::catch_unwind(|| {
+            let task =
+                match plant::TaskFile::parse(&text, Some(path)).and_then(|f| f.task(Some(path))) {
+                    Err(e) => {
+                        let msg = e.to_string();
+                        assert!(!msg.contains('\n'), "a one-line error: {msg}");
+                        assert!(msg.starts_with("task.toml: "), "names the file: {msg}");
+                        return false;
+                    }
+                    Ok(task) => Arc::new(task),
+                };
+            // Accepted: the system's preset learns on it within the limits.
+            let sim = task.simulation().system;
+            let o = Overrides {
+                system: Some(sim),
+                ..Default::default()
+            };
+            let cfg = resolve(None, &o).unwrap();
+            let mut agent = agent::build(&task, &cfg.agent, 1);
+            let mut plant = Plant::new(task.clone());
+            let mut u = vec![0.0; task.action_dim()];
+            plant.reset(&task.initial_states[0]);
+            agent.start_trial(plant.state(), &mut u);
+            for _ in 0..20 {
+                let r = plant.step(&u);
+                for (j, a) in plant.applied_action().iter().enumerate() {
+                    assert!(*a >= task.action_low[j] && *a <= task.action_high[j]);
+                }
+                let x = plant.state().to_vec();
+                agent.learn(r, &x, Some(&mut u));
+            }
+            true
+        });
+        match outcome {
+            Ok(true) => accepted += 1,
+            Ok(false) => rejected += 1,
+            Err(_) => panic!("case {case} ({system}) panicked on:\n{text}"),
+        }
+    }
+    eprintln!("mutated task files: {accepted} accepted and run, {rejected} rejected");
     assert!(
         accepted > 10 && rejected > 10,
         "{accepted} accepted, {rejected} rejected"
