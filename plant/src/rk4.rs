@@ -1,7 +1,7 @@
 //! Fixed-step fourth-order Runge–Kutta integration with a zero-order-hold input.
 //!
 //! The thesis samples at `Ts` (30 ms for the pendulum) and holds the action over the
-//! interval. [`crate::Task::substeps`] RK4 steps of `Ts / substeps` are taken per sample
+//! interval. [`crate::Simulation::substeps`] RK4 steps of `Ts / substeps` are taken per sample
 //! (20 for the pendulum: 1.5 ms steps);
 //! the choice is justified by the test `halving_the_substep_changes_little` in
 //! [`crate::task`]: halving the sub-step changes a 3 s trajectory by less than 1e-6.

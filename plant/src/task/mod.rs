@@ -1,5 +1,5 @@
 //! Tasks: a system together with everything an experiment on it needs, described by a
-//! task file ([`file`]); the built-in systems' files ship in `plant/tasks/` ([`builtin`]).
+//! task file ([`mod@file`]); the built-in systems' files ship in `plant/tasks/` ([`builtin`]).
 
 use std::path::Path;
 
