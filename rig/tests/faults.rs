@@ -71,7 +71,9 @@ fn run_messages(path: &Path) -> Messages {
     m
 }
 
-const RUN: [&str; 6] = ["--trials", "30", "--eval-every", "5", "--quiet", "--out"];
+/// Long enough that a process killed after a few trials dies mid-run, however loaded
+/// the machine (a trial takes about 2 ms in lockstep).
+const RUN: [&str; 6] = ["--trials", "150", "--eval-every", "5", "--quiet", "--out"];
 
 #[test]
 fn a_process_killed_in_lockstep_loses_no_trial_and_resume_continues_bit_for_bit() {
@@ -109,7 +111,7 @@ fn a_process_killed_in_lockstep_loses_no_trial_and_resume_continues_bit_for_bit(
         assert!(whole.starts_with(&before), "{role}: {before}");
         let recorded = run_messages(&out.join("run.mcap"));
         let rows = before.lines().count() - 1;
-        assert!(rows >= 4 + 5 * i && rows < 30, "{role}: {rows} rows");
+        assert!(rows >= 4 + 5 * i && rows < 150, "{role}: {rows} rows");
         for (topic, msgs) in &recorded {
             let n = msgs.len();
             assert_eq!(msgs[..], whole_msgs[topic][..n], "{role}: {topic}");

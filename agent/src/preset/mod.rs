@@ -39,6 +39,8 @@
 //! * Combinations the thesis did not tune (RMAC on the arm, anything on the double
 //!   integrator) start from the pendulum values of the same algorithm and approximator.
 //! * Finite horizon (Chapter 4, §4.4): see [`finite_horizon`].
+//! * A task the rig does not simulate (a task file without `[simulation]`): the
+//!   pendulum's preset carried over by [`rules`] ([`for_task`]).
 
 use plant::config::{ConfigError, RunConfig};
 use plant::{SystemName, Task};
@@ -49,6 +51,7 @@ mod actor_critic;
 mod components;
 mod critic_only;
 mod finite;
+pub mod rules;
 #[cfg(test)]
 mod tests;
 
@@ -97,6 +100,23 @@ fn input_scaling(system: SystemName) -> (Vec<f64>, Vec<f64>) {
         .chain(std::iter::repeat_n(w_action, m))
         .collect();
     (w_state, w_model)
+}
+
+/// The preset for `task`: its simulated system's ([`preset`]), or, for a task the rig
+/// does not simulate, the pendulum's carried over by [`rules`].
+pub fn for_task(
+    task: &Task,
+    algo: Algo,
+    approx: ApproxKind,
+    horizon: HorizonKind,
+) -> Result<Preset, ConfigError> {
+    match &task.simulation {
+        Some(sim) => preset(sim.system, algo, approx, horizon),
+        None => Ok(rules::adapt(
+            preset(SystemName::Pendulum, algo, approx, horizon)?,
+            task,
+        )),
+    }
 }
 
 /// The preset for `(system, algo, approx)` with the given horizon.

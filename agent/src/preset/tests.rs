@@ -52,3 +52,117 @@ fn finite_horizon_presets_are_those_of_section_4_4() {
     assert_eq!(rates(Algo::Mlac), (0.15, 0.4, Some(0.8), 0.55, 0.65));
     assert_eq!(rates(Algo::Rmac), (0.6, 0.2, Some(0.6), 0.7, 0.7));
 }
+
+/// Every supported (algorithm, approximator, horizon), with `f` on each preset's result.
+fn each_supported(mut f: impl FnMut(Algo, ApproxKind, HorizonKind)) {
+    for algo in Algo::ALL {
+        for &approx in algo.approximators() {
+            f(algo, approx, HorizonKind::Infinite);
+            if algo.has_actor() && approx == ApproxKind::Rbf {
+                f(algo, approx, HorizonKind::Finite);
+            }
+        }
+    }
+}
+
+/// The task of `text` with its `[simulation]` table removed: one only a driver serves.
+fn driven(text: &str) -> Task {
+    let text = text.split("[simulation]").next().unwrap();
+    plant::TaskFile::parse(text, None)
+        .and_then(|f| f.task(None))
+        .unwrap()
+}
+
+#[test]
+fn the_rules_carry_the_pendulum_preset_over_to_the_pendulum_itself() {
+    let task = driven(plant::task::builtin::text(SystemName::Pendulum));
+    each_supported(|algo, approx, horizon| {
+        assert_eq!(
+            for_task(&task, algo, approx, horizon).unwrap(),
+            preset(SystemName::Pendulum, algo, approx, horizon).unwrap(),
+            "{algo}/{approx}/{horizon}"
+        );
+    });
+}
+
+/// A rotary pendulum's shape: four states (arm and pendulum angles, their velocities) and
+/// one action of ±10 V.
+const ROTARY: &str = r#"
+name = "rotary"
+sampling_time = 0.01
+trial_seconds = 4
+start_states = [[0.0, "pi", 0.0, 0.0]]
+[[state]]
+name = "theta"
+angle = true
+[[state]]
+name = "alpha"
+angle = true
+[[state]]
+name = "theta_dot"
+range = ["-10pi", "10pi"]
+[[state]]
+name = "alpha_dot"
+range = ["-20pi", "20pi"]
+[[action]]
+name = "v"
+low = -10
+high = 10
+[reward]
+state_weights = [1, 5, 0.1, 0.1]
+action_weights = [0.1]
+"#;
+
+#[test]
+fn the_rules_fit_a_task_of_other_dimensions_and_ranges() {
+    let task = driven(ROTARY);
+    each_supported(|algo, approx, horizon| {
+        let p = for_task(&task, algo, approx, horizon).unwrap();
+        p.agent
+            .validate(&task)
+            .unwrap_or_else(|e| panic!("{algo}/{approx}/{horizon}: {e}"));
+        let pendulum = preset(SystemName::Pendulum, algo, approx, horizon).unwrap();
+        // σ scaled to the ±10 V bounds.
+        assert_eq!(
+            p.agent.learning.sigma,
+            pendulum.agent.learning.sigma * 10.0 / 3.0
+        );
+        for c in [
+            p.agent.actor.as_ref(),
+            Some(&p.agent.critic),
+            p.agent.model.as_ref(),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            match c {
+                Component::Rbf(r) => {
+                    assert!(r.centres.iter().product::<usize>() <= rules::MAX_GRID)
+                }
+                Component::Lstd(l) => {
+                    assert!(l.centres.iter().product::<usize>() <= rules::MAX_GRID)
+                }
+                Component::Tiles(t) => {
+                    assert!(t.tiles.iter().product::<usize>() <= rules::MAX_GRID)
+                }
+                Component::Llr(l) => assert!(l.neighbours >= 2 * (l.weights.len() + 1)),
+            }
+        }
+    });
+    // MLAC/LLR by hand: angles weigh as the pendulum's angle, the velocities by their
+    // ranges (the pendulum's 0.1 at ±8π), the voltage by its bounds.
+    let p = for_task(&task, Algo::Mlac, ApproxKind::Llr, HorizonKind::Infinite).unwrap();
+    let Some(Component::Llr(actor)) = &p.agent.actor else {
+        panic!()
+    };
+    assert_eq!(
+        actor.weights,
+        [1.0, 1.0, 0.1 * 8.0 / 10.0, 0.1 * 8.0 / 20.0]
+    );
+    assert_eq!((actor.memory, actor.neighbours), (4000, 25));
+    let Some(Component::Llr(model)) = &p.agent.model else {
+        panic!()
+    };
+    assert_eq!(model.weights[4], 1.0 * 3.0 / 10.0);
+    assert_eq!((model.memory, model.neighbours), (200, 12));
+}
