@@ -132,6 +132,12 @@ impl ObserverConfig {
         *self == Self::default()
     }
 
+    /// Whether the observer integrates the plant's own dynamics (the predictive observer
+    /// with the known model), which a task without a simulation does not have.
+    pub fn uses_known_model(&self) -> bool {
+        self.observer == ObserverKind::Predictive && self.model == ObserverModel::Known
+    }
+
     /// Checks every value against its allowed range, that predictive timing has the
     /// predictive observer's model, and that an angle sensor has an observer that
     /// estimates the velocities. (Predictive timing also needs an infinite horizon: the

@@ -26,7 +26,11 @@ pub struct Args {
 
 /// Runs the command.
 pub fn main(args: &Args) -> ExitCode {
-    let cfg = match resolve_selection(&args.selection) {
+    let simulated = |cfg: ExperimentConfig| match cfg.check_simulated() {
+        Ok(()) => Ok(cfg),
+        Err(e) => Err(e.to_string()),
+    };
+    let cfg = match resolve_selection(&args.selection).and_then(simulated) {
         Ok(c) => c,
         Err(e) => {
             eprintln!("error: {e}");

@@ -122,6 +122,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
     } else if args.driver.driver.is_some() {
         return Err("`--driver` needs `--plant external`".into());
     } else {
+        cfg.check_simulated().map_err(|e| e.to_string())?;
         None
     };
     let lockstep = realtime.is_none() && driver.is_none();

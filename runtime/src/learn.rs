@@ -146,6 +146,7 @@ pub fn write_atomic(path: &Path, text: &str) -> Result<()> {
 
 /// Runs every run of `cfg` and writes the outputs.
 pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary> {
+    cfg.check_simulated()?;
     std::fs::create_dir_all(&opts.out)
         .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
     write_atomic(&opts.out.join("config.toml"), &cfg.to_toml())?;

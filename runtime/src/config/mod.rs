@@ -55,13 +55,18 @@ impl ExperimentConfig {
         horizon: HorizonKind,
     ) -> Result<Self, ConfigError> {
         let preset = agent::preset::preset(system, algo, approx, horizon)?;
-        Ok(Self {
+        Ok(Self::from_preset(system, preset))
+    }
+
+    /// `preset` on `system`'s task, with the default sensor and observer.
+    pub fn from_preset(system: SystemName, preset: agent::preset::Preset) -> Self {
+        Self {
             system,
             task: None,
             agent: preset.agent,
             run: preset.run,
             observer: ObserverConfig::default(),
-        })
+        }
     }
 
     /// Checks every value against its allowed range and the system's dimensions, section
@@ -70,6 +75,15 @@ impl ExperimentConfig {
         let task = self.checked_task()?;
         self.run.validate(&task)?;
         self.observer.validate()?;
+        if task.simulation.is_none() && self.observer.uses_known_model() {
+            return Err(ConfigError::new(
+                "observer.model",
+                format!(
+                    "\"known\" integrates the task's simulation, and task \"{}\" has none: use \"learned\"",
+                    task.name
+                ),
+            ));
+        }
         if self.observer.mode == ObserverMode::Predictive
             && self.agent.horizon == HorizonKind::Finite
         {
@@ -92,17 +106,25 @@ impl ExperimentConfig {
 
     /// The task learned, checked; an error's key is prefixed with `task.`.
     fn checked_task(&self) -> Result<Task, ConfigError> {
-        let Some(file) = &self.task else {
-            return Ok(Task::new(self.system));
-        };
-        file.task(None).map_err(|mut e| {
-            e.key = if e.key.is_empty() {
-                "task".into()
-            } else {
-                format!("task.{}", e.key)
-            };
-            e
-        })
+        match &self.task {
+            Some(file) => task_of(file),
+            None => Ok(Task::new(self.system)),
+        }
+    }
+
+    /// Checks that the rig can simulate the task (`rig learn`, the simulated plant); the
+    /// error says to learn it against its driver.
+    pub fn check_simulated(&self) -> Result<(), ConfigError> {
+        match &self.task {
+            Some(f) if f.simulation.is_none() => Err(ConfigError::new(
+                "task",
+                format!(
+                    "\"{}\" has no [simulation]: the rig cannot simulate it; learn it against its driver (rig run --plant external --task FILE)",
+                    f.name
+                ),
+            )),
+            _ => Ok(()),
+        }
     }
 
     /// The name of the task learned.
@@ -136,4 +158,16 @@ impl ExperimentConfig {
             fingerprint: checkpoint::fingerprint(c.to_toml().as_bytes()),
         }
     }
+}
+
+/// The task of a `[task]` table, checked; an error's key is prefixed with `task.`.
+fn task_of(file: &TaskFile) -> Result<Task, ConfigError> {
+    file.task(None).map_err(|mut e| {
+        e.key = if e.key.is_empty() {
+            "task".into()
+        } else {
+            format!("task.{}", e.key)
+        };
+        e
+    })
 }

@@ -83,9 +83,11 @@ impl Overrides {
     }
 }
 
-/// Which preset: the system and the learner.
+/// Which preset: the system and the learner, and a task the rig does not simulate, whose
+/// preset the pendulum's gives by rules.
 struct PresetChoice {
     system: SystemName,
+    driven: Option<plant::Task>,
     algo: Algo,
     approx: ApproxKind,
     horizon: HorizonKind,
@@ -105,11 +107,16 @@ impl PresetChoice {
         };
         let system = choose("system", o.system, pick("system")?, SystemName::Pendulum)?;
         let explicit = o.system.is_some() || user.contains_key("system");
+        let driven = match task {
+            Some(t) if t.simulation.is_none() => Some(super::task_of(t)?),
+            _ => None,
+        };
         Ok(Self {
             system: match task {
                 Some(t) => simulated_system(t, explicit.then_some(system))?,
                 None => system,
             },
+            driven,
             algo: choose("algo", o.algo, pick("algo")?, Algo::Mlac)?,
             approx: choose("approx", o.approx, pick("approx")?, ApproxKind::Llr)?,
             horizon: choose(
@@ -124,7 +131,13 @@ impl PresetChoice {
     /// The preset as a TOML table with every key a user may set: also those it does not
     /// write when they have their default values.
     fn table(&self) -> Result<toml::Table, ConfigError> {
-        let cfg = ExperimentConfig::preset(self.system, self.algo, self.approx, self.horizon)?;
+        let cfg = match &self.driven {
+            None => ExperimentConfig::preset(self.system, self.algo, self.approx, self.horizon)?,
+            Some(task) => ExperimentConfig::from_preset(
+                self.system,
+                agent::preset::for_task(task, self.algo, self.approx, self.horizon)?,
+            ),
+        };
         let mut table = toml::Table::try_from(&cfg).expect("a preset always serialises");
         // The observer section is written only when it differs from the default; a user's
         // file may still set any of its keys.
@@ -152,31 +165,26 @@ impl PresetChoice {
     }
 }
 
-/// The built-in system a task file simulates, which gives the learner's presets; the
-/// error says why there is none, or names the system given beside it (`explicit`) that
-/// differs.
+/// The built-in system whose presets a task file's learner starts from: the one it
+/// simulates, else the pendulum, whose presets [`agent::preset::rules`] carry over. The
+/// error names a system given beside the task (`explicit`) that differs.
 fn simulated_system(
     task: &TaskFile,
     explicit: Option<SystemName>,
 ) -> Result<SystemName, ConfigError> {
-    let Some(sim) = &task.simulation else {
-        return Err(ConfigError::new(
-            "task",
-            format!(
-                "\"{}\" has no [simulation]: the learner's presets are those of the built-in system it simulates, and learning on a task only a driver serves is not supported yet",
-                task.name
-            ),
-        ));
+    let (system, why) = match &task.simulation {
+        Some(sim) => (sim.system, "simulates"),
+        None => (SystemName::Pendulum, "takes its presets from (by rules)"),
     };
     match explicit {
-        Some(s) if s != sim.system => Err(ConfigError::new(
+        Some(s) if s != system => Err(ConfigError::new(
             "system",
             format!(
-                "\"{s}\" differs from the system task \"{}\" simulates, \"{}\": give one of --system and --task",
-                task.name, sim.system
+                "\"{s}\" differs from the system task \"{}\" {why}, \"{system}\": give one of --system and --task",
+                task.name
             ),
         )),
-        _ => Ok(sim.system),
+        _ => Ok(system),
     }
 }
 

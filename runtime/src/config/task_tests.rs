@@ -99,12 +99,6 @@ fn task_errors_name_the_task_file_or_the_key() {
             .starts_with("c.toml: `task.sampling_time`: -1 is out of range"),
         "{e}"
     );
-    // A task without a simulation.
-    let driven = dir.join("driven.toml");
-    let text = text.split("[simulation]").next().unwrap();
-    std::fs::write(&driven, text).unwrap();
-    let e = resolve(None, &with_task(&driven)).unwrap_err().to_string();
-    assert!(e.contains("`task`: \"heavy\" has no [simulation]"), "{e}");
     let e = resolve(
         Some((Path::new("c.toml"), "task = 3\n")),
         &Overrides::default(),
@@ -113,5 +107,56 @@ fn task_errors_name_the_task_file_or_the_key() {
         e.unwrap_err()
             .to_string()
             .contains("must be a task file's path or a [task] table")
+    );
+}
+
+#[test]
+fn a_task_without_a_simulation_takes_the_pendulum_presets_by_rules() {
+    let dir = heavy_pendulum("driven");
+    let text = std::fs::read_to_string(dir.join("heavy.toml")).unwrap();
+    let driven = dir.join("driven.toml");
+    std::fs::write(&driven, text.split("[simulation]").next().unwrap()).unwrap();
+    let cfg = resolve(None, &with_task(&driven)).unwrap();
+    assert_eq!(cfg.system, SystemName::Pendulum, "the presets' basis");
+    let task = cfg.task();
+    assert!(task.simulation.is_none());
+    let rules = agent::preset::for_task(&task, cfg.agent.algo, cfg.agent.approx, cfg.agent.horizon);
+    assert_eq!(cfg.agent, rules.unwrap().agent);
+    // Its config.toml resolves to itself.
+    assert_eq!(
+        resolve(
+            Some((Path::new("c.toml"), &cfg.to_toml())),
+            &Overrides::default()
+        )
+        .unwrap(),
+        cfg
+    );
+    // The rig cannot simulate it: one line says to use its driver.
+    let e = cfg.check_simulated().unwrap_err().to_string();
+    assert!(
+        e.contains(
+            "\"heavy\" has no [simulation]: the rig cannot simulate it; learn it against its driver"
+        ),
+        "{e}"
+    );
+    assert!(
+        resolve(None, &with_task(&dir.join("heavy.toml")))
+            .unwrap()
+            .check_simulated()
+            .is_ok()
+    );
+    // Nor can the observer integrate its dynamics.
+    let known = "[observer]\nsensor = \"angle\"\nobserver = \"predictive\"\nmodel = \"known\"\n";
+    let e = resolve(Some((Path::new("k.toml"), known)), &with_task(&driven)).unwrap_err();
+    assert_eq!(e.key, "observer.model");
+    // Another system than the pendulum beside it is a contradiction.
+    let o = Overrides {
+        system: Some(SystemName::Arm64),
+        ..with_task(&driven)
+    };
+    let e = resolve(None, &o).unwrap_err().to_string();
+    assert!(
+        e.contains("takes its presets from (by rules), \"pendulum\""),
+        "{e}"
     );
 }

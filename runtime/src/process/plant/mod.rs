@@ -52,6 +52,9 @@ pub const CYCLES_HEADER: &str = "seq,t_sample_ns,t_woke_ns,t_action_ns";
 pub fn run(args: &PlantArgs) -> Result<()> {
     schedule_clock(&args.node.scheduling)?;
     let cfg = args.node.config()?;
+    if args.driver.is_none() {
+        cfg.check_simulated()?;
+    }
     let task = Arc::new(cfg.task());
     let run_seed = ::agent::seed::run_seed(cfg.run.seed, args.node.run_index);
     let sensor = crate::experiment::sensor(&task, &cfg.observer, run_seed);
