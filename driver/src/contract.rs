@@ -28,7 +28,7 @@ use wire::{Bus, Error, MAX_U, MAX_X, Qos};
 pub use crate::link::{DriverLink, DriverWatch, running, wait_info};
 
 /// The protocol version in [`DriverInfo::version`].
-pub const VERSION: u64 = 1;
+pub const VERSION: u64 = 2;
 
 /// Settings of every driver service: one publisher (one driver per id; one rig
 /// commanding it at a time), up to eight subscribers (the rig's plant process, its
@@ -61,6 +61,17 @@ pub mod status {
     pub const WATCHDOG: u64 = 4;
 }
 
+/// Values of [`DriverInfo::clock`].
+pub mod clock {
+    /// The driver samples every period on its own, whether or not actions arrive:
+    /// hardware, or a simulation in real time.
+    pub const REALTIME: u64 = 0;
+    /// A simulation that publishes sample `k + 1` only after the action answering sample
+    /// `k` arrived (or a reset): it runs as fast as the loop, and the same commands give
+    /// the same samples.
+    pub const LOCKSTEP: u64 = 1;
+}
+
 /// Values of [`DriverCommand::kind`].
 pub mod kind {
     /// Apply `u` from now on.
@@ -73,13 +84,18 @@ pub mod kind {
 /// at least once a second (a rig that starts later learns it from the next one).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("rig.DriverInfo.v1")]
+#[type_name("rig.DriverInfo.v2")]
 pub struct DriverInfo {
     /// Protocol version: [`VERSION`].
     pub version: u64,
-    /// The system, ASCII, NUL-padded: `pendulum`, `arm-vertical`, `arm-horizontal`,
-    /// `arm-6.4`, `double-integrator` (the rig's `--system` names).
-    pub system: [u8; 32],
+    /// The task's name (its task file's `name`), ASCII, NUL-padded: a built-in system's
+    /// `pendulum`, `arm-vertical`, `arm-horizontal`, `arm-6.4`, `double-integrator`, or
+    /// a task file's.
+    pub task: [u8; 32],
+    /// The task's content hash ([`plant::Task::hash`], `docs/tasks.md`).
+    pub task_hash: u64,
+    /// How the driver keeps time: [`clock`].
+    pub clock: u64,
     /// State components in [`DriverSample::x`].
     pub n_x: u64,
     /// Action components in [`DriverCommand::u`] and [`DriverSample::u_applied`].
@@ -165,10 +181,15 @@ pub struct DriverCommand {
 }
 
 impl DriverInfo {
-    /// The system name as text (up to the first NUL).
-    pub fn system_name(&self) -> String {
-        let end = self.system.iter().position(|&b| b == 0).unwrap_or(32);
-        String::from_utf8_lossy(&self.system[..end]).into_owned()
+    /// The task's name as text (up to the first NUL).
+    pub fn task_name(&self) -> String {
+        let end = self.task.iter().position(|&b| b == 0).unwrap_or(32);
+        String::from_utf8_lossy(&self.task[..end]).into_owned()
+    }
+
+    /// Whether the driver runs in lockstep ([`clock::LOCKSTEP`]).
+    pub fn lockstep(&self) -> bool {
+        self.clock == clock::LOCKSTEP
     }
 
     /// The physical sample time `period_ns · time_scale` \[s\].
@@ -210,6 +231,14 @@ impl DriverInfo {
                     "limits of u[{i}]: [{lo}, {hi}]: must be finite with u_min < u_max"
                 ));
             }
+        }
+        if self.clock > clock::LOCKSTEP {
+            return Err(format!(
+                "clock = {}: must be {} (realtime) or {} (lockstep)",
+                self.clock,
+                clock::REALTIME,
+                clock::LOCKSTEP
+            ));
         }
         if self.watchdog_periods != 1 {
             return Err(format!(
@@ -320,7 +349,7 @@ mod tests {
 
     #[test]
     fn layouts_are_fixed() {
-        assert_eq!(size_of::<DriverInfo>(), 160);
+        assert_eq!(size_of::<DriverInfo>(), 176);
         assert_eq!(size_of::<DriverSample>(), 184);
         assert_eq!(size_of::<DriverCommand>(), 144);
         assert_eq!(align_of::<DriverInfo>(), 8);
@@ -341,9 +370,9 @@ mod tests {
         };
         i.u_min[0] = -3.0;
         i.u_max[0] = 3.0;
-        i.system[..8].copy_from_slice(b"pendulum");
+        i.task[..8].copy_from_slice(b"pendulum");
         assert_eq!(i.validate(), Ok(()));
-        assert_eq!(i.system_name(), "pendulum");
+        assert_eq!(i.task_name(), "pendulum");
         assert!((i.ts() - 0.03).abs() < 1e-12);
         let mut bad = i;
         bad.u_max[0] = f64::NAN;
@@ -352,8 +381,11 @@ mod tests {
         bad.watchdog_periods = 3;
         assert!(bad.validate().unwrap_err().contains("watchdog_periods"));
         let mut bad = i;
-        bad.version = 2;
+        bad.version = 1;
         assert!(bad.validate().unwrap_err().contains("version"));
+        let mut bad = i;
+        bad.clock = 2;
+        assert!(bad.validate().unwrap_err().contains("clock"));
     }
 
     /// Velocities may be unmeasured (all NaN); positions, a single NaN velocity and

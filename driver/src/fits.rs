@@ -1,18 +1,19 @@
-//! What the rig requires of a driver for a task (`docs/driver.md`): the same system,
-//! dimensions, sample time and action limits.
+//! What the rig requires of a driver for a task (`docs/driver.md`): the same task —
+//! name, dimensions, sample time, action limits and content hash.
 
 use crate::contract::DriverInfo;
 use plant::Task;
 
-/// Checks that a driver's info fits `task`: the same system, dimensions, sample time
-/// (within 0.01 %) and action limits (within 1e-9) — the rig learns the task as the
-/// thesis defines it, so a driver with other limits is an error, not a silent change.
+/// Checks that a driver's info fits `task`: the same task name, dimensions, sample time
+/// (within 0.01 %), action limits (within 1e-9) and content hash ([`Task::hash`]) — the
+/// rig learns the task its file defines, so a driver of another is an error, not a
+/// silent change. The error names both sides.
 pub fn fits_task(info: &DriverInfo, task: &Task) -> Result<(), String> {
-    let name = info.system_name();
-    if name != task.name.as_str() {
+    let name = info.task_name();
+    if name != task.name {
         return Err(format!(
-            "it drives {name:?}, the task is {:?}",
-            task.name.as_str()
+            "it serves task {name:?}, the rig's task is {:?}",
+            task.name
         ));
     }
     if info.n_x != task.state_dim() as u64 || info.n_u != task.action_dim() as u64 {
@@ -43,6 +44,13 @@ pub fn fits_task(info: &DriverInfo, task: &Task) -> Result<(), String> {
             ));
         }
     }
+    if info.task_hash != task.hash() {
+        return Err(format!(
+            "it serves task {name:?} with hash {:016x}, the rig's task {name:?} has hash {:016x}: the two task files differ (reward, start states, ranges or operating range)",
+            info.task_hash,
+            task.hash()
+        ));
+    }
     Ok(())
 }
 
@@ -61,7 +69,8 @@ mod tests {
             watchdog_periods: 1,
             ..Default::default()
         };
-        i.system[..8].copy_from_slice(b"pendulum");
+        i.task[..8].copy_from_slice(b"pendulum");
+        i.task_hash = Task::new(SystemName::Pendulum).hash();
         i.u_min[0] = -3.0;
         i.u_max[0] = 3.0;
         i
@@ -78,10 +87,15 @@ mod tests {
         i.period_ns = 30_000_000;
         assert!(fits_task(&i, &task).unwrap_err().contains("sample time"));
         let arm = Task::new(SystemName::ArmVertical);
-        assert!(
-            fits_task(&pendulum_info(), &arm)
-                .unwrap_err()
-                .contains("\"pendulum\"")
+        assert_eq!(
+            fits_task(&pendulum_info(), &arm).unwrap_err(),
+            "it serves task \"pendulum\", the rig's task is \"arm-vertical\""
         );
+        // The same name, dimensions and limits, another reward: the hash tells.
+        let mut heavier = Task::new(SystemName::Pendulum);
+        heavier.reward.q[0] = 10.0;
+        let e = fits_task(&pendulum_info(), &heavier).unwrap_err();
+        assert!(e.contains("the two task files differ"), "{e}");
+        assert!(e.contains(&format!("{:016x}", heavier.hash())), "{e}");
     }
 }

@@ -4,8 +4,9 @@
 //! - [`contract`]: the messages and services of `docs/driver.md` (`DriverInfo`,
 //!   `DriverSample`, `DriverCommand`), and the rig's end of them.
 //! - [`device`]: the [`Device`] trait a driver implements; [`serve`] runs the contract
-//!   for it (clock, commands, resets, watchdog); [`Simulated`] is any built-in system as
-//!   a device (`rig sim-driver`).
+//!   for it (clock, commands, resets, watchdog); [`serve_lockstep`] serves a simulation
+//!   ([`Lockstep`]) one period per action; [`Simulated`] is any built-in system as a
+//!   device (`rig sim-driver`).
 //! - [`safety`]: the supervisor every action passes (clamps, rejection, watchdog, range
 //!   stop), the same one the simulated plant uses.
 //! - [`fits_task`]: whether a driver's limits fit a task.
@@ -22,5 +23,5 @@ mod simulated;
 pub use device::{Device, REST_SAMPLES};
 pub use fits::fits_task;
 pub use plant::safety;
-pub use serve::{Served, Serving, serve};
+pub use serve::{Lockstep, Served, Serving, serve, serve_lockstep};
 pub use simulated::Simulated;

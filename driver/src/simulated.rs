@@ -13,6 +13,7 @@ use plant::{Plant, SystemName, Task};
 use wire::{MAX_U, now_ns};
 
 use crate::device::Device;
+use crate::serve::Lockstep;
 
 /// A simulated device: a [`Task`]'s system integrated with RK4 over the real elapsed
 /// time (times `speed`), piecewise between action arrivals, with the steps of the
@@ -35,6 +36,9 @@ pub struct Simulated {
     t_ns: u64,
     speed: f64,
     gains: (f64, f64),
+    /// Served in lockstep ([`crate::serve_lockstep`]): time passes only by
+    /// [`Lockstep::step`], never with the wall clock.
+    lockstep: bool,
 }
 
 impl Simulated {
@@ -61,18 +65,38 @@ impl Simulated {
 
     /// `system` at its first start state, running `speed` times faster than real time.
     pub fn new(system: SystemName, speed: f64) -> Result<Self> {
-        let gains = Self::brake_gains(system)?;
+        Self::of(Task::new(system), speed)
+    }
+
+    /// `task` (one with a built-in simulation: a task file's `[simulation]`) at its first
+    /// start state, running `speed` times faster than real time.
+    pub fn of(task: Task, speed: f64) -> Result<Self> {
+        let Some(sim) = &task.simulation else {
+            return Err(anyhow!(
+                "task {:?} has no [simulation]: there is nothing to simulate",
+                task.name
+            ));
+        };
+        let gains = Self::brake_gains(sim.system)?;
         if !(speed.is_finite() && speed > 0.0 && speed <= 1000.0) {
             return Err(anyhow!("--speed {speed}: must be in (0, 1000]"));
         }
         Ok(Self {
-            plant: Plant::new(Arc::new(Task::new(system))),
+            plant: Plant::new(Arc::new(task)),
             sensor: Sensor::Full,
             u: [0.0; MAX_U],
             t_ns: now_ns(),
             speed,
             gains,
+            lockstep: false,
         })
+    }
+
+    /// For [`crate::serve_lockstep`]: time passes one period per [`Lockstep::step`], not
+    /// with the wall clock, and resets place the system at once.
+    pub fn in_lockstep(mut self) -> Self {
+        self.lockstep = true;
+        self
     }
 
     /// Samples report the positions only, quantised to `counts_per_rev` counts per
@@ -86,9 +110,10 @@ impl Simulated {
         Ok(self)
     }
 
-    /// Integrates up to monotonic time `t_ns` with the action in effect.
+    /// Integrates up to monotonic time `t_ns` with the action in effect (in lockstep:
+    /// nothing, [`Lockstep::step`] integrates).
     fn advance(&mut self, t_ns: u64) {
-        if t_ns > self.t_ns {
+        if t_ns > self.t_ns && !self.lockstep {
             let m = self.plant.task().action_dim();
             let seconds = (t_ns - self.t_ns) as f64 * 1e-9 * self.speed;
             self.plant.advance(&self.u[..m], seconds);
@@ -143,6 +168,18 @@ impl Device for Simulated {
     fn at_rest(&self, _: &[f64], x0: &[f64]) -> bool {
         self.errors(self.plant.state(), x0)
             .all(|(e, de)| e.abs() < REST_POSITION && de.abs() < REST_SPEED)
+    }
+}
+
+impl Lockstep for Simulated {
+    fn place(&mut self, x0: &[f64]) {
+        self.plant.reset(x0);
+    }
+
+    /// [`Plant::step`]: the in-process plant's sample period, exactly.
+    fn step(&mut self) {
+        let m = self.plant.task().action_dim();
+        self.plant.step(&self.u[..m]);
     }
 }
 

@@ -53,7 +53,9 @@ fn rust_layouts() -> BTreeMap<String, Layout> {
     let all = [
         layout!(DriverInfo {
             version: "u64",
-            system: "[u8; 32]",
+            task: "[u8; 32]",
+            task_hash: "u64",
+            clock: "u64",
             n_x: "u64",
             n_u: "u64",
             period_ns: "u64",

@@ -2,21 +2,20 @@
 
 use std::process::ExitCode;
 
+use std::sync::Arc;
+
 use clap::Args as Flags;
-use plant::SystemName;
-use plant::config::Choice;
 use runtime::check_driver::{CheckOptions, check};
 
-use crate::external::DriverArgs;
+use crate::external::{DriverArgs, TaskArgs};
 
 #[derive(Flags)]
 pub struct Args {
     #[command(flatten)]
     driver: DriverArgs,
-    /// The task the driver must fit: pendulum, arm-vertical, arm-horizontal, arm-6.4,
-    /// double-integrator.
-    #[arg(long, value_parser = SystemName::parse, default_value = "pendulum")]
-    system: SystemName,
+    /// The task the driver must fit.
+    #[command(flatten)]
+    task: TaskArgs,
     /// How long to measure the sample rate, answering every sample with zero [s].
     #[arg(long, value_name = "SECONDS", default_value_t = 5.0)]
     rate_seconds: f64,
@@ -45,13 +44,14 @@ pub fn main(args: &Args) -> ExitCode {
         }
     };
     let opts = (|| -> Result<CheckOptions, String> {
-        let d = args.driver.resolve(args.system)?;
+        let task = args.task.task()?;
+        let d = args.driver.resolve(&task.name)?;
         let rate_seconds = runtime::process::seconds("--rate-seconds", args.rate_seconds)
             .map_err(|e| e.to_string())?
             .as_secs_f64();
         Ok(CheckOptions {
             driver: d.id,
-            system: args.system,
+            task: Arc::new(task),
             timeout: d.timeout,
             reset_timeout: d.reset_timeout,
             rate_seconds,
@@ -69,7 +69,7 @@ pub fn main(args: &Args) -> ExitCode {
     };
     println!(
         "rig check-driver: driver {:?} (rig/driver/{}/...) against the {} task",
-        opts.driver, opts.driver, opts.system
+        opts.driver, opts.driver, opts.task.name
     );
     match check(&opts, &mut |o| println!("{o}")) {
         Ok(outcomes) => {

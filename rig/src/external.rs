@@ -1,16 +1,42 @@
 //! The flags that name an external driver (`rig run --plant external`, `rig
 //! check-driver`).
 
+use std::path::PathBuf;
+
 use clap::Args;
-use plant::SystemName;
+use plant::config::Choice;
+use plant::{SystemName, Task};
 use runtime::run::ExternalDriver;
+
+/// Which task a driver serves: a built-in system, or a task file (`rig sim-driver`, `rig
+/// check-driver`).
+#[derive(Args)]
+pub struct TaskArgs {
+    /// A built-in system: pendulum, arm-vertical, arm-horizontal, arm-6.4,
+    /// double-integrator.
+    #[arg(long, value_parser = SystemName::parse, default_value = "pendulum")]
+    system: SystemName,
+    /// A task file (docs/tasks.md) instead of `--system`.
+    #[arg(long, value_name = "FILE", conflicts_with = "system")]
+    task: Option<PathBuf>,
+}
+
+impl TaskArgs {
+    /// The task: `--task`'s file, checked, else `--system`'s.
+    pub fn task(&self) -> Result<Task, String> {
+        match &self.task {
+            Some(path) => Task::from_file(path).map_err(|e| e.to_string()),
+            None => Ok(Task::new(self.system)),
+        }
+    }
+}
 
 /// Which external driver, and how long to wait for it (`rig run`: with `--plant
 /// external` only).
 #[derive(Args)]
 pub struct DriverArgs {
     /// The external driver's id: its services are rig/driver/ID/{info,sample,command}
-    /// (`rig run`: needs `--plant external`) [default: the system's name, e.g. pendulum].
+    /// (`rig run`: needs `--plant external`) [default: the task's name, e.g. pendulum].
     #[arg(long, value_name = "ID")]
     pub(crate) driver: Option<String>,
     /// How long to wait for the driver to appear (its first info message) [s].
@@ -23,13 +49,10 @@ pub struct DriverArgs {
 }
 
 impl DriverArgs {
-    /// The driver to run against `system`'s task: its id (default: the system's name) and
-    /// timeouts, checked.
-    pub fn resolve(&self, system: SystemName) -> Result<ExternalDriver, String> {
-        let id = self
-            .driver
-            .clone()
-            .unwrap_or_else(|| system.as_str().to_string());
+    /// The driver to run against the task named `task`: its id (default: the task's
+    /// name; one a driver id cannot be, with '.', needs `--driver`) and timeouts, checked.
+    pub fn resolve(&self, task: &str) -> Result<ExternalDriver, String> {
+        let id = self.driver.clone().unwrap_or_else(|| task.to_string());
         driver::contract::check_id(&id).map_err(|e| format!("`--driver`: {e}"))?;
         Ok(ExternalDriver {
             id,

@@ -118,7 +118,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
                     .into(),
             );
         }
-        Some(args.driver.resolve(cfg.system).map_err(|e| e.to_string())?)
+        Some(args.driver.resolve(&cfg.task_name())?)
     } else if args.driver.driver.is_some() {
         return Err("`--driver` needs `--plant external`".into());
     } else {
@@ -167,9 +167,10 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
     );
     if let (Some(i), Some(d)) = (&s.driver, &opts.driver) {
         println!(
-            "  driver {:?} ({}): period {:.3} ms × time scale {}; deadline misses: {} of {} samples",
+            "  driver {:?} (task {}, {} clock): period {:.3} ms × time scale {}; deadline misses: {} of {} samples",
             d.id,
-            i.system_name(),
+            i.task_name(),
+            if i.lockstep() { "lockstep" } else { "realtime" },
             i.period_ns as f64 * 1e-6,
             i.time_scale,
             s.deadline_misses,

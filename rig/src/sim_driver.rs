@@ -3,8 +3,8 @@
 use std::process::ExitCode;
 
 use clap::Args as Flags;
-use plant::SystemName;
-use plant::config::Choice;
+
+use crate::external::TaskArgs;
 
 #[derive(Flags)]
 pub struct Args {
@@ -12,12 +12,19 @@ pub struct Args {
     /// digits, '-' and '_'.
     #[arg(long, value_name = "ID", default_value = "pendulum")]
     driver_id: String,
-    /// The system simulated: pendulum, arm-horizontal, arm-6.4, double-integrator
-    /// (arm-vertical cannot rest at its start state within its torque limits).
-    #[arg(long, value_parser = SystemName::parse, default_value = "pendulum")]
-    system: SystemName,
+    /// The task simulated: `--system` pendulum, arm-horizontal, arm-6.4,
+    /// double-integrator (arm-vertical cannot rest at its start state within its torque
+    /// limits), or `--task FILE`, a task file with a `[simulation]`.
+    #[command(flatten)]
+    task: TaskArgs,
+    /// How the driver keeps time: `realtime` — a sample every period of wall time (÷
+    /// `--speed`), as hardware; `lockstep` — sample k+1 only after the action for sample
+    /// k arrived, as fast as the rig answers, the same bytes every run; resets place the
+    /// system at the start state at once.
+    #[arg(long, value_name = "CLOCK", value_parser = ["realtime", "lockstep"], default_value = "realtime")]
+    clock: String,
     /// Run SPEED times faster than real time (a sample every Ts / SPEED of wall time,
-    /// advertised as time_scale SPEED); in (0, 1000].
+    /// advertised as time_scale SPEED); in (0, 1000]; realtime only.
     #[arg(long, value_name = "SPEED", default_value_t = 1.0)]
     speed: f64,
     /// Run under SCHED_FIFO at this priority (1–99), as a hardware driver should, so that
@@ -46,10 +53,18 @@ pub struct Args {
 
 /// Runs the command.
 pub fn main(args: &Args) -> ExitCode {
-    use driver::{Serving, Simulated, serve};
+    use driver::{Serving, Simulated, serve, serve_lockstep};
+    let lockstep = args.clock == "lockstep";
     let device = driver::contract::check_id(&args.driver_id)
         .map_err(|e| anyhow::anyhow!("`--driver-id`: {e}"))
-        .and_then(|()| Simulated::new(args.system, args.speed))
+        .and_then(|()| {
+            if lockstep && args.speed != 1.0 {
+                anyhow::bail!("`--speed` applies to the realtime clock only: in lockstep the driver runs as fast as the rig answers");
+            }
+            args.task.task().map_err(|e| anyhow::anyhow!(e))
+        })
+        .and_then(|task| Simulated::of(task, args.speed))
+        .map(|d| if lockstep { d.in_lockstep() } else { d })
         .and_then(|d| match args.sensor.as_str() {
             "angle" => d.measuring_positions_only(args.counts_per_rev),
             _ => Ok(d),
@@ -62,25 +77,36 @@ pub fn main(args: &Args) -> ExitCode {
         }
     };
     let served = runtime::process::set_rt_priority(args.rt_priority).and_then(|()| {
-        let ts = driver::Device::task(&device).ts;
+        let task = driver::Device::task(&device);
+        let sensed = match args.sensor.as_str() {
+            "angle" => format!("positions only, {} counts/rev", args.counts_per_rev),
+            _ => "full state".to_string(),
+        };
+        let clock = if lockstep {
+            "lockstep".to_string()
+        } else {
+            format!(
+                "period {:.3} ms of wall time (speed {})",
+                task.ts * 1e3 / args.speed,
+                args.speed
+            )
+        };
         eprintln!(
-            "driver {:?}: {} ({}), Ts {} ms, period {:.3} ms of wall time (speed {})",
+            "driver {:?}: task {} ({sensed}), Ts {} ms, {clock}",
             args.driver_id,
-            args.system,
-            match args.sensor.as_str() {
-                "angle" => format!("positions only, {} counts/rev", args.counts_per_rev),
-                _ => "full state".to_string(),
-            },
-            ts * 1e3,
-            ts * 1e3 / args.speed,
-            args.speed
+            task.name,
+            task.ts * 1e3,
         );
         let how = Serving {
             stop_after: None,
             spin_ns: args.spin_us.saturating_mul(1000),
             verbose: args.verbose,
         };
-        serve(&mut device, &args.driver_id, &how)
+        if lockstep {
+            serve_lockstep(&mut device, &args.driver_id, &how)
+        } else {
+            serve(&mut device, &args.driver_id, &how)
+        }
     });
     match served {
         Ok(s) => {

@@ -10,6 +10,7 @@ use crate::config::ConfigError;
 use crate::{Dynamics, QuadraticReward};
 
 pub mod builtin;
+pub mod digest;
 pub mod file;
 mod number;
 
@@ -94,6 +95,16 @@ pub struct Task {
     pub file: TaskFile,
 }
 
+impl std::fmt::Debug for Task {
+    /// The task's name and its file (the dynamics are code).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Task")
+            .field("name", &self.name)
+            .field("file", &self.file)
+            .finish_non_exhaustive()
+    }
+}
+
 /// A built-in simulation of a task's system: `ẋ = f(x, u)` integrated by RK4.
 pub struct Simulation {
     /// Which built-in system.
@@ -153,6 +164,11 @@ impl Task {
                 self.name
             )
         })
+    }
+
+    /// The task's content hash, which drivers advertise ([`digest`]).
+    pub fn hash(&self) -> u64 {
+        digest::hash(self)
     }
 
     /// State dimension `n`.

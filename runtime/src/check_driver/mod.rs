@@ -26,8 +26,8 @@ use std::time::Duration;
 
 use anyhow::{Result, anyhow};
 use driver::contract::{DriverCommand, DriverInfo, DriverLink, DriverSample, service};
+use plant::Task;
 use plant::angle::wrap;
-use plant::{SystemName, Task};
 use wire::{Bus, MAX_U, type_name_of};
 
 mod clock;
@@ -42,7 +42,7 @@ pub struct CheckOptions {
     /// The driver id.
     pub driver: String,
     /// The task the driver must fit.
-    pub system: SystemName,
+    pub task: std::sync::Arc<Task>,
     /// How long to wait for the driver's info.
     pub timeout: Duration,
     /// How long one reset may take.
@@ -87,7 +87,7 @@ pub fn check(opts: &CheckOptions, report: &mut dyn FnMut(&Outcome)) -> Result<Ve
     let info = link
         .wait_info(&bus, opts.timeout)
         .map_err(|e| anyhow!("{e}"))?;
-    let task = Task::new(opts.system);
+    let task = opts.task.clone();
     let mut s = Probe {
         silence: (info.period() * 20).max(Duration::from_secs(1)),
         bus,
@@ -127,7 +127,7 @@ struct Probe<'r> {
     bus: Bus,
     link: DriverLink,
     info: DriverInfo,
-    task: Task,
+    task: std::sync::Arc<Task>,
     silence: Duration,
     reset_id: u64,
     outcomes: Vec<Outcome>,
@@ -228,8 +228,10 @@ impl Probe<'_> {
             .validate()
             .map(|()| driver::fits_task(&i, &self.task).err());
         let text = format!(
-            "{}, n_x {}, n_u {}, Ts {:.3} ms (period {:.3} ms × time scale {}), u_min {}, u_max {}, watchdog {} period(s)",
-            i.system_name(),
+            "task {} (hash {:016x}), {} clock, n_x {}, n_u {}, Ts {:.3} ms (period {:.3} ms × time scale {}), u_min {}, u_max {}, watchdog {} period(s)",
+            i.task_name(),
+            i.task_hash,
+            if i.lockstep() { "lockstep" } else { "realtime" },
             i.n_x,
             i.n_u,
             i.ts() * 1e3,

@@ -1,43 +1,37 @@
-//! The driver's side of the driver contract (`docs/driver.md`): [`serve`] makes a
-//! process the driver of a [`Device`] — the clock (a sample every period on
-//! `CLOCK_MONOTONIC`), the safety layer of the actuator (clamping, rejection and the
-//! watchdog of [`plant::safety::Supervisor`]) and resets — so that a driver for a real
-//! motor is one `impl Device` for its amplifier and encoder.
+//! The driver's state between sample instants: commands as they arrive, the decisions
+//! of a sample instant (a reset's progress, the watchdog), the sample it publishes.
 
-use anyhow::{Result, anyhow};
 use plant::Task;
 use plant::safety::{Admission, Supervisor};
-use wire::{MAX_U, MAX_X, now_ns};
+use wire::{MAX_U, MAX_X};
 
-use crate::contract::{
-    DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, VERSION, kind, service, status, topic,
-};
+use crate::contract::{DriverCommand, DriverSample, kind, status};
 use crate::device::{Device, REST_SAMPLES};
 
 /// A whole period's worth of the driver's state between sample instants.
-struct Driver {
-    n_x: usize,
-    n_u: usize,
-    status: u64,
-    reset_id: u64,
-    target: [f64; MAX_X],
-    at_rest: u32,
-    last_command: u64,
+pub(super) struct Driver {
+    pub(super) n_x: usize,
+    pub(super) n_u: usize,
+    pub(super) status: u64,
+    pub(super) reset_id: u64,
+    pub(super) target: [f64; MAX_X],
+    pub(super) at_rest: u32,
+    pub(super) last_command: u64,
     /// The action in effect.
-    u: [f64; MAX_U],
-    action_this_period: bool,
-    acted_since_reset: bool,
-    safety: Supervisor,
+    pub(super) u: [f64; MAX_U],
+    pub(super) action_this_period: bool,
+    pub(super) acted_since_reset: bool,
+    pub(super) safety: Supervisor,
     /// Commands rejected for other reasons than a non-finite action (those the
     /// supervisor counts): wrong dimensions, unknown kind, an action while not READY.
-    other_rejected: u64,
-    verbose: bool,
+    pub(super) other_rejected: u64,
+    pub(super) verbose: bool,
 }
 
 impl Driver {
     /// A driver of `task` as it starts: no reset yet (actions are not applied), zero in
     /// effect.
-    fn new(task: &Task, verbose: bool) -> Self {
+    pub(super) fn new(task: &Task, verbose: bool) -> Self {
         Self {
             n_x: task.state_dim(),
             n_u: task.action_dim(),
@@ -55,20 +49,20 @@ impl Driver {
         }
     }
 
-    fn log(&self, text: impl FnOnce() -> String) {
+    pub(super) fn log(&self, text: impl FnOnce() -> String) {
         if self.verbose {
             eprintln!("driver: {}", text());
         }
     }
 
     /// Puts `u` into effect now.
-    fn set(&mut self, device: &mut impl Device, t_ns: u64, u: &[f64]) {
+    pub(super) fn set(&mut self, device: &mut impl Device, t_ns: u64, u: &[f64]) {
         self.u[..self.n_u].copy_from_slice(u);
         device.apply(t_ns, &self.u[..self.n_u]);
     }
 
     /// One command, at its arrival `t_ns` (docs/driver.md, "Commands").
-    fn command(&mut self, device: &mut impl Device, t_ns: u64, c: &DriverCommand) {
+    pub(super) fn command(&mut self, device: &mut impl Device, t_ns: u64, c: &DriverCommand) {
         match c.kind {
             kind::ACTION if self.status & status::READY == 0 => self.other_rejected += 1,
             kind::ACTION if c.n_u as usize != self.n_u => {
@@ -108,7 +102,7 @@ impl Driver {
 
     /// The decisions of a sample instant with state `x` (docs/driver.md, "What the
     /// driver does", step 3): a reset's progress, or the watchdog.
-    fn decide(&mut self, device: &mut impl Device, t_ns: u64, x: &[f64]) {
+    pub(super) fn decide(&mut self, device: &mut impl Device, t_ns: u64, x: &[f64]) {
         if self.status & status::RESETTING != 0 {
             let target = self.target;
             let x0 = &target[..self.n_x];
@@ -119,11 +113,7 @@ impl Driver {
             };
             let mut out = [0.0; MAX_U];
             if self.at_rest >= REST_SAMPLES {
-                self.status = status::READY;
-                self.action_this_period = false;
-                self.acted_since_reset = false;
-                self.safety.start_trial();
-                self.log(|| format!("reset {} done at {x:?}", self.reset_id));
+                self.ready(x);
             } else {
                 let mut u = [0.0; MAX_U];
                 device.reset_action(x, x0, &mut u[..self.n_u]);
@@ -141,9 +131,18 @@ impl Driver {
         }
     }
 
+    /// The reset is done at state `x`: READY, no action since (the caller applies zero).
+    pub(super) fn ready(&mut self, x: &[f64]) {
+        self.status = status::READY;
+        self.action_this_period = false;
+        self.acted_since_reset = false;
+        self.safety.start_trial();
+        self.log(|| format!("reset {} done at {x:?}", self.reset_id));
+    }
+
     /// The sample of instant `seq` at `t_ns` with state `x`, before this instant's
     /// decisions (`u_applied`: the action in effect at `t_ns`).
-    fn sample(&self, seq: u64, t_ns: u64, x: &[f64]) -> DriverSample {
+    pub(super) fn sample(&self, seq: u64, t_ns: u64, x: &[f64]) -> DriverSample {
         let counts = self.safety.counts();
         let mut s = DriverSample {
             seq,
@@ -162,137 +161,6 @@ impl Driver {
         s.x[..self.n_x].copy_from_slice(x);
         s
     }
-}
-
-/// The [`DriverInfo`] of `device`, started at `t_start_ns`, with period `period_ns`.
-fn info(device: &impl Device, period_ns: u64, t_start_ns: u64) -> DriverInfo {
-    let task = device.task();
-    let mut i = DriverInfo {
-        version: VERSION,
-        n_x: task.state_dim() as u64,
-        n_u: task.action_dim() as u64,
-        period_ns,
-        time_scale: device.time_scale(),
-        watchdog_periods: 1,
-        t_start_ns,
-        t_publish_ns: now_ns(),
-        ..Default::default()
-    };
-    let name = task.name.as_bytes();
-    i.system[..name.len()].copy_from_slice(name);
-    i.u_min[..task.action_dim()].copy_from_slice(&task.action_low);
-    i.u_max[..task.action_dim()].copy_from_slice(&task.action_high);
-    i
-}
-
-/// What a driver did while it served.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Served {
-    /// Samples published.
-    pub samples: u64,
-    /// Periods missed (woken a whole period late or more).
-    pub missed: u64,
-}
-
-/// How [`serve`] runs.
-#[derive(Clone, Debug, Default)]
-pub struct Serving {
-    /// Stop after this many samples (`None`: at Ctrl-C or SIGTERM only).
-    pub stop_after: Option<u64>,
-    /// How long before each sample instant to stop sleeping and poll (a busy core), so
-    /// that the instant does not depend on the operating system's wake-up latency \[ns\].
-    pub spin_ns: u64,
-    /// Log resets, rejected commands, watchdog trips and missed periods to stderr.
-    pub verbose: bool,
-}
-
-/// Serves `device` as driver `driver_id` until Ctrl-C or SIGTERM (or
-/// [`Serving::stop_after`] samples): opens the three services of `docs/driver.md`,
-/// publishes the info at start and every second, and at each sample instant
-/// `t_start + k · period` samples the device, decides (reset progress, watchdog) and
-/// publishes the sample; between sample instants it applies each command as it arrives.
-pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result<Served> {
-    let task = device.task();
-    let (n_x, n_u) = (task.state_dim(), task.action_dim());
-    let scale = device.time_scale();
-    if !(scale.is_finite() && scale > 0.0) {
-        return Err(anyhow!("time scale {scale}: must be positive and finite"));
-    }
-    let period_ns = (task.ts / scale * 1e9).round() as u64;
-    let bus = crate::contract::bus(driver_id).map_err(|e| anyhow!("driver {driver_id:?}: {e}"))?;
-    let open = |t: &str, e: wire::Error| {
-        if e.to_string().contains("ExceedsMaxSupportedPublishers") {
-            anyhow!(
-                "another driver {driver_id:?} is running: {} has its one publisher already",
-                service(driver_id, t)
-            )
-        } else {
-            anyhow!("driver {driver_id:?}: {e}")
-        }
-    };
-    let infos = bus
-        .tx_on::<DriverInfo>(&service(driver_id, topic::INFO), DRIVER_QOS)
-        .map_err(|e| open(topic::INFO, e))?;
-    let samples = bus
-        .tx_on::<DriverSample>(&service(driver_id, topic::SAMPLE), DRIVER_QOS)
-        .map_err(|e| open(topic::SAMPLE, e))?;
-    let commands = bus
-        .rx_on::<DriverCommand>(&service(driver_id, topic::COMMAND), DRIVER_QOS)
-        .map_err(|e| open(topic::COMMAND, e))?;
-    let wire_err = |e: wire::Error| anyhow!("driver {driver_id:?}: {e}");
-    let mut d = Driver::new(task, how.verbose);
-    let t_start = now_ns();
-    device.apply(t_start, &d.u[..n_u]);
-    infos
-        .send(info(device, period_ns, t_start))
-        .map_err(wire_err)?;
-    let mut next_info = t_start + 1_000_000_000;
-    let mut served = Served::default();
-    let mut x = [0.0; MAX_X];
-    let mut seq = 0;
-    while !bus.interrupted() && how.stop_after.is_none_or(|n| served.samples < n) {
-        let t_k = t_start + seq * period_ns;
-        // Until the sample instant: each command at its arrival.
-        loop {
-            while let Some(c) = commands.try_recv().map_err(wire_err)? {
-                d.command(device, now_ns(), &c);
-            }
-            let now = now_ns();
-            if now >= t_k {
-                break;
-            }
-            if t_k - now > how.spin_ns {
-                commands.wait_until(t_k - how.spin_ns).map_err(wire_err)?;
-            } else {
-                std::hint::spin_loop();
-            }
-        }
-        // Woken a whole period late or more: those periods were missed.
-        let late = (now_ns() - t_k) / period_ns;
-        if late > 0 {
-            seq += late;
-            served.missed += late;
-            d.log(|| format!("missed {late} period(s)"));
-        }
-        let t_sample = now_ns();
-        device.sample(t_sample, &mut x[..n_x]);
-        let mut s = d.sample(seq, t_sample, &x[..n_x]);
-        d.decide(device, t_sample, &x[..n_x]);
-        s.status = d.status;
-        s.t_publish_ns = now_ns();
-        samples.send(s).map_err(wire_err)?;
-        served.samples += 1;
-        if t_sample >= next_info {
-            infos
-                .send(info(device, period_ns, t_start))
-                .map_err(wire_err)?;
-            next_info = t_sample + 1_000_000_000;
-        }
-        seq += 1;
-    }
-    // Stopping: the safe action.
-    device.apply(now_ns(), &[0.0; MAX_U][..n_u]);
-    Ok(served)
 }
 
 #[cfg(test)]

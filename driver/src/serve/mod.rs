@@ -1,0 +1,121 @@
+//! The driver's side of the driver contract (`docs/driver.md`): [`serve`] makes a
+//! process the driver of a [`Device`] — the clock (a sample every period on
+//! `CLOCK_MONOTONIC`), the safety layer of the actuator (clamping, rejection and the
+//! watchdog of [`plant::safety::Supervisor`]) and resets — so that a driver for a real
+//! motor is one `impl Device` for its amplifier and encoder. [`serve_lockstep`] serves a
+//! simulation ([`Lockstep`]) without a clock: one period per action.
+
+use anyhow::{Result, anyhow};
+use plant::Task;
+use wire::{Bus, Rx, Tx, now_ns};
+
+use crate::contract::{
+    DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, VERSION, service, topic,
+};
+use crate::device::Device;
+
+mod lockstep;
+mod realtime;
+mod state;
+
+pub use lockstep::{Lockstep, serve_lockstep};
+pub use realtime::serve;
+
+/// The [`DriverInfo`] of a driver of `task` at time scale `time_scale`, keeping time by
+/// `clock`, started at `t_start_ns`, with period `period_ns`.
+fn info(task: &Task, time_scale: f64, clock: u64, period_ns: u64, t_start_ns: u64) -> DriverInfo {
+    let mut i = DriverInfo {
+        version: VERSION,
+        clock,
+        n_x: task.state_dim() as u64,
+        n_u: task.action_dim() as u64,
+        period_ns,
+        time_scale,
+        watchdog_periods: 1,
+        t_start_ns,
+        t_publish_ns: now_ns(),
+        ..Default::default()
+    };
+    let name = task.name.as_bytes();
+    i.task[..name.len()].copy_from_slice(name);
+    i.task_hash = task.hash();
+    i.u_min[..task.action_dim()].copy_from_slice(&task.action_low);
+    i.u_max[..task.action_dim()].copy_from_slice(&task.action_high);
+    i
+}
+
+/// What a driver did while it served.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Served {
+    /// Samples published.
+    pub samples: u64,
+    /// Periods missed (woken a whole period late or more).
+    pub missed: u64,
+}
+
+/// How [`serve`] runs.
+#[derive(Clone, Debug, Default)]
+pub struct Serving {
+    /// Stop after this many samples (`None`: at Ctrl-C or SIGTERM only).
+    pub stop_after: Option<u64>,
+    /// How long before each sample instant to stop sleeping and poll (a busy core), so
+    /// that the instant does not depend on the operating system's wake-up latency \[ns\].
+    pub spin_ns: u64,
+    /// Log resets, rejected commands, watchdog trips and missed periods to stderr.
+    pub verbose: bool,
+}
+
+/// A driver's three services (`docs/driver.md`, "Connecting").
+struct Services {
+    bus: Bus,
+    infos: Tx<DriverInfo>,
+    samples: Tx<DriverSample>,
+    commands: Rx<DriverCommand>,
+    id: String,
+}
+
+impl Services {
+    /// Opens the services of driver `driver_id`; a second driver of the same id is a
+    /// one-line error.
+    fn open(driver_id: &str) -> Result<Self> {
+        let bus =
+            crate::contract::bus(driver_id).map_err(|e| anyhow!("driver {driver_id:?}: {e}"))?;
+        let open = |t: &str, e: wire::Error| {
+            if e.to_string().contains("ExceedsMaxSupportedPublishers") {
+                anyhow!(
+                    "another driver {driver_id:?} is running: {} has its one publisher already",
+                    service(driver_id, t)
+                )
+            } else {
+                anyhow!("driver {driver_id:?}: {e}")
+            }
+        };
+        Ok(Self {
+            infos: bus
+                .tx_on(&service(driver_id, topic::INFO), DRIVER_QOS)
+                .map_err(|e| open(topic::INFO, e))?,
+            samples: bus
+                .tx_on(&service(driver_id, topic::SAMPLE), DRIVER_QOS)
+                .map_err(|e| open(topic::SAMPLE, e))?,
+            commands: bus
+                .rx_on(&service(driver_id, topic::COMMAND), DRIVER_QOS)
+                .map_err(|e| open(topic::COMMAND, e))?,
+            bus,
+            id: driver_id.to_string(),
+        })
+    }
+
+    /// A transport error, naming the driver.
+    fn err(&self, e: wire::Error) -> anyhow::Error {
+        anyhow!("driver {:?}: {e}", self.id)
+    }
+}
+
+/// The sample period of `device` on the monotonic clock \[ns\]: `Ts` over its time scale.
+fn period_ns(device: &impl Device) -> Result<u64> {
+    let scale = device.time_scale();
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(anyhow!("time scale {scale}: must be positive and finite"));
+    }
+    Ok((device.task().ts / scale * 1e9).round() as u64)
+}
