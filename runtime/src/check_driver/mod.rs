@@ -21,6 +21,11 @@
 //! 7. *out-of-range actions* — clamped to the limits and counted;
 //! 8. *non-finite and malformed actions* — NaN, ±inf and a wrong `n_u` rejected: zero
 //!    applied, counted.
+//!
+//! A lockstep driver (`clock = lockstep`) has no clock to measure and no watchdog: in
+//! place of 4 and 6 it is checked for one sample per action and none without
+//! (*lockstep*), and for the same samples from the same reset and actions
+//! (*determinism*).
 
 use std::time::Duration;
 
@@ -31,6 +36,7 @@ use plant::angle::wrap;
 use wire::{Bus, MAX_U, type_name_of};
 
 mod clock;
+mod lockstep;
 mod phases;
 
 /// Periods of the step input.
@@ -100,6 +106,7 @@ pub fn check(opts: &CheckOptions, report: &mut dyn FnMut(&Outcome)) -> Result<Ve
         opts: opts.clone(),
         drift: 0.0,
         t_last_action: 0,
+        pending: None,
     };
     s.record(
         "payload types",
@@ -137,6 +144,9 @@ struct Probe<'r> {
     drift: f64,
     /// When the last action of the step was sent (monotonic ns).
     t_last_action: u64,
+    /// A lockstep driver's newest sample, read but not answered yet: it publishes no
+    /// other until it is.
+    pending: Option<DriverSample>,
 }
 
 /// `[a, b]` with four decimals.
@@ -182,8 +192,12 @@ impl Probe<'_> {
         self.info.n_u as usize
     }
 
-    /// The next sample, in order, well-formed (dimensions, finite values).
-    fn sample(&self) -> Result<DriverSample> {
+    /// The next sample, in order, well-formed (dimensions, finite values): a lockstep
+    /// driver's sample left pending by the last phase, else the next to arrive.
+    fn sample(&mut self) -> Result<DriverSample> {
+        if let Some(s) = self.pending.take() {
+            return Ok(s);
+        }
         let s = self
             .link
             .next_sample(&self.bus, self.silence)

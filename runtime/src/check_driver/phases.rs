@@ -14,7 +14,7 @@ impl Probe<'_> {
     /// The phases in order; the first that cannot go on ends the check.
     pub(super) fn run_phases(&mut self) {
         type Phase<'r> = (&'static str, fn(&mut Probe<'r>) -> Result<()>);
-        let phases: [Phase<'_>; 6] = [
+        let realtime: [Phase<'_>; 6] = [
             ("reset", Probe::reset),
             ("sample rate", Probe::rate),
             ("step response", Probe::step),
@@ -22,6 +22,19 @@ impl Probe<'_> {
             ("out-of-range actions", Probe::out_of_range),
             ("non-finite and malformed actions", Probe::non_finite),
         ];
+        let lockstep: [Phase<'_>; 6] = [
+            ("reset", Probe::reset),
+            ("lockstep", Probe::lockstep),
+            ("step response", Probe::step),
+            ("determinism", Probe::determinism),
+            ("out-of-range actions", Probe::out_of_range),
+            ("non-finite and malformed actions", Probe::non_finite),
+        ];
+        let phases = if self.info.lockstep() {
+            lockstep
+        } else {
+            realtime
+        };
         for (name, phase) in phases {
             if let Err(e) = phase(self) {
                 self.record(name, false, format!("{e:#}"));
@@ -39,6 +52,10 @@ impl Probe<'_> {
             .wait_ready(&self.bus, &self.info, id, self.opts.reset_timeout)
             .map_err(|e| anyhow!("{e}"))?;
         self.reset_id = id;
+        if self.info.lockstep() {
+            // It publishes nothing more until this sample is answered.
+            self.pending = Some(s);
+        }
         let off = self.change(&x0, s.state());
         self.record(
             "reset",
@@ -70,9 +87,15 @@ impl Probe<'_> {
     /// Samples for `--rate-seconds` (at least enough for the step's horizon), each
     /// answered with zero, with the time that answer was sent; records whether they are
     /// well-formed.
-    fn zero_input_samples(&mut self) -> Result<Vec<(DriverSample, u64)>> {
+    pub(super) fn zero_input_samples(&mut self) -> Result<Vec<(DriverSample, u64)>> {
         let zero = vec![0.0; self.n_u()];
-        let t_end = Instant::now() + Duration::from_secs_f64(self.opts.rate_seconds);
+        // A lockstep driver has no rate to measure: enough samples for the step's horizon.
+        let seconds = if self.info.lockstep() {
+            0.0
+        } else {
+            self.opts.rate_seconds
+        };
+        let t_end = Instant::now() + Duration::from_secs_f64(seconds);
         let mut samples: Vec<(DriverSample, u64)> = Vec::new();
         let mut problems: Vec<String> = Vec::new();
         while Instant::now() < t_end || samples.len() < STEP_PERIODS + 2 {
@@ -266,8 +289,9 @@ impl Probe<'_> {
         Ok(())
     }
 
-    /// Sends `cmd` answering the next sample; returns that sample and the one after it.
-    fn probe(&self, cmd: DriverCommand) -> Result<(DriverSample, DriverSample)> {
+    /// Sends `cmd` answering the next sample; returns that sample and the one after it
+    /// (which a lockstep driver's next probe answers).
+    fn probe(&mut self, cmd: DriverCommand) -> Result<(DriverSample, DriverSample)> {
         let before = self.sample()?;
         self.link
             .send_raw(DriverCommand {
@@ -275,7 +299,12 @@ impl Probe<'_> {
                 ..cmd
             })
             .map_err(|e| anyhow!("{e}"))?;
-        Ok((before, self.sample()?))
+        let after = self.sample()?;
+        if self.info.lockstep() {
+            // The next probe answers it.
+            self.pending = Some(after);
+        }
+        Ok((before, after))
     }
 
     fn action_command(&self, u: &[f64], n_u: usize) -> DriverCommand {
@@ -291,12 +320,12 @@ impl Probe<'_> {
     /// Actions far above and below the limits: clamped, counted.
     fn out_of_range(&mut self) -> Result<()> {
         let n = self.n_u();
-        let (lo, hi) = (&self.info.u_min[..n], &self.info.u_max[..n]);
+        let (lo, hi) = (self.info.u_min[..n].to_vec(), self.info.u_max[..n].to_vec());
         let span: Vec<f64> = (0..n).map(|j| hi[j] - lo[j]).collect();
         let above: Vec<f64> = (0..n).map(|j| hi[j] + 10.0 * span[j]).collect();
         let below: Vec<f64> = (0..n).map(|j| lo[j] - 10.0 * span[j]).collect();
         let mut wrong = Vec::new();
-        for (u, want) in [(above, hi.to_vec()), (below, lo.to_vec())] {
+        for (u, want) in [(above, hi.clone()), (below, lo.clone())] {
             let (before, after) = self.probe(self.action_command(&u, n))?;
             let counted = after.clamped - before.clamped;
             if !same(after.applied(), &want) || counted != 1 {
@@ -310,8 +339,8 @@ impl Probe<'_> {
         }
         let ok = format!(
             "10 ranges above and below: applied as {} and {}, each counted as clamped",
-            vector(hi),
-            vector(lo)
+            vector(&hi),
+            vector(&lo)
         );
         self.record_problems("out-of-range actions", wrong, ok);
         Ok(())
