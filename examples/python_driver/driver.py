@@ -11,7 +11,14 @@ pendulum to rest at the bottom with a PD controller, then reports READY. The phy
 Table A.1's model integrated with RK4 (steps of at most 1.5 ms) over the real elapsed
 time, piecewise between action arrivals.
 
-    python3 driver.py [--driver-id pendulum] [--speed 1]
+    python3 driver.py [--driver-id pendulum] [--speed 1] [--clock lockstep] [--task FILE]
+
+It advertises the task it serves — by default the rig's shipped pendulum task,
+plant/tasks/pendulum.toml; `--task FILE` another task file of the pendulum's shape, whose
+sampling time and action bounds it then keeps — with the task's hash (task.py). With
+`--clock lockstep` it is a simulator rather than a stand-in for hardware: it publishes
+sample k+1 only after the action for sample k arrived, integrating exactly one period,
+and resets by placing the pendulum at the start state (docs/driver.md, "Lockstep").
 
 Stop it with Ctrl-C or SIGTERM (it finishes the current period and exits).
 """
@@ -25,12 +32,16 @@ import signal
 import sys
 import time
 
+from pathlib import Path
+
 import iceoryx2 as iox2
 
 # DriverInfo, DriverSample, DriverCommand and the constants of docs/driver.md.
-from messages import (  # the module next to this file
+from messages import (  # the modules next to this file
     ACTION,
+    LOCKSTEP,
     READY,
+    REALTIME,
     RESET,
     RESETTING,
     VERSION,
@@ -39,6 +50,10 @@ from messages import (  # the module next to this file
     DriverInfo,
     DriverSample,
 )
+from task import Task
+
+# The rig's pendulum task, shipped with it.
+PENDULUM_TASK = Path(__file__).resolve().parents[2] / "plant" / "tasks" / "pendulum.toml"
 
 
 class BadSample(ctypes.Structure):
@@ -55,9 +70,7 @@ class Pendulum:
     """Appendix A.1: J φ̈ = M g l sin φ − (b + K²/R) φ̇ + (K/R) u, φ from upright."""
 
     J, M, G, L, B, K, R = 1.91e-4, 5.50e-2, 9.81, 4.20e-2, 3e-6, 5.36e-2, 9.50
-    TS = 0.03  # sample time [s]
-    U_MAX = 3.0  # |u| ≤ 3 V
-    H_MAX = 0.0015  # longest RK4 step [s] (20 per sample, as the rig's simulation)
+    H_MAX = 0.0015  # longest RK4 step [s] (20 per 30 ms sample, as the rig's simulation)
 
     def __init__(self):
         self.x = [-math.pi, 0.0]  # hanging at rest
@@ -108,10 +121,12 @@ class Driver:
     REST_ANGLE, REST_SPEED = 0.02, 0.05  # "at rest" tolerance [rad], [rad/s]
     REST_SAMPLES = 3  # consecutive samples at rest before READY
 
-    def __init__(self, args):
+    def __init__(self, args, task):
         self.args = args
+        self.task = task
+        self.u_min, self.u_max = task.low[0], task.high[0]
         self.speed = args.speed
-        self.period_ns = round(Pendulum.TS / self.speed * 1e9)
+        self.period_ns = round(task.ts / self.speed * 1e9)
         self.clock_error = random.Random(1)  # --inject-fault clock
         self.plant = Pendulum()
         self.t_start = time.monotonic_ns()
@@ -189,7 +204,9 @@ class Driver:
     def publish_info(self):
         info = DriverInfo(
             version=VERSION,
-            system=b"pendulum",
+            task=self.task.name.encode(),
+            task_hash=self.task.hash(),
+            clock=LOCKSTEP if self.args.clock == "lockstep" else REALTIME,
             n_x=2,
             n_u=1,
             period_ns=self.period_ns,
@@ -198,8 +215,8 @@ class Driver:
             t_start_ns=self.t_start,
             t_publish_ns=time.monotonic_ns(),
         )
-        info.u_min[0] = -Pendulum.U_MAX
-        info.u_max[0] = Pendulum.U_MAX
+        info.u_min[0] = self.u_min
+        info.u_max[0] = self.u_max
         self.publish(self.info_pub, self.info_note, info)
 
     def physics_to(self, t_ns):
@@ -224,7 +241,7 @@ class Driver:
                 self.u = 0.0  # the safe action
                 self.log(f"rejected command {c.seq}: n_u {c.n_u}, u {u}")
             else:
-                lo, hi = -Pendulum.U_MAX, Pendulum.U_MAX
+                lo, hi = self.u_min, self.u_max
                 if not lo <= u <= hi and self.args.inject_fault != "limits":
                     self.clamped += 1
                     u = min(max(u, lo), hi)
@@ -265,7 +282,7 @@ class Driver:
                 self.log(f"reset {self.reset_id} done at {self.plant.x}")
             else:
                 u = self.KP * e_phi + self.KD * e_omega
-                self.u = min(max(u, -Pendulum.U_MAX), Pendulum.U_MAX)
+                self.u = min(max(u, self.u_min), self.u_max)
             return
         if self.status & READY:
             if self.action_this_period:
@@ -334,7 +351,50 @@ class Driver:
                 time.sleep(min(left, 200_000) * 1e-9)
             self.drain_commands()
 
+    def publish_sample(self, seq):
+        """Samples the state now and publishes it (status as decided)."""
+        t_sample = time.monotonic_ns()
+        s = self.sample(seq, t_sample)
+        s.t_publish_ns = time.monotonic_ns()
+        self.publish(self.sample_pub, self.sample_note, s)
+
+    def run_lockstep(self):
+        """The lockstep clock (docs/driver.md, "Lockstep"): a RESET places the pendulum
+        at x0 and is answered by a READY sample there; an ACTION answering the newest
+        sample while READY integrates exactly one period and is answered by the next
+        sample; any other action only counts as rejected."""
+        newest = None
+        next_info = 0
+        while not self.stopping:
+            if time.monotonic_ns() >= next_info:
+                self.publish_info()
+                next_info = time.monotonic_ns() + 1_000_000_000
+            c = self.commands.receive()
+            if c is None:
+                self.waitset.wait_and_process_with_timeout(iox2.Duration.from_millis(200))
+                self.command_events.try_wait()  # consume the wake-up
+                continue
+            cmd = DriverCommand.from_buffer_copy(c.payload().contents)
+            del c  # returns the slot
+            if cmd.kind == RESET:
+                self.command(cmd)
+                if self.status != RESETTING or self.reset_id != cmd.seq:
+                    continue  # rejected: no answer
+                self.plant.x = [wrap(self.reset_target[0]), self.reset_target[1]]
+                self.status, self.u = READY, 0.0
+                self.log(f"reset {self.reset_id} placed at {self.plant.x}")
+            elif cmd.kind == ACTION and self.status & READY and cmd.sample_seq == newest:
+                self.command(cmd)  # clamped, or rejected: zero
+                self.plant.advance(self.u, self.task.ts)
+            else:
+                self.rejected += 1  # before a reset, for an older sample, or unknown
+                continue
+            newest = 0 if newest is None else newest + 1
+            self.publish_sample(newest)
+
     def run(self):
+        if self.args.clock == "lockstep":
+            return self.run_lockstep()
         period = self.period_ns
         seq = 0
         next_info = self.t_start
@@ -382,6 +442,21 @@ def main():
         "time, advertised as time_scale S [default: 1, real time]",
     )
     p.add_argument(
+        "--clock",
+        choices=["realtime", "lockstep"],
+        default="realtime",
+        help="realtime: a sample every period of wall time, as hardware; lockstep: "
+        "sample k+1 only after the action for sample k, as fast as the rig answers, "
+        "the same samples every time [default: realtime]",
+    )
+    p.add_argument(
+        "--task",
+        default=str(PENDULUM_TASK),
+        help="the task file this driver serves: the pendulum's shape (2 states, 1 "
+        "action); its name, hash, sampling time and action bounds are advertised "
+        "[default: the rig's plant/tasks/pendulum.toml]",
+    )
+    p.add_argument(
         "--inject-fault",
         choices=["layout", "watchdog", "limits", "clock"],
         help="misbehave on purpose, to see what `rig check-driver` says: publish a "
@@ -410,12 +485,20 @@ def main():
     args = p.parse_args()
     if not (math.isfinite(args.speed) and 0.0 < args.speed <= 1000.0):
         p.error(f"--speed {args.speed}: must be in (0, 1000]")
+    if args.clock == "lockstep" and args.speed != 1.0:
+        p.error("--speed applies to the realtime clock only")
+    try:
+        task = Task.read(args.task)
+    except (OSError, KeyError, ValueError) as e:
+        p.error(f"--task {args.task}: {e!r}")
+    if (task.n, task.m) != (2, 1):
+        p.error(f"--task {args.task}: {task.n} states and {task.m} actions; this driver is a pendulum (2 and 1)")
     ok = all(ch.isascii() and (ch.isalnum() or ch in "-_") for ch in args.driver_id)
     if not args.driver_id or not ok:
         p.error(f"--driver-id {args.driver_id!r}: letters, digits, '-' and '_' only")
 
     try:
-        driver = Driver(args)
+        driver = Driver(args, task)
     except iox2.PublishSubscribeOpenOrCreateError as e:
         print(
             f"driver: cannot open the services rig/driver/{args.driver_id}/*: {e!r} "
@@ -430,9 +513,14 @@ def main():
             file=sys.stderr,
         )
         return 1
+    clock = (
+        "lockstep"
+        if args.clock == "lockstep"
+        else f"period {driver.period_ns / 1e6:g} ms of wall time (speed {args.speed:g})"
+    )
     print(
-        f"driver {args.driver_id!r}: pendulum, Ts 30 ms, "
-        f"period {driver.period_ns / 1e6:g} ms of wall time (speed {args.speed:g})",
+        f"driver {args.driver_id!r}: task {task.name} (the pendulum), "
+        f"Ts {task.ts * 1e3:g} ms, {clock}",
         file=sys.stderr,
         flush=True,
     )

@@ -11,7 +11,7 @@ import ctypes
 
 MAX_X = 8
 MAX_U = 4
-VERSION = 1
+VERSION = 2
 
 # status bits of DriverSample.status
 READY = 1
@@ -20,14 +20,19 @@ WATCHDOG = 4
 # DriverCommand.kind
 ACTION = 1
 RESET = 2
+# DriverInfo.clock
+REALTIME = 0
+LOCKSTEP = 1
 
 
 class DriverInfo(ctypes.Structure):
-    """rig.DriverInfo.v1 (docs/driver.md)."""
+    """rig.DriverInfo.v2 (docs/driver.md)."""
 
     _fields_ = [
         ("version", ctypes.c_uint64),
-        ("system", ctypes.c_char * 32),
+        ("task", ctypes.c_char * 32),
+        ("task_hash", ctypes.c_uint64),
+        ("clock", ctypes.c_uint64),
         ("n_x", ctypes.c_uint64),
         ("n_u", ctypes.c_uint64),
         ("period_ns", ctypes.c_uint64),
@@ -41,7 +46,7 @@ class DriverInfo(ctypes.Structure):
 
     @staticmethod
     def type_name() -> str:
-        return "rig.DriverInfo.v1"
+        return "rig.DriverInfo.v2"
 
 
 class DriverSample(ctypes.Structure):

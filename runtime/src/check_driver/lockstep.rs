@@ -59,6 +59,34 @@ impl Probe<'_> {
         Ok(())
     }
 
+    /// From the start state, a small step for [`STEP_PERIODS`] periods takes the state
+    /// elsewhere than zero input does (compared exactly: both from the same reset, so an
+    /// unstable start state, which zero input leaves fast, is no obstacle), and shows as
+    /// applied.
+    pub(super) fn step_against_zero(&mut self) -> Result<()> {
+        let u = self.action(self.opts.step);
+        let zero = self.replay(&vec![0.0; u.len()])?;
+        let step = self.replay(&u)?;
+        let (z, s) = (zero[STEP_PERIODS].state(), step[STEP_PERIODS].state());
+        let apart = self.change(z, s);
+        let applied = step[1..]
+            .iter()
+            .filter(|s| super::same(s.applied(), &u))
+            .count();
+        self.record(
+            "step response",
+            apart > 1e-3 && applied == STEP_PERIODS,
+            format!(
+                "u = {} for {STEP_PERIODS} periods from the start state: x {} against zero input's {}, {:.2} % of the state range apart (bound: > 0.10 %); reported applied in {applied} of {STEP_PERIODS} samples",
+                vector(&u),
+                vector(s),
+                vector(z),
+                apart * 100.0
+            ),
+        );
+        Ok(())
+    }
+
     /// The same reset and actions twice give the same samples, bit for bit.
     pub(super) fn determinism(&mut self) -> Result<()> {
         let u = self.action(self.opts.step);

@@ -25,7 +25,8 @@
 //! A lockstep driver (`clock = lockstep`) has no clock to measure and no watchdog: in
 //! place of 4 and 6 it is checked for one sample per action and none without
 //! (*lockstep*), and for the same samples from the same reset and actions
-//! (*determinism*).
+//! (*determinism*); its step response is compared with zero input's from the same
+//! reset.
 
 use std::time::Duration;
 

@@ -25,7 +25,7 @@ impl Probe<'_> {
         let lockstep: [Phase<'_>; 6] = [
             ("reset", Probe::reset),
             ("lockstep", Probe::lockstep),
-            ("step response", Probe::step),
+            ("step response", Probe::step_against_zero),
             ("determinism", Probe::determinism),
             ("out-of-range actions", Probe::out_of_range),
             ("non-finite and malformed actions", Probe::non_finite),
