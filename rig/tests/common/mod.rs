@@ -7,6 +7,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
+pub mod drivers;
+
 /// The flags of VGBP-LSTD on the §6.4.2 manipulator.
 pub const ARM64_VGBP_LSTD: [&str; 6] =
     ["--system", "arm-6.4", "--algo", "vgbp", "--approx", "lstd"];

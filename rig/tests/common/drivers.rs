@@ -1,0 +1,130 @@
+//! Driver processes for the tests: the Python example (`examples/python_driver/`,
+//! official iceoryx2 bindings) and `rig sim-driver`, one at a time.
+
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use super::rig;
+
+/// The Python interpreter with the bindings, or `None` (and why) if there is none.
+pub fn python() -> Option<String> {
+    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
+    let probe = Command::new(&python)
+        .args([
+            "-c",
+            "import importlib.metadata as m, iceoryx2; print(m.version('iceoryx2'))",
+        ])
+        .output();
+    match probe {
+        Ok(o) if o.status.success() && String::from_utf8_lossy(&o.stdout).trim() == "0.10.0" => {
+            Some(python)
+        }
+        Ok(o) => {
+            println!(
+                "skipped: {python} cannot import iceoryx2 0.10.0 (pip install iceoryx2==0.10.0, or set RIG_PYTHON): {}{}",
+                String::from_utf8_lossy(&o.stdout).trim(),
+                String::from_utf8_lossy(&o.stderr)
+                    .lines()
+                    .last()
+                    .unwrap_or("")
+            );
+            None
+        }
+        Err(e) => {
+            println!("skipped: cannot run {python} ({e})");
+            None
+        }
+    }
+}
+
+/// A driver process: the Python example (`examples/python_driver/driver.py`, official
+/// iceoryx2 bindings) or `rig sim-driver` (Rust, the driver kit).
+#[derive(Clone, Debug)]
+pub enum Kind {
+    /// The Python example, run by this interpreter.
+    Python(String),
+    /// `rig sim-driver`.
+    Rust,
+}
+
+/// The drivers to test: `rig sim-driver`, and the Python example where the bindings are.
+pub fn drivers() -> Vec<Kind> {
+    let mut kinds = vec![Kind::Rust];
+    kinds.extend(python().map(Kind::Python));
+    kinds
+}
+
+/// A driver, stopped (SIGTERM, then killed) when dropped. One runs at a time: these
+/// tests measure the driver's timing (sample rate, watchdog, the safe action after a
+/// death), which two drivers and their rigs sharing a 2-core CI machine would disturb.
+pub struct Driver {
+    pub child: Child,
+    pub id: String,
+    _alone: std::sync::MutexGuard<'static, ()>,
+}
+
+/// Held by the test whose driver is running.
+static ONE_DRIVER: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+impl Driver {
+    pub fn start(python: &str, name: &str, extra: &[&str]) -> Self {
+        Self::launch(&Kind::Python(python.into()), name, extra)
+    }
+
+    /// Driver `kind` with id `<name>-rs<pid>` (Rust) or `<name>-py<pid>` (Python) and
+    /// flags `extra` (both drivers take `--speed`; the Python one also
+    /// `--inject-fault`).
+    pub fn launch(kind: &Kind, name: &str, extra: &[&str]) -> Self {
+        // A failed test's poisoned lock is still a lock.
+        let alone = ONE_DRIVER.lock().unwrap_or_else(|e| e.into_inner());
+        let tag = match kind {
+            Kind::Python(_) => "py",
+            Kind::Rust => "rs",
+        };
+        let id = format!("{name}-{tag}{}", std::process::id());
+        let mut command = match kind {
+            Kind::Python(python) => {
+                let mut c = Command::new(python);
+                c.arg(concat!(
+                    env!("CARGO_MANIFEST_DIR"),
+                    "/../examples/python_driver/driver.py"
+                ));
+                c
+            }
+            Kind::Rust => {
+                let mut c = rig();
+                c.arg("sim-driver");
+                c
+            }
+        };
+        let child = command
+            .args(["--driver-id", &id])
+            .args(extra)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        Self {
+            child,
+            id,
+            _alone: alone,
+        }
+    }
+}
+
+impl Drop for Driver {
+    fn drop(&mut self) {
+        let _ = Command::new("kill")
+            .args(["-TERM", &self.child.id().to_string()])
+            .status();
+        let t0 = Instant::now();
+        while t0.elapsed() < Duration::from_secs(3) {
+            if let Ok(Some(_)) = self.child.try_wait() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}

@@ -1,0 +1,196 @@
+//! Drivers of a task (`DriverInfo.v2`: its name and hash) and drivers in lockstep: `rig
+//! sim-driver --clock lockstep` and the Python example's `--clock lockstep`, against `rig
+//! check-driver` and `rig run --plant external`; a task file only a driver serves.
+//!
+//! The Python tests need `iceoryx2==0.10.0` importable by `$RIG_PYTHON` (default
+//! `python3`); without it they print why and pass — CI installs it, so they run there.
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+mod common;
+use common::drivers::{Driver, Kind, drivers};
+use common::{ok, rig};
+
+fn tmp(name: &str) -> PathBuf {
+    common::tmp("lockstep", name)
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// `rig check-driver --driver ID` with `extra` flags.
+fn check(id: &str, extra: &[&str]) -> Output {
+    rig()
+        .args(["check-driver", "--driver", id, "--driver-timeout", "20"])
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+/// `rig run --plant external --driver ID --quiet --out DIR` with `extra` flags.
+fn run(id: &str, extra: &[&str], dir: &Path) -> Output {
+    rig()
+        .args(["run", "--plant", "external", "--driver", id, "--quiet"])
+        .args(extra)
+        .arg("--out")
+        .arg(dir)
+        .output()
+        .unwrap()
+}
+
+fn returns(dir: &Path) -> String {
+    std::fs::read_to_string(dir.join("returns.csv")).unwrap()
+}
+
+/// Against `rig sim-driver --clock lockstep`, `rig run --plant external` gives `rig
+/// learn --runs 1`'s runs.csv byte for byte (the driver steps the in-process plant, one
+/// period per action, and places resets exactly); against the Python lockstep driver,
+/// the same returns on two runs (its RK4 rounds differently from the rig's). Both pass
+/// `rig check-driver` with the lockstep checks in place of the clock's.
+#[test]
+fn lockstep_drivers_pass_their_checks_and_repeat_their_runs_byte_for_byte() {
+    let dir = tmp("repeat");
+    let args = ["--trials", "12", "--eval-every", "4"];
+    ok(rig()
+        .args(["learn", "--runs", "1", "--quiet", "--out"])
+        .arg(dir.join("learn"))
+        .args(args)
+        .output()
+        .unwrap());
+    let learned = std::fs::read_to_string(dir.join("learn/runs.csv")).unwrap();
+    for kind in drivers() {
+        let d = Driver::launch(&kind, "ls", &["--clock", "lockstep"]);
+        let out = check(&d.id, &[]);
+        let text = stdout(&out);
+        assert!(out.status.success(), "{text}{}", stderr(&out));
+        for line in ["lockstep", "determinism", "step response"] {
+            assert!(text.contains(&format!("PASS  {line}")), "{text}");
+        }
+        assert!(
+            !text.contains("sample rate") && !text.contains("watchdog  "),
+            "{text}"
+        );
+        assert!(text.contains("lockstep clock"), "{text}");
+        let (a, b) = (
+            dir.join(format!("{}-a", d.id)),
+            dir.join(format!("{}-b", d.id)),
+        );
+        ok(run(&d.id, &args, &a));
+        ok(run(&d.id, &args, &b));
+        assert_eq!(returns(&a), returns(&b), "{}: the same bytes twice", d.id);
+        if matches!(kind, Kind::Rust) {
+            assert_eq!(
+                returns(&a),
+                learned,
+                "rig sim-driver --clock lockstep = rig learn"
+            );
+        }
+    }
+}
+
+/// The pendulum's shipped task with another name and reward, and no simulation: a task
+/// only a driver serves, of the Python driver's shape.
+fn driven_task(dir: &Path) -> PathBuf {
+    let shipped = include_str!("../../plant/tasks/pendulum.toml");
+    let text = shipped
+        .split("[simulation]")
+        .next()
+        .unwrap()
+        .replace("name = \"pendulum\"", "name = \"my-pendulum\"")
+        .replace("state_weights = [5.0, 0.1]", "state_weights = [4.0, 0.2]");
+    let path = dir.join("my-pendulum.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// A driver of a task file the rig does not simulate: the Python driver serves it (its
+/// name and hash computed by task.py from the same file), `rig check-driver --task`
+/// passes it, `rig run --plant external --task` learns against it with presets by
+/// rules, and a rig with another task — the built-in pendulum's, or a file of the same
+/// name with another reward — is refused in one line naming both.
+#[test]
+fn a_driver_serves_a_task_file_and_a_rig_of_another_task_is_refused() {
+    let Some(python) = common::drivers::python() else {
+        return;
+    };
+    let dir = tmp("task");
+    let task = driven_task(&dir);
+    let task = task.to_str().unwrap();
+    let d = Driver::start(&python, "mine", &["--clock", "lockstep", "--task", task]);
+    let out = check(&d.id, &["--task", task]);
+    assert!(out.status.success(), "{}{}", stdout(&out), stderr(&out));
+    let learned = run(&d.id, &["--task", task, "--trials", "10"], &dir.join("run"));
+    ok(learned);
+    let config = std::fs::read_to_string(dir.join("run/config.toml")).unwrap();
+    assert!(
+        config.contains("[task]\nname = \"my-pendulum\""),
+        "{config}"
+    );
+    assert_eq!(returns(&dir.join("run")).lines().count(), 11);
+
+    let refused = run(&d.id, &["--trials", "2"], &dir.join("pendulum"));
+    assert!(!refused.status.success());
+    let e = stderr(&refused);
+    assert!(
+        e.contains("it serves task \"my-pendulum\", the rig's task is \"pendulum\""),
+        "{e}"
+    );
+    let other = dir.join("other.toml");
+    let text = std::fs::read_to_string(task).unwrap();
+    std::fs::write(&other, text.replace("[4.0, 0.2]", "[4.0, 0.3]")).unwrap();
+    let refused = run(
+        &d.id,
+        &["--task", other.to_str().unwrap(), "--trials", "2"],
+        &dir.join("other"),
+    );
+    assert!(!refused.status.success());
+    let e = stderr(&refused);
+    assert!(e.contains("the two task files differ"), "{e}");
+    assert_eq!(e.trim().lines().count(), 1, "{e}");
+}
+
+/// The task's hash of examples/python_driver/task.py is the rig's, for every shipped
+/// task file and example (their canonical bytes written independently in two languages).
+#[test]
+fn the_python_task_hash_is_the_rigs() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut files: Vec<PathBuf> = ["plant/tasks", "examples/tasks"]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(root.join(d)).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 6, "{files:?}");
+    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
+    let out = std::process::Command::new(&python)
+        .arg(root.join("examples/python_driver/task.py"))
+        .args(&files)
+        .output();
+    let out = match out {
+        Ok(o) if o.status.success() => stdout(&o),
+        Ok(o) => {
+            // tomllib needs Python 3.11.
+            println!(
+                "skipped: {python} cannot run task.py: {}",
+                stderr(&o).trim()
+            );
+            return;
+        }
+        Err(e) => {
+            println!("skipped: cannot run {python} ({e})");
+            return;
+        }
+    };
+    for (path, line) in files.iter().zip(out.lines()) {
+        let task = plant::Task::from_file(path).unwrap();
+        let want = format!("{} {} {:016x}", path.display(), task.name, task.hash());
+        assert_eq!(line, want);
+    }
+}
