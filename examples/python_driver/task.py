@@ -5,8 +5,9 @@ hash a driver advertises in DriverInfo.task_hash, as the rig computes it.
     task = Task.read("plant/tasks/pendulum.toml")
     task.name, task.ts, task.n, task.m, task.low, task.high, task.hash()
 
-Standard library only (tomllib: Python 3.11 or later). The checks are the rig's in
-outline (dimensions, bounds); the rig checks the rest and names what is wrong.
+Standard library only (tomllib: Python 3.11 or later; before, `tomli` from PyPI, which
+requirements.txt installs there). The checks are the rig's in outline (dimensions,
+bounds); the rig checks the rest and names what is wrong.
 
     python3 task.py FILE...    # prints each file's name and hash
 """
@@ -15,7 +16,11 @@ import hashlib
 import math
 import struct
 import sys
-import tomllib
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python < 3.11: the same parser, from PyPI
+    import tomli as tomllib
 
 
 def number(v, where: str) -> float:
