@@ -50,6 +50,7 @@ from messages import (  # the modules next to this file
     DriverInfo,
     DriverSample,
 )
+from lockstep import Services, serve
 from task import Task
 
 # The rig's pendulum task, shipped with it.
@@ -144,58 +145,13 @@ class Driver:
         self.rejected = 0
         self.watchdog_trips = 0
 
-        iox2.set_log_level_from_env_or(iox2.LogLevel.Error)
-        self.node = (
-            iox2.NodeBuilder.new()
-            .name(iox2.NodeName.new(f"rig-driver-{args.driver_id}"))
-            .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
-            .create(iox2.ServiceType.Ipc)
-        )
         sample_type = BadSample if args.inject_fault == "layout" else DriverSample
-        self.info_pub, self.info_note = self.publisher("info", DriverInfo)
-        self.sample_pub, self.sample_note = self.publisher("sample", sample_type)
-        cmd_service = self.pubsub("command", DriverCommand)
-        self.commands = cmd_service.subscriber_builder().create()
-        self.command_events = (
-            self.node.service_builder(self.service_name("command"))
-            .event()
-            .open_or_create()
-            .listener_builder()
-            .create()
-        )
-        self.waitset = (
-            iox2.WaitSetBuilder.new()
-            .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
-            .create(iox2.ServiceType.Ipc)
-        )
-        self.command_guard = self.waitset.attach_notification(self.command_events)
+        io = Services(args.driver_id, sample_type)
+        self.io = io
+        self.info_pub, self.info_note = io.info_pub, io.info_note
+        self.sample_pub, self.sample_note = io.sample_pub, io.sample_note
+        self.commands, self.command_events, self.waitset = io.commands, io.command_events, io.waitset
         self.stopping = False
-
-    def service_name(self, topic):
-        return iox2.ServiceName.new(f"rig/driver/{self.args.driver_id}/{topic}")
-
-    def pubsub(self, topic, payload):
-        # The settings every driver service uses (docs/driver.md, "Services").
-        return (
-            self.node.service_builder(self.service_name(topic))
-            .publish_subscribe(payload)
-            .max_publishers(1)
-            .max_subscribers(8)
-            .subscriber_max_buffer_size(256)
-            .enable_safe_overflow(True)
-            .open_or_create()
-        )
-
-    def publisher(self, topic, payload):
-        pub = self.pubsub(topic, payload).publisher_builder().create()
-        notifier = (
-            self.node.service_builder(self.service_name(topic))
-            .event()
-            .open_or_create()
-            .notifier_builder()
-            .create()
-        )
-        return pub, notifier
 
     def publish(self, pub, notifier, msg):
         pub.loan_uninit().write_payload(msg).send()
@@ -306,12 +262,7 @@ class Driver:
         s.last_command = self.last_command
         s.n_x = 2
         s.n_u = 1
-        s.x[0], s.x[1] = self.plant.x
-        if self.args.sensor == "angle":
-            # An encoder: the angle in whole counts, the velocity not measured (NaN);
-            # the rig's observer estimates it (docs/driver.md, "Positions only").
-            q = 2.0 * math.pi / ENCODER_COUNTS
-            s.x[0], s.x[1] = wrap(round(s.x[0] / q) * q), math.nan
+        s.x[0], s.x[1] = self.measured()
         s.u_applied[0] = self.u
         if self.args.inject_fault != "layout":
             s.clamped = self.clamped
@@ -351,46 +302,33 @@ class Driver:
                 time.sleep(min(left, 200_000) * 1e-9)
             self.drain_commands()
 
-    def publish_sample(self, seq):
-        """Samples the state now and publishes it (status as decided)."""
-        t_sample = time.monotonic_ns()
-        s = self.sample(seq, t_sample)
-        s.t_publish_ns = time.monotonic_ns()
-        self.publish(self.sample_pub, self.sample_note, s)
+    def measured(self):
+        """The state as the samples report it (an encoder's counts with --sensor angle)."""
+        x = list(self.plant.x)
+        if self.args.sensor == "angle":
+            # An encoder: the angle in whole counts, the velocity not measured (NaN);
+            # the rig's observer estimates it (docs/driver.md, "Positions only").
+            q = 2.0 * math.pi / ENCODER_COUNTS
+            x = [wrap(round(x[0] / q) * q), math.nan]
+        return x
 
     def run_lockstep(self):
-        """The lockstep clock (docs/driver.md, "Lockstep"): a RESET places the pendulum
-        at x0 and is answered by a READY sample there; an ACTION answering the newest
-        sample while READY integrates exactly one period and is answered by the next
-        sample; any other action only counts as rejected."""
-        newest = None
-        next_info = 0
-        while not self.stopping:
-            if time.monotonic_ns() >= next_info:
-                self.publish_info()
-                next_info = time.monotonic_ns() + 1_000_000_000
-            c = self.commands.receive()
-            if c is None:
-                self.waitset.wait_and_process_with_timeout(iox2.Duration.from_millis(200))
-                self.command_events.try_wait()  # consume the wake-up
-                continue
-            cmd = DriverCommand.from_buffer_copy(c.payload().contents)
-            del c  # returns the slot
-            if cmd.kind == RESET:
-                self.command(cmd)
-                if self.status != RESETTING or self.reset_id != cmd.seq:
-                    continue  # rejected: no answer
-                self.plant.x = [wrap(self.reset_target[0]), self.reset_target[1]]
-                self.status, self.u = READY, 0.0
-                self.log(f"reset {self.reset_id} placed at {self.plant.x}")
-            elif cmd.kind == ACTION and self.status & READY and cmd.sample_seq == newest:
-                self.command(cmd)  # clamped, or rejected: zero
-                self.plant.advance(self.u, self.task.ts)
-            else:
-                self.rejected += 1  # before a reset, for an older sample, or unknown
-                continue
-            newest = 0 if newest is None else newest + 1
-            self.publish_sample(newest)
+        """The lockstep clock (docs/driver.md, "Lockstep"), by lockstep.serve: resets
+        place the pendulum, each action integrates exactly one period."""
+
+        driver = self
+
+        class Simulation:
+            def place(self, x0):
+                driver.plant.x = [wrap(x0[0]), x0[1]]
+
+            def step(self, u, dt):
+                driver.plant.advance(u[0], dt)
+
+            def state(self):
+                return driver.measured()
+
+        serve(self.io, self.task, Simulation(), lambda: self.stopping, self.log)
 
     def run(self):
         if self.args.clock == "lockstep":

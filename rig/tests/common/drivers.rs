@@ -71,6 +71,26 @@ impl Driver {
         Self::launch(&Kind::Python(python.into()), name, extra)
     }
 
+    /// The Python driver `script` (relative to the repository) with id `<name>-py<pid>`
+    /// and flags `extra`.
+    pub fn script(python: &str, script: &str, name: &str, extra: &[&str]) -> Self {
+        let alone = ONE_DRIVER.lock().unwrap_or_else(|e| e.into_inner());
+        let id = format!("{name}-py{}", std::process::id());
+        let child = Command::new(python)
+            .arg(format!("{}/../{script}", env!("CARGO_MANIFEST_DIR")))
+            .args(["--driver-id", &id])
+            .args(extra)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        Self {
+            child,
+            id,
+            _alone: alone,
+        }
+    }
+
     /// Driver `kind` with id `<name>-rs<pid>` (Rust) or `<name>-py<pid>` (Python) and
     /// flags `extra` (both drivers take `--speed`; the Python one also
     /// `--inject-fault`).

@@ -1,0 +1,97 @@
+"""The rotary inverted (Furuta) pendulum of the Quanser QUBE-Servo 2, simulated.
+
+Model: the Lagrangian dynamics of the Furuta pendulum (B. S. Cazzolato and Z. Prime, "On
+the Dynamics of the Furuta Pendulum", Journal of Control Science and Engineering, 2011,
+article 528341), for the QUBE-Servo 2's slender rotary arm and pendulum as the Quanser
+QUBE-Servo 2 Rotary Pendulum Workbook models them, with the parameters of the Quanser
+QUBE-Servo 2 User Manual:
+
+    motor       R_m = 8.4 ohm, k_t = k_m = 0.042 N m/A = V s/rad
+    rotary arm  m_r = 0.095 kg, L_r = 0.085 m, D_r = 0.0015 N m s/rad
+    pendulum    m_p = 0.024 kg, L_p = 0.129 m, D_p = 0.0005 N m s/rad, g = 9.81 m/s^2
+
+State x = [theta, alpha, theta_dot, alpha_dot]: the arm's angle, the pendulum's angle
+from upright (it hangs at alpha = +-pi), their velocities; input u = V_m, the motor
+voltage. With J_r = m_r L_r^2 / 3 and J_p = m_p L_p^2 / 3 (about their pivots), l_p =
+L_p / 2 and the motor torque tau = k_t (V_m - k_m theta_dot) / R_m:
+
+    (m_p L_r^2 + J_p sin^2 a + J_r) theta'' + (m_p L_r l_p cos a) alpha''
+        = tau - D_r theta' - 2 J_p sin a cos a theta' alpha' + m_p L_r l_p sin a alpha'^2
+    (m_p L_r l_p cos a) theta'' + J_p alpha''
+        = m_p g l_p sin a - D_p alpha' + J_p sin a cos a theta'^2
+
+integrated with fourth-order Runge-Kutta in steps of at most 1 ms.
+"""
+
+import math
+
+# Motor
+R_M, K_T, K_M = 8.4, 0.042, 0.042
+# Rotary arm
+M_R, L_R, D_R = 0.095, 0.085, 0.0015
+# Pendulum link
+M_P, L_P, D_P = 0.024, 0.129, 0.0005
+G = 9.81
+
+J_R = M_R * L_R**2 / 3.0  # arm about its pivot
+J_P = M_P * L_P**2 / 3.0  # pendulum about its pivot
+L_CM = L_P / 2.0  # pivot to the pendulum's centre of mass
+C = M_P * L_R * L_CM  # coupling
+
+
+def wrap(a: float) -> float:
+    """Angle to [-pi, pi)."""
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def derivative(x, u: float):
+    """x' = f(x, u) of the model above."""
+    _, a, td, ad = x
+    s, c = math.sin(a), math.cos(a)
+    tau = K_T * (u - K_M * td) / R_M
+    # M [theta'', alpha'']^T = b
+    m11 = M_P * L_R**2 + J_P * s * s + J_R
+    m12 = C * c
+    m22 = J_P
+    b1 = tau - D_R * td - 2.0 * J_P * s * c * td * ad + C * s * ad * ad
+    b2 = M_P * G * L_CM * s - D_P * ad + J_P * s * c * td * td
+    det = m11 * m22 - m12 * m12
+    tdd = (m22 * b1 - m12 * b2) / det
+    add = (m11 * b2 - m12 * b1) / det
+    return [td, ad, tdd, add]
+
+
+class Furuta:
+    """The pendulum's state, stepped with an action held."""
+
+    H_MAX = 0.001  # longest RK4 step [s]
+
+    def __init__(self):
+        self.x = [0.0, math.pi, 0.0, 0.0]
+
+    def place(self, x0):
+        self.x = [x0[0], wrap(x0[1]), x0[2], x0[3]]
+
+    def step(self, u, dt):
+        n = max(1, math.ceil(dt / self.H_MAX - 1e-9))
+        h = dt / n
+        x, v = self.x, u[0]
+        for _ in range(n):
+            k1 = derivative(x, v)
+            k2 = derivative([xi + 0.5 * h * ki for xi, ki in zip(x, k1)], v)
+            k3 = derivative([xi + 0.5 * h * ki for xi, ki in zip(x, k2)], v)
+            k4 = derivative([xi + h * ki for xi, ki in zip(x, k3)], v)
+            x = [xi + h / 6.0 * (a + 2 * b + 2 * c + d) for xi, a, b, c, d in zip(x, k1, k2, k3, k4)]
+        # The arm turns freely here (the rig's operating range stops it): only the
+        # pendulum's angle wraps.
+        self.x = [x[0], wrap(x[1]), x[2], x[3]]
+
+    def state(self):
+        return list(self.x)
+
+    def energy(self) -> float:
+        """Kinetic plus potential energy (zero hanging at rest), for the model's test."""
+        _, a, td, ad = self.x
+        s, c = math.sin(a), math.cos(a)
+        kinetic = 0.5 * (M_P * L_R**2 + J_P * s * s + J_R) * td * td + 0.5 * J_P * ad * ad + C * c * td * ad
+        return kinetic + M_P * G * L_CM * (math.cos(a) + 1.0)

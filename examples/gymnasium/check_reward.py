@@ -1,0 +1,69 @@
+#!/usr/bin/env python3
+"""Checks that a task file's quadratic reward is the environment's: steps the environment
+from random states with random actions and compares each reward with the task's
+rho(x, u) = -(e'Qe) - u'Pu of the mapped state before the step (angle errors wrapped) and
+the action clipped to the bounds.
+
+    python3 examples/gymnasium/check_reward.py --mapping examples/gymnasium/pendulum_v1.py
+
+Prints the largest difference and exits 1 if it exceeds 1e-9.
+"""
+
+import argparse
+import math
+import random
+import sys
+from pathlib import Path
+
+import gymnasium
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "python_driver"))
+sys.path.insert(0, str(HERE))
+
+from adapter import load  # noqa: E402
+from task import Task  # noqa: E402
+
+
+def wrap(a):
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def rho(task, x, u):
+    r = 0.0
+    for i in range(task.n):
+        e = x[i] - task.reference[i]
+        e = wrap(e) if task.angles[i] else e
+        r -= task.q[i] * e * e
+    for j in range(task.m):
+        r -= task.p[j] * u[j] * u[j]
+    return r
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--mapping", required=True)
+    p.add_argument("--steps", type=int, default=2000)
+    args = p.parse_args()
+    mapping = load(args.mapping)
+    task = Task.read(str(Path(args.mapping).resolve().parent / mapping.TASK))
+    env = gymnasium.make(mapping.ENV_ID)
+    rng = random.Random(7)
+    worst = 0.0
+    for k in range(args.steps):
+        if k % 50 == 0:
+            env.reset(seed=k)
+            x0 = [rng.uniform(lo, hi) for lo, hi in task.ranges]
+            mapping.place(env, x0)
+        x = mapping.state(env)
+        u = [rng.uniform(2 * lo, 2 * hi) for lo, hi in zip(task.low, task.high)]
+        _, reward, _, _, _ = env.step(np.asarray(u))
+        clipped = [min(max(v, lo), hi) for v, lo, hi in zip(u, task.low, task.high)]
+        worst = max(worst, abs(float(reward) - rho(task, x, clipped)))
+    print(f"{mapping.ENV_ID}: {args.steps} steps, largest |reward - rho(x, u)| = {worst:.3g}")
+    return 0 if worst <= 1e-9 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
