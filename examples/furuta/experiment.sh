@@ -22,12 +22,12 @@ for seed in $(seq 1 "$runs"); do
   id="furuta-$$-$seed"
   "$python" "$here/driver.py" --driver-id "$id" &
   driver=$!
-  t0=$(date +%s.%N)
+  t0=$(date +%s%N)
   "$rig" run --plant external --driver "$id" --task "$here/furuta.toml" --seed "$seed" \
     --trials "$trials" --quiet --out "$out/seed-$seed" "$@"
-  t1=$(date +%s.%N)
+  t1=$(date +%s%N)
   kill "$driver"; wait "$driver" || true
-  echo "$seed,$(echo "$t1 - $t0" | bc)" >> "$out/wall.csv"
+  echo "$seed,$(( (t1 - t0) / 1000000 ))e-3" >> "$out/wall.csv"
   tail -n +2 "$out/seed-$seed/returns.csv" | sed "s/^0,/$((seed - 1)),/" >> "$out/runs.csv"
   echo "seed $seed: $(tail -n 1 "$out/seed-$seed/returns.csv")"
 done

@@ -10,8 +10,9 @@
 //!    with `h` the half-width of the component's approximator range (the action's bounds
 //!    for an action): the pendulum's ranges `π`, `8π`, `3 V` map to its own weights.
 //! 3. **RBF, LSTD and tile grids** take the pendulum's count per kind of input; a grid of
-//!    more than [`MAX_GRID`] basis functions shrinks by a common factor (each count at
-//!    least 2).
+//!    more than [`MAX_GRID`] basis functions — an LSTD critic's: more than the pendulum's
+//!    400, as it solves a dense system each step — shrinks by a common factor (each count
+//!    at least 2).
 //! 4. **LLR memories** hold `n/2` times the pendulum's samples; `K` is at least
 //!    `2 (d + 1)` for `d` inputs (an affine fit needs more than `d + 1` neighbours).
 //! 5. **Exploration** `σ` and the saturation margin scale with the smallest action
@@ -134,30 +135,33 @@ fn adapt_component(c: &mut Component, task: &Task, inputs: &[Input]) {
             let k_max = crate::approx::kdtree::MAX_K.min(l.memory);
             l.neighbours = l.neighbours.max(k).min(k_max);
         }
-        Component::Rbf(r) => r.centres = grid(&r.centres, inputs),
-        Component::Lstd(l) => l.centres = grid(&l.centres, inputs),
-        Component::Tiles(t) => t.tiles = grid(&t.tiles, inputs),
+        Component::Rbf(r) => r.centres = grid(&r.centres, inputs, MAX_GRID),
+        Component::Lstd(l) => {
+            let pendulum = l.centres.iter().product();
+            l.centres = grid(&l.centres, inputs, pendulum);
+        }
+        Component::Tiles(t) => t.tiles = grid(&t.tiles, inputs, MAX_GRID),
     }
 }
 
-/// The pendulum's counts per kind of input, shrunk to at most [`MAX_GRID`] in all.
-fn grid(pendulum: &[usize], inputs: &[Input]) -> Vec<usize> {
+/// The pendulum's counts per kind of input, shrunk to at most `max` in all.
+fn grid(pendulum: &[usize], inputs: &[Input], max: usize) -> Vec<usize> {
     let len = pendulum.len();
     let counts: Vec<usize> = inputs
         .iter()
         .map(|i| pendulum[i.pendulum_index(len)])
         .collect();
     let total: f64 = counts.iter().map(|&c| c as f64).product();
-    if total <= MAX_GRID as f64 {
+    if total <= max as f64 {
         return counts;
     }
-    let mut factor = (MAX_GRID as f64 / total).powf(1.0 / counts.len() as f64);
+    let mut factor = (max as f64 / total).powf(1.0 / counts.len() as f64);
     loop {
         let shrunk: Vec<usize> = counts
             .iter()
             .map(|&c| ((c as f64 * factor).floor() as usize).max(2))
             .collect();
-        if shrunk.iter().product::<usize>() <= MAX_GRID || shrunk.iter().all(|&c| c == 2) {
+        if shrunk.iter().product::<usize>() <= max || shrunk.iter().all(|&c| c == 2) {
             return shrunk;
         }
         factor *= 0.95;

@@ -140,7 +140,10 @@ fn the_rules_fit_a_task_of_other_dimensions_and_ranges() {
                     assert!(r.centres.iter().product::<usize>() <= rules::MAX_GRID)
                 }
                 Component::Lstd(l) => {
-                    assert!(l.centres.iter().product::<usize>() <= rules::MAX_GRID)
+                    assert!(
+                        l.centres.iter().product::<usize>() <= 400,
+                        "the pendulum's LSTD grid at most"
+                    )
                 }
                 Component::Tiles(t) => {
                     assert!(t.tiles.iter().product::<usize>() <= rules::MAX_GRID)
