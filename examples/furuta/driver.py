@@ -10,7 +10,6 @@ Stop it with Ctrl-C or SIGTERM.
 """
 
 import argparse
-import signal
 import sys
 from pathlib import Path
 
@@ -18,7 +17,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "python_driver"))  # the contract's modules
 
 from furuta import Furuta  # noqa: E402
-from lockstep import Services, serve  # noqa: E402
+from lockstep import Services, serve_until_signalled  # noqa: E402
 from task import Task  # noqa: E402
 
 
@@ -40,22 +39,13 @@ def main():
     task = Task.read(args.task)
     if (task.n, task.m) != (4, 1):
         p.error(f"--task {args.task}: {task.n} states and {task.m} actions, not 4 and 1")
-    stopping = []
-    for sig in (signal.SIGTERM, signal.SIGINT):
-        signal.signal(sig, lambda *_: stopping.append(True))
-
-    def log(text):
-        if args.verbose:
-            print(f"driver: {text}", file=sys.stderr, flush=True)
-
     print(
         f"driver {args.driver_id!r}: task {task.name} (QUBE-Servo 2 rotary pendulum), "
         f"Ts {task.ts * 1e3:g} ms, lockstep",
         file=sys.stderr,
         flush=True,
     )
-    serve(Services(args.driver_id), task, Furuta(), lambda: bool(stopping), log)
-    print("driver: stopped", file=sys.stderr)
+    serve_until_signalled(Services(args.driver_id), task, Furuta(), "driver", args.verbose)
     return 0
 
 

@@ -23,7 +23,6 @@ requirements.
 
 import argparse
 import importlib.util
-import signal
 import sys
 from pathlib import Path
 
@@ -33,7 +32,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "python_driver"))  # the contract's modules
 
-from lockstep import Services, serve  # noqa: E402
+from lockstep import Services, serve_until_signalled  # noqa: E402
 from task import Task  # noqa: E402
 
 
@@ -91,21 +90,12 @@ def main():
         sim = Environment(mapping, task, args.seed)
     except ValueError as e:
         p.error(str(e))
-    stopping = []
-    for sig in (signal.SIGTERM, signal.SIGINT):
-        signal.signal(sig, lambda *_: stopping.append(True))
-
-    def log(text):
-        if args.verbose:
-            print(f"adapter: {text}", file=sys.stderr, flush=True)
-
     print(
         f"adapter {driver_id!r}: {mapping.ENV_ID} as task {task.name}, Ts {task.ts * 1e3:g} ms, lockstep",
         file=sys.stderr,
         flush=True,
     )
-    serve(Services(driver_id), task, sim, lambda: bool(stopping), log)
-    print("adapter: stopped", file=sys.stderr)
+    serve_until_signalled(Services(driver_id), task, sim, "adapter", args.verbose)
     return 0
 
 

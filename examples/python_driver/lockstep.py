@@ -18,6 +18,8 @@ at start and every second. `examples/furuta/` and `examples/gymnasium/` are buil
 """
 
 import math
+import signal
+import sys
 import time
 
 import iceoryx2 as iox2
@@ -206,3 +208,17 @@ def serve(services: Services, task, simulation, stopping=lambda: False, log=lamb
             continue
         newest = 0 if newest is None else newest + 1
         services.publish_sample(sample(task, counters, newest, simulation.state()))
+
+
+def serve_until_signalled(services: Services, task, simulation, who: str, verbose: bool):
+    """serve() until SIGTERM or Ctrl-C, logging resets to stderr as `who` if `verbose`."""
+    stopping = []
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(sig, lambda *_: stopping.append(True))
+
+    def log(text):
+        if verbose:
+            print(f"{who}: {text}", file=sys.stderr, flush=True)
+
+    serve(services, task, simulation, lambda: bool(stopping), log)
+    print(f"{who}: stopped", file=sys.stderr)

@@ -99,6 +99,24 @@ fn wild_value(old: &str, rng: &mut ChaCha8Rng) -> String {
     }
 }
 
+/// An agent of `learner` learns 20 samples on `task`'s plant, every action applied within
+/// the bounds.
+fn learns_within_the_limits(task: Arc<Task>, learner: &agent::config::AgentConfig) {
+    let mut agent = agent::build(&task, learner, 1);
+    let mut plant = Plant::new(task.clone());
+    let mut u = vec![0.0; task.action_dim()];
+    plant.reset(&task.initial_states[0]);
+    agent.start_trial(plant.state(), &mut u);
+    for _ in 0..20 {
+        let r = plant.step(&u);
+        for (j, a) in plant.applied_action().iter().enumerate() {
+            assert!(*a >= task.action_low[j] && *a <= task.action_high[j]);
+        }
+        let x = plant.state().to_vec();
+        agent.learn(r, &x, Some(&mut u));
+    }
+}
+
 #[test]
 fn mutated_configuration_files_are_errors_or_run_but_never_panic() {
     let mut rng = ChaCha8Rng::seed_from_u64(0xC0F1);
@@ -125,17 +143,7 @@ fn mutated_configuration_files_are_errors_or_run_but_never_panic() {
             }
             Ok(cfg) => {
                 // Accepted: it must build and learn a few samples within the limits.
-                let task = Arc::new(cfg.task());
-                let mut agent = agent::build(&task, &cfg.agent, 1);
-                let mut plant = Plant::new(task.clone());
-                let mut u = vec![0.0; task.action_dim()];
-                plant.reset(&task.initial_states[0]);
-                agent.start_trial(plant.state(), &mut u);
-                for _ in 0..20 {
-                    let r = plant.step(&u);
-                    let x = plant.state().to_vec();
-                    agent.learn(r, &x, Some(&mut u));
-                }
+                learns_within_the_limits(Arc::new(cfg.task()), &cfg.agent);
                 true
             }
         });
@@ -188,20 +196,7 @@ fn mutated_task_files_are_errors_or_run_but_never_panic() {
                 system: Some(sim),
                 ..Default::default()
             };
-            let cfg = resolve(None, &o).unwrap();
-            let mut agent = agent::build(&task, &cfg.agent, 1);
-            let mut plant = Plant::new(task.clone());
-            let mut u = vec![0.0; task.action_dim()];
-            plant.reset(&task.initial_states[0]);
-            agent.start_trial(plant.state(), &mut u);
-            for _ in 0..20 {
-                let r = plant.step(&u);
-                for (j, a) in plant.applied_action().iter().enumerate() {
-                    assert!(*a >= task.action_low[j] && *a <= task.action_high[j]);
-                }
-                let x = plant.state().to_vec();
-                agent.learn(r, &x, Some(&mut u));
-            }
+            learns_within_the_limits(task, &resolve(None, &o).unwrap().agent);
             true
         });
         match outcome {

@@ -71,52 +71,35 @@ impl Driver {
         Self::launch(&Kind::Python(python.into()), name, extra)
     }
 
-    /// The Python driver `script` (relative to the repository) with id `<name>-py<pid>`
-    /// and flags `extra`.
-    pub fn script(python: &str, script: &str, name: &str, extra: &[&str]) -> Self {
-        let alone = ONE_DRIVER.lock().unwrap_or_else(|e| e.into_inner());
-        let id = format!("{name}-py{}", std::process::id());
-        let child = Command::new(python)
-            .arg(format!("{}/../{script}", env!("CARGO_MANIFEST_DIR")))
-            .args(["--driver-id", &id])
-            .args(extra)
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        Self {
-            child,
-            id,
-            _alone: alone,
-        }
-    }
-
     /// Driver `kind` with id `<name>-rs<pid>` (Rust) or `<name>-py<pid>` (Python) and
     /// flags `extra` (both drivers take `--speed`; the Python one also
     /// `--inject-fault`).
     pub fn launch(kind: &Kind, name: &str, extra: &[&str]) -> Self {
-        // A failed test's poisoned lock is still a lock.
-        let alone = ONE_DRIVER.lock().unwrap_or_else(|e| e.into_inner());
-        let tag = match kind {
-            Kind::Python(_) => "py",
-            Kind::Rust => "rs",
-        };
-        let id = format!("{name}-{tag}{}", std::process::id());
-        let mut command = match kind {
+        match kind {
             Kind::Python(python) => {
-                let mut c = Command::new(python);
-                c.arg(concat!(
-                    env!("CARGO_MANIFEST_DIR"),
-                    "/../examples/python_driver/driver.py"
-                ));
-                c
+                Self::script(python, "examples/python_driver/driver.py", name, extra)
             }
             Kind::Rust => {
                 let mut c = rig();
                 c.arg("sim-driver");
-                c
+                Self::spawn(c, &format!("{name}-rs"), extra)
             }
-        };
+        }
+    }
+
+    /// The Python driver `script` (relative to the repository) with id `<name>-py<pid>`
+    /// and flags `extra`.
+    pub fn script(python: &str, script: &str, name: &str, extra: &[&str]) -> Self {
+        let mut c = Command::new(python);
+        c.arg(format!("{}/../{script}", env!("CARGO_MANIFEST_DIR")));
+        Self::spawn(c, &format!("{name}-py"), extra)
+    }
+
+    /// `command --driver-id <prefix><pid> extra…`, once the other tests' drivers are done.
+    fn spawn(mut command: Command, prefix: &str, extra: &[&str]) -> Self {
+        // A failed test's poisoned lock is still a lock.
+        let alone = ONE_DRIVER.lock().unwrap_or_else(|e| e.into_inner());
+        let id = format!("{prefix}{}", std::process::id());
         let child = command
             .args(["--driver-id", &id])
             .args(extra)

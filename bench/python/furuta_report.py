@@ -1,0 +1,106 @@
+#!/usr/bin/env python3
+"""Plots the Furuta pendulum experiment (examples/furuta/experiment.sh): the greedy
+learning curves of each learner (mean, min and max over its runs) in one figure, and the
+time response of the last greedy trial of one run, from its recording.
+
+    python3 bench/python/furuta_report.py OUT LEARNER=DIR [LEARNER=DIR ...]
+    python3 bench/python/furuta_report.py docs/results/furuta mlac=out/furuta-mlac vgbp=out/furuta-vgbp
+
+Writes OUT/curves.png, OUT/curves.svg, OUT/response-<LEARNER>.png/.svg and prints a
+Markdown table (final greedy returns, best, wall time). Needs matplotlib and mcap (the
+official reader).
+"""
+
+import csv
+import json
+import statistics
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+from mcap.reader import make_reader  # noqa: E402
+
+FLAG_GREEDY = 4
+
+
+def greedy_curves(runs_csv: Path):
+    """trial -> [greedy return of each run]."""
+    by_trial = {}
+    with open(runs_csv) as f:
+        for row in csv.DictReader(f):
+            if row["greedy_return"]:
+                by_trial.setdefault(int(row["trial"]), []).append(float(row["greedy_return"]))
+    return dict(sorted(by_trial.items()))
+
+
+def last_greedy_trial(mcap_path: Path):
+    """(t, x, u) of the last greedy trial's measurements in a recording."""
+    trials = {}
+    with open(mcap_path, "rb") as f:
+        for _, _, msg in make_reader(f).iter_messages(topics=["/plant/measurement"]):
+            m = json.loads(msg.data)
+            if m["flags"] & FLAG_GREEDY:
+                if m["step"] == 0:
+                    trials[m["trial"]] = []
+                trials.setdefault(m["trial"], []).append(m)
+    msgs = trials[max(trials)]
+    t = [m["step"] * 0.02 for m in msgs]
+    x = [[m[f"y_{i}"] for m in msgs] for i in range(4)]
+    u = [m["u_applied_0"] for m in msgs]
+    return t, x, u
+
+
+def main():
+    out = Path(sys.argv[1])
+    out.mkdir(parents=True, exist_ok=True)
+    learners = [a.split("=", 1) for a in sys.argv[2:]]
+    fig, ax = plt.subplots(figsize=(7, 4))
+    print("| learner | runs | greedy return at the last trial: mean [min, max] | best mean | wall time per run |")
+    print("|---|---:|---|---:|---|")
+    for name, d in learners:
+        d = Path(d)
+        curves = greedy_curves(d / "runs.csv")
+        trials = list(curves)
+        mean = [statistics.mean(v) for v in curves.values()]
+        ax.plot(trials, mean, label=f"{name} (mean of {len(next(iter(curves.values())))} runs)")
+        ax.fill_between(trials, [min(v) for v in curves.values()], [max(v) for v in curves.values()], alpha=0.2)
+        with open(d / "wall.csv") as f:
+            walls = [float(r["wall_s"]) for r in csv.DictReader(f)]
+        last = curves[trials[-1]]
+        print(
+            f"| {name} | {len(last)} | {statistics.mean(last):.0f} [{min(last):.0f}, {max(last):.0f}] "
+            f"| {max(mean):.0f} (trial {trials[mean.index(max(mean))]}) "
+            f"| {statistics.median(walls):.1f} s median ({min(walls):.1f}–{max(walls):.1f}) |"
+        )
+        seeds = sorted(d.glob("seed-*"))
+        t, x, u = last_greedy_trial(seeds[0] / "run.mcap")
+        rfig, rax = plt.subplots(3, 1, figsize=(7, 6), sharex=True)
+        rax[0].plot(t, x[0], label="arm θ")
+        rax[0].plot(t, x[1], label="pendulum α (0 upright)")
+        rax[0].set_ylabel("rad")
+        rax[0].legend(loc="best")
+        rax[1].plot(t, x[2], label="θ̇")
+        rax[1].plot(t, x[3], label="α̇")
+        rax[1].set_ylabel("rad/s")
+        rax[1].legend(loc="best")
+        rax[2].step(t, u, where="post")
+        rax[2].set_ylabel("V (applied)")
+        rax[2].set_xlabel("time [s]")
+        rax[0].set_title(f"{name}: last greedy trial of {seeds[0].name}")
+        rfig.tight_layout()
+        for ext in ("png", "svg"):
+            rfig.savefig(out / f"response-{name}.{ext}")
+    ax.set_xlabel("trial")
+    ax.set_ylabel("greedy return")
+    ax.set_title("Furuta pendulum (QUBE-Servo 2) against its Python driver")
+    ax.legend(loc="lower right")
+    fig.tight_layout()
+    for ext in ("png", "svg"):
+        fig.savefig(out / f"curves.{ext}")
+
+
+if __name__ == "__main__":
+    main()
