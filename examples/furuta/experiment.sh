@@ -8,22 +8,23 @@
 #   examples/furuta/experiment.sh out/furuta-mlac 5 400 --algo mlac --approx llr
 #
 # PYTHON (default python3) must import iceoryx2 0.10.0; RIG (default the release build)
-# is the rig.
+# is the rig; TASK (default furuta.toml next to this script) the task file.
 set -euo pipefail
 out=$1 runs=$2 trials=$3
 shift 3
 here=$(cd "$(dirname "$0")" && pwd)
 python=${PYTHON:-python3}
 rig=${RIG:-$here/../../target/release/rig}
+task=${TASK:-$here/furuta.toml}
 mkdir -p "$out"
 echo "run,trial,sim_time_s,return,greedy_return" > "$out/runs.csv"
 echo "seed,wall_s" > "$out/wall.csv"
 for seed in $(seq 1 "$runs"); do
   id="furuta-$$-$seed"
-  "$python" "$here/driver.py" --driver-id "$id" &
+  "$python" "$here/driver.py" --driver-id "$id" --task "$task" &
   driver=$!
   t0=$(date +%s%N)
-  "$rig" run --plant external --driver "$id" --task "$here/furuta.toml" --seed "$seed" \
+  "$rig" run --plant external --driver "$id" --task "$task" --seed "$seed" \
     --trials "$trials" --quiet --out "$out/seed-$seed" "$@"
   t1=$(date +%s%N)
   kill "$driver"; wait "$driver" || true

@@ -12,15 +12,21 @@ QUBE-Servo 2 User Manual:
 
 State x = [theta, alpha, theta_dot, alpha_dot]: the arm's angle, the pendulum's angle
 from upright (it hangs at alpha = +-pi), their velocities; input u = V_m, the motor
-voltage. With J_r = m_r L_r^2 / 3 and J_p = m_p L_p^2 / 3 (about their pivots), l_p =
-L_p / 2 and the motor torque tau = k_t (V_m - k_m theta_dot) / R_m:
+voltage. As the workbook writes the model: J_r = m_r L_r^2 / 12, J_p = m_p L_p^2 / 12, the
+pendulum's centre of mass l_p = L_p / 2 from its pivot, and, with
+J_a = J_r + m_p L_r^2 (the arm with the pendulum's mass at its tip),
+K = m_p L_p^2 / 4 (the pendulum about the arm's axis, times sin^2 alpha),
+J_b = J_p + m_p L_p^2 / 4 (the pendulum about its pivot), C = m_p L_r l_p and the motor
+torque tau = k_t (V_m - k_m theta') / R_m:
 
-    (m_p L_r^2 + J_p sin^2 a + J_r) theta'' + (m_p L_r l_p cos a) alpha''
-        = tau - D_r theta' - 2 J_p sin a cos a theta' alpha' + m_p L_r l_p sin a alpha'^2
-    (m_p L_r l_p cos a) theta'' + J_p alpha''
-        = m_p g l_p sin a - D_p alpha' + J_p sin a cos a theta'^2
+    (J_a + K sin^2 a) theta'' + C cos a alpha''
+        = tau - D_r theta' - 2 K sin a cos a theta' alpha' + C sin a alpha'^2
+    C cos a theta'' + J_b alpha''
+        = m_p g l_p sin a - D_p alpha' + K sin a cos a theta'^2
 
-integrated with fourth-order Runge-Kutta in steps of at most 1 ms.
+(the Euler-Lagrange equations of T = (J_a + K sin^2 a) theta'^2 / 2 + J_b alpha'^2 / 2
++ C cos a theta' alpha', V = m_p g l_p cos a), integrated with fourth-order Runge-Kutta in
+steps of at most 1 ms.
 """
 
 import math
@@ -33,9 +39,12 @@ M_R, L_R, D_R = 0.095, 0.085, 0.0015
 M_P, L_P, D_P = 0.024, 0.129, 0.0005
 G = 9.81
 
-J_R = M_R * L_R**2 / 3.0  # arm about its pivot
-J_P = M_P * L_P**2 / 3.0  # pendulum about its pivot
+J_R = M_R * L_R**2 / 12.0
+J_P = M_P * L_P**2 / 12.0
 L_CM = L_P / 2.0  # pivot to the pendulum's centre of mass
+J_A = J_R + M_P * L_R**2
+K = M_P * L_P**2 / 4.0
+J_B = J_P + K
 C = M_P * L_R * L_CM  # coupling
 
 
@@ -50,11 +59,11 @@ def derivative(x, u: float):
     s, c = math.sin(a), math.cos(a)
     tau = K_T * (u - K_M * td) / R_M
     # M [theta'', alpha'']^T = b
-    m11 = M_P * L_R**2 + J_P * s * s + J_R
+    m11 = J_A + K * s * s
     m12 = C * c
-    m22 = J_P
-    b1 = tau - D_R * td - 2.0 * J_P * s * c * td * ad + C * s * ad * ad
-    b2 = M_P * G * L_CM * s - D_P * ad + J_P * s * c * td * td
+    m22 = J_B
+    b1 = tau - D_R * td - 2.0 * K * s * c * td * ad + C * s * ad * ad
+    b2 = M_P * G * L_CM * s - D_P * ad + K * s * c * td * td
     det = m11 * m22 - m12 * m12
     tdd = (m22 * b1 - m12 * b2) / det
     add = (m11 * b2 - m12 * b1) / det
@@ -93,5 +102,5 @@ class Furuta:
         """Kinetic plus potential energy (zero hanging at rest), for the model's test."""
         _, a, td, ad = self.x
         s, c = math.sin(a), math.cos(a)
-        kinetic = 0.5 * (M_P * L_R**2 + J_P * s * s + J_R) * td * td + 0.5 * J_P * ad * ad + C * c * td * ad
+        kinetic = 0.5 * (J_A + K * s * s) * td * td + 0.5 * J_B * ad * ad + C * c * td * ad
         return kinetic + M_P * G * L_CM * (math.cos(a) + 1.0)
