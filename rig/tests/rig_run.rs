@@ -283,25 +283,28 @@ fn trials_that_leave_the_operating_range_end_early_in_both_drivers() {
     assert!(rows[3][4].is_finite() && rows[7][4].is_finite(), "{ran}");
 }
 
+/// MLAC-FH with RBFs, 6 trials and 2 evaluations, quiet, and `--out` (its directory to
+/// follow).
+const MLAC_FH: [&str; 12] = [
+    "--horizon",
+    "finite",
+    "--algo",
+    "mlac",
+    "--approx",
+    "rbf",
+    "--trials",
+    "6",
+    "--eval-every",
+    "3",
+    "--quiet",
+    "--out",
+];
+
 #[test]
 fn a_finite_horizon_run_is_the_same_in_both_drivers() {
     // τ_N(x_N) enters the returns of `rig run` as it does in `rig learn` (Eq. 4.1).
     let dir = tmp("fh");
-    let args = [
-        "--horizon",
-        "finite",
-        "--algo",
-        "mlac",
-        "--approx",
-        "rbf",
-        "--trials",
-        "6",
-        "--eval-every",
-        "3",
-        "--quiet",
-        "--out",
-    ];
-    let ran = learn_and_run(&dir, "", &args);
+    let ran = learn_and_run(&dir, "", &MLAC_FH);
     assert_eq!(ran.lines().count(), 7);
 }
 
@@ -314,22 +317,7 @@ fn a_task_file_runs_the_same_in_both_drivers() {
     let task =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/tasks/pendulum-balance.toml");
     let task = task.to_str().unwrap();
-    let args = [
-        "--task",
-        task,
-        "--horizon",
-        "finite",
-        "--algo",
-        "mlac",
-        "--approx",
-        "rbf",
-        "--trials",
-        "6",
-        "--eval-every",
-        "3",
-        "--quiet",
-        "--out",
-    ];
+    let args = [["--task", task].as_slice(), &MLAC_FH].concat();
     let ran = learn_and_run(&dir, "", &args);
     assert_eq!(ran.lines().count(), 7);
     let config = std::fs::read_to_string(dir.join("run/config.toml")).unwrap();
@@ -341,7 +329,7 @@ fn a_task_file_runs_the_same_in_both_drivers() {
     let text = std::fs::read_to_string(task).unwrap();
     let plain = dir.join("plain.toml");
     std::fs::write(&plain, text.replace("terminal_weights = [50.0, 1.0]\n", "")).unwrap();
-    let mut args = args.to_vec();
+    let mut args = args;
     args[1] = plain.to_str().unwrap();
     assert_ne!(learn_and_run(&dir, "-plain", &args), ran);
 }

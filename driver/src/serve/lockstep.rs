@@ -52,12 +52,7 @@ pub fn serve_lockstep(
         period_ns,
         t_start,
     );
-    let publish_info = || {
-        let mut i = advertised;
-        i.t_publish_ns = now_ns();
-        io.infos.send(i).map_err(|e| io.err(e))
-    };
-    publish_info()?;
+    io.publish_info(advertised)?;
     let mut next_info = now_ns() + INFO_EVERY.as_nanos() as u64;
     let mut served = Served::default();
     let mut x = [0.0; MAX_X];
@@ -67,7 +62,7 @@ pub fn serve_lockstep(
         let Some(c) = io.commands.try_recv().map_err(|e| io.err(e))? else {
             io.commands.wait_until(next_info).map_err(|e| io.err(e))?;
             if now_ns() >= next_info {
-                publish_info()?;
+                io.publish_info(advertised)?;
                 next_info = now_ns() + INFO_EVERY.as_nanos() as u64;
             }
             continue;

@@ -105,6 +105,13 @@ impl Services {
         })
     }
 
+    /// Publishes `advertised`, stamped now.
+    fn publish_info(&self, advertised: DriverInfo) -> Result<()> {
+        let mut i = advertised;
+        i.t_publish_ns = now_ns();
+        self.infos.send(i).map_err(|e| self.err(e))
+    }
+
     /// A transport error, naming the driver.
     fn err(&self, e: wire::Error) -> anyhow::Error {
         anyhow!("driver {:?}: {e}", self.id)

@@ -19,20 +19,19 @@ pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result
     let (n_x, n_u) = (task.state_dim(), task.action_dim());
     let period_ns = period_ns(device)?;
     let io = Services::open(driver_id)?;
-    let (bus, infos, samples, commands) = (&io.bus, &io.infos, &io.samples, &io.commands);
+    let (bus, samples, commands) = (&io.bus, &io.samples, &io.commands);
     let wire_err = |e: wire::Error| io.err(e);
     let mut d = Driver::new(task, how.verbose);
     let t_start = now_ns();
     device.apply(t_start, &d.u[..n_u]);
-    infos
-        .send(info(
-            device.task(),
-            device.time_scale(),
-            clock::REALTIME,
-            period_ns,
-            t_start,
-        ))
-        .map_err(wire_err)?;
+    let advertised = info(
+        device.task(),
+        device.time_scale(),
+        clock::REALTIME,
+        period_ns,
+        t_start,
+    );
+    io.publish_info(advertised)?;
     let mut next_info = t_start + 1_000_000_000;
     let mut served = Served::default();
     let mut x = [0.0; MAX_X];
@@ -70,15 +69,7 @@ pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result
         samples.send(s).map_err(wire_err)?;
         served.samples += 1;
         if t_sample >= next_info {
-            infos
-                .send(info(
-                    device.task(),
-                    device.time_scale(),
-                    clock::REALTIME,
-                    period_ns,
-                    t_start,
-                ))
-                .map_err(wire_err)?;
+            io.publish_info(advertised)?;
             next_info = t_sample + 1_000_000_000;
         }
         seq += 1;
