@@ -1,0 +1,189 @@
+#!/usr/bin/env python3
+"""The thesis's learners through the rig against Stable-Baselines3's SAC, on the same
+Gymnasium Pendulum-v1: environment steps and wall time until the greedy return first
+reaches a common level, per seed, and the learning curves in one plot.
+
+    python3 bench/python/sb3_pendulum.py OUT [--seeds 3] [--steps 40000] [--level -300]
+
+Both sides are evaluated alike: the greedy (deterministic) policy, one 200-step episode
+from each of the task's four start states (examples/gymnasium/pendulum-v1.toml), the
+mean, every 2000 environment steps of learning (the rig's `eval_every` of 10 trials of
+200 steps). The rig's learners (MLAC/LLR, SAC/LLR, the presets by rules) learn through
+examples/gymnasium/adapter.py, one `rig run --plant external` per seed; SB3's SAC
+(default hyperparameters, CPU) learns on the environment with its own random starts, as
+users run it. Steps count learning steps only; wall time is the whole run's, evaluations
+included, on the machine this runs on.
+
+Writes OUT/curves.csv (learner, seed, steps, wall_s, greedy_return), OUT/curves.png/.svg,
+OUT/summary.md. Needs stable-baselines3 (with torch), gymnasium, iceoryx2 0.10.0,
+matplotlib, and the release build of the rig.
+"""
+
+import argparse
+import csv
+import math
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "examples" / "python_driver"))
+sys.path.insert(0, str(ROOT / "examples" / "gymnasium"))
+
+import gymnasium  # noqa: E402
+
+import pendulum_v1  # noqa: E402
+from task import Task  # noqa: E402
+
+TASK = ROOT / "examples" / "gymnasium" / "pendulum-v1.toml"
+EVAL_EVERY = 2000  # environment steps
+EPISODE = 200
+
+
+def greedy_return(env, act, starts) -> float:
+    """The mean return of one deterministic episode from each start state."""
+    total = 0.0
+    for x0 in starts:
+        env.reset(seed=0)
+        pendulum_v1.place(env, x0)
+        obs = env.unwrapped._get_obs()
+        for _ in range(EPISODE):
+            obs, r, _, _, _ = env.step(act(obs))
+            total += float(r)
+    return total / len(starts)
+
+
+def sb3_sac(seed: int, steps: int, starts):
+    """SB3 SAC on Pendulum-v1: [(steps, wall_s, greedy_return)] every EVAL_EVERY steps."""
+    from stable_baselines3 import SAC
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    curve = []
+    t0 = time.monotonic()
+    eval_env = gymnasium.make("Pendulum-v1")
+
+    class Evaluate(BaseCallback):
+        def _on_step(self) -> bool:
+            if self.num_timesteps % EVAL_EVERY == 0:
+                act = lambda obs: self.model.predict(obs, deterministic=True)[0]  # noqa: E731
+                curve.append((self.num_timesteps, time.monotonic() - t0, greedy_return(eval_env, act, starts)))
+            return True
+
+    model = SAC("MlpPolicy", gymnasium.make("Pendulum-v1"), seed=seed, device="cpu", verbose=0)
+    model.learn(total_timesteps=steps, callback=Evaluate())
+    return curve
+
+
+def rig_learner(algo: str, seed: int, steps: int, out: Path, python: str):
+    """A learner of the rig through the adapter: [(steps, wall_s, greedy_return)]."""
+    rig = ROOT / "target" / "release" / "rig"
+    driver_id = f"bench-gym-{algo}-{seed}"
+    adapter = subprocess.Popen(
+        [python, str(ROOT / "examples/gymnasium/adapter.py"), "--mapping",
+         str(ROOT / "examples/gymnasium/pendulum_v1.py"), "--driver-id", driver_id, "--seed", str(seed)],
+        stderr=subprocess.DEVNULL,
+    )
+    run_dir = out / f"rig-{algo}-{seed}"
+    try:
+        t0 = time.monotonic()
+        subprocess.run(
+            [str(rig), "run", "--plant", "external", "--driver", driver_id, "--task", str(TASK),
+             "--algo", algo, "--approx", "llr", "--seed", str(seed), "--trials", str(steps // EPISODE),
+             "--eval-every", str(EVAL_EVERY // EPISODE), "--quiet", "--out", str(run_dir)],
+            check=True,
+        )
+        wall = time.monotonic() - t0
+    finally:
+        adapter.terminate()
+        adapter.wait()
+    curve = []
+    with open(run_dir / "returns.csv") as f:
+        rows = [r for r in csv.DictReader(f) if r["greedy_return"]]
+    for r in rows:
+        trial = int(r["trial"])
+        # The run's wall time, spread over its trials (the rig stamps no per-trial time).
+        curve.append((trial * EPISODE, wall * trial / (steps // EPISODE), float(r["greedy_return"])))
+    return curve
+
+
+def first_reaching(curve, level):
+    """(steps, wall_s) of the first evaluation at or above `level`, or None."""
+    return next(((s, w) for s, w, g in curve if g >= level), None)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("out")
+    p.add_argument("--seeds", type=int, default=3)
+    p.add_argument("--steps", type=int, default=40000, help="learning steps per run")
+    p.add_argument("--level", type=float, default=-300.0, help="the common greedy-return level")
+    p.add_argument("--python", default=sys.executable, help="the interpreter for the adapter")
+    args = p.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    starts = Task.read(str(TASK)).starts
+    curves = {}
+    for seed in range(1, args.seeds + 1):
+        for algo in ("mlac", "sac"):
+            curves[(f"rig {algo.upper()}/LLR", seed)] = rig_learner(algo, seed, args.steps, out, args.python)
+            print(f"rig {algo} seed {seed}: {curves[(f'rig {algo.upper()}/LLR', seed)][-1]}", flush=True)
+        curves[("SB3 SAC", seed)] = sb3_sac(seed, args.steps, starts)
+        print(f"sb3 sac seed {seed}: {curves[('SB3 SAC', seed)][-1]}", flush=True)
+    with open(out / "curves.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["learner", "seed", "steps", "wall_s", "greedy_return"])
+        for (learner, seed), curve in curves.items():
+            for s, t, g in curve:
+                w.writerow([learner, seed, s, f"{t:.3f}", g])
+    summarize(curves, args, out)
+    plot(curves, out)
+
+
+def summarize(curves, args, out: Path):
+    lines = [
+        f"Level {args.level:g} (greedy return, mean over the four start states); {args.seeds} seeds, "
+        f"{args.steps} learning steps each.",
+        "",
+        "| learner | seeds reaching the level | steps to reach it (median) | wall time to reach it (median) | final greedy return (median) | wall time per run (median) |",
+        "|---|---:|---:|---:|---:|---:|",
+    ]
+    for learner in dict.fromkeys(k[0] for k in curves):
+        runs = [c for (name, _), c in curves.items() if name == learner]
+        reached = [first_reaching(c, args.level) for c in runs]
+        hit = [r for r in reached if r is not None]
+        med = lambda v: statistics.median(v) if v else math.nan  # noqa: E731
+        lines.append(
+            f"| {learner} | {len(hit)} of {len(runs)} | {med([s for s, _ in hit]):.0f} | {med([w for _, w in hit]):.1f} s "
+            f"| {med([c[-1][2] for c in runs]):.1f} | {med([c[-1][1] for c in runs]):.1f} s |"
+        )
+    text = "\n".join(lines) + "\n"
+    (out / "summary.md").write_text(text)
+    print(text)
+
+
+def plot(curves, out: Path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for learner in dict.fromkeys(k[0] for k in curves):
+        runs = [c for (name, _), c in curves.items() if name == learner]
+        steps = [s for s, _, _ in runs[0]]
+        values = [[c[i][2] for c in runs if i < len(c)] for i in range(len(steps))]
+        ax.plot(steps, [statistics.mean(v) for v in values], label=f"{learner} (mean of {len(runs)})")
+        ax.fill_between(steps, [min(v) for v in values], [max(v) for v in values], alpha=0.2)
+    ax.set_xlabel("environment steps of learning")
+    ax.set_ylabel("greedy return (4 start states)")
+    ax.set_title("Pendulum-v1: the rig's learners and Stable-Baselines3 SAC")
+    ax.legend(loc="lower right")
+    fig.tight_layout()
+    for ext in ("png", "svg"):
+        fig.savefig(out / f"curves.{ext}")
+
+
+if __name__ == "__main__":
+    main()
