@@ -17,7 +17,8 @@ mod number;
 pub use file::TaskFile;
 pub use number::Number;
 
-/// The systems an experiment can run on.
+/// The built-in systems: simulated dynamics, each with its shipped task file and the
+/// thesis's tuned presets. Any other system is a task file a driver serves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum SystemName {
