@@ -186,6 +186,38 @@ fn a_finished_run_learns_on_with_more_trials() {
     );
 }
 
+/// Trials that end early (the §6.4.2 manipulator's operating range): the agent stamps the
+/// checkpoint with the trial's start plus its samples, returns.csv with whole trials less
+/// the samples not run, which round apart; resuming still continues as the whole run.
+#[test]
+fn a_run_whose_trials_end_early_learns_on_with_more_trials() {
+    let dir = tmp("early");
+    let run = |trials: &str, out: &str| {
+        ok(rig()
+            .arg("run")
+            .args(common::ARM64_VGBP_LSTD)
+            .args(["--trials", trials, "--quiet", "--out"])
+            .arg(dir.join(out))
+            .output()
+            .unwrap())
+    };
+    run("6", "six");
+    run("4", "four");
+    ok(rig()
+        .args(["run", "--quiet", "--trials", "6", "--resume"])
+        .arg(dir.join("four"))
+        .output()
+        .unwrap());
+    let six = std::fs::read_to_string(dir.join("six/returns.csv")).unwrap();
+    assert_eq!(
+        std::fs::read_to_string(dir.join("four/returns.csv")).unwrap(),
+        six
+    );
+    // Trials did end early: the simulated time is not a whole number of 10 s trials.
+    let last = six.lines().last().unwrap().split(',').nth(2).unwrap();
+    assert_ne!(last.parse::<f64>().unwrap(), 60.0, "{six}");
+}
+
 #[test]
 fn bad_resumes_are_one_line_errors() {
     let dir = tmp("bad");

@@ -147,8 +147,10 @@ fn last_complete_trial(
 }
 
 /// Checks that the checkpoint at `path` is of this experiment and of trial `c` ending at
-/// simulated time `sim_time_s`, as `returns.csv` says; names an older one of `available`
-/// to fall back to when it cannot be read.
+/// simulated time `sim_time_s`, as `returns.csv` says — the same instant within half a
+/// sample period: the agent stamps it as the trial's start plus its samples, returns.csv
+/// as whole trials less the samples not run, which round differently when trials end
+/// early; names an older one of `available` to fall back to when it cannot be read.
 fn check_checkpoint(
     path: &Path,
     cfg: &ExperimentConfig,
@@ -164,7 +166,8 @@ fn check_checkpoint(
         })?;
     ck.check_origin(&cfg.origin(0))
         .map_err(|e| anyhow!("cannot resume from {}: {e}", path.display()))?;
-    if ck.trial != c || ck.sim_time_s.to_bits() != sim_time_s.to_bits() {
+    let half_sample = 0.5 * cfg.task().ts;
+    if ck.trial != c || !((ck.sim_time_s - sim_time_s).abs() < half_sample) {
         bail!(
             "cannot resume: {} is of trial {} at {} s, but returns.csv has trial {c} at {sim_time_s} s",
             path.display(),
