@@ -166,8 +166,8 @@ fn check_checkpoint(
         })?;
     ck.check_origin(&cfg.origin(0))
         .map_err(|e| anyhow!("cannot resume from {}: {e}", path.display()))?;
-    let half_sample = 0.5 * cfg.task().ts;
-    if ck.trial != c || !((ck.sim_time_s - sim_time_s).abs() < half_sample) {
+    let apart = (ck.sim_time_s - sim_time_s).abs();
+    if ck.trial != c || apart.is_nan() || apart >= 0.5 * cfg.task().ts {
         bail!(
             "cannot resume: {} is of trial {} at {} s, but returns.csv has trial {c} at {sim_time_s} s",
             path.display(),
