@@ -278,3 +278,34 @@ fn gymnasium_pendulum_v1_is_served_by_the_adapter() {
     ok(run(&d.id, &args, &dir.join("b")));
     assert_eq!(returns(&dir.join("a")), returns(&dir.join("b")));
 }
+
+/// `rig sim-driver --task FILE --clock lockstep` serves a task file with a simulation
+/// (examples/tasks/pendulum-balance.toml: three start states, trials that end early);
+/// a run against it that stops after 5 trials and is resumed to 8 writes the 8-trial
+/// run's returns, byte for byte.
+#[test]
+fn a_run_against_a_lockstep_driver_resumes_to_the_whole_runs_bytes() {
+    let dir = tmp("resume");
+    let task = root().join("examples/tasks/pendulum-balance.toml");
+    let task = task.to_str().unwrap();
+    let d = Driver::launch(&Kind::Rust, "res", &["--clock", "lockstep", "--task", task]);
+    ok(run(
+        &d.id,
+        &["--task", task, "--trials", "8"],
+        &dir.join("whole"),
+    ));
+    ok(run(
+        &d.id,
+        &["--task", task, "--trials", "5"],
+        &dir.join("part"),
+    ));
+    ok(rig()
+        .args([
+            "run", "--plant", "external", "--driver", &d.id, "--quiet", "--trials", "8",
+        ])
+        .arg("--resume")
+        .arg(dir.join("part"))
+        .output()
+        .unwrap());
+    assert_eq!(returns(&dir.join("part")), returns(&dir.join("whole")));
+}
