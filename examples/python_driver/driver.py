@@ -36,21 +36,18 @@ from pathlib import Path
 
 import iceoryx2 as iox2
 
-# DriverInfo, DriverSample, DriverCommand and the constants of docs/driver.md.
+# DriverSample, DriverCommand and the constants of docs/driver.md.
 from messages import (  # the modules next to this file
     ACTION,
-    LOCKSTEP,
     READY,
     REALTIME,
     RESET,
     RESETTING,
-    VERSION,
     WATCHDOG,
     DriverCommand,
-    DriverInfo,
     DriverSample,
 )
-from lockstep import Services, serve
+from lockstep import Services, info, serve
 from task import Task
 
 # The rig's pendulum task, shipped with it.
@@ -148,7 +145,6 @@ class Driver:
         sample_type = BadSample if args.inject_fault == "layout" else DriverSample
         io = Services(args.driver_id, sample_type)
         self.io = io
-        self.info_pub, self.info_note = io.info_pub, io.info_note
         self.sample_pub, self.sample_note = io.sample_pub, io.sample_note
         self.commands, self.command_events, self.waitset = io.commands, io.command_events, io.waitset
         self.stopping = False
@@ -158,22 +154,8 @@ class Driver:
         notifier.notify()
 
     def publish_info(self):
-        info = DriverInfo(
-            version=VERSION,
-            task=self.task.name.encode(),
-            task_hash=self.task.hash(),
-            clock=LOCKSTEP if self.args.clock == "lockstep" else REALTIME,
-            n_x=2,
-            n_u=1,
-            period_ns=self.period_ns,
-            time_scale=self.speed,
-            watchdog_periods=1,
-            t_start_ns=self.t_start,
-            t_publish_ns=time.monotonic_ns(),
-        )
-        info.u_min[0] = self.u_min
-        info.u_max[0] = self.u_max
-        self.publish(self.info_pub, self.info_note, info)
+        """The info of the real-time clock (lockstep.serve publishes its own)."""
+        self.io.publish_info(info(self.task, REALTIME, self.t_start, self.speed))
 
     def physics_to(self, t_ns):
         """Advances the simulation to monotonic time t_ns with the action in effect."""

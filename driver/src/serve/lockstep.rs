@@ -15,7 +15,7 @@ use anyhow::Result;
 use wire::{MAX_U, MAX_X, now_ns};
 
 use super::state::Driver;
-use super::{Served, Services, Serving, info, period_ns};
+use super::{Served, Serving, Start};
 use crate::contract::{DriverCommand, clock, kind, status};
 use crate::device::Device;
 
@@ -40,19 +40,12 @@ pub fn serve_lockstep(
     how: &Serving,
 ) -> Result<Served> {
     let (n_x, n_u) = (device.task().state_dim(), device.task().action_dim());
-    let period_ns = period_ns(device)?;
-    let io = Services::open(driver_id)?;
-    let mut d = Driver::new(device.task(), how.verbose);
-    let t_start = now_ns();
-    device.apply(t_start, &d.u[..n_u]);
-    let advertised = info(
-        device.task(),
-        device.time_scale(),
-        clock::LOCKSTEP,
-        period_ns,
-        t_start,
-    );
-    io.publish_info(advertised)?;
+    let Start {
+        io,
+        mut d,
+        advertised,
+        ..
+    } = Start::of(device, driver_id, clock::LOCKSTEP, how.verbose)?;
     let mut next_info = now_ns() + INFO_EVERY.as_nanos() as u64;
     let mut served = Served::default();
     let mut x = [0.0; MAX_X];

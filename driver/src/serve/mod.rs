@@ -126,3 +126,39 @@ fn period_ns(device: &impl Device) -> Result<u64> {
     }
     Ok((device.task().ts / scale * 1e9).round() as u64)
 }
+
+/// A driver as it starts serving: its services open, its state, zero in effect, its info
+/// published.
+struct Start {
+    io: Services,
+    d: state::Driver,
+    advertised: DriverInfo,
+    t_start: u64,
+    period_ns: u64,
+}
+
+impl Start {
+    /// Starts serving `device` as driver `driver_id`, keeping time by `clock`.
+    fn of(device: &mut impl Device, driver_id: &str, clock: u64, verbose: bool) -> Result<Self> {
+        let period_ns = period_ns(device)?;
+        let io = Services::open(driver_id)?;
+        let d = state::Driver::new(device.task(), verbose);
+        let t_start = now_ns();
+        device.apply(t_start, &d.u[..d.n_u]);
+        let advertised = info(
+            device.task(),
+            device.time_scale(),
+            clock,
+            period_ns,
+            t_start,
+        );
+        io.publish_info(advertised)?;
+        Ok(Self {
+            io,
+            d,
+            advertised,
+            t_start,
+            period_ns,
+        })
+    }
+}

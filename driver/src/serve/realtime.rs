@@ -4,8 +4,7 @@
 use anyhow::Result;
 use wire::{MAX_U, MAX_X, now_ns};
 
-use super::state::Driver;
-use super::{Served, Services, Serving, info, period_ns};
+use super::{Served, Serving, Start};
 use crate::contract::clock;
 use crate::device::Device;
 
@@ -15,23 +14,16 @@ use crate::device::Device;
 /// `t_start + k · period` samples the device, decides (reset progress, watchdog) and
 /// publishes the sample; between sample instants it applies each command as it arrives.
 pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result<Served> {
-    let task = device.task();
-    let (n_x, n_u) = (task.state_dim(), task.action_dim());
-    let period_ns = period_ns(device)?;
-    let io = Services::open(driver_id)?;
+    let (n_x, n_u) = (device.task().state_dim(), device.task().action_dim());
+    let Start {
+        io,
+        mut d,
+        advertised,
+        t_start,
+        period_ns,
+    } = Start::of(device, driver_id, clock::REALTIME, how.verbose)?;
     let (bus, samples, commands) = (&io.bus, &io.samples, &io.commands);
     let wire_err = |e: wire::Error| io.err(e);
-    let mut d = Driver::new(task, how.verbose);
-    let t_start = now_ns();
-    device.apply(t_start, &d.u[..n_u]);
-    let advertised = info(
-        device.task(),
-        device.time_scale(),
-        clock::REALTIME,
-        period_ns,
-        t_start,
-    );
-    io.publish_info(advertised)?;
     let mut next_info = t_start + 1_000_000_000;
     let mut served = Served::default();
     let mut x = [0.0; MAX_X];

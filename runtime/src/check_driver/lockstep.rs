@@ -17,10 +17,6 @@ impl Probe<'_> {
     /// without a command.
     pub(super) fn lockstep(&mut self) -> Result<()> {
         let samples = self.zero_input_samples()?;
-        self.drift = samples
-            .windows(STEP_PERIODS + 1)
-            .map(|w| self.change(w[0].0.state(), w[STEP_PERIODS].0.state()))
-            .fold(0.0, f64::max);
         let mut wrong = Vec::new();
         for w in samples.windows(2) {
             let ((a, cmd), (b, _)) = (w[0], w[1]);
