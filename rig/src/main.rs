@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 use runtime::process::{AgentArgs, ObserverArgs, PlantArgs};
 
 mod bench_loop;
+mod bridge;
 mod check_driver;
 mod config;
 mod delay_study;
@@ -52,6 +53,9 @@ enum Command {
     /// the driver kit (`driver`), is the template for one (`driver/examples/motor_driver.rs`).
     /// Runs until Ctrl-C or SIGTERM.
     SimDriver(sim_driver::Args),
+    /// Carry one driver's services between two hosts over Zenoh: `rig bridge driver` on
+    /// the driver's host, `rig bridge rig` on the rig's (docs/across-hosts.md).
+    Bridge(bridge::Args),
     /// Compute the optimal return of the pendulum swing-up from [π, 0] (one 3 s trial,
     /// Eq. 3.16) by dynamic programming on a grid, run the DP's policy on the plant, and
     /// write its trajectory to DIR/optimal.csv (t, angle, velocity, u, reward).
@@ -98,6 +102,7 @@ fn main() -> ExitCode {
         Command::Config(selection) => config::main(&selection),
         Command::CheckDriver(args) => check_driver::main(&args),
         Command::SimDriver(args) => sim_driver::main(&args),
+        Command::Bridge(args) => bridge::main(&args),
         Command::Optimal(args) => optimal::main(&args),
         Command::BenchLoop(args) => bench_loop::main(&args),
         Command::Pong(args) => bench_loop::pong(&args),

@@ -1,0 +1,268 @@
+//! The bridge on the driver's host (`rig bridge driver`): the driver's info and samples
+//! out to the network, the rig's commands in to the driver, pings answered.
+//!
+//! Safety stays here, beside the motor, and needs nothing from the network: the driver's
+//! own watchdog applies the safe action one period after the last action, whatever
+//! happened to the link. The bridge only keeps stale commands away from it — a command
+//! that answers a sample more than `max_age_periods` older than the newest (a burst the
+//! network delivers late, after an outage) or that is not newer than the last one — and
+//! says, measured on this host, when the watchdog engaged and how long after the last
+//! command.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
+use std::time::Duration;
+
+use anyhow::{Result, anyhow};
+use driver::contract::{
+    DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, kind, service, status, topic,
+};
+use wire::{Bus, now_ns};
+use zenoh::Wait;
+use zenoh::pubsub::Publisher;
+
+use crate::message::{Ping, Stamps, Topic, from_bytes, to_bytes};
+use crate::session::{Network, driver_side};
+use crate::{Counts, publisher, wire_err};
+
+/// What `rig bridge driver` serves.
+#[derive(Clone, Debug)]
+pub struct DriverSide {
+    /// The driver's id on this host.
+    pub id: String,
+    /// Where the rig's bridge connects, and who may.
+    pub net: Network,
+    /// Commands answering a sample more than this many periods older than the newest
+    /// are dropped.
+    pub max_age_periods: u64,
+    /// Silence of the rig's pings after which the link is reported lost.
+    pub link_timeout: Duration,
+}
+
+/// What the two halves share.
+#[derive(Default)]
+struct Shared {
+    stop: AtomicBool,
+    /// `seq` of the last command passed to the driver, and when it arrived.
+    command: AtomicU64,
+    command_arrived: AtomicU64,
+    /// The newest sample's `seq`.
+    newest: AtomicU64,
+    /// When the last ping arrived.
+    pinged: AtomicU64,
+}
+
+/// Serves until Ctrl-C or a termination request; returns what was forwarded.
+pub fn serve_driver(opts: &DriverSide) -> Result<Counts> {
+    driver::contract::check_id(&opts.id).map_err(wire_err)?;
+    let session = driver_side(&opts.id, &opts.net)?;
+    eprintln!(
+        "bridge for driver {:?}: listening on {} (session {})",
+        opts.id,
+        opts.net.endpoint,
+        session.zid()
+    );
+    let shared = Arc::new(Shared::default());
+    let _pong = answer_pings(&session, &opts.id, &shared)?;
+    let up = {
+        let (session, opts, shared) = (session.clone(), opts.clone(), shared.clone());
+        std::thread::Builder::new()
+            .name("bridge-up".into())
+            .spawn(move || samples_up(&session, &opts, &shared))?
+    };
+    let down = commands_down(&session, opts, &shared);
+    shared.stop.store(true, Relaxed);
+    let up = up
+        .join()
+        .map_err(|_| anyhow!("the samples' thread panicked"))?;
+    let (mut counts, up) = (down?, up?);
+    counts.samples = up.samples;
+    counts.infos = up.infos;
+    counts.watchdog = up.watchdog;
+    let _ = session.close().wait();
+    Ok(counts)
+}
+
+/// Answers each ping at once, from Zenoh's own thread.
+fn answer_pings(
+    session: &zenoh::Session,
+    id: &str,
+    shared: &Arc<Shared>,
+) -> Result<zenoh::pubsub::Subscriber<()>> {
+    let pong = publisher(session, &Topic::Pong.key(id))?;
+    let shared = shared.clone();
+    session
+        .declare_subscriber(Topic::Ping.key(id))
+        .callback(move |s| {
+            let arrived = now_ns();
+            if let Ok(mut p) = from_bytes::<Ping>(&s.payload().to_bytes()) {
+                shared.pinged.store(arrived, Relaxed);
+                p.arrived = arrived;
+                p.answered = now_ns();
+                let _ = pong.put(to_bytes(&p)).wait();
+            }
+        })
+        .wait()
+        .map_err(|e| anyhow!("subscribing to pings: {e}"))
+}
+
+/// The rig's commands, from the network to the driver, until stopped.
+fn commands_down(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -> Result<Counts> {
+    let bus = Bus::with_node(&format!("rig-bridge-{}", opts.id), "driver").map_err(wire_err)?;
+    let tx = bus
+        .tx_on::<DriverCommand>(&service(&opts.id, topic::COMMAND), DRIVER_QOS)
+        .map_err(|e| {
+            anyhow!(
+                "commanding driver {:?} on this host: {e} (is a rig commanding it here?)",
+                opts.id
+            )
+        })?;
+    let commands = session
+        .declare_subscriber(Topic::Command.key(&opts.id))
+        .wait()
+        .map_err(|e| anyhow!("subscribing to commands: {e}"))?;
+    let mut counts = Counts::default();
+    while !bus.interrupted() {
+        let Ok(Some(s)) = commands.recv_timeout(Duration::from_millis(100)) else {
+            continue;
+        };
+        let arrived = now_ns();
+        let c: DriverCommand = match from_bytes(&s.payload().to_bytes()) {
+            Ok(c) => c,
+            Err(e) => {
+                counts.malformed += 1;
+                eprintln!("bridge for driver {:?}: dropped a command: {e}", opts.id);
+                continue;
+            }
+        };
+        let last = shared.command.load(Relaxed);
+        let newest = shared.newest.load(Relaxed);
+        if c.seq <= last {
+            counts.out_of_order += 1;
+        } else if c.kind == kind::ACTION && c.sample_seq + opts.max_age_periods < newest {
+            counts.stale += 1;
+        } else {
+            tx.send(c).map_err(wire_err)?;
+            shared.command.store(c.seq, Relaxed);
+            shared.command_arrived.store(arrived, Relaxed);
+            counts.commands += 1;
+        }
+    }
+    Ok(counts)
+}
+
+/// The driver's info and samples, to the network, until stopped; what the driver's
+/// watchdog did, and the link's state, said on the way.
+fn samples_up(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -> Result<Counts> {
+    let id = &opts.id;
+    let bus = Bus::with_node(&format!("rig-bridge-{id}-samples"), "driver").map_err(wire_err)?;
+    let info_rx = bus
+        .rx_on::<DriverInfo>(&service(id, topic::INFO), DRIVER_QOS)
+        .map_err(wire_err)?;
+    let samples = bus
+        .rx_on::<DriverSample>(&service(id, topic::SAMPLE), DRIVER_QOS)
+        .map_err(wire_err)?;
+    let info_pub = publisher(session, &Topic::Info.key(id))?;
+    let sample_pub = publisher(session, &Topic::Sample.key(id))?;
+    let mut watch = Watch::new(id, opts.link_timeout);
+    let mut counts = Counts::default();
+    while !shared.stop.load(Relaxed) {
+        while let Some(i) = info_rx.try_recv().map_err(wire_err)? {
+            watch.period_ns = i.period_ns;
+            put(&info_pub, to_bytes(&i), None)?;
+            counts.infos += 1;
+        }
+        if let Some(s) = samples
+            .recv_timeout(Duration::from_millis(20))
+            .map_err(wire_err)?
+        {
+            shared.newest.store(s.seq, Relaxed);
+            let stamps = Stamps {
+                command: shared.command.load(Relaxed),
+                command_arrived: shared.command_arrived.load(Relaxed),
+                forwarded: now_ns(),
+            };
+            put(&sample_pub, to_bytes(&s), Some(to_bytes(&stamps)))?;
+            counts.samples += 1;
+            counts.watchdog += watch.sample(&s, &stamps) as u64;
+        }
+        watch.link(shared.pinged.load(Relaxed));
+    }
+    Ok(counts)
+}
+
+fn put(p: &Publisher<'_>, bytes: Vec<u8>, attachment: Option<Vec<u8>>) -> Result<()> {
+    let mut put = p.put(bytes);
+    if let Some(a) = attachment {
+        put = put.attachment(a);
+    }
+    put.wait()
+        .map_err(|e| anyhow!("publishing on {}: {e}", p.key_expr()))
+}
+
+/// Says, once each time, when the driver's watchdog engages and when the link goes and
+/// comes back.
+struct Watch<'a> {
+    id: &'a str,
+    period_ns: u64,
+    timeout: Duration,
+    watchdog: bool,
+    lost_at: Option<u64>,
+}
+
+impl<'a> Watch<'a> {
+    fn new(id: &'a str, timeout: Duration) -> Self {
+        Self {
+            id,
+            period_ns: 0,
+            timeout,
+            watchdog: false,
+            lost_at: None,
+        }
+    }
+
+    /// Whether the watchdog engaged at sample `s`.
+    fn sample(&mut self, s: &DriverSample, stamps: &Stamps) -> bool {
+        let engaged = s.has(status::WATCHDOG) && !self.watchdog;
+        self.watchdog = s.has(status::WATCHDOG);
+        if engaged && stamps.command_arrived != 0 {
+            let after = s.t_sample_ns.saturating_sub(stamps.command_arrived);
+            eprintln!(
+                "bridge for driver {:?}: the driver applies the safe action from sample {} ({:.1} ms = {:.2} periods after the last command arrived)",
+                self.id,
+                s.seq,
+                after as f64 * 1e-6,
+                after as f64 / self.period_ns.max(1) as f64
+            );
+        }
+        engaged
+    }
+
+    /// Reports the link lost when no ping came for the timeout, and back when one does.
+    fn link(&mut self, pinged: u64) {
+        if pinged == 0 {
+            return;
+        }
+        let now = now_ns();
+        let silent = now.saturating_sub(pinged);
+        match self.lost_at {
+            None if silent > self.timeout.as_nanos() as u64 => {
+                eprintln!(
+                    "bridge for driver {:?}: link lost: no ping from the rig for {:.0} ms",
+                    self.id,
+                    silent as f64 * 1e-6
+                );
+                self.lost_at = Some(pinged);
+            }
+            Some(t) if pinged > t => {
+                eprintln!(
+                    "bridge for driver {:?}: link back after {:.1} s",
+                    self.id,
+                    (pinged - t) as f64 * 1e-9
+                );
+                self.lost_at = None;
+            }
+            _ => {}
+        }
+    }
+}

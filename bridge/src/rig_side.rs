@@ -1,0 +1,382 @@
+//! The bridge on the rig's host (`rig bridge rig`): the remote driver's info and samples
+//! published here under its id — a stand-in the rig cannot tell from a local driver —
+//! and the rig's commands carried back; the link's round trips measured.
+//!
+//! The driver's stamps (`t_start_ns`, `t_sample_ns`, `t_publish_ns`) are placed on this
+//! host's clock by the offset of [`ClockMap`] (nothing is forwarded before the first
+//! round trip measured it), and the commands' `t_publish_ns` on the driver's. Per
+//! sample, the command it acknowledges gives the network's round trip through the loop;
+//! the one-way hops only where both hosts read one clock.
+
+use std::collections::VecDeque;
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, AtomicI64, Ordering::Relaxed};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use anyhow::{Context, Result, anyhow};
+use driver::contract::{DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, service, topic};
+use wire::{Bus, Tx, now_ns};
+use zenoh::Wait;
+
+use crate::clock::{ClockMap, Durations, Exchange};
+use crate::message::{Ping, Stamps, Topic, from_bytes, to_bytes};
+use crate::session::{Network, rig_side};
+use crate::{Counts, publisher, wire_err};
+
+/// What `rig bridge rig` serves.
+#[derive(Clone, Debug)]
+pub struct RigSide {
+    /// The driver's id (the same on both hosts).
+    pub id: String,
+    /// The driver's bridge's endpoint, and this side's credentials.
+    pub net: Network,
+    /// Whether both hosts read one monotonic clock: stamps pass unchanged and one-way
+    /// hops are measured.
+    pub same_clock: bool,
+    /// How often the link is pinged.
+    pub ping_period: Duration,
+    /// Silence after which the link is reported lost.
+    pub link_timeout: Duration,
+    /// Every measurement of the link as CSV (`what,seq,ns`), if given.
+    pub timing_out: Option<PathBuf>,
+}
+
+/// The link's measurements.
+#[derive(Clone, Debug)]
+pub struct LinkTiming {
+    /// The clocks' map at the end.
+    pub clock: ClockMap,
+    /// Pings' round trips (the network's, the answer's time excluded).
+    pub ping: Durations,
+    /// Command → acknowledging sample, the time on the driver's host excluded.
+    pub command_round_trip: Durations,
+    /// Rig's bridge → driver's bridge (one clock only).
+    pub command_hop: Durations,
+    /// Driver's bridge → rig's bridge (one clock only).
+    pub sample_hop: Durations,
+}
+
+impl LinkTiming {
+    /// The summary lines.
+    pub fn summary(&self) -> String {
+        let clock = &self.clock;
+        let mut s = format!(
+            "  round trip, pings:          {}\n  round trip, command→sample: {}\n",
+            self.ping.summary(),
+            self.command_round_trip.summary()
+        );
+        if clock.same() {
+            s += &format!(
+                "  one way rig→driver:         {}\n  one way driver→rig:         {}\n  (one clock on both hosts)",
+                self.command_hop.summary(),
+                self.sample_hop.summary()
+            );
+        } else {
+            s += &format!(
+                "  one-way hops not measured (two clocks); driver's clock − rig's: {:.3} ms ± {:.3} ms",
+                clock.offset() as f64 * 1e-6,
+                clock.uncertainty() as f64 * 1e-6
+            );
+        }
+        s
+    }
+}
+
+/// A message from the network, with when it arrived.
+struct Arrival {
+    topic: Topic,
+    payload: Vec<u8>,
+    attachment: Option<Vec<u8>>,
+    at: u64,
+}
+
+/// What the commands' thread shares with the main one.
+#[derive(Default)]
+struct Shared {
+    stop: AtomicBool,
+    /// The driver's clock minus the rig's (ns).
+    offset: AtomicI64,
+    /// Commands sent: `(seq, when)`, the newest last.
+    sent: Mutex<VecDeque<(u64, u64)>>,
+}
+
+/// Serves until Ctrl-C or a termination request; returns what was forwarded and the
+/// link's timing.
+pub fn serve_rig(opts: &RigSide) -> Result<(Counts, LinkTiming)> {
+    driver::contract::check_id(&opts.id).map_err(wire_err)?;
+    let session = rig_side(&opts.net)?;
+    eprintln!(
+        "bridge for driver {:?}: connecting to {} (session {})",
+        opts.id,
+        opts.net.endpoint,
+        session.zid()
+    );
+    let (tx, rx) = channel();
+    let _subs: Vec<_> = [Topic::Info, Topic::Sample, Topic::Pong]
+        .into_iter()
+        .map(|t| listen(&session, &opts.id, t, tx.clone()))
+        .collect::<Result<_>>()?;
+    let shared = Arc::new(Shared::default());
+    let up = {
+        let (session, id, shared) = (session.clone(), opts.id.clone(), shared.clone());
+        std::thread::Builder::new()
+            .name("bridge-commands".into())
+            .spawn(move || commands_up(&session, &id, &shared))?
+    };
+    let mut side = Stand::new(opts, &session, shared.clone())?;
+    let result = side.run(&rx);
+    shared.stop.store(true, Relaxed);
+    let commands = up
+        .join()
+        .map_err(|_| anyhow!("the commands' thread panicked"))??;
+    let _ = session.close().wait();
+    result?;
+    side.counts.commands = commands;
+    if let Some(path) = &opts.timing_out {
+        side.write_timing(path)?;
+    }
+    Ok((side.counts, side.timing))
+}
+
+/// Subscribes to topic `t`, passing each message to `tx` with its arrival time.
+fn listen(
+    session: &zenoh::Session,
+    id: &str,
+    t: Topic,
+    tx: Sender<Arrival>,
+) -> Result<zenoh::pubsub::Subscriber<()>> {
+    session
+        .declare_subscriber(t.key(id))
+        .callback(move |s| {
+            let _ = tx.send(Arrival {
+                topic: t,
+                payload: s.payload().to_bytes().into_owned(),
+                attachment: s.attachment().map(|a| a.to_bytes().into_owned()),
+                at: now_ns(),
+            });
+        })
+        .wait()
+        .map_err(|e| anyhow!("subscribing to {}: {e}", t.key(id)))
+}
+
+/// The rig's commands to the network, until stopped; how many.
+fn commands_up(session: &zenoh::Session, id: &str, shared: &Shared) -> Result<u64> {
+    let bus = Bus::with_node(&format!("rig-bridge-{id}"), "driver").map_err(wire_err)?;
+    let rx = bus
+        .rx_on::<DriverCommand>(&service(id, topic::COMMAND), DRIVER_QOS)
+        .map_err(wire_err)?;
+    let out = publisher(session, &Topic::Command.key(id))?;
+    let mut n = 0;
+    while !shared.stop.load(Relaxed) {
+        let Some(mut c) = rx
+            .recv_timeout(Duration::from_millis(20))
+            .map_err(wire_err)?
+        else {
+            continue;
+        };
+        let sent = now_ns();
+        c.t_publish_ns = c
+            .t_publish_ns
+            .saturating_add_signed(shared.offset.load(Relaxed));
+        out.put(to_bytes(&c))
+            .wait()
+            .map_err(|e| anyhow!("publishing a command: {e}"))?;
+        let mut q = shared.sent.lock().expect("no panics while holding it");
+        if q.len() == 4096 {
+            q.pop_front();
+        }
+        q.push_back((c.seq, sent));
+        n += 1;
+    }
+    Ok(n)
+}
+
+/// The stand-in driver on this host.
+struct Stand<'a> {
+    opts: &'a RigSide,
+    bus: Bus,
+    info: Tx<DriverInfo>,
+    samples: Tx<DriverSample>,
+    ping: zenoh::pubsub::Publisher<'static>,
+    shared: Arc<Shared>,
+    timing: LinkTiming,
+    rows: Vec<(&'static str, u64, u64)>,
+    counts: Counts,
+    heard: u64,
+    lost_at: Option<u64>,
+    /// The last command whose round trip was measured.
+    acknowledged: u64,
+}
+
+impl<'a> Stand<'a> {
+    fn new(opts: &'a RigSide, session: &zenoh::Session, shared: Arc<Shared>) -> Result<Self> {
+        let bus = driver::contract::bus(&opts.id).map_err(wire_err)?;
+        let taken = |e: wire::Error| {
+            anyhow!(
+                "standing in for driver {:?} on this host: {e} (is that driver running here too?)",
+                opts.id
+            )
+        };
+        let info = bus
+            .tx_on(&service(&opts.id, topic::INFO), DRIVER_QOS)
+            .map_err(taken)?;
+        let samples = bus
+            .tx_on(&service(&opts.id, topic::SAMPLE), DRIVER_QOS)
+            .map_err(taken)?;
+        Ok(Self {
+            opts,
+            info,
+            samples,
+            bus,
+            ping: publisher(session, &Topic::Ping.key(&opts.id))?,
+            shared,
+            timing: LinkTiming {
+                clock: ClockMap::new(opts.same_clock),
+                ping: Durations::default(),
+                command_round_trip: Durations::default(),
+                command_hop: Durations::default(),
+                sample_hop: Durations::default(),
+            },
+            rows: Vec::new(),
+            counts: Counts::default(),
+            heard: 0,
+            lost_at: None,
+            acknowledged: 0,
+        })
+    }
+
+    /// Pings every period and passes on what arrives, until interrupted.
+    fn run(&mut self, rx: &Receiver<Arrival>) -> Result<()> {
+        let mut next_ping = now_ns();
+        while !self.bus.interrupted() {
+            let now = now_ns();
+            if now >= next_ping {
+                let p = Ping {
+                    sent: now,
+                    ..Default::default()
+                };
+                self.ping
+                    .put(to_bytes(&p))
+                    .wait()
+                    .map_err(|e| anyhow!("pinging: {e}"))?;
+                next_ping = now + self.opts.ping_period.as_nanos() as u64;
+                self.watch_link(now);
+            }
+            match rx.recv_timeout(Duration::from_nanos(next_ping.saturating_sub(now))) {
+                Ok(a) => self.arrived(a)?,
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => break,
+            }
+        }
+        Ok(())
+    }
+
+    fn arrived(&mut self, a: Arrival) -> Result<()> {
+        self.heard = a.at;
+        match a.topic {
+            Topic::Pong => {
+                let e = Exchange::of(&from_bytes::<Ping>(&a.payload)?, a.at);
+                self.timing.clock.add(e);
+                self.shared
+                    .offset
+                    .store(self.timing.clock.offset(), Relaxed);
+                self.timing.ping.push(e.round_trip);
+                self.rows.push(("ping_round_trip", 0, e.round_trip));
+            }
+            _ if !self.timing.clock.ready() => {}
+            Topic::Info => {
+                let mut i: DriverInfo = from_bytes(&a.payload)?;
+                i.t_start_ns = self.timing.clock.to_rig(i.t_start_ns);
+                i.t_publish_ns = self.timing.clock.to_rig(i.t_publish_ns);
+                self.info.send(i).map_err(wire_err)?;
+                self.counts.infos += 1;
+            }
+            Topic::Sample => {
+                let mut s: DriverSample = from_bytes(&a.payload)?;
+                let stamps = match &a.attachment {
+                    Some(b) => from_bytes::<Stamps>(b)?,
+                    None => Stamps::default(),
+                };
+                s.t_sample_ns = self.timing.clock.to_rig(s.t_sample_ns);
+                s.t_publish_ns = self.timing.clock.to_rig(s.t_publish_ns);
+                self.samples.send(s).map_err(wire_err)?;
+                self.counts.samples += 1;
+                self.time_sample(s.seq, &stamps, a.at);
+            }
+            Topic::Command | Topic::Ping => {}
+        }
+        Ok(())
+    }
+
+    /// The round trip through the command a sample acknowledges (once per command), and
+    /// the one-way hops on one clock.
+    fn time_sample(&mut self, seq: u64, st: &Stamps, at: u64) {
+        if self.timing.clock.same() && st.forwarded != 0 {
+            let hop = at.saturating_sub(st.forwarded);
+            self.timing.sample_hop.push(hop);
+            self.rows.push(("sample_hop", seq, hop));
+        }
+        if st.command == 0 || st.command == self.acknowledged {
+            return;
+        }
+        let sent = {
+            let q = self.shared.sent.lock().expect("no panics while holding it");
+            q.iter()
+                .rev()
+                .find(|(s, _)| *s == st.command)
+                .map(|&(_, t)| t)
+        };
+        let Some(sent) = sent else { return };
+        self.acknowledged = st.command;
+        let held = st.forwarded.saturating_sub(st.command_arrived);
+        let rt = at.saturating_sub(sent).saturating_sub(held);
+        self.timing.command_round_trip.push(rt);
+        self.rows.push(("command_round_trip", st.command, rt));
+        if self.timing.clock.same() {
+            let hop = st.command_arrived.saturating_sub(sent);
+            self.timing.command_hop.push(hop);
+            self.rows.push(("command_hop", st.command, hop));
+        }
+    }
+
+    /// Reports the link lost after the timeout's silence, and back when it speaks.
+    fn watch_link(&mut self, now: u64) {
+        let silent = now.saturating_sub(self.heard);
+        match self.lost_at {
+            None if self.heard != 0 && silent > self.opts.link_timeout.as_nanos() as u64 => {
+                eprintln!(
+                    "bridge for driver {:?}: link lost: nothing from {} for {:.0} ms (the driver's watchdog holds the safe action)",
+                    self.opts.id,
+                    self.opts.net.endpoint,
+                    silent as f64 * 1e-6
+                );
+                self.lost_at = Some(self.heard);
+                self.counts.watchdog += 1;
+            }
+            Some(t) if self.heard > t => {
+                eprintln!(
+                    "bridge for driver {:?}: link back after {:.1} s",
+                    self.opts.id,
+                    (self.heard - t) as f64 * 1e-9
+                );
+                self.lost_at = None;
+            }
+            _ => {}
+        }
+    }
+
+    fn write_timing(&self, path: &PathBuf) -> Result<()> {
+        let mut f = std::io::BufWriter::new(
+            std::fs::File::create(path).with_context(|| format!("{}", path.display()))?,
+        );
+        writeln!(f, "what,seq,ns")?;
+        for (what, seq, ns) in &self.rows {
+            writeln!(f, "{what},{seq},{ns}")?;
+        }
+        f.flush()?;
+        Ok(())
+    }
+}

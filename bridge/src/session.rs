@@ -1,0 +1,236 @@
+//! The Zenoh session of each side: where it listens or connects, who may connect, and
+//! which keys may cross.
+//!
+//! The driver's side listens and holds the credentials dictionary: a peer without a
+//! listed user and password cannot open a session with it (Zenoh's user-password
+//! authentication), and a peer that can may only put commands and pings for this one
+//! driver and subscribe to its info, samples and pongs (Zenoh's access control, default
+//! deny). The rig's side connects with one user and password and retries while the link
+//! is down. Scouting is off: the bridges meet only at the endpoint they are given.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow, bail};
+use zenoh::{Config, Session, Wait};
+
+use crate::message::Topic;
+
+/// Where a bridge meets the other and with what.
+#[derive(Clone, Debug)]
+pub struct Network {
+    /// A Zenoh endpoint: the driver's side listens on it (e.g. `tcp/0.0.0.0:7447`), the
+    /// rig's side connects to it (e.g. `tcp/192.168.1.20:7447`).
+    pub endpoint: String,
+    /// `user:password` lines: on the driver's side every user that may connect; on the
+    /// rig's side its own (the first line).
+    pub credentials: PathBuf,
+    /// A Zenoh configuration file (JSON5) to start from, e.g. for TLS endpoints and
+    /// certificates; the bridge sets the mode, endpoints, authentication, access control
+    /// and scouting over it.
+    pub zenoh_config: Option<PathBuf>,
+    /// How long the link may stay silent before the session closes it (ms): Zenoh's
+    /// link lease.
+    pub lease_ms: u64,
+}
+
+/// The users and passwords of a credentials file, checked: one `user:password` per
+/// line, neither empty; blank lines and `#` comments skipped.
+pub fn read_credentials(path: &Path) -> Result<Vec<(String, String)>> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("credentials file {}", path.display()))?;
+    let mut found = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        match line.split_once(':') {
+            Some((u, p)) if !u.is_empty() && !p.is_empty() && !u.contains(char::is_whitespace) => {
+                found.push((u.to_string(), p.to_string()))
+            }
+            _ => bail!(
+                "credentials file {} line {}: expected `user:password` (a user without spaces, neither empty)",
+                path.display(),
+                i + 1
+            ),
+        }
+    }
+    if found.is_empty() {
+        bail!(
+            "credentials file {}: no `user:password` line",
+            path.display()
+        );
+    }
+    Ok(found)
+}
+
+/// Opens the driver's side's session: listens on the endpoint, admits the users of the
+/// credentials file, lets them reach driver `id`'s topics only.
+pub fn driver_side(id: &str, net: &Network) -> Result<Session> {
+    let users = read_credentials(&net.credentials)?;
+    let mut c = base(net)?;
+    set(&mut c, "listen/endpoints", &json(&[net.endpoint.as_str()]))?;
+    set(&mut c, "connect/endpoints", "[]")?;
+    let dictionary = net.credentials.canonicalize()?;
+    set(
+        &mut c,
+        "transport/auth/usrpwd",
+        &format!(
+            "{{user: {}, password: {}, dictionary_file: {}}}",
+            json_str(&users[0].0),
+            json_str(&users[0].1),
+            json_str(&dictionary.to_string_lossy())
+        ),
+    )?;
+    let names: Vec<&str> = users.iter().map(|(u, _)| u.as_str()).collect();
+    set(&mut c, "access_control", &access_control(id, &names))?;
+    open(c, &net.endpoint, "listen on")
+}
+
+/// Opens the rig's side's session: connects to the endpoint as the first user of the
+/// credentials file, and keeps reconnecting while the link is down.
+pub fn rig_side(net: &Network) -> Result<Session> {
+    let (user, password) = read_credentials(&net.credentials)?.swap_remove(0);
+    let mut c = base(net)?;
+    set(&mut c, "listen/endpoints", "[]")?;
+    set(&mut c, "connect/endpoints", &json(&[net.endpoint.as_str()]))?;
+    set(
+        &mut c,
+        "transport/auth/usrpwd",
+        &format!(
+            "{{user: {}, password: {}}}",
+            json_str(&user),
+            json_str(&password)
+        ),
+    )?;
+    open(c, &net.endpoint, "connect to")
+}
+
+/// What both sides share: peers that only meet at the given endpoint, a short lease,
+/// reconnection without end.
+fn base(net: &Network) -> Result<Config> {
+    let mut c = match &net.zenoh_config {
+        Some(p) => {
+            Config::from_file(p).map_err(|e| anyhow!("Zenoh configuration {}: {e}", p.display()))?
+        }
+        None => Config::default(),
+    };
+    set(&mut c, "mode", "\"peer\"")?;
+    set(&mut c, "scouting/multicast/enabled", "false")?;
+    set(&mut c, "scouting/gossip/enabled", "false")?;
+    set(&mut c, "transport/link/tx/lease", &net.lease_ms.to_string())?;
+    set(&mut c, "transport/link/tx/keep_alive", "4")?;
+    set(&mut c, "connect/timeout_ms", "-1")?;
+    set(&mut c, "connect/exit_on_failure", "false")?;
+    set(
+        &mut c,
+        "connect/retry",
+        "{period_init_ms: 100, period_max_ms: 500, period_increase_factor: 2}",
+    )?;
+    Ok(c)
+}
+
+/// Default deny; the users may put commands and pings of driver `id`, subscribe to its
+/// info, samples and pongs, and receive those (and this side's subscriptions to the
+/// commands and pings may reach them).
+fn access_control(id: &str, users: &[&str]) -> String {
+    let keys = |from_rig: bool| {
+        let k: Vec<String> = Topic::ALL
+            .iter()
+            .filter(|t| t.from_rig() == from_rig)
+            .map(|t| t.key(id))
+            .collect();
+        json(&k.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let (to_driver, from_driver) = (keys(true), keys(false));
+    format!(
+        r#"{{
+  enabled: true,
+  default_permission: "deny",
+  rules: [
+    {{ id: "rig-puts", messages: ["put"], flows: ["ingress"], permission: "allow", key_exprs: {to_driver} }},
+    {{ id: "driver-puts", messages: ["put"], flows: ["egress"], permission: "allow", key_exprs: {from_driver} }},
+    {{ id: "rig-subscribes", messages: ["declare_subscriber"], flows: ["ingress"], permission: "allow", key_exprs: {from_driver} }},
+    {{ id: "driver-subscribes", messages: ["declare_subscriber"], flows: ["egress"], permission: "allow", key_exprs: {to_driver} }},
+  ],
+  subjects: [{{ id: "rigs", usernames: {users} }}],
+  policies: [{{ rules: ["rig-puts", "driver-puts", "rig-subscribes", "driver-subscribes"], subjects: ["rigs"] }}],
+}}"#,
+        users = json(users)
+    )
+}
+
+fn open(c: Config, endpoint: &str, what: &str) -> Result<Session> {
+    zenoh::open(c)
+        .wait()
+        .map_err(|e| anyhow!("cannot {what} {endpoint}: {e}"))
+}
+
+fn set(c: &mut Config, key: &str, value: &str) -> Result<()> {
+    c.insert_json5(key, value)
+        .map_err(|e| anyhow!("Zenoh configuration {key} = {value}: {e}"))
+}
+
+fn json(items: &[&str]) -> String {
+    let quoted: Vec<String> = items.iter().map(|s| json_str(s)).collect();
+    format!("[{}]", quoted.join(", "))
+}
+
+fn json_str(s: &str) -> String {
+    format!("{s:?}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn credentials_files_are_checked_line_by_line() {
+        let dir = std::env::temp_dir().join(format!("bridge-cred-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("users.txt");
+        std::fs::write(&f, "# who may drive the motor\nrig:s3cret\n\nlab:pa:ss\n").unwrap();
+        assert_eq!(
+            read_credentials(&f).unwrap(),
+            [
+                ("rig".into(), "s3cret".into()),
+                ("lab".into(), "pa:ss".into())
+            ]
+        );
+        std::fs::write(&f, "rig\n").unwrap();
+        let e = read_credentials(&f).unwrap_err().to_string();
+        assert!(
+            e.contains("users.txt line 1: expected `user:password`"),
+            "{e}"
+        );
+        std::fs::write(&f, "# nothing\n").unwrap();
+        assert!(
+            read_credentials(&f)
+                .unwrap_err()
+                .to_string()
+                .contains("no `user:password` line")
+        );
+        let e = format!("{:#}", read_credentials(&dir.join("missing")).unwrap_err());
+        assert!(e.contains("missing") && e.contains("No such file"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_access_control_names_this_drivers_keys_only() {
+        let acl = access_control("qube", &["rig"]);
+        let c = {
+            let mut c = Config::default();
+            c.insert_json5("access_control", &acl).unwrap();
+            c
+        };
+        assert!(c.access_control.enabled);
+        assert!(
+            acl.contains(r#"["rig/driver/qube/command", "rig/driver/qube/ping"]"#),
+            "{acl}"
+        );
+        assert!(acl.contains(
+            r#"["rig/driver/qube/info", "rig/driver/qube/sample", "rig/driver/qube/pong"]"#
+        ));
+        assert!(!acl.contains("**"));
+    }
+}

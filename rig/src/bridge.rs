@@ -1,0 +1,128 @@
+//! `rig bridge driver|rig`: one driver's services across two hosts over Zenoh
+//! (docs/across-hosts.md).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use clap::{Args as Flags, Subcommand};
+
+#[derive(Flags)]
+pub struct Args {
+    #[command(subcommand)]
+    side: Side,
+}
+
+#[derive(Subcommand)]
+enum Side {
+    /// On the driver's host, beside the driver: listen at ENDPOINT, admit the users of
+    /// the credentials file, pass their commands for this driver only to it, and its
+    /// info and samples to them. The driver's own watchdog keeps the actuator safe when
+    /// the link goes; stale commands are dropped. Runs until Ctrl-C or SIGTERM.
+    Driver {
+        #[command(flatten)]
+        common: Common,
+        /// Drop an action answering a sample more than N periods older than the newest
+        /// (a late burst after an outage); 1 or more.
+        #[arg(long, value_name = "N", default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..))]
+        max_age_periods: u64,
+    },
+    /// On the rig's host: connect to the driver's bridge at ENDPOINT and stand in for
+    /// the driver here (its id's services), so `rig run --plant external` and `rig
+    /// check-driver` work unchanged; measure the link (round trips; one-way hops with
+    /// `--same-clock`). Runs until Ctrl-C or SIGTERM, then prints the link's timing.
+    Rig {
+        #[command(flatten)]
+        common: Common,
+        /// Both hosts read one monotonic clock (network namespaces of one machine, or
+        /// clocks synchronised otherwise): the driver's stamps pass unchanged and one-way
+        /// hops are measured. Without it the stamps are placed on this host's clock by
+        /// the offset of the shortest recent round trip (± half of it) and only round
+        /// trips are measured.
+        #[arg(long)]
+        same_clock: bool,
+        /// Ping the link every MS milliseconds (round trips, the clocks' offset).
+        #[arg(long, value_name = "MS", default_value_t = 100, value_parser = clap::value_parser!(u64).range(1..=10_000))]
+        ping_ms: u64,
+        /// Write every measurement of the link to FILE as CSV (`what,seq,ns`: what is
+        /// ping_round_trip, command_round_trip, command_hop or sample_hop).
+        #[arg(long, value_name = "FILE")]
+        timing_out: Option<PathBuf>,
+    },
+}
+
+#[derive(Flags)]
+struct Common {
+    /// The driver's id (the same on both hosts): letters, digits, '-' and '_'.
+    #[arg(long, value_name = "ID")]
+    driver: String,
+    /// The Zenoh endpoint: where the driver's bridge listens (e.g. `tcp/0.0.0.0:7447`)
+    /// and the rig's bridge connects (e.g. `tcp/192.168.1.20:7447`).
+    #[arg(long, value_name = "ENDPOINT")]
+    endpoint: String,
+    /// A file of `user:password` lines: on the driver's host every user that may
+    /// command the driver; on the rig's host its own (the first line). Keep it
+    /// readable by its owner only.
+    #[arg(long, value_name = "FILE")]
+    credentials: PathBuf,
+    /// A Zenoh configuration file (JSON5) to start from, e.g. for TLS endpoints and
+    /// their certificates; the mode, endpoints, authentication, access control and
+    /// scouting are set over it.
+    #[arg(long, value_name = "FILE")]
+    zenoh_config: Option<PathBuf>,
+    /// Report the link lost after MS milliseconds without a word from the other side;
+    /// Zenoh closes it after the same silence and reconnects when it can.
+    #[arg(long, value_name = "MS", default_value_t = 500, value_parser = clap::value_parser!(u64).range(10..=60_000))]
+    link_timeout_ms: u64,
+}
+
+impl Common {
+    fn network(&self) -> bridge::Network {
+        bridge::Network {
+            endpoint: self.endpoint.clone(),
+            credentials: self.credentials.clone(),
+            zenoh_config: self.zenoh_config.clone(),
+            lease_ms: self.link_timeout_ms.max(100),
+        }
+    }
+}
+
+/// Runs the command.
+pub fn main(args: &Args) -> ExitCode {
+    let result = match &args.side {
+        Side::Driver {
+            common,
+            max_age_periods,
+        } => bridge::serve_driver(&bridge::DriverSide {
+            id: common.driver.clone(),
+            net: common.network(),
+            max_age_periods: *max_age_periods,
+            link_timeout: Duration::from_millis(common.link_timeout_ms),
+        })
+        .map(|counts| eprintln!("bridge for driver {:?}: {counts}", common.driver)),
+        Side::Rig {
+            common,
+            same_clock,
+            ping_ms,
+            timing_out,
+        } => bridge::serve_rig(&bridge::RigSide {
+            id: common.driver.clone(),
+            net: common.network(),
+            same_clock: *same_clock,
+            ping_period: Duration::from_millis(*ping_ms),
+            link_timeout: Duration::from_millis(common.link_timeout_ms),
+            timing_out: timing_out.clone(),
+        })
+        .map(|(counts, timing)| {
+            eprintln!("bridge for driver {:?}: {counts}", common.driver);
+            eprintln!("the link:\n{}", timing.summary());
+        }),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
