@@ -225,14 +225,17 @@ impl<'a> Watch<'a> {
     fn sample(&mut self, s: &DriverSample, stamps: &Stamps) -> bool {
         let engaged = s.has(status::WATCHDOG) && !self.watchdog;
         self.watchdog = s.has(status::WATCHDOG);
-        if engaged && stamps.command_arrived != 0 {
-            let after = s.t_sample_ns.saturating_sub(stamps.command_arrived);
+        if engaged && stamps.command_arrived != 0 && self.period_ns != 0 {
+            // The safe action took over within the period this sample closes.
+            let after = s.t_sample_ns.saturating_sub(stamps.command_arrived) as f64;
+            let period = self.period_ns as f64;
             eprintln!(
-                "bridge for driver {:?}: the driver applies the safe action from sample {} ({:.1} ms = {:.2} periods after the last command arrived)",
+                "bridge for driver {:?}: the driver applies the safe action (watchdog) from between {:.2} and {:.2} periods after the last command arrived (sample {}, {:.1} ms)",
                 self.id,
+                (after - period).max(0.0) / period,
+                after / period,
                 s.seq,
-                after as f64 * 1e-6,
-                after as f64 / self.period_ns.max(1) as f64
+                after * 1e-6
             );
         }
         engaged

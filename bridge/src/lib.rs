@@ -16,16 +16,20 @@
 //!   info and samples under the driver's id on this host, so `rig run --plant external`
 //!   and `rig check-driver` work unchanged; carries the commands back; measures the
 //!   link's round trips and places the driver's stamps on this host's clock ([`clock`]).
+//! - [`probe`] (`rig bridge probe`): what a peer with given credentials, or none, can
+//!   reach.
 //! - [`message`]: what crosses, as bytes, under which keys.
 
 pub mod clock;
 mod driver_side;
 pub mod message;
+mod probe;
 mod rig_side;
 pub mod session;
 
 pub use driver_side::{DriverSide, serve_driver};
-pub use rig_side::{RigSide, serve_rig};
+pub use probe::{Probed, probe};
+pub use rig_side::{LinkTiming, RigSide, serve_rig};
 pub use session::Network;
 
 use anyhow::{Result, anyhow};

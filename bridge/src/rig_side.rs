@@ -74,12 +74,14 @@ impl LinkTiming {
                 self.command_hop.summary(),
                 self.sample_hop.summary()
             );
-        } else {
+        } else if clock.ready() {
             s += &format!(
                 "  one-way hops not measured (two clocks); driver's clock − rig's: {:.3} ms ± {:.3} ms",
                 clock.offset() as f64 * 1e-6,
                 clock.uncertainty() as f64 * 1e-6
             );
+        } else {
+            s += "  one-way hops not measured (two clocks); the clocks' offset not measured (no round trip)";
         }
         s
     }
@@ -92,6 +94,9 @@ struct Arrival {
     attachment: Option<Vec<u8>>,
     at: u64,
 }
+
+/// How long the rig's bridge waits for a first answer before it says none came.
+const SILENT_START: Duration = Duration::from_secs(3);
 
 /// What the commands' thread shares with the main one.
 #[derive(Default)]
@@ -135,10 +140,19 @@ pub fn serve_rig(opts: &RigSide) -> Result<(Counts, LinkTiming)> {
     let _ = session.close().wait();
     result?;
     side.counts.commands = commands;
-    if let Some(path) = &opts.timing_out {
-        side.write_timing(path)?;
+    if let Some(f) = &mut side.log {
+        f.flush()?;
     }
     Ok((side.counts, side.timing))
+}
+
+/// `--timing-out`'s file, with its header.
+fn timing_file(path: &PathBuf) -> Result<std::io::BufWriter<std::fs::File>> {
+    let mut f = std::io::BufWriter::new(
+        std::fs::File::create(path).with_context(|| format!("--timing-out {}", path.display()))?,
+    );
+    writeln!(f, "what,seq,ns")?;
+    Ok(f)
 }
 
 /// Subscribes to topic `t`, passing each message to `tx` with its arrival time.
@@ -203,10 +217,14 @@ struct Stand<'a> {
     ping: zenoh::pubsub::Publisher<'static>,
     shared: Arc<Shared>,
     timing: LinkTiming,
-    rows: Vec<(&'static str, u64, u64)>,
+    /// `--timing-out`: every measurement as it is made.
+    log: Option<std::io::BufWriter<std::fs::File>>,
     counts: Counts,
     heard: u64,
     lost_at: Option<u64>,
+    /// When the bridge started, and whether it said that nobody answers.
+    started: u64,
+    unanswered: bool,
     /// The last command whose round trip was measured.
     acknowledged: u64,
 }
@@ -240,10 +258,15 @@ impl<'a> Stand<'a> {
                 command_hop: Durations::default(),
                 sample_hop: Durations::default(),
             },
-            rows: Vec::new(),
+            log: match &opts.timing_out {
+                Some(path) => Some(timing_file(path)?),
+                None => None,
+            },
             counts: Counts::default(),
             heard: 0,
             lost_at: None,
+            started: now_ns(),
+            unanswered: false,
             acknowledged: 0,
         })
     }
@@ -284,7 +307,7 @@ impl<'a> Stand<'a> {
                     .offset
                     .store(self.timing.clock.offset(), Relaxed);
                 self.timing.ping.push(e.round_trip);
-                self.rows.push(("ping_round_trip", 0, e.round_trip));
+                self.row("ping_round_trip", 0, e.round_trip)?;
             }
             _ if !self.timing.clock.ready() => {}
             Topic::Info => {
@@ -304,7 +327,7 @@ impl<'a> Stand<'a> {
                 s.t_publish_ns = self.timing.clock.to_rig(s.t_publish_ns);
                 self.samples.send(s).map_err(wire_err)?;
                 self.counts.samples += 1;
-                self.time_sample(s.seq, &stamps, a.at);
+                self.time_sample(s.seq, &stamps, a.at)?;
             }
             Topic::Command | Topic::Ping => {}
         }
@@ -313,14 +336,14 @@ impl<'a> Stand<'a> {
 
     /// The round trip through the command a sample acknowledges (once per command), and
     /// the one-way hops on one clock.
-    fn time_sample(&mut self, seq: u64, st: &Stamps, at: u64) {
+    fn time_sample(&mut self, seq: u64, st: &Stamps, at: u64) -> Result<()> {
         if self.timing.clock.same() && st.forwarded != 0 {
             let hop = at.saturating_sub(st.forwarded);
             self.timing.sample_hop.push(hop);
-            self.rows.push(("sample_hop", seq, hop));
+            self.row("sample_hop", seq, hop)?;
         }
         if st.command == 0 || st.command == self.acknowledged {
-            return;
+            return Ok(());
         }
         let sent = {
             let q = self.shared.sent.lock().expect("no panics while holding it");
@@ -329,21 +352,32 @@ impl<'a> Stand<'a> {
                 .find(|(s, _)| *s == st.command)
                 .map(|&(_, t)| t)
         };
-        let Some(sent) = sent else { return };
+        let Some(sent) = sent else { return Ok(()) };
         self.acknowledged = st.command;
         let held = st.forwarded.saturating_sub(st.command_arrived);
         let rt = at.saturating_sub(sent).saturating_sub(held);
         self.timing.command_round_trip.push(rt);
-        self.rows.push(("command_round_trip", st.command, rt));
+        self.row("command_round_trip", st.command, rt)?;
         if self.timing.clock.same() {
             let hop = st.command_arrived.saturating_sub(sent);
             self.timing.command_hop.push(hop);
-            self.rows.push(("command_hop", st.command, hop));
+            self.row("command_hop", st.command, hop)?;
         }
+        Ok(())
     }
 
     /// Reports the link lost after the timeout's silence, and back when it speaks.
     fn watch_link(&mut self, now: u64) {
+        if self.heard == 0 && !self.unanswered && now - self.started > SILENT_START.as_nanos() as u64 {
+            eprintln!(
+                "bridge for driver {:?}: no answer from {} after {:.0} s: is `rig bridge driver` running there, and is the user of {} in its credentials file with this password? (a refused session is not reported to this side)",
+                self.opts.id,
+                self.opts.net.endpoint,
+                SILENT_START.as_secs_f64(),
+                self.opts.net.credentials.display()
+            );
+            self.unanswered = true;
+        }
         let silent = now.saturating_sub(self.heard);
         match self.lost_at {
             None if self.heard != 0 && silent > self.opts.link_timeout.as_nanos() as u64 => {
@@ -368,15 +402,11 @@ impl<'a> Stand<'a> {
         }
     }
 
-    fn write_timing(&self, path: &PathBuf) -> Result<()> {
-        let mut f = std::io::BufWriter::new(
-            std::fs::File::create(path).with_context(|| format!("{}", path.display()))?,
-        );
-        writeln!(f, "what,seq,ns")?;
-        for (what, seq, ns) in &self.rows {
+    /// One measurement of the link, to `--timing-out`.
+    fn row(&mut self, what: &str, seq: u64, ns: u64) -> Result<()> {
+        if let Some(f) = &mut self.log {
             writeln!(f, "{what},{seq},{ns}")?;
         }
-        f.flush()?;
         Ok(())
     }
 }

@@ -90,19 +90,32 @@ pub fn driver_side(id: &str, net: &Network) -> Result<Session> {
 /// Opens the rig's side's session: connects to the endpoint as the first user of the
 /// credentials file, and keeps reconnecting while the link is down.
 pub fn rig_side(net: &Network) -> Result<Session> {
-    let (user, password) = read_credentials(&net.credentials)?.swap_remove(0);
+    connecting(net, Some(read_credentials(&net.credentials)?.swap_remove(0)))
+}
+
+/// Opens a probe's session: as the rig's side, or without credentials (`anonymous`).
+pub fn probe_side(net: &Network, anonymous: bool) -> Result<Session> {
+    match anonymous {
+        true => connecting(net, None),
+        false => rig_side(net),
+    }
+}
+
+fn connecting(net: &Network, user: Option<(String, String)>) -> Result<Session> {
     let mut c = base(net)?;
     set(&mut c, "listen/endpoints", "[]")?;
     set(&mut c, "connect/endpoints", &json(&[net.endpoint.as_str()]))?;
-    set(
-        &mut c,
-        "transport/auth/usrpwd",
-        &format!(
-            "{{user: {}, password: {}}}",
-            json_str(&user),
-            json_str(&password)
-        ),
-    )?;
+    if let Some((user, password)) = user {
+        set(
+            &mut c,
+            "transport/auth/usrpwd",
+            &format!(
+                "{{user: {}, password: {}}}",
+                json_str(&user),
+                json_str(&password)
+            ),
+        )?;
+    }
     open(c, &net.endpoint, "connect to")
 }
 

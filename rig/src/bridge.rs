@@ -49,6 +49,24 @@ enum Side {
         #[arg(long, value_name = "FILE")]
         timing_out: Option<PathBuf>,
     },
+    /// From any host: connect to the driver's bridge at ENDPOINT with the credentials
+    /// (or none) for a while, listen to the driver's info and samples and, with
+    /// `--zero-actions`, put zero actions; prints what arrived. The driver's bridge
+    /// prints how many commands it passed on. To check an access-control setup: a peer
+    /// without listed credentials must see nothing and command nothing.
+    Probe {
+        #[command(flatten)]
+        common: Common,
+        /// Connect without credentials (`--credentials` is then not read).
+        #[arg(long)]
+        anonymous: bool,
+        /// Put a zero action (the safe action) every 10 ms.
+        #[arg(long)]
+        zero_actions: bool,
+        /// How long to probe [s].
+        #[arg(long, value_name = "S", default_value_t = 3.0)]
+        seconds: f64,
+    },
 }
 
 #[derive(Flags)]
@@ -116,6 +134,24 @@ pub fn main(args: &Args) -> ExitCode {
         .map(|(counts, timing)| {
             eprintln!("bridge for driver {:?}: {counts}", common.driver);
             eprintln!("the link:\n{}", timing.summary());
+        }),
+        Side::Probe {
+            common,
+            anonymous,
+            zero_actions,
+            seconds,
+        } => bridge::probe(
+            &common.driver,
+            &common.network(),
+            *anonymous,
+            *zero_actions,
+            *seconds,
+        )
+        .map(|p| {
+            println!(
+                "probe of driver {:?} at {}: {} infos and {} samples arrived; {} zero actions put",
+                common.driver, common.endpoint, p.infos, p.samples, p.commands
+            )
         }),
     };
     match result {

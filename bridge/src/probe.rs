@@ -1,0 +1,86 @@
+//! `rig bridge probe`: what a peer with given credentials — or none — can do at a
+//! driver's bridge, seen from its own host: whether the driver's info and samples reach
+//! it, and whether the zero actions it puts reach the driver (the driver's bridge counts
+//! what it passed on). To check an access-control setup from another machine.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::time::{Duration, Instant};
+
+use anyhow::{Result, anyhow};
+use driver::contract::{DriverCommand, DriverSample, kind};
+use wire::now_ns;
+use zenoh::Wait;
+
+use crate::message::{Topic, from_bytes, to_bytes};
+use crate::publisher;
+use crate::session::{Network, probe_side};
+
+/// What a probe saw.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Probed {
+    /// Info messages that arrived.
+    pub infos: u64,
+    /// Samples that arrived.
+    pub samples: u64,
+    /// Zero actions put (whether they arrived is the driver's bridge's count).
+    pub commands: u64,
+}
+
+/// Connects to `net.endpoint` with `net`'s credentials (or, if `anonymous`, none) for
+/// `seconds`, listens to driver `id`'s info and samples and, if `zero_actions`, puts a
+/// zero action every 10 ms.
+pub fn probe(
+    id: &str,
+    net: &Network,
+    anonymous: bool,
+    zero_actions: bool,
+    seconds: f64,
+) -> Result<Probed> {
+    driver::contract::check_id(id).map_err(|e| anyhow!("{e}"))?;
+    let session = probe_side(net, anonymous)?;
+    // Infos, samples, the newest sample's seq (the one a zero action answers).
+    let counters = Arc::new([AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0)]);
+    let _subs: Vec<_> = [Topic::Info, Topic::Sample]
+        .into_iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let c = counters.clone();
+            session
+                .declare_subscriber(t.key(id))
+                .callback(move |m| {
+                    c[i].fetch_add(1, Relaxed);
+                    if let Ok(s) = from_bytes::<DriverSample>(&m.payload().to_bytes()) {
+                        c[2].store(s.seq, Relaxed);
+                    }
+                })
+                .wait()
+                .map_err(|e| anyhow!("subscribing to {}: {e}", t.key(id)))
+        })
+        .collect::<Result<_>>()?;
+    let out = publisher(&session, &Topic::Command.key(id))?;
+    let mut commands = 0;
+    let t0 = Instant::now();
+    while t0.elapsed().as_secs_f64() < seconds {
+        if zero_actions {
+            let c = DriverCommand {
+                seq: now_ns(),
+                kind: kind::ACTION,
+                sample_seq: counters[2].load(Relaxed),
+                t_publish_ns: now_ns(),
+                n_u: 1,
+                ..Default::default()
+            };
+            // A refused session drops the put without an error, as it should.
+            let _ = out.put(to_bytes(&c)).wait();
+            commands += 1;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let _ = session.close().wait();
+    Ok(Probed {
+        infos: counters[0].load(Relaxed),
+        samples: counters[1].load(Relaxed),
+        commands,
+    })
+}
