@@ -368,7 +368,10 @@ impl<'a> Stand<'a> {
 
     /// Reports the link lost after the timeout's silence, and back when it speaks.
     fn watch_link(&mut self, now: u64) {
-        if self.heard == 0 && !self.unanswered && now - self.started > SILENT_START.as_nanos() as u64 {
+        if self.heard == 0
+            && !self.unanswered
+            && now - self.started > SILENT_START.as_nanos() as u64
+        {
             eprintln!(
                 "bridge for driver {:?}: no answer from {} after {:.0} s: is `rig bridge driver` running there, and is the user of {} in its credentials file with this password? (a refused session is not reported to this side)",
                 self.opts.id,

@@ -90,7 +90,10 @@ pub fn driver_side(id: &str, net: &Network) -> Result<Session> {
 /// Opens the rig's side's session: connects to the endpoint as the first user of the
 /// credentials file, and keeps reconnecting while the link is down.
 pub fn rig_side(net: &Network) -> Result<Session> {
-    connecting(net, Some(read_credentials(&net.credentials)?.swap_remove(0)))
+    connecting(
+        net,
+        Some(read_credentials(&net.credentials)?.swap_remove(0)),
+    )
 }
 
 /// Opens a probe's session: as the rig's side, or without credentials (`anonymous`).

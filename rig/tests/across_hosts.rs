@@ -1,0 +1,375 @@
+//! The driver on one host, the rig on another (`rig bridge`, docs/across-hosts.md): two
+//! hosts made of network namespaces joined by a veth pair, each with its own shared
+//! memory ([`common::hosts`]). Needs root; without it each test prints why and passes.
+//!
+//! * `rig check-driver` passes across and `rig run --plant external` learns 20 trials
+//!   across; `check_mcap.py` accepts the recording (where Python has `mcap`).
+//! * A lockstep driver across the network gives `rig learn`'s bytes.
+//! * A peer without the credentials neither receives samples nor commands the driver.
+//! * The link down for a second mid-trial: the driver applies the safe action within two
+//!   periods (said by the driver's bridge, on the driver's host), the rig stops with
+//!   one line, the rig's bridge reports the loss and the return, and `--resume` finishes.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::Duration;
+
+use common::hosts::{Host, Hosts};
+use common::{ok, tmp};
+
+const RIG: &str = env!("CARGO_BIN_EXE_rig");
+const PORT: u16 = 7447;
+
+/// A process on one of the hosts whose stderr goes to a file; stopped (SIGINT) by
+/// [`Proc::stop`], which returns what it wrote, or killed when dropped.
+struct Proc {
+    child: Child,
+    log: PathBuf,
+}
+
+impl Proc {
+    fn start(host: &Host, args: &[&str], log: PathBuf) -> Self {
+        let child = host
+            .command(RIG)
+            .args(args)
+            .stdout(Stdio::null())
+            .stderr(std::fs::File::create(&log).unwrap())
+            .spawn()
+            .unwrap();
+        Self { child, log }
+    }
+
+    fn log(&self) -> String {
+        std::fs::read_to_string(&self.log).unwrap_or_default()
+    }
+
+    fn stop(mut self) -> String {
+        let _ = Command::new("kill")
+            .args(["-INT", &self.child.id().to_string()])
+            .status();
+        let status = self.child.wait().unwrap();
+        let log = self.log();
+        assert!(status.success(), "{}: {status}\n{log}", self.log.display());
+        log
+    }
+}
+
+impl Drop for Proc {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The driver (`rig sim-driver` with `driver_flags`, id `pend`) and its bridge on host
+/// A, the rig's bridge (with `rig_flags`) on host B.
+struct Across {
+    hosts: Hosts,
+    dir: PathBuf,
+    users: PathBuf,
+    driver: Proc,
+    driver_bridge: Proc,
+    rig_bridge: Proc,
+}
+
+impl Across {
+    fn start(n: u8, name: &str, driver_flags: &[&str], rig_flags: &[&str]) -> Option<Self> {
+        let hosts = Hosts::new(n)?;
+        let dir = tmp("hosts", name);
+        let users = dir.join("users.txt");
+        std::fs::write(&users, "rig:correct-horse\n").unwrap();
+        let mut flags = vec!["sim-driver", "--driver-id", "pend"];
+        flags.extend(driver_flags);
+        let driver = Proc::start(&hosts.a, &flags, dir.join("driver.log"));
+        let endpoint = format!("tcp/{}:{PORT}", hosts.a.addr);
+        let common = ["--driver", "pend", "--endpoint", &endpoint, "--credentials"];
+        let users_arg = users.to_str().unwrap();
+        let mut flags = vec!["bridge", "driver"];
+        flags.extend(common);
+        flags.push(users_arg);
+        let driver_bridge = Proc::start(&hosts.a, &flags, dir.join("driver-bridge.log"));
+        std::thread::sleep(Duration::from_millis(500));
+        let mut flags = vec!["bridge", "rig"];
+        flags.extend(common);
+        flags.push(users_arg);
+        flags.extend(rig_flags);
+        let rig_bridge = Proc::start(&hosts.b, &flags, dir.join("rig-bridge.log"));
+        std::thread::sleep(Duration::from_millis(500));
+        Some(Self {
+            hosts,
+            dir,
+            users,
+            driver,
+            driver_bridge,
+            rig_bridge,
+        })
+    }
+
+    /// `rig ARGS` on the rig's host.
+    fn rig(&self, args: &[&str]) -> Output {
+        self.hosts.b.command(RIG).args(args).output().unwrap()
+    }
+
+    /// `rig run --plant external` against the driver across, `trials` trials, into `out`.
+    fn run(&self, out: &Path, extra: &[&str]) -> Output {
+        let mut c = self.hosts.b.command(RIG);
+        c.args([
+            "run", "--plant", "external", "--driver", "pend", "--quiet", "--out",
+        ])
+        .arg(out)
+        .args(extra);
+        c.output().unwrap()
+    }
+
+    fn endpoint(&self) -> String {
+        format!("tcp/{}:{PORT}", self.hosts.a.addr)
+    }
+}
+
+fn text(out: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+/// The number before ` what` in a bridge's closing line ("… 12 commands, 340 samples,
+/// 9 infos passed on; dropped 0 stale, …").
+fn counted(log: &str, what: &str) -> u64 {
+    let last = log
+        .lines()
+        .rfind(|l| l.contains(" passed on; dropped "))
+        .unwrap_or_else(|| panic!("no closing line: {log}"));
+    let words: Vec<&str> = last
+        .split([' ', ',', ';'])
+        .filter(|w| !w.is_empty())
+        .collect();
+    let at = words
+        .iter()
+        .position(|w| *w == what)
+        .unwrap_or_else(|| panic!("no {what}: {last}"));
+    words[at - 1].parse().unwrap()
+}
+
+/// `tests/python/check_mcap.py DIR` where Python has the official `mcap` reader.
+fn check_mcap(dir: &Path) {
+    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
+    let has = Command::new(&python).args(["-c", "import mcap"]).output();
+    if !has.is_ok_and(|o| o.status.success()) {
+        println!("check_mcap.py skipped: {python} cannot import mcap (pip install mcap)");
+        return;
+    }
+    let script = format!(
+        "{}/../tests/python/check_mcap.py",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let out = Command::new(&python).arg(script).arg(dir).output().unwrap();
+    assert!(
+        out.status.success(),
+        "check_mcap.py {}: {}",
+        dir.display(),
+        text(&out)
+    );
+}
+
+#[test]
+fn a_rig_on_one_host_checks_and_learns_from_a_driver_on_another() {
+    let Some(x) = Across::start(1, "learn", &["--speed", "5"], &[]) else {
+        return;
+    };
+    let out = x.rig(&[
+        "check-driver",
+        "--driver",
+        "pend",
+        "--rate-seconds",
+        "3",
+        "--max-jitter",
+        "0.5",
+    ]);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(
+        text(&out).contains("check-driver: PASS (9 checks)"),
+        "{}",
+        text(&out)
+    );
+    let run = x.dir.join("run");
+    let out = x.run(&run, &["--trials", "20"]);
+    assert!(out.status.success(), "{}", text(&out));
+    let returns = std::fs::read_to_string(run.join("returns.csv")).unwrap();
+    assert_eq!(returns.lines().count(), 21, "{returns}");
+    check_mcap(&run);
+    let rig_side = x.rig_bridge.stop();
+    for line in [
+        "round trip, pings:          n ",
+        "round trip, command→sample: n ",
+        "one-way hops not measured (two clocks); driver's clock − rig's: ",
+    ] {
+        assert!(rig_side.contains(line), "{line}: {rig_side}");
+    }
+    let driver_side = x.driver_bridge.stop();
+    assert!(counted(&driver_side, "commands") > 2000, "{driver_side}");
+    assert!(
+        driver_side.contains(" 0 out of order, 0 malformed"),
+        "{driver_side}"
+    );
+    drop(x.driver);
+}
+
+#[test]
+fn a_lockstep_driver_across_the_network_gives_the_in_process_bytes() {
+    let Some(x) = Across::start(
+        2,
+        "lockstep",
+        &["--clock", "lockstep"],
+        &["--same-clock", "--timing-out", "/dev/null"],
+    ) else {
+        return;
+    };
+    let args = ["--trials", "20", "--eval-every", "5"];
+    let learn = x.dir.join("learn");
+    ok(common::rig()
+        .args(["learn", "--runs", "1", "--quiet", "--out"])
+        .arg(&learn)
+        .args(args)
+        .output()
+        .unwrap());
+    let run = x.dir.join("run");
+    let out = x.run(&run, &args);
+    assert!(out.status.success(), "{}", text(&out));
+    assert_eq!(
+        std::fs::read_to_string(run.join("returns.csv")).unwrap(),
+        std::fs::read_to_string(learn.join("runs.csv")).unwrap()
+    );
+    let rig_side = x.rig_bridge.stop();
+    for line in [
+        "one way rig→driver:         n ",
+        "one way driver→rig:         n ",
+        "(one clock on both hosts)",
+    ] {
+        assert!(rig_side.contains(line), "{line}: {rig_side}");
+    }
+    drop(x.driver_bridge);
+    drop(x.driver);
+}
+
+#[test]
+fn a_peer_without_the_credentials_neither_hears_nor_commands_the_driver() {
+    let Some(x) = Across::start(3, "refused", &[], &[]) else {
+        return;
+    };
+    let wrong = x.dir.join("wrong.txt");
+    std::fs::write(&wrong, "rig:guess\n").unwrap();
+    let endpoint = x.endpoint();
+    let probe = |credentials: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "bridge",
+            "probe",
+            "--driver",
+            "pend",
+            "--endpoint",
+            &endpoint,
+        ];
+        args.extend([
+            "--credentials",
+            credentials.to_str().unwrap(),
+            "--zero-actions",
+        ]);
+        args.extend(["--seconds", "2"]);
+        args.extend(extra);
+        let out = x.hosts.b.command(RIG).args(&args).output().unwrap();
+        assert!(out.status.success(), "{}", text(&out));
+        text(&out)
+    };
+    let nothing = "0 infos and 0 samples arrived";
+    assert!(probe(&wrong, &[]).contains(nothing));
+    assert!(probe(&wrong, &["--anonymous"]).contains(nothing));
+    // The driver's bridge passed on none of their zero actions.
+    std::thread::sleep(Duration::from_millis(300));
+    // A peer with the credentials hears and commands (the probe itself can tell).
+    let heard = probe(&x.users, &[]);
+    assert!(!heard.contains(nothing), "{heard}");
+    let driver_side = x.driver_bridge.stop();
+    // Only the probe with the credentials (about 200 zero actions in 2 s) got through.
+    let passed = counted(&driver_side, "commands");
+    assert!((100..=200).contains(&passed), "{driver_side}");
+    drop(x.rig_bridge);
+    drop(x.driver);
+}
+
+#[test]
+fn the_link_down_for_a_second_leaves_the_driver_safe_and_the_run_resumable() {
+    let Some(x) = Across::start(4, "outage", &[], &["--same-clock"]) else {
+        return;
+    };
+    let run = x.dir.join("run");
+    let cut = std::thread::scope(|s| {
+        let cut = s.spawn(|| {
+            common::wait_for_lines(&run.join("returns.csv"), 2);
+            std::thread::sleep(Duration::from_millis(1000));
+            x.hosts.a.link(false);
+            std::thread::sleep(Duration::from_secs(1));
+            x.hosts.a.link(true);
+        });
+        let out = x.run(&run, &["--trials", "6"]);
+        cut.join().unwrap();
+        out
+    });
+    let err = text(&cut);
+    assert!(
+        !cut.status.success(),
+        "the run went on through a 1 s outage: {err}"
+    );
+    assert!(
+        err.contains("driver \"pend\" stopped: no sample") && err.contains("rig run --resume"),
+        "{err}"
+    );
+    // The driver's host: the safe action within two periods of the last command.
+    std::thread::sleep(Duration::from_millis(1500));
+    let driver_side = x.driver_bridge.log();
+    let from: f64 = driver_side
+        .lines()
+        .rfind(|l| l.contains("applies the safe action (watchdog) from between "))
+        .and_then(|l| {
+            l.split("from between ")
+                .nth(1)?
+                .split(' ')
+                .next()?
+                .parse()
+                .ok()
+        })
+        .unwrap_or_else(|| panic!("{driver_side}"));
+    assert!(
+        from <= 2.0,
+        "the safe action from {from} periods on: {driver_side}"
+    );
+    assert!(
+        driver_side.contains("link lost: no ping from the rig"),
+        "{driver_side}"
+    );
+    let rig_side = x.rig_bridge.log();
+    assert!(
+        rig_side.contains("link lost: nothing from ") && rig_side.contains("link back after "),
+        "{rig_side}"
+    );
+    let out = x
+        .hosts
+        .b
+        .command(RIG)
+        .args([
+            "run", "--plant", "external", "--driver", "pend", "--quiet", "--trials", "6",
+            "--resume",
+        ])
+        .arg(&run)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out));
+    let returns = std::fs::read_to_string(run.join("returns.csv")).unwrap();
+    assert_eq!(returns.lines().count(), 7, "{returns}");
+    check_mcap(&run);
+    drop(x.rig_bridge);
+    drop(x.driver_bridge);
+    drop(x.driver);
+}

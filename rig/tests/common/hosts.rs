@@ -1,0 +1,165 @@
+//! Two hosts on this machine for the cross-host tests: two network namespaces joined by
+//! a veth pair, each with its own shared memory (`/dev/shm`, `/tmp/iceoryx2` on tmpfs in
+//! a mount namespace of its own), so iceoryx2 on one cannot see the other's services and
+//! only the network joins them. Both read the machine's one monotonic clock.
+
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+/// One host: a process that holds its namespaces, and its address.
+pub struct Host {
+    anchor: Child,
+    netns: String,
+    /// Its address on the veth link.
+    pub addr: String,
+    /// Its end of the link.
+    pub dev: String,
+}
+
+impl Host {
+    /// `program args…` run on this host.
+    pub fn command(&self, program: impl AsRef<Path>) -> Command {
+        let mut c = Command::new("nsenter");
+        c.arg("--target")
+            .arg(self.anchor.id().to_string())
+            .args(["--mount", "--net"])
+            .arg(program.as_ref());
+        c
+    }
+
+    /// Waits (at most 10 s) until the anchor has mounted its shared memory and sleeps.
+    fn wait_until_anchored(&self) {
+        let cmdline = format!("/proc/{}/cmdline", self.anchor.id());
+        for _ in 0..1000 {
+            if std::fs::read(&cmdline).is_ok_and(|c| c.starts_with(b"sleep")) {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        panic!("host {} did not come up", self.netns);
+    }
+
+    /// Takes this host's end of the link down (`false`) or up.
+    pub fn link(&self, up: bool) {
+        run(&[
+            "ip",
+            "-n",
+            &self.netns,
+            "link",
+            "set",
+            &self.dev,
+            if up { "up" } else { "down" },
+        ]);
+    }
+}
+
+/// Hosts A (`10.77.N.1`) and B (`10.77.N.2`), removed when dropped.
+pub struct Hosts {
+    /// The driver's host.
+    pub a: Host,
+    /// The rig's host.
+    pub b: Host,
+}
+
+impl Hosts {
+    /// Two hosts for test number `n` (distinct per test of a binary: names and subnet),
+    /// or `None`, with the reason printed, where this process cannot make them (not
+    /// root, no `ip`, `nsenter` or `unshare`, no network namespaces).
+    pub fn new(n: u8) -> Option<Self> {
+        let root = std::fs::read_to_string("/proc/self/status")
+            .unwrap_or_default()
+            .lines()
+            .any(|l| l.starts_with("Uid:") && l.split_whitespace().nth(1) == Some("0"));
+        if !root {
+            println!("skipped: making network namespaces needs root");
+            return None;
+        }
+        for tool in ["ip", "nsenter", "unshare"] {
+            if Command::new(tool).arg("--version").output().is_err() {
+                println!("skipped: no `{tool}` (iproute2, util-linux)");
+                return None;
+            }
+        }
+        let tag = format!("{}{n}", std::process::id() % 100_000);
+        let (na, nb) = (format!("riga{tag}"), format!("rigb{tag}"));
+        let (da, db) = (format!("va{tag}"), format!("vb{tag}"));
+        if let Err(e) = try_run(&["ip", "netns", "add", &na]) {
+            println!("skipped: cannot make a network namespace: {e}");
+            return None;
+        }
+        run(&["ip", "netns", "add", &nb]);
+        run(&[
+            "ip", "link", "add", &da, "type", "veth", "peer", "name", &db,
+        ]);
+        let host = |ns: &str, dev: &str, last: u8| {
+            let addr = format!("10.77.{n}.{last}");
+            run(&["ip", "link", "set", dev, "netns", ns]);
+            run(&[
+                "ip",
+                "-n",
+                ns,
+                "addr",
+                "add",
+                &format!("{addr}/24"),
+                "dev",
+                dev,
+            ]);
+            run(&["ip", "-n", ns, "link", "set", dev, "up"]);
+            run(&["ip", "-n", ns, "link", "set", "lo", "up"]);
+            Host {
+                anchor: anchor(ns),
+                netns: ns.to_string(),
+                addr,
+                dev: dev.to_string(),
+            }
+        };
+        let hosts = Self {
+            a: host(&na, &da, 1),
+            b: host(&nb, &db, 2),
+        };
+        for h in [&hosts.a, &hosts.b] {
+            h.wait_until_anchored();
+        }
+        Some(hosts)
+    }
+}
+
+impl Drop for Hosts {
+    fn drop(&mut self) {
+        for h in [&mut self.a, &mut self.b] {
+            let _ = h.anchor.kill();
+            let _ = h.anchor.wait();
+            let _ = try_run(&["ip", "netns", "del", &h.netns]);
+        }
+    }
+}
+
+/// A process in network namespace `ns` and a mount namespace of its own with fresh
+/// tmpfs on `/dev/shm` and `/tmp/iceoryx2`; it sleeps until killed.
+fn anchor(ns: &str) -> Child {
+    Command::new("ip")
+        .args(["netns", "exec", ns, "unshare", "--mount", "--propagation", "private"])
+        .args(["sh", "-c"])
+        .arg("mount -t tmpfs tmpfs /dev/shm && mkdir -p /tmp/iceoryx2 && mount -t tmpfs tmpfs /tmp/iceoryx2 && exec sleep infinity")
+        .stdin(Stdio::null())
+        .spawn()
+        .expect("ip netns exec")
+}
+
+fn try_run(args: &[&str]) -> Result<(), String> {
+    let out = Command::new(args[0])
+        .args(&args[1..])
+        .output()
+        .map_err(|e| e.to_string())?;
+    match out.status.success() {
+        true => Ok(()),
+        false => Err(String::from_utf8_lossy(&out.stderr).trim().to_string()),
+    }
+}
+
+fn run(args: &[&str]) {
+    if let Err(e) = try_run(args) {
+        panic!("{}: {e}", args.join(" "));
+    }
+}
