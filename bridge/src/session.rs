@@ -239,7 +239,7 @@ mod tests {
             c.insert_json5("access_control", &acl).unwrap();
             c
         };
-        assert!(c.access_control.enabled);
+        assert_eq!(c.get_json("access_control/enabled").unwrap(), "true");
         assert!(
             acl.contains(r#"["rig/driver/qube/command", "rig/driver/qube/ping"]"#),
             "{acl}"
