@@ -18,8 +18,8 @@ and one of two published sets of the equivalent viscous damping (DAMPING):
     "manual"    D_r = 0.0015, D_p = 0.0005 N m s/rad: the User Manual's
 
 With the manual's damping the pendulum's swing decays with a time constant J_b / D_p of
-0.27 s, and no energy-pumping controller within +-10 V brings it near upright (pump.py);
-with gym-brt's (2.7 s) one does within a 4 s trial at +-5 V.
+0.27 s, and none of pump.py's energy-pumping controllers brings it within 1.4 rad of
+upright in a 4 s trial, even at +-10 V; with gym-brt's (2.7 s) they swing it up at +-5 V.
 
 State x = [theta, alpha, theta_dot, alpha_dot]: the arm's angle, the pendulum's angle
 from upright (it hangs at alpha = +-pi), their velocities; input u = V_m, the motor
