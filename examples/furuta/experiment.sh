@@ -8,7 +8,8 @@
 #   examples/furuta/experiment.sh out/furuta-mlac 5 400 --algo mlac --approx llr
 #
 # PYTHON (default python3) must import iceoryx2 0.10.0; RIG (default the release build)
-# is the rig; TASK (default furuta.toml next to this script) the task file.
+# is the rig; TASK (default furuta.toml next to this script) the task file; DAMPING
+# (default the driver's, gym-brt) the model's damping set (furuta.py).
 set -euo pipefail
 out=$1 runs=$2 trials=$3
 shift 3
@@ -21,7 +22,7 @@ echo "run,trial,sim_time_s,return,greedy_return" > "$out/runs.csv"
 echo "seed,wall_s" > "$out/wall.csv"
 for seed in $(seq 1 "$runs"); do
   id="furuta-$$-$seed"
-  "$python" "$here/driver.py" --driver-id "$id" --task "$task" &
+  "$python" "$here/driver.py" --driver-id "$id" --task "$task" ${DAMPING:+--damping "$DAMPING"} &
   driver=$!
   t0=$(date +%s%N)
   "$rig" run --plant external --driver "$id" --task "$task" --seed "$seed" \

@@ -7,8 +7,19 @@ QUBE-Servo 2 Rotary Pendulum Workbook models them, with the parameters of the Qu
 QUBE-Servo 2 User Manual:
 
     motor       R_m = 8.4 ohm, k_t = k_m = 0.042 N m/A = V s/rad
-    rotary arm  m_r = 0.095 kg, L_r = 0.085 m, D_r = 0.0015 N m s/rad
-    pendulum    m_p = 0.024 kg, L_p = 0.129 m, D_p = 0.0005 N m s/rad, g = 9.81 m/s^2
+    rotary arm  m_r = 0.095 kg, L_r = 0.085 m
+    pendulum    m_p = 0.024 kg, L_p = 0.129 m, g = 9.81 m/s^2
+
+and one of two published sets of the equivalent viscous damping (DAMPING):
+
+    "gym-brt"   D_r = 0.00027, D_p = 0.00005 N m s/rad: Blue River Technology's QUBE-Servo 2
+                simulator (github.com/BlueRiverTech/quanser-openai-driver,
+                gym_brt/quanser/qube_simulator.py), the default
+    "manual"    D_r = 0.0015, D_p = 0.0005 N m s/rad: the User Manual's
+
+With the manual's damping the pendulum's swing decays with a time constant J_b / D_p of
+0.27 s, and none of pump.py's energy-pumping controllers brings it within 1.4 rad of
+upright in a 4 s trial, even at +-10 V; with gym-brt's (2.7 s) they swing it up at +-5 V.
 
 State x = [theta, alpha, theta_dot, alpha_dot]: the arm's angle, the pendulum's angle
 from upright (it hangs at alpha = +-pi), their velocities; input u = V_m, the motor
@@ -34,10 +45,13 @@ import math
 # Motor
 R_M, K_T, K_M = 8.4, 0.042, 0.042
 # Rotary arm
-M_R, L_R, D_R = 0.095, 0.085, 0.0015
+M_R, L_R = 0.095, 0.085
 # Pendulum link
-M_P, L_P, D_P = 0.024, 0.129, 0.0005
+M_P, L_P = 0.024, 0.129
 G = 9.81
+# Equivalent viscous damping (D_r, D_p) [N m s/rad], by source (the docstring)
+DAMPING = {"gym-brt": (0.00027, 0.00005), "manual": (0.0015, 0.0005)}
+DEFAULT_DAMPING = "gym-brt"
 
 J_R = M_R * L_R**2 / 12.0
 J_P = M_P * L_P**2 / 12.0
@@ -53,8 +67,9 @@ def wrap(a: float) -> float:
     return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
-def derivative(x, u: float):
-    """x' = f(x, u) of the model above."""
+def derivative(x, u: float, damping=DAMPING[DEFAULT_DAMPING]):
+    """x' = f(x, u) of the model above, with damping = (D_r, D_p)."""
+    d_r, d_p = damping
     _, a, td, ad = x
     s, c = math.sin(a), math.cos(a)
     tau = K_T * (u - K_M * td) / R_M
@@ -62,8 +77,8 @@ def derivative(x, u: float):
     m11 = J_A + K * s * s
     m12 = C * c
     m22 = J_B
-    b1 = tau - D_R * td - 2.0 * K * s * c * td * ad + C * s * ad * ad
-    b2 = M_P * G * L_CM * s - D_P * ad + K * s * c * td * td
+    b1 = tau - d_r * td - 2.0 * K * s * c * td * ad + C * s * ad * ad
+    b2 = M_P * G * L_CM * s - d_p * ad + K * s * c * td * td
     det = m11 * m22 - m12 * m12
     tdd = (m22 * b1 - m12 * b2) / det
     add = (m11 * b2 - m12 * b1) / det
@@ -75,7 +90,8 @@ class Furuta:
 
     H_MAX = 0.001  # longest RK4 step [s]
 
-    def __init__(self):
+    def __init__(self, damping: str = DEFAULT_DAMPING):
+        self.damping = DAMPING[damping]
         self.x = [0.0, math.pi, 0.0, 0.0]
 
     def place(self, x0):
@@ -84,12 +100,12 @@ class Furuta:
     def step(self, u, dt):
         n = max(1, math.ceil(dt / self.H_MAX - 1e-9))
         h = dt / n
-        x, v = self.x, u[0]
+        x, v, d = self.x, u[0], self.damping
         for _ in range(n):
-            k1 = derivative(x, v)
-            k2 = derivative([xi + 0.5 * h * ki for xi, ki in zip(x, k1)], v)
-            k3 = derivative([xi + 0.5 * h * ki for xi, ki in zip(x, k2)], v)
-            k4 = derivative([xi + h * ki for xi, ki in zip(x, k3)], v)
+            k1 = derivative(x, v, d)
+            k2 = derivative([xi + 0.5 * h * ki for xi, ki in zip(x, k1)], v, d)
+            k3 = derivative([xi + 0.5 * h * ki for xi, ki in zip(x, k2)], v, d)
+            k4 = derivative([xi + h * ki for xi, ki in zip(x, k3)], v, d)
             x = [xi + h / 6.0 * (a + 2 * b + 2 * c + d) for xi, a, b, c, d in zip(x, k1, k2, k3, k4)]
         # The arm turns freely here (the rig's operating range stops it): only the
         # pendulum's angle wraps.

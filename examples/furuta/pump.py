@@ -1,8 +1,17 @@
 #!/usr/bin/env python3
-"""How close a bang-bang energy-pumping controller swings the model's pendulum to upright
-from hanging at rest: u = -k (E_up - E) sign(alpha_dot cos alpha), saturated at each
-voltage bound, every 2 ms for 6 s, with E the pendulum's energy (zero upright at rest).
-A check of the swing-up task's difficulty (docs/results/furuta.md).
+"""Can the model's pendulum be swung up at all within a trial of furuta.toml? A check with
+an energy-pumping controller, no learning: from hanging at rest, every Ts = 20 ms (the
+task's sampling time) it applies
+
+    u = sat(k_E E sign(alpha_dot cos alpha) - k_theta theta)
+
+saturated at the voltage bound, with E the pendulum's energy (zero upright at rest) and
+the arm pulled back to centre. For each damping set of furuta.py and voltage bound it
+prints the closest approach to upright within the 4 s trial over a small family of gains
+(k_E in 300, 700, 1000, 1500 V/J; k_theta in 8, 12, 16, 20 V/rad), among those that keep
+the arm inside the task's operating range (|theta| < 2 rad): that approach, when, the
+pendulum's speed there, and the gains. A check of the swing-up task's feasibility
+(docs/results/furuta.md).
 
     python3 examples/furuta/pump.py
 """
@@ -11,20 +20,36 @@ import math
 
 import furuta
 
+TS, TRIAL = 0.02, 4.0
+GAINS = [(k_e, k_t) for k_e in (300.0, 700.0, 1000.0, 1500.0) for k_t in (8.0, 12.0, 16.0, 20.0)]
 
-def closest_to_upright(v_max: float, seconds: float = 6.0, dt: float = 0.002) -> float:
-    f = furuta.Furuta()
+
+def pump(damping: str, v_max: float, k_e: float, k_theta: float):
+    """(closest |alpha|, its time, |alpha_dot| there, largest |theta|) over one trial."""
+    f = furuta.Furuta(damping)
     f.place([0.0, math.pi, 0.0, 0.0])
-    closest = math.pi
-    for _ in range(round(seconds / dt)):
-        _, a, _, ad = f.x
+    closest, when, speed, arm = math.pi, 0.0, 0.0, 0.0
+    for k in range(round(TRIAL / TS)):
+        th, a, _, ad = f.x
         energy = 0.5 * furuta.J_B * ad * ad + furuta.M_P * furuta.G * furuta.L_CM * (math.cos(a) - 1.0)
-        u = 2000.0 * energy * (1.0 if ad * math.cos(a) > 0 else -1.0)
-        f.step([max(-v_max, min(v_max, u))], dt)
-        closest = min(closest, abs(f.x[1]))
-    return closest
+        u = k_e * energy * (1.0 if ad * math.cos(a) > 0 else -1.0) - k_theta * th
+        f.step([max(-v_max, min(v_max, u))], TS)
+        arm = max(arm, abs(f.x[0]))
+        if abs(f.x[1]) < closest:
+            closest, when, speed = abs(f.x[1]), (k + 1) * TS, abs(f.x[3])
+    return closest, when, speed, arm
 
 
 if __name__ == "__main__":
-    for v in (3.0, 5.0, 10.0, 15.0):
-        print(f"±{v:g} V: closest {closest_to_upright(v):.3f} rad from upright in 6 s")
+    for damping in ("manual", "gym-brt"):
+        d_r, d_p = furuta.DAMPING[damping]
+        print(f"{damping} damping (D_r = {d_r:g}, D_p = {d_p:g} N m s/rad):")
+        for v in (3.0, 5.0, 10.0):
+            runs = [(pump(damping, v, k_e, k_t), k_e, k_t) for k_e, k_t in GAINS]
+            inside = [r for r in runs if r[0][3] < 2.0]
+            (closest, when, speed, arm), k_e, k_t = min(inside, key=lambda r: r[0][0])
+            print(
+                f"  ±{v:g} V: closest {closest:.3f} rad from upright at {when:.2f} s "
+                f"(|alpha_dot| {speed:.1f} rad/s, arm within {arm:.2f} rad; "
+                f"k_E {k_e:g}, k_theta {k_t:g})"
+            )
