@@ -9,8 +9,10 @@
 //! says, measured on this host, when the watchdog engaged and how long after the last
 //! command.
 
-use std::sync::Arc;
+use std::collections::VecDeque;
+use std::io::Write as _;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use anyhow::{Result, anyhow};
@@ -37,6 +39,10 @@ pub struct DriverSide {
     pub max_age_periods: u64,
     /// Silence of the rig's pings after which the link is reported lost.
     pub link_timeout: Duration,
+    /// Each action's sample-to-actuation delay across the link as CSV, if given
+    /// (`seq,t_sample_ns,t_arrived_ns,sample_to_actuation`, ns on this host's clock: a
+    /// file `rig learn --delay-from` takes).
+    pub timing_out: Option<std::path::PathBuf>,
 }
 
 /// What the two halves share.
@@ -50,7 +56,12 @@ struct Shared {
     newest: AtomicU64,
     /// When the last ping arrived.
     pinged: AtomicU64,
+    /// The recent samples' `(seq, t_sample_ns)`, the newest last.
+    sampled: Mutex<VecDeque<(u64, u64)>>,
 }
+
+/// Samples remembered for the actions that answer them.
+const RECENT: usize = 1024;
 
 /// Serves until Ctrl-C or a termination request; returns what was forwarded.
 pub fn serve_driver(opts: &DriverSide) -> Result<Counts> {
@@ -121,6 +132,10 @@ fn commands_down(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -
         .declare_subscriber(Topic::Command.key(&opts.id))
         .wait()
         .map_err(|e| anyhow!("subscribing to commands: {e}"))?;
+    let mut timing = match &opts.timing_out {
+        Some(path) => Some(timing_file(path)?),
+        None => None,
+    };
     let mut counts = Counts::default();
     while !bus.interrupted() {
         let Ok(Some(s)) = commands.recv_timeout(Duration::from_millis(100)) else {
@@ -146,7 +161,15 @@ fn commands_down(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -
             shared.command.store(c.seq, Relaxed);
             shared.command_arrived.store(arrived, Relaxed);
             counts.commands += 1;
+            if let Some(f) = &mut timing
+                && c.kind == kind::ACTION
+            {
+                write_delay(f, shared, &c, arrived)?;
+            }
         }
+    }
+    if let Some(f) = &mut timing {
+        f.flush()?;
     }
     Ok(counts)
 }
@@ -177,6 +200,13 @@ fn samples_up(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -> R
             .map_err(wire_err)?
         {
             shared.newest.store(s.seq, Relaxed);
+            {
+                let mut q = shared.sampled.lock().expect("no panics while holding it");
+                if q.len() == RECENT {
+                    q.pop_front();
+                }
+                q.push_back((s.seq, s.t_sample_ns));
+            }
             let stamps = Stamps {
                 command: shared.command.load(Relaxed),
                 command_arrived: shared.command_arrived.load(Relaxed),
@@ -189,6 +219,37 @@ fn samples_up(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -> R
         watch.link(shared.pinged.load(Relaxed));
     }
     Ok(counts)
+}
+
+/// `--timing-out`'s file, with its header.
+fn timing_file(path: &std::path::Path) -> Result<std::io::BufWriter<std::fs::File>> {
+    let f =
+        std::fs::File::create(path).map_err(|e| anyhow!("--timing-out {}: {e}", path.display()))?;
+    let mut f = std::io::BufWriter::new(f);
+    writeln!(f, "seq,t_sample_ns,t_arrived_ns,sample_to_actuation")?;
+    Ok(f)
+}
+
+/// The row of action `c`, arrived at `arrived`: from its sample's instant to its arrival,
+/// both on this host's clock.
+fn write_delay(
+    f: &mut impl std::io::Write,
+    shared: &Shared,
+    c: &DriverCommand,
+    arrived: u64,
+) -> Result<()> {
+    let sampled = {
+        let q = shared.sampled.lock().expect("no panics while holding it");
+        q.iter()
+            .rev()
+            .find(|(seq, _)| *seq == c.sample_seq)
+            .map(|&(_, t)| t)
+    };
+    if let Some(t) = sampled {
+        let delay = arrived.saturating_sub(t);
+        writeln!(f, "{},{t},{arrived},{delay}", c.sample_seq)?;
+    }
+    Ok(())
 }
 
 fn put(p: &Publisher<'_>, bytes: Vec<u8>, attachment: Option<Vec<u8>>) -> Result<()> {

@@ -26,6 +26,12 @@ enum Side {
         /// (a late burst after an outage); 1 or more.
         #[arg(long, value_name = "N", default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..))]
         max_age_periods: u64,
+        /// Write each action's sample-to-actuation delay across the link to FILE as CSV
+        /// (`seq,t_sample_ns,t_arrived_ns,sample_to_actuation`: from the driver's sample
+        /// instant to the action's arrival here, ns, on this host's clock alone) — for
+        /// `rig learn --delay-from FILE`.
+        #[arg(long, value_name = "FILE")]
+        timing_out: Option<PathBuf>,
     },
     /// On the rig's host: connect to the driver's bridge at ENDPOINT and stand in for
     /// the driver here (its id's services), so `rig run --plant external` and `rig
@@ -111,7 +117,9 @@ pub fn main(args: &Args) -> ExitCode {
         Side::Driver {
             common,
             max_age_periods,
+            timing_out,
         } => bridge::serve_driver(&bridge::DriverSide {
+            timing_out: timing_out.clone(),
             id: common.driver.clone(),
             net: common.network(),
             max_age_periods: *max_age_periods,

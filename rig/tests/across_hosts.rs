@@ -63,6 +63,16 @@ impl Drop for Proc {
     }
 }
 
+/// How the rig's bridge reaches the driver's.
+enum Link {
+    /// Straight over the veth pair.
+    Direct,
+    /// Through a relay on the rig's host that holds each chunk this long each way.
+    Delayed(Duration),
+    /// Over the veth pair, both hosts dropping this percentage of their TCP packets.
+    Lossy(u32),
+}
+
 /// The driver (`rig sim-driver` with `driver_flags`, id `pend`) and its bridge on host
 /// A, the rig's bridge (with `rig_flags`) on host B.
 struct Across {
@@ -76,7 +86,36 @@ struct Across {
 
 impl Across {
     fn start(n: u8, name: &str, driver_flags: &[&str], rig_flags: &[&str]) -> Option<Self> {
+        Self::over(n, name, driver_flags, rig_flags, Link::Direct)
+    }
+
+    fn over(
+        n: u8,
+        name: &str,
+        driver_flags: &[&str],
+        rig_flags: &[&str],
+        link: Link,
+    ) -> Option<Self> {
         let hosts = Hosts::new(n)?;
+        let rig_endpoint = match link {
+            Link::Direct => format!("tcp/{}:{PORT}", hosts.a.addr),
+            Link::Delayed(d) => {
+                let relay = format!("{}:{}", hosts.b.addr, PORT + 1);
+                hosts
+                    .b
+                    .relay(&relay, &format!("{}:{PORT}", hosts.a.addr), d);
+                format!("tcp/{relay}")
+            }
+            Link::Lossy(percent) => {
+                if Command::new("nft").arg("--version").output().is_err() {
+                    println!("skipped: no `nft` (nftables) to drop packets with");
+                    return None;
+                }
+                hosts.a.lose(percent);
+                hosts.b.lose(percent);
+                format!("tcp/{}:{PORT}", hosts.a.addr)
+            }
+        };
         let dir = tmp("hosts", name);
         let users = dir.join("users.txt");
         std::fs::write(&users, "rig:correct-horse\n").unwrap();
@@ -86,14 +125,21 @@ impl Across {
         let endpoint = format!("tcp/{}:{PORT}", hosts.a.addr);
         let common = ["--driver", "pend", "--endpoint", &endpoint, "--credentials"];
         let users_arg = users.to_str().unwrap();
+        let delays = dir.join("delays.csv");
         let mut flags = vec!["bridge", "driver"];
         flags.extend(common);
-        flags.push(users_arg);
+        flags.extend([users_arg, "--timing-out", delays.to_str().unwrap()]);
         let driver_bridge = Proc::start(&hosts.a, &flags, dir.join("driver-bridge.log"));
         std::thread::sleep(Duration::from_millis(500));
-        let mut flags = vec!["bridge", "rig"];
-        flags.extend(common);
-        flags.push(users_arg);
+        let mut flags = vec![
+            "bridge",
+            "rig",
+            "--driver",
+            "pend",
+            "--endpoint",
+            &rig_endpoint,
+        ];
+        flags.extend(["--credentials", users_arg]);
         flags.extend(rig_flags);
         let rig_bridge = Proc::start(&hosts.b, &flags, dir.join("rig-bridge.log"));
         std::thread::sleep(Duration::from_millis(500));
@@ -115,11 +161,9 @@ impl Across {
     /// `rig run --plant external` against the driver across, `trials` trials, into `out`.
     fn run(&self, out: &Path, extra: &[&str]) -> Output {
         let mut c = self.hosts.b.command(RIG);
-        c.args([
-            "run", "--plant", "external", "--driver", "pend", "--quiet", "--out",
-        ])
-        .arg(out)
-        .args(extra);
+        c.args(["run", "--plant", "external", "--driver", "pend", "--out"])
+            .arg(out)
+            .args(extra);
         c.output().unwrap()
     }
 
@@ -152,6 +196,19 @@ fn counted(log: &str, what: &str) -> u64 {
         .position(|w| *w == what)
         .unwrap_or_else(|| panic!("no {what}: {last}"));
     words[at - 1].parse().unwrap()
+}
+
+/// The p50 [ms] of the bridge summary's line starting with `label`.
+fn p50(log: &str, label: &str) -> f64 {
+    let line = log
+        .lines()
+        .find(|l| l.trim_start().starts_with(label))
+        .unwrap_or_else(|| panic!("no {label}: {log}"));
+    line.split("p50 ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{line}"))
 }
 
 /// `tests/python/check_mcap.py DIR` where Python has the official `mcap` reader.
@@ -371,5 +428,86 @@ fn the_link_down_for_a_second_leaves_the_driver_safe_and_the_run_resumable() {
     check_mcap(&run);
     drop(x.rig_bridge);
     drop(x.driver_bridge);
+    drop(x.driver);
+}
+
+#[test]
+fn a_link_two_milliseconds_slower_each_way_completes_and_shows_in_the_timing() {
+    let delay = Duration::from_millis(2);
+    let Some(x) = Across::over(
+        5,
+        "delay",
+        &["--speed", "5"],
+        &["--same-clock"],
+        Link::Delayed(delay),
+    ) else {
+        return;
+    };
+    let run = x.dir.join("run");
+    let out = x.run(&run, &["--trials", "20"]);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(text(&out).contains("deadline misses: "), "{}", text(&out));
+    check_mcap(&run);
+    let rig_side = x.rig_bridge.stop();
+    let ping = p50(&rig_side, "round trip, pings:");
+    let out_hop = p50(&rig_side, "one way rig→driver:");
+    let back_hop = p50(&rig_side, "one way driver→rig:");
+    assert!(
+        ping >= 4.0 && out_hop >= 2.0 && back_hop >= 2.0,
+        "{rig_side}"
+    );
+    assert!(ping < 20.0, "{rig_side}");
+    // On the driver's host: each action's sample-to-actuation delay, 4 ms or more, and
+    // a file `rig learn --delay-from` takes.
+    x.driver_bridge.stop();
+    let delays = x.dir.join("delays.csv");
+    let text_delays = std::fs::read_to_string(&delays).unwrap();
+    let mut ns: Vec<u64> = text_delays
+        .lines()
+        .skip(1)
+        .map(|l| l.rsplit(',').next().unwrap().parse().unwrap())
+        .collect();
+    ns.sort_unstable();
+    assert!(ns.len() > 1000, "{} delays", ns.len());
+    assert!(
+        ns[ns.len() / 2] >= 4_000_000,
+        "median {} ns",
+        ns[ns.len() / 2]
+    );
+    ok(common::rig()
+        .args([
+            "learn",
+            "--runs",
+            "1",
+            "--trials",
+            "4",
+            "--quiet",
+            "--delay-from",
+        ])
+        .arg(&delays)
+        .arg("--out")
+        .arg(x.dir.join("delayed"))
+        .output()
+        .unwrap());
+    drop(x.driver);
+}
+
+#[test]
+fn one_percent_loss_makes_actions_late_but_never_out_of_order() {
+    let Some(x) = Across::over(6, "loss", &["--speed", "5"], &[], Link::Lossy(1)) else {
+        return;
+    };
+    let run = x.dir.join("run");
+    let out = x.run(&run, &["--trials", "20"]);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(text(&out).contains("deadline misses: "), "{}", text(&out));
+    check_mcap(&run);
+    let driver_side = x.driver_bridge.stop();
+    assert!(counted(&driver_side, "commands") > 2000, "{driver_side}");
+    assert!(
+        driver_side.contains(" 0 out of order, 0 malformed"),
+        "{driver_side}"
+    );
+    drop(x.rig_bridge);
     drop(x.driver);
 }

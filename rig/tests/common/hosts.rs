@@ -163,3 +163,90 @@ fn run(args: &[&str]) {
         panic!("{}: {e}", args.join(" "));
     }
 }
+
+impl Host {
+    /// Drops `percent` % of the TCP packets this host sends, at random (nftables).
+    pub fn lose(&self, percent: u32) {
+        let nft = |args: &[&str]| {
+            let mut all = vec!["ip", "netns", "exec", &self.netns, "nft"];
+            all.extend(args);
+            run(&all);
+        };
+        nft(&["add", "table", "inet", "rigloss"]);
+        nft(&[
+            "add",
+            "chain",
+            "inet",
+            "rigloss",
+            "out",
+            "{ type filter hook output priority 0; }",
+        ]);
+        let rule = format!("meta l4proto tcp numgen random mod 100 < {percent} counter drop");
+        let mut args = vec!["add", "rule", "inet", "rigloss", "out"];
+        args.extend(rule.split(' '));
+        nft(&args);
+    }
+
+    /// A TCP relay on this host, listening on `listen` (`addr:port`) and forwarding to
+    /// `to`, that holds every chunk `delay` in each direction (in order): a link that
+    /// takes `delay` longer each way, where the kernel has no `netem`.
+    pub fn relay(&self, listen: &str, to: &str, delay: Duration) {
+        let (netns, listen, to) = (self.netns.clone(), listen.to_string(), to.to_string());
+        let (ready_tx, ready) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            enter_netns(&netns);
+            let listener = std::net::TcpListener::bind(&listen).expect("relay: bind");
+            ready_tx.send(()).unwrap();
+            for inbound in listener.incoming().flatten() {
+                let Ok(outbound) = std::net::TcpStream::connect(&to) else {
+                    continue;
+                };
+                for (from, into) in [
+                    (inbound.try_clone().unwrap(), outbound.try_clone().unwrap()),
+                    (outbound, inbound),
+                ] {
+                    std::thread::spawn(move || delayed_copy(from, into, delay));
+                }
+            }
+        });
+        ready.recv().expect("relay started");
+    }
+}
+
+/// Moves this thread (and the threads it starts) into network namespace `name`.
+fn enter_netns(name: &str) {
+    use std::os::fd::AsRawFd;
+    let f = std::fs::File::open(format!("/var/run/netns/{name}")).expect("netns file");
+    // SAFETY: setns on an open namespace file descriptor; affects this thread only.
+    let r = unsafe { libc::setns(f.as_raw_fd(), libc::CLONE_NEWNET) };
+    assert_eq!(r, 0, "setns {name}: {}", std::io::Error::last_os_error());
+}
+
+/// Copies `from` to `into`, each chunk written `delay` after it was read.
+fn delayed_copy(mut from: std::net::TcpStream, into: std::net::TcpStream, delay: Duration) {
+    use std::io::{Read, Write};
+    let (tx, rx) = std::sync::mpsc::channel::<(std::time::Instant, Vec<u8>)>();
+    let writer = std::thread::spawn(move || {
+        let mut into = into;
+        for (at, chunk) in rx {
+            std::thread::sleep(at.saturating_duration_since(std::time::Instant::now()));
+            if into.write_all(&chunk).is_err() {
+                break;
+            }
+        }
+        let _ = into.shutdown(std::net::Shutdown::Write);
+    });
+    let _ = from.set_nodelay(true);
+    let mut buf = vec![0u8; 65536];
+    while let Ok(n) = from.read(&mut buf) {
+        if n == 0
+            || tx
+                .send((std::time::Instant::now() + delay, buf[..n].to_vec()))
+                .is_err()
+        {
+            break;
+        }
+    }
+    drop(tx);
+    let _ = writer.join();
+}
