@@ -167,6 +167,19 @@ impl Across {
         c.output().unwrap()
     }
 
+    /// `rig run --plant external` of `trials` trials across into DIR/run: it succeeds,
+    /// says its deadline misses, writes every trial's return, and `check_mcap.py`
+    /// accepts its recording.
+    fn learns(&self, trials: usize) {
+        let run = self.dir.join("run");
+        let out = self.run(&run, &["--trials", &trials.to_string()]);
+        assert!(out.status.success(), "{}", text(&out));
+        assert!(text(&out).contains("deadline misses: "), "{}", text(&out));
+        let returns = std::fs::read_to_string(run.join("returns.csv")).unwrap();
+        assert_eq!(returns.lines().count(), trials + 1, "{returns}");
+        check_mcap(&run);
+    }
+
     fn endpoint(&self) -> String {
         format!("tcp/{}:{PORT}", self.hosts.a.addr)
     }
@@ -252,12 +265,7 @@ fn a_rig_on_one_host_checks_and_learns_from_a_driver_on_another() {
         "{}",
         text(&out)
     );
-    let run = x.dir.join("run");
-    let out = x.run(&run, &["--trials", "20"]);
-    assert!(out.status.success(), "{}", text(&out));
-    let returns = std::fs::read_to_string(run.join("returns.csv")).unwrap();
-    assert_eq!(returns.lines().count(), 21, "{returns}");
-    check_mcap(&run);
+    x.learns(20);
     let rig_side = x.rig_bridge.stop();
     for line in [
         "round trip, pings:          n ",
@@ -443,11 +451,7 @@ fn a_link_two_milliseconds_slower_each_way_completes_and_shows_in_the_timing() {
     ) else {
         return;
     };
-    let run = x.dir.join("run");
-    let out = x.run(&run, &["--trials", "20"]);
-    assert!(out.status.success(), "{}", text(&out));
-    assert!(text(&out).contains("deadline misses: "), "{}", text(&out));
-    check_mcap(&run);
+    x.learns(20);
     let rig_side = x.rig_bridge.stop();
     let ping = p50(&rig_side, "round trip, pings:");
     let out_hop = p50(&rig_side, "one way rig→driver:");
@@ -497,11 +501,7 @@ fn one_percent_loss_makes_actions_late_but_never_out_of_order() {
     let Some(x) = Across::over(6, "loss", &["--speed", "5"], &[], Link::Lossy(1)) else {
         return;
     };
-    let run = x.dir.join("run");
-    let out = x.run(&run, &["--trials", "20"]);
-    assert!(out.status.success(), "{}", text(&out));
-    assert!(text(&out).contains("deadline misses: "), "{}", text(&out));
-    check_mcap(&run);
+    x.learns(20);
     let driver_side = x.driver_bridge.stop();
     assert!(counted(&driver_side, "commands") > 2000, "{driver_side}");
     assert!(
