@@ -119,51 +119,6 @@ fn shift(t: u64, by: i64) -> u64 {
     }
 }
 
-/// Durations collected for a summary: count, median and tail percentiles.
-#[derive(Clone, Debug, Default)]
-pub struct Durations(Vec<u64>);
-
-impl Durations {
-    /// Adds one duration (ns).
-    pub fn push(&mut self, ns: u64) {
-        self.0.push(ns);
-    }
-
-    /// How many were added.
-    pub fn len(&self) -> usize {
-        self.0.len()
-    }
-
-    /// Whether none were added.
-    pub fn is_empty(&self) -> bool {
-        self.0.is_empty()
-    }
-
-    /// The `q`-quantile (0 ≤ q ≤ 1, nearest rank) in ms, if any.
-    pub fn quantile_ms(&self, q: f64) -> Option<f64> {
-        let mut v = self.0.clone();
-        v.sort_unstable();
-        let i = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len().max(1)) - 1;
-        v.get(i).map(|&ns| ns as f64 * 1e-6)
-    }
-
-    /// "n 1200, p50 0.21 ms, p99 0.48 ms, p99.9 1.20 ms, max 3.02 ms", or "none".
-    pub fn summary(&self) -> String {
-        if self.0.is_empty() {
-            return "none".into();
-        }
-        let q = |q| self.quantile_ms(q).unwrap_or(f64::NAN);
-        format!(
-            "n {}, p50 {:.3} ms, p99 {:.3} ms, p99.9 {:.3} ms, max {:.3} ms",
-            self.0.len(),
-            q(0.5),
-            q(0.99),
-            q(0.999),
-            q(1.0)
-        )
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -201,22 +156,5 @@ mod tests {
         let one = ClockMap::new(true);
         assert!(one.ready());
         assert_eq!(one.to_rig(77), 77);
-    }
-
-    #[test]
-    fn durations_summarise_by_nearest_rank() {
-        let mut d = Durations::default();
-        assert_eq!(d.summary(), "none");
-        for ms in 1..=1000u64 {
-            d.push(ms * 1_000_000);
-        }
-        assert_eq!(d.quantile_ms(0.5), Some(500.0));
-        assert_eq!(d.quantile_ms(0.99), Some(990.0));
-        assert_eq!(d.quantile_ms(0.999), Some(999.0));
-        assert!(
-            d.summary().starts_with("n 1000, p50 500.000 ms"),
-            "{}",
-            d.summary()
-        );
     }
 }

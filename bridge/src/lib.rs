@@ -26,11 +26,13 @@ pub mod message;
 mod probe;
 mod rig_side;
 pub mod session;
+pub mod timing;
 
 pub use driver_side::{DriverSide, serve_driver};
 pub use probe::{Probed, probe};
-pub use rig_side::{LinkTiming, RigSide, serve_rig};
+pub use rig_side::{RigSide, serve_rig};
 pub use session::Network;
+pub use timing::LinkTiming;
 
 use anyhow::{Result, anyhow};
 use zenoh::Wait;

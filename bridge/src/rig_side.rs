@@ -21,9 +21,10 @@ use driver::contract::{DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, serv
 use wire::{Bus, Tx, now_ns};
 use zenoh::Wait;
 
-use crate::clock::{ClockMap, Durations, Exchange};
+use crate::clock::{ClockMap, Exchange};
 use crate::message::{Ping, Stamps, Topic, from_bytes, to_bytes};
 use crate::session::{Network, rig_side};
+use crate::timing::{Durations, LinkTiming};
 use crate::{Counts, publisher, wire_err};
 
 /// What `rig bridge rig` serves.
@@ -42,49 +43,6 @@ pub struct RigSide {
     pub link_timeout: Duration,
     /// Every measurement of the link as CSV (`what,seq,ns`), if given.
     pub timing_out: Option<PathBuf>,
-}
-
-/// The link's measurements.
-#[derive(Clone, Debug)]
-pub struct LinkTiming {
-    /// The clocks' map at the end.
-    pub clock: ClockMap,
-    /// Pings' round trips (the network's, the answer's time excluded).
-    pub ping: Durations,
-    /// Command → acknowledging sample, the time on the driver's host excluded.
-    pub command_round_trip: Durations,
-    /// Rig's bridge → driver's bridge (one clock only).
-    pub command_hop: Durations,
-    /// Driver's bridge → rig's bridge (one clock only).
-    pub sample_hop: Durations,
-}
-
-impl LinkTiming {
-    /// The summary lines.
-    pub fn summary(&self) -> String {
-        let clock = &self.clock;
-        let mut s = format!(
-            "  round trip, pings:          {}\n  round trip, command→sample: {}\n",
-            self.ping.summary(),
-            self.command_round_trip.summary()
-        );
-        if clock.same() {
-            s += &format!(
-                "  one way rig→driver:         {}\n  one way driver→rig:         {}\n  (one clock on both hosts)",
-                self.command_hop.summary(),
-                self.sample_hop.summary()
-            );
-        } else if clock.ready() {
-            s += &format!(
-                "  one-way hops not measured (two clocks); driver's clock − rig's: {:.3} ms ± {:.3} ms",
-                clock.offset() as f64 * 1e-6,
-                clock.uncertainty() as f64 * 1e-6
-            );
-        } else {
-            s += "  one-way hops not measured (two clocks); the clocks' offset not measured (no round trip)";
-        }
-        s
-    }
 }
 
 /// A message from the network, with when it arrived.
