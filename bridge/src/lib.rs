@@ -15,7 +15,8 @@
 //! - [`serve_rig`] (`rig bridge rig`): beside the rig, connecting; publishes the driver's
 //!   info and samples under the driver's id on this host, so `rig run --plant external`
 //!   and `rig check-driver` work unchanged; carries the commands back; measures the
-//!   link's round trips and places the driver's stamps on this host's clock ([`clock`]).
+//!   link's round trips ([`timing`]) and places the driver's stamps on this host's clock
+//!   ([`clock`]).
 //! - [`probe`] (`rig bridge probe`): what a peer with given credentials, or none, can
 //!   reach.
 //! - [`message`]: what crosses, as bytes, under which keys.
