@@ -17,7 +17,9 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow};
-use driver::contract::{DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, service, topic};
+use driver::contract::{
+    DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, LinkSample, service, topic,
+};
 use wire::{Bus, Tx, now_ns};
 use zenoh::Wait;
 
@@ -185,6 +187,9 @@ struct Stand<'a> {
     unanswered: bool,
     /// The last command whose round trip was measured.
     acknowledged: u64,
+    /// The latest ping's round trip.
+    last_ping: u64,
+    link: Tx<LinkSample>,
 }
 
 impl<'a> Stand<'a> {
@@ -201,6 +206,9 @@ impl<'a> Stand<'a> {
             .map_err(taken)?;
         let samples = bus
             .tx_on(&service(&opts.id, topic::SAMPLE), DRIVER_QOS)
+            .map_err(taken)?;
+        let link = bus
+            .tx_on(&service(&opts.id, topic::LINK), DRIVER_QOS)
             .map_err(taken)?;
         Ok(Self {
             opts,
@@ -226,6 +234,8 @@ impl<'a> Stand<'a> {
             started: now_ns(),
             unanswered: false,
             acknowledged: 0,
+            last_ping: 0,
+            link,
         })
     }
 
@@ -265,6 +275,7 @@ impl<'a> Stand<'a> {
                     .offset
                     .store(self.timing.clock.offset(), Relaxed);
                 self.timing.ping.push(e.round_trip);
+                self.last_ping = e.round_trip;
                 self.row("ping_round_trip", 0, e.round_trip)?;
             }
             _ if !self.timing.clock.ready() => {}
@@ -285,43 +296,56 @@ impl<'a> Stand<'a> {
                 s.t_publish_ns = self.timing.clock.to_rig(s.t_publish_ns);
                 self.samples.send(s).map_err(wire_err)?;
                 self.counts.samples += 1;
-                self.time_sample(s.seq, &stamps, a.at)?;
+                let l = self.time_sample(s.seq, &stamps, a.at)?;
+                self.link.send(l).map_err(wire_err)?;
             }
             Topic::Command | Topic::Ping => {}
         }
         Ok(())
     }
 
-    /// The round trip through the command a sample acknowledges (once per command), and
-    /// the one-way hops on one clock.
-    fn time_sample(&mut self, seq: u64, st: &Stamps, at: u64) -> Result<()> {
-        if self.timing.clock.same() && st.forwarded != 0 {
-            let hop = at.saturating_sub(st.forwarded);
-            self.timing.sample_hop.push(hop);
-            self.row("sample_hop", seq, hop)?;
-        }
-        if st.command == 0 || st.command == self.acknowledged {
-            return Ok(());
-        }
-        let sent = {
-            let q = self.shared.sent.lock().expect("no panics while holding it");
-            q.iter()
-                .rev()
-                .find(|(s, _)| *s == st.command)
-                .map(|&(_, t)| t)
+    /// What the link did with sample `seq`, arrived at `at`: the one-way hops on one
+    /// clock, the round trip through the command it is the first to acknowledge.
+    fn time_sample(&mut self, seq: u64, st: &Stamps, at: u64) -> Result<LinkSample> {
+        let clock = &self.timing.clock;
+        let mut l = LinkSample {
+            seq,
+            t_received_ns: at,
+            ping_round_trip_ns: self.last_ping,
+            clock_offset_ns: clock.offset(),
+            clock_uncertainty_ns: clock.uncertainty(),
+            ..Default::default()
         };
-        let Some(sent) = sent else { return Ok(()) };
-        self.acknowledged = st.command;
-        let held = st.forwarded.saturating_sub(st.command_arrived);
-        let rt = at.saturating_sub(sent).saturating_sub(held);
-        self.timing.command_round_trip.push(rt);
-        self.row("command_round_trip", st.command, rt)?;
-        if self.timing.clock.same() {
-            let hop = st.command_arrived.saturating_sub(sent);
-            self.timing.command_hop.push(hop);
-            self.row("command_hop", st.command, hop)?;
+        if clock.same() && st.forwarded != 0 {
+            l.sample_hop_ns = at.saturating_sub(st.forwarded);
+            self.timing.sample_hop.push(l.sample_hop_ns);
+            self.row("sample_hop", seq, l.sample_hop_ns)?;
         }
-        Ok(())
+        let Some(sent) = self.first_acknowledged(st) else {
+            return Ok(l);
+        };
+        let held = st.forwarded.saturating_sub(st.command_arrived);
+        l.command_round_trip_ns = at.saturating_sub(sent).saturating_sub(held);
+        self.timing.command_round_trip.push(l.command_round_trip_ns);
+        self.row("command_round_trip", st.command, l.command_round_trip_ns)?;
+        if self.timing.clock.same() {
+            l.command_hop_ns = st.command_arrived.saturating_sub(sent);
+            self.timing.command_hop.push(l.command_hop_ns);
+            self.row("command_hop", st.command, l.command_hop_ns)?;
+        }
+        Ok(l)
+    }
+
+    /// When the command that `st` says arrived last was sent, if this is the first
+    /// sample to say so.
+    fn first_acknowledged(&mut self, st: &Stamps) -> Option<u64> {
+        if st.command == 0 || st.command == self.acknowledged {
+            return None;
+        }
+        let q = self.shared.sent.lock().expect("no panics while holding it");
+        let sent = q.iter().rev().find(|(s, _)| *s == st.command)?.1;
+        self.acknowledged = st.command;
+        Some(sent)
     }
 
     /// Reports the link lost after the timeout's silence, and back when it speaks.

@@ -47,6 +47,9 @@ pub mod topic {
     pub const SAMPLE: &str = "sample";
     /// Rig → driver: actions and reset requests.
     pub const COMMAND: &str = "command";
+    /// The rig's bridge → rig, across hosts only: what the network did with each sample
+    /// ([`super::LinkSample`], docs/across-hosts.md).
+    pub const LINK: &str = "link";
 }
 
 /// Bits of [`DriverSample::status`].
@@ -178,6 +181,32 @@ pub struct DriverCommand {
     pub n_x: u64,
     /// RESET: the state to bring the system to rest at.
     pub x0: [f64; MAX_X],
+}
+
+/// The rig's bridge → rig, one per driver sample it forwards, when the driver is on
+/// another host (docs/across-hosts.md): the link's share of the loop, recorded as
+/// `/driver/link`. Durations in ns on one clock each; 0 where not measured.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
+#[type_name("rig.LinkSample.v1")]
+pub struct LinkSample {
+    /// The driver sample's `seq`.
+    pub seq: u64,
+    /// When it arrived on the rig's host (its monotonic clock).
+    pub t_received_ns: u64,
+    /// Driver's bridge → rig's bridge; only where both hosts read one clock.
+    pub sample_hop_ns: u64,
+    /// Through the command this sample is the first to acknowledge: the rig's bridge
+    /// sent it, the driver's host held it until this sample (excluded), back here.
+    pub command_round_trip_ns: u64,
+    /// That command's rig's bridge → driver's bridge; only on one clock.
+    pub command_hop_ns: u64,
+    /// The latest ping's round trip (the network's and the bridges').
+    pub ping_round_trip_ns: u64,
+    /// The driver's clock minus the rig's, as the samples' stamps were shifted by.
+    pub clock_offset_ns: i64,
+    /// How far that offset may be off: half the round trip it was taken from.
+    pub clock_uncertainty_ns: u64,
 }
 
 impl DriverInfo {
@@ -352,6 +381,7 @@ mod tests {
         assert_eq!(size_of::<DriverInfo>(), 176);
         assert_eq!(size_of::<DriverSample>(), 184);
         assert_eq!(size_of::<DriverCommand>(), 144);
+        assert_eq!(size_of::<LinkSample>(), 64);
         assert_eq!(align_of::<DriverInfo>(), 8);
         assert_eq!(align_of::<DriverSample>(), 8);
         assert_eq!(align_of::<DriverCommand>(), 8);

@@ -9,7 +9,8 @@ use iceoryx2::prelude::*;
 use wire::{Bus, Error, Rx, Tx, now_ns};
 
 use crate::contract::{
-    DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, check_id, kind, service, status, topic,
+    DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, LinkSample, check_id, kind, service,
+    status, topic,
 };
 
 /// Drivers whose nodes are alive on this host: `(id, process id)`, by node name.
@@ -79,6 +80,8 @@ pub struct DriverWatch {
     pub samples: Rx<DriverSample>,
     /// The commands sent to the driver.
     pub commands: Rx<DriverCommand>,
+    /// The link's timing, when a bridge stands in for a driver on another host.
+    pub link: Rx<LinkSample>,
 }
 
 impl DriverWatch {
@@ -90,6 +93,7 @@ impl DriverWatch {
             info: bus.rx_on(&service(id, topic::INFO), DRIVER_QOS)?,
             samples: bus.rx_on(&service(id, topic::SAMPLE), DRIVER_QOS)?,
             commands: bus.rx_on(&service(id, topic::COMMAND), DRIVER_QOS)?,
+            link: bus.rx_on(&service(id, topic::LINK), DRIVER_QOS)?,
         })
     }
 }

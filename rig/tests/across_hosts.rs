@@ -224,6 +224,25 @@ fn p50(log: &str, label: &str) -> f64 {
         .unwrap_or_else(|| panic!("{line}"))
 }
 
+/// Field `field` of every `/driver/link` message of the recording `path` that has it
+/// measured (non-zero), sorted.
+fn recorded_link(path: &Path, field: &str) -> Vec<u64> {
+    let bytes = std::fs::read(path).unwrap();
+    let mut values: Vec<u64> = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(Result::unwrap)
+        .filter(|m| m.channel.topic == "/driver/link")
+        .map(|m| {
+            serde_json::from_slice::<serde_json::Value>(&m.data).unwrap()[field]
+                .as_u64()
+                .unwrap()
+        })
+        .filter(|&v| v != 0)
+        .collect();
+    values.sort_unstable();
+    values
+}
+
 /// `tests/python/check_mcap.py DIR` where Python has the official `mcap` reader.
 fn check_mcap(dir: &Path) {
     let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
@@ -461,6 +480,14 @@ fn a_link_two_milliseconds_slower_each_way_completes_and_shows_in_the_timing() {
         "{rig_side}"
     );
     assert!(ping < 20.0, "{rig_side}");
+    // The recording has the link's share of every sample.
+    let hops = recorded_link(&x.dir.join("run/run.mcap"), "sample_hop_ns");
+    assert!(hops.len() > 1000, "{} /driver/link messages", hops.len());
+    assert!(
+        hops[hops.len() / 2] >= 2_000_000,
+        "median hop {} ns",
+        hops[hops.len() / 2]
+    );
     // On the driver's host: each action's sample-to-actuation delay, 4 ms or more, and
     // a file `rig learn --delay-from` takes.
     x.driver_bridge.stop();

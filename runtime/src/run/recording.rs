@@ -5,7 +5,19 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use driver::contract::{DriverCommand, DriverSample};
+use driver::contract::{DriverCommand, DriverSample, LinkSample};
+
+/// The integer fields of `/driver/link`, in [`LinkSample`]'s order (the offset, signed,
+/// follows as a number).
+const LINK_INTS: [&str; 7] = [
+    "seq",
+    "t_received_ns",
+    "sample_hop_ns",
+    "command_round_trip_ns",
+    "command_hop_ns",
+    "ping_round_trip_ns",
+    "clock_uncertainty_ns",
+];
 use wire::{Action, Estimate, Header, Measurement, Truth};
 
 use crate::config::ExperimentConfig;
@@ -25,8 +37,8 @@ pub(super) struct Recording {
     pub(super) t_measurement: ChannelId,
     pub(super) t_estimate: ChannelId,
     pub(super) t_action: ChannelId,
-    /// `/driver/sample` and `/driver/command`, with an external driver.
-    pub(super) driver: Option<(ChannelId, ChannelId)>,
+    /// `/driver/sample`, `/driver/command` and `/driver/link`, with an external driver.
+    pub(super) driver: Option<(ChannelId, ChannelId, ChannelId)>,
     pub(super) n: usize,
     pub(super) m: usize,
     pub(super) values: Vec<Value>,
@@ -320,12 +332,38 @@ impl Recording {
         let c = self
             .rec
             .channel("/driver/command", "rig.DriverCommand", &command)?;
-        self.driver = Some((s, c));
+        let mut link = ints(&LINK_INTS);
+        link.push(Field::number("clock_offset_ns"));
+        let l = self.rec.channel("/driver/link", "rig.LinkSample", &link)?;
+        self.driver = Some((s, c, l));
         Ok(())
     }
 
+    /// The link's timing of one driver sample (across hosts).
+    pub(super) fn driver_link(&mut self, l: &LinkSample) -> Result<()> {
+        let Some((_, _, ch)) = self.driver else {
+            return Ok(());
+        };
+        self.values.clear();
+        self.values.extend(
+            [
+                l.seq,
+                l.t_received_ns,
+                l.sample_hop_ns,
+                l.command_round_trip_ns,
+                l.command_hop_ns,
+                l.ping_round_trip_ns,
+                l.clock_uncertainty_ns,
+            ]
+            .map(Value::Int),
+        );
+        self.values.push(Value::Num(l.clock_offset_ns as f64));
+        self.rec
+            .write(ch, l.t_received_ns, l.t_received_ns, &self.values)
+    }
+
     pub(super) fn driver_sample(&mut self, s: &DriverSample) -> Result<()> {
-        let Some((ch, _)) = self.driver else {
+        let Some((ch, _, _)) = self.driver else {
             return Ok(());
         };
         self.values.clear();
@@ -340,7 +378,7 @@ impl Recording {
     }
 
     pub(super) fn driver_command(&mut self, c: &DriverCommand) -> Result<()> {
-        let Some((_, ch)) = self.driver else {
+        let Some((_, ch, _)) = self.driver else {
             return Ok(());
         };
         self.values.clear();

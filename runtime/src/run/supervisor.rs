@@ -201,6 +201,9 @@ impl Supervisor {
             while let Some(c) = d.commands.try_recv().map_err(wire_err)? {
                 self.recording.driver_command(&c)?;
             }
+            while let Some(l) = d.link.try_recv().map_err(wire_err)? {
+                self.recording.driver_link(&l)?;
+            }
         }
         Ok(done)
     }
