@@ -117,7 +117,7 @@ def one_host(rig, out, trials, speed):
 def two_hosts(rig, out, trials, speed):
     os.makedirs(out, exist_ok=True)
     users = os.path.join(out, "users.txt")
-    with open(users, "w") as f:
+    with open(os.open(users, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600), "w") as f:
         f.write("rig:bench-password\n")
     hosts = Hosts()
     procs = []

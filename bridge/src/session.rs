@@ -38,6 +38,7 @@ pub struct Network {
 pub fn read_credentials(path: &Path) -> Result<Vec<(String, String)>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("credentials file {}", path.display()))?;
+    warn_if_readable_by_others(path);
     let mut found = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();
@@ -62,6 +63,24 @@ pub fn read_credentials(path: &Path) -> Result<Vec<(String, String)>> {
         );
     }
     Ok(found)
+}
+
+/// Says so when others than the owner may read the credentials file.
+fn warn_if_readable_by_others(path: &Path) {
+    if let Some(mode) = others_may_read(path) {
+        eprintln!(
+            "warning: credentials file {} may be read by others than its owner (mode {mode:o}): `chmod 600 {}`",
+            path.display(),
+            path.display()
+        );
+    }
+}
+
+/// The file's permission bits if its group or others may read or write it.
+fn others_may_read(path: &Path) -> Option<u32> {
+    use std::os::unix::fs::PermissionsExt;
+    let mode = std::fs::metadata(path).ok()?.permissions().mode() & 0o777;
+    (mode & 0o077 != 0).then_some(mode)
 }
 
 /// Opens the driver's side's session: listens on the endpoint, admits the users of the
@@ -213,6 +232,11 @@ mod tests {
                 ("lab".into(), "pa:ss".into())
             ]
         );
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o644)).unwrap();
+        assert_eq!(others_may_read(&f), Some(0o644));
+        std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o600)).unwrap();
+        assert_eq!(others_may_read(&f), None);
         std::fs::write(&f, "rig\n").unwrap();
         let e = read_credentials(&f).unwrap_err().to_string();
         assert!(

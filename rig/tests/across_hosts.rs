@@ -119,6 +119,8 @@ impl Across {
         let dir = tmp("hosts", name);
         let users = dir.join("users.txt");
         std::fs::write(&users, "rig:correct-horse\n").unwrap();
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&users, std::fs::Permissions::from_mode(0o600)).unwrap();
         let mut flags = vec!["sim-driver", "--driver-id", "pend"];
         flags.extend(driver_flags);
         let driver = Proc::start(&hosts.a, &flags, dir.join("driver.log"));
