@@ -71,6 +71,86 @@ enum Link {
     Delayed(Duration),
     /// Over the veth pair, both hosts dropping this percentage of their TCP packets.
     Lossy(u32),
+    /// Over TLS: the driver's bridge with a certificate for its address signed by a CA
+    /// made for the test, the rig's bridge trusting that CA (Zenoh configuration files).
+    Tls,
+}
+
+/// A CA and a certificate for `addr` (openssl), and the Zenoh configuration files of
+/// the driver's side (its key and certificate) and the rig's (the CA); `None`, with the
+/// reason printed, without openssl.
+fn tls_configs(dir: &Path, addr: &str) -> Option<(PathBuf, PathBuf)> {
+    let f = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let ssl = |args: &[&str]| Command::new("openssl").args(args).output();
+    if !ssl(&["version"]).is_ok_and(|o| o.status.success()) {
+        println!("skipped: no `openssl` to make the test's certificates with");
+        return None;
+    }
+    std::fs::write(dir.join("ext.cnf"), format!("subjectAltName=IP:{addr}\n")).unwrap();
+    let (ca, ca_key, key, csr, cert) = (
+        f("ca.pem"),
+        f("ca.key"),
+        f("key.pem"),
+        f("host.csr"),
+        f("cert.pem"),
+    );
+    for args in [
+        vec![
+            "req",
+            "-x509",
+            "-newkey",
+            "rsa:2048",
+            "-nodes",
+            "-keyout",
+            &ca_key,
+            "-out",
+            &ca,
+            "-days",
+            "1",
+            "-subj",
+            "/CN=rig test CA",
+        ],
+        vec![
+            "req",
+            "-newkey",
+            "rsa:2048",
+            "-nodes",
+            "-keyout",
+            &key,
+            "-out",
+            &csr,
+            "-subj",
+            "/CN=driver host",
+        ],
+        vec![
+            "x509",
+            "-req",
+            "-in",
+            &csr,
+            "-CA",
+            &ca,
+            "-CAkey",
+            &ca_key,
+            "-CAcreateserial",
+            "-out",
+            &cert,
+            "-days",
+            "1",
+            "-extfile",
+            &f("ext.cnf"),
+        ],
+    ] {
+        let out = ssl(&args).unwrap();
+        assert!(out.status.success(), "openssl {args:?}: {}", text(&out));
+    }
+    let (driver_side, rig_side) = (dir.join("driver.json5"), dir.join("rig.json5"));
+    std::fs::write(&driver_side, format!("{{ transport: {{ link: {{ tls: {{ listen_private_key: {key:?}, listen_certificate: {cert:?} }} }} }} }}")).unwrap();
+    std::fs::write(
+        &rig_side,
+        format!("{{ transport: {{ link: {{ tls: {{ root_ca_certificate: {ca:?} }} }} }} }}"),
+    )
+    .unwrap();
+    Some((driver_side, rig_side))
 }
 
 /// The driver (`rig sim-driver` with `driver_flags`, id `pend`) and its bridge on host
@@ -97,13 +177,14 @@ impl Across {
         link: Link,
     ) -> Option<Self> {
         let hosts = Hosts::new(n)?;
+        let dir = tmp("hosts", name);
+        let at_a = format!("{}:{PORT}", hosts.a.addr);
+        let (mut driver_endpoint, mut tls) = (format!("tcp/{at_a}"), None);
         let rig_endpoint = match link {
-            Link::Direct => format!("tcp/{}:{PORT}", hosts.a.addr),
+            Link::Direct => driver_endpoint.clone(),
             Link::Delayed(d) => {
                 let relay = format!("{}:{}", hosts.b.addr, PORT + 1);
-                hosts
-                    .b
-                    .relay(&relay, &format!("{}:{PORT}", hosts.a.addr), d);
+                hosts.b.relay(&relay, &at_a, d);
                 format!("tcp/{relay}")
             }
             Link::Lossy(percent) => {
@@ -113,10 +194,14 @@ impl Across {
                 }
                 hosts.a.lose(percent);
                 hosts.b.lose(percent);
-                format!("tcp/{}:{PORT}", hosts.a.addr)
+                driver_endpoint.clone()
+            }
+            Link::Tls => {
+                tls = Some(tls_configs(&dir, &hosts.a.addr)?);
+                driver_endpoint = format!("tls/{at_a}");
+                driver_endpoint.clone()
             }
         };
-        let dir = tmp("hosts", name);
         let users = dir.join("users.txt");
         std::fs::write(&users, "rig:correct-horse\n").unwrap();
         use std::os::unix::fs::PermissionsExt;
@@ -124,13 +209,21 @@ impl Across {
         let mut flags = vec!["sim-driver", "--driver-id", "pend"];
         flags.extend(driver_flags);
         let driver = Proc::start(&hosts.a, &flags, dir.join("driver.log"));
-        let endpoint = format!("tcp/{}:{PORT}", hosts.a.addr);
-        let common = ["--driver", "pend", "--endpoint", &endpoint, "--credentials"];
+        let common = [
+            "--driver",
+            "pend",
+            "--endpoint",
+            &driver_endpoint,
+            "--credentials",
+        ];
         let users_arg = users.to_str().unwrap();
         let delays = dir.join("delays.csv");
         let mut flags = vec!["bridge", "driver"];
         flags.extend(common);
         flags.extend([users_arg, "--timing-out", delays.to_str().unwrap()]);
+        if let Some((driver_side, _)) = &tls {
+            flags.extend(["--zenoh-config", driver_side.to_str().unwrap()]);
+        }
         let driver_bridge = Proc::start(&hosts.a, &flags, dir.join("driver-bridge.log"));
         std::thread::sleep(Duration::from_millis(500));
         let mut flags = vec![
@@ -142,6 +235,9 @@ impl Across {
             &rig_endpoint,
         ];
         flags.extend(["--credentials", users_arg]);
+        if let Some((_, rig_side)) = &tls {
+            flags.extend(["--zenoh-config", rig_side.to_str().unwrap()]);
+        }
         flags.extend(rig_flags);
         let rig_bridge = Proc::start(&hosts.b, &flags, dir.join("rig-bridge.log"));
         std::thread::sleep(Duration::from_millis(500));
@@ -538,5 +634,50 @@ fn one_percent_loss_makes_actions_late_but_never_out_of_order() {
         "{driver_side}"
     );
     drop(x.rig_bridge);
+    drop(x.driver);
+}
+
+#[test]
+fn over_tls_the_driver_passes_its_check_and_a_plain_connection_gets_nothing() {
+    let Some(x) = Across::over(7, "tls", &["--speed", "2"], &[], Link::Tls) else {
+        return;
+    };
+    let out = x.rig(&[
+        "check-driver",
+        "--driver",
+        "pend",
+        "--rate-seconds",
+        "3",
+        "--max-jitter",
+        "0.5",
+    ]);
+    assert!(
+        text(&out).contains("check-driver: PASS (9 checks)"),
+        "{}",
+        text(&out)
+    );
+    // With the credentials but without TLS: the listener speaks TLS only.
+    let plain = format!("tcp/{}:{PORT}", x.hosts.a.addr);
+    let users = x.users.to_str().unwrap();
+    let args = [
+        "bridge",
+        "probe",
+        "--driver",
+        "pend",
+        "--endpoint",
+        &plain,
+        "--credentials",
+        users,
+        "--seconds",
+        "2",
+    ];
+    let out = x.hosts.b.command(RIG).args(args).output().unwrap();
+    assert!(
+        text(&out).contains("0 infos and 0 samples arrived"),
+        "{}",
+        text(&out)
+    );
+    drop(x.rig_bridge);
+    drop(x.driver_bridge);
     drop(x.driver);
 }
