@@ -34,7 +34,8 @@ pub struct Network {
 }
 
 /// The users and passwords of a credentials file, checked: one `user:password` per
-/// line, neither empty; blank lines and `#` comments skipped.
+/// line, neither empty, each trimmed; blank lines skipped. No comments: Zenoh reads the
+/// driver's side's file itself, by these same rules.
 pub fn read_credentials(path: &Path) -> Result<Vec<(String, String)>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("credentials file {}", path.display()))?;
@@ -42,15 +43,15 @@ pub fn read_credentials(path: &Path) -> Result<Vec<(String, String)>> {
     let mut found = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
+        if line.is_empty() {
             continue;
         }
-        match line.split_once(':') {
+        match line.split_once(':').map(|(u, p)| (u.trim(), p.trim())) {
             Some((u, p)) if !u.is_empty() && !p.is_empty() && !u.contains(char::is_whitespace) => {
                 found.push((u.to_string(), p.to_string()))
             }
             _ => bail!(
-                "credentials file {} line {}: expected `user:password` (a user without spaces, neither empty)",
+                "credentials file {} line {}: expected `user:password` (a user without spaces, neither empty; no comments)",
                 path.display(),
                 i + 1
             ),
@@ -224,7 +225,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("bridge-cred-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let f = dir.join("users.txt");
-        std::fs::write(&f, "# who may drive the motor\nrig:s3cret\n\nlab:pa:ss\n").unwrap();
+        std::fs::write(&f, "rig:s3cret\n\n lab : pa:ss \n").unwrap();
         assert_eq!(
             read_credentials(&f).unwrap(),
             [
@@ -243,7 +244,10 @@ mod tests {
             e.contains("users.txt line 1: expected `user:password`"),
             "{e}"
         );
-        std::fs::write(&f, "# nothing\n").unwrap();
+        std::fs::write(&f, "# rig:s3cret\n").unwrap();
+        let e = read_credentials(&f).unwrap_err().to_string();
+        assert!(e.contains("line 1: expected `user:password`"), "{e}");
+        std::fs::write(&f, "\n").unwrap();
         assert!(
             read_credentials(&f)
                 .unwrap_err()
