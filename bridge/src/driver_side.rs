@@ -79,7 +79,12 @@ pub fn serve_driver(opts: &DriverSide) -> Result<Counts> {
         let (session, opts, shared) = (session.clone(), opts.clone(), shared.clone());
         std::thread::Builder::new()
             .name("bridge-up".into())
-            .spawn(move || samples_up(&session, &opts, &shared))?
+            .spawn(move || {
+                // Whichever half ends, the other follows.
+                let r = samples_up(&session, &opts, &shared);
+                shared.stop.store(true, Relaxed);
+                r
+            })?
     };
     let down = commands_down(&session, opts, &shared);
     shared.stop.store(true, Relaxed);
@@ -137,7 +142,7 @@ fn commands_down(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -
         None => None,
     };
     let mut counts = Counts::default();
-    while !bus.interrupted() {
+    while !bus.interrupted() && !shared.stop.load(Relaxed) {
         let Ok(Some(s)) = commands.recv_timeout(Duration::from_millis(100)) else {
             continue;
         };

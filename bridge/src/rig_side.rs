@@ -89,7 +89,12 @@ pub fn serve_rig(opts: &RigSide) -> Result<(Counts, LinkTiming)> {
         let (session, id, shared) = (session.clone(), opts.id.clone(), shared.clone());
         std::thread::Builder::new()
             .name("bridge-commands".into())
-            .spawn(move || commands_up(&session, &id, &shared))?
+            .spawn(move || {
+                // Whichever half ends, the other follows.
+                let r = commands_up(&session, &id, &shared);
+                shared.stop.store(true, Relaxed);
+                r
+            })?
     };
     let mut side = Stand::new(opts, &session, shared.clone())?;
     let result = side.run(&rx);
@@ -242,7 +247,7 @@ impl<'a> Stand<'a> {
     /// Pings every period and passes on what arrives, until interrupted.
     fn run(&mut self, rx: &Receiver<Arrival>) -> Result<()> {
         let mut next_ping = now_ns();
-        while !self.bus.interrupted() {
+        while !self.bus.interrupted() && !self.shared.stop.load(Relaxed) {
             let now = now_ns();
             if now >= next_ping {
                 let p = Ping {
