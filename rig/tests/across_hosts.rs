@@ -278,6 +278,26 @@ impl Across {
         check_mcap(&run);
     }
 
+    /// `rig check-driver` across passes (a 3 s rate measurement, the tests' jitter
+    /// bound for a shared machine).
+    fn passes_check_driver(&self) {
+        let out = self.rig(&[
+            "check-driver",
+            "--driver",
+            "pend",
+            "--rate-seconds",
+            "3",
+            "--max-jitter",
+            "0.5",
+        ]);
+        assert!(out.status.success(), "{}", text(&out));
+        assert!(
+            text(&out).contains("check-driver: PASS (9 checks)"),
+            "{}",
+            text(&out)
+        );
+    }
+
     fn endpoint(&self) -> String {
         format!("tcp/{}:{PORT}", self.hosts.a.addr)
     }
@@ -367,21 +387,7 @@ fn a_rig_on_one_host_checks_and_learns_from_a_driver_on_another() {
     let Some(x) = Across::start(1, "learn", &["--speed", "5"], &[]) else {
         return;
     };
-    let out = x.rig(&[
-        "check-driver",
-        "--driver",
-        "pend",
-        "--rate-seconds",
-        "3",
-        "--max-jitter",
-        "0.5",
-    ]);
-    assert!(out.status.success(), "{}", text(&out));
-    assert!(
-        text(&out).contains("check-driver: PASS (9 checks)"),
-        "{}",
-        text(&out)
-    );
+    x.passes_check_driver();
     x.learns(20);
     let rig_side = x.rig_bridge.stop();
     for line in [
@@ -642,20 +648,7 @@ fn over_tls_the_driver_passes_its_check_and_a_plain_connection_gets_nothing() {
     let Some(x) = Across::over(7, "tls", &["--speed", "2"], &[], Link::Tls) else {
         return;
     };
-    let out = x.rig(&[
-        "check-driver",
-        "--driver",
-        "pend",
-        "--rate-seconds",
-        "3",
-        "--max-jitter",
-        "0.5",
-    ]);
-    assert!(
-        text(&out).contains("check-driver: PASS (9 checks)"),
-        "{}",
-        text(&out)
-    );
+    x.passes_check_driver();
     // With the credentials but without TLS: the listener speaks TLS only.
     let plain = format!("tcp/{}:{PORT}", x.hosts.a.addr);
     let users = x.users.to_str().unwrap();
