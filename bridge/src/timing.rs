@@ -70,25 +70,31 @@ impl Durations {
     pub fn quantile_ms(&self, q: f64) -> Option<f64> {
         let mut v = self.0.clone();
         v.sort_unstable();
-        let i = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len().max(1)) - 1;
-        v.get(i).map(|&ns| ns as f64 * 1e-6)
+        nearest_rank_ms(&v, q)
     }
 
     /// "n 1200, p50 0.21 ms, p99 0.48 ms, p99.9 1.20 ms, max 3.02 ms", or "none".
     pub fn summary(&self) -> String {
-        if self.0.is_empty() {
-            return "none".into();
+        let mut v = self.0.clone();
+        v.sort_unstable();
+        let q = |q| nearest_rank_ms(&v, q).unwrap_or(f64::NAN);
+        match v.len() {
+            0 => "none".into(),
+            n => format!(
+                "n {n}, p50 {:.3} ms, p99 {:.3} ms, p99.9 {:.3} ms, max {:.3} ms",
+                q(0.5),
+                q(0.99),
+                q(0.999),
+                q(1.0)
+            ),
         }
-        let q = |q| self.quantile_ms(q).unwrap_or(f64::NAN);
-        format!(
-            "n {}, p50 {:.3} ms, p99 {:.3} ms, p99.9 {:.3} ms, max {:.3} ms",
-            self.0.len(),
-            q(0.5),
-            q(0.99),
-            q(0.999),
-            q(1.0)
-        )
     }
+}
+
+/// The `q`-quantile of `sorted` (ns) by nearest rank, in ms.
+fn nearest_rank_ms(sorted: &[u64], q: f64) -> Option<f64> {
+    let i = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len().max(1)) - 1;
+    sorted.get(i).map(|&ns| ns as f64 * 1e-6)
 }
 
 #[cfg(test)]
