@@ -32,11 +32,13 @@ pub const VERSION: u64 = 2;
 
 /// Settings of every driver service: one publisher (one driver per id; one rig
 /// commanding it at a time), up to eight subscribers (the rig's plant process, its
-/// recorder, `rig check-driver`, monitors), 256 samples of buffer.
+/// recorder, `rig check-driver`, monitors), 256 samples of buffer, the oldest
+/// overwritten when full (a driver never waits for a reader).
 pub const DRIVER_QOS: Qos = Qos {
     max_publishers: 1,
     max_subscribers: 8,
     buffer: 256,
+    safe_overflow: true,
 };
 
 /// Topics of a driver, below `rig/driver/<id>/`.

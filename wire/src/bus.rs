@@ -5,6 +5,9 @@ use std::time::Duration;
 
 use iceoryx2::prelude::*;
 
+use iceoryx2::port::{BackpressureAction, BackpressureInfo};
+
+use crate::PATIENCE;
 use crate::{Error, Qos, RUN_QOS, Recorded, Rx, Tx, Waiting, describe_service, type_name_of};
 
 /// One process's connection to a run.
@@ -111,7 +114,7 @@ impl Bus {
             .max_publishers(qos.max_publishers)
             .max_subscribers(qos.max_subscribers)
             .subscriber_max_buffer_size(qos.buffer)
-            .enable_safe_overflow(true)
+            .enable_safe_overflow(qos.safe_overflow)
             .open_or_create()
             .map_err(|e| {
                 let found = describe_service(&name, self.node.config());
@@ -178,6 +181,13 @@ impl Bus {
         let publisher = factory
             .publisher_builder()
             .max_loaned_samples(2)
+            .set_backpressure_handler(|info: &BackpressureInfo| {
+                if info.elapsed_time < PATIENCE {
+                    BackpressureAction::Retry
+                } else {
+                    BackpressureAction::DiscardData
+                }
+            })
             .create()
             .map_err(|e| {
                 format!(

@@ -29,7 +29,7 @@ pub use bus::Bus;
 pub use clock::now_ns;
 pub use messages::{Action, Estimate, Header, MAX_U, MAX_X, Measurement, Truth, flags, topic};
 pub use ports::{Recorded, Rx, Tx};
-pub use service::{BUFFER, Qos, RUN_QOS, describe_service, type_name_of};
+pub use service::{BUFFER, PATIENCE, Qos, RUN_QOS, describe_service, type_name_of};
 pub use waiting::{FOREVER, Waiting};
 
 /// Errors of the transport.

@@ -329,4 +329,40 @@ mod tests {
         assert!(waited < 1_000_000_000, "woke {waited} ns after the start");
         sender.join().unwrap();
     }
+
+    #[test]
+    fn a_reader_a_whole_buffer_behind_holds_the_publisher_back_and_loses_nothing() {
+        let run = format!("backpressure{}", std::process::id());
+        let n = crate::BUFFER as u64 + 500;
+        let (ready, listening) = std::sync::mpsc::channel();
+        let reader = {
+            let run = run.clone();
+            std::thread::spawn(move || {
+                let bus = Bus::join(&run, "reader").unwrap();
+                let rx = bus.rx::<Action>(topic::ACTION).unwrap();
+                ready.send(()).unwrap();
+                let next = || rx.recv(&bus, Duration::from_secs(5)).unwrap().header.seq;
+                let first = next();
+                // A recorder that falls behind: reads nothing for 300 ms.
+                std::thread::sleep(Duration::from_millis(300));
+                std::iter::once(first)
+                    .chain((1..n).map(|_| next()))
+                    .collect::<Vec<u64>>()
+            })
+        };
+        let bus = Bus::join(&run, "writer").unwrap();
+        let tx = bus.tx::<Action>(topic::ACTION).unwrap();
+        listening.recv().unwrap();
+        let t0 = now_ns();
+        for seq in 0..n {
+            let mut a = Action::default();
+            a.header.seq = seq;
+            tx.send(a).unwrap();
+        }
+        let sending = now_ns() - t0;
+        let got = reader.join().unwrap();
+        // The publisher waited for the reader to make room rather than overwrite.
+        assert!(sending >= 200_000_000, "sent in {sending} ns");
+        assert_eq!(got, (0..n).collect::<Vec<u64>>());
+    }
 }

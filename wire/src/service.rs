@@ -1,11 +1,18 @@
 //! Publish-subscribe settings of a service, and what an existing service carries.
 
+use std::time::Duration;
+
 use iceoryx2::prelude::*;
 
 /// Subscriber buffer of every run topic: the recorder may lag this many samples behind
-/// (about a quarter of a second of the default lockstep experiment; a recorder that lags further loses
-/// the oldest, and `rig run` stops with an error naming the topic).
+/// (about a quarter of a second of the default lockstep experiment) before it holds the
+/// loop back ([`RUN_QOS`]).
 pub const BUFFER: usize = 16384;
+
+/// How long a publisher on a run topic waits for a subscriber whose buffer is full
+/// before it drops the message for that subscriber (and `rig run` stops with an error
+/// naming the topic): a process that stopped reading, not one that is merely slow.
+pub const PATIENCE: Duration = Duration::from_secs(10);
 
 /// Publish-subscribe settings of a service. Both ends must use the same values:
 /// iceoryx2 refuses to open a service whose settings cannot serve the opener's.
@@ -15,15 +22,24 @@ pub struct Qos {
     pub max_publishers: usize,
     /// Subscribers at most.
     pub max_subscribers: usize,
-    /// Samples a subscriber may have waiting (the oldest is overwritten when full).
+    /// Samples a subscriber may have waiting.
     pub buffer: usize,
+    /// When a subscriber's buffer is full: `true` overwrites its oldest sample (the
+    /// publisher never waits); `false` makes the publisher wait until the subscriber has
+    /// read one, for up to [`PATIENCE`].
+    pub safe_overflow: bool,
 }
 
-/// Settings of the run topics (`rig/<run id>/...`).
+/// Settings of the run topics (`rig/<run id>/...`). A publisher waits for a subscriber
+/// that lags a whole buffer behind — in practice the recorder on a machine busy with
+/// other work — rather than lose its messages: in lockstep the run slows down; in real
+/// time, where the recorder lagging [`BUFFER`] samples behind is minutes of samples, late
+/// actions are counted as deadline misses. Nothing is lost either way.
 pub const RUN_QOS: Qos = Qos {
     max_publishers: 1,
     max_subscribers: 4,
     buffer: BUFFER,
+    safe_overflow: false,
 };
 
 /// The `#[type_name]` of a payload type: its identity across processes and languages.
