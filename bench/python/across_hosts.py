@@ -11,13 +11,16 @@ Runs R times each, alternating:
     `rig bridge driver` on one, `rig bridge rig --same-clock` and the rig on the other.
 Both are the default pendulum experiment (N trials) against a driver at S × real time.
 
-Per run it reads, with the official `mcap` reader, the recording's driver samples and
-commands and takes, per action, sample -> action published by the rig (t_sample_ns of
-the sample the action answers to the command's t_publish_ns; one clock: across, the
-hosts share the machine's). Across hosts it also reads the driver's bridge's
+Each run is `rig latency --driver` (the loop against the driver, recorded, its stages
+per cycle in latency.csv). Per run it reads, with the official `mcap` reader, the
+recording's driver samples and commands and takes, per action, sample -> action
+published by the rig (t_sample_ns of the sample the action answers to the command's
+t_publish_ns; one clock: across, the hosts share the machine's), a check of `rig
+latency`'s own `sample_to_command`. Across hosts it also reads the driver's bridge's
 `--timing-out` file (sample -> action arrived beside the driver, the driver's clock) and
-the rig's bridge's (ping round trips, one-way hops). Prints p50 / p99 / p99.9 of each,
-pooled over the repetitions, and the machine; writes OUT/summary.txt.
+the rig's bridge's (ping round trips, one-way hops). Prints p50 / p99 / p99.9 of each
+and of every stage of `rig latency`, pooled over the repetitions, and the machine;
+writes OUT/summary.txt.
 Needs root, iproute2, util-linux and `pip install mcap`.
 """
 
@@ -54,6 +57,26 @@ def sample_to_command(mcap_path):
             elif m["kind"] == 1 and m["sample_seq"] in sampled:
                 delays.append(m["t_publish_ns"] - sampled[m["sample_seq"]])
     return delays
+
+
+def latency(rig, out, trials):
+    """`rig latency --driver bench` for `trials` trials into `out` (a command line)."""
+    return [rig, "latency", "--driver", "bench", "--cycles", str(trials * 101), "--raw-samples", "2000",
+            "--out", out]
+
+
+def stages(out):
+    """Every stage of OUT/latency.csv: name -> its values (ns) where measured."""
+    found = {}
+    with open(os.path.join(out, "latency.csv")) as f:
+        reader = csv.DictReader(f)
+        names = [n for n in reader.fieldnames if not n.startswith("t_") and not n.endswith("_ns")
+                 and n not in ("seq", "deadline_miss")]
+        for r in reader:
+            for n in names:
+                if r[n]:
+                    found.setdefault(n, []).append(int(r[n]))
+    return found
 
 
 def sh(*args):
@@ -107,11 +130,10 @@ def one_host(rig, out, trials, speed):
     driver = subprocess.Popen([rig, "sim-driver", "--driver-id", "bench", "--speed", str(speed)],
                               stderr=subprocess.DEVNULL)
     try:
-        subprocess.run([rig, "run", "--plant", "external", "--driver", "bench", "--trials", str(trials),
-                        "--quiet", "--out", out], check=True)
+        subprocess.run(latency(rig, out, trials), check=True, capture_output=True)
     finally:
         stop(driver)
-    return sample_to_command(os.path.join(out, "run.mcap"))
+    return sample_to_command(os.path.join(out, "run", "run.mcap")), stages(out)
 
 
 def two_hosts(rig, out, trials, speed):
@@ -131,8 +153,7 @@ def two_hosts(rig, out, trials, speed):
         procs.append(subprocess.Popen(hosts.on(1, [rig, "bridge", "rig", *endpoint, "--same-clock", "--timing-out",
                                                    os.path.join(out, "link.csv")]), stderr=subprocess.DEVNULL))
         time.sleep(0.5)
-        subprocess.run(hosts.on(1, [rig, "run", "--plant", "external", "--driver", "bench", "--trials", str(trials),
-                                    "--quiet", "--out", os.path.join(out, "run")]), check=True)
+        subprocess.run(hosts.on(1, latency(rig, out, trials)), check=True, capture_output=True)
     finally:
         for p in reversed(procs):
             stop(p)
@@ -143,7 +164,7 @@ def two_hosts(rig, out, trials, speed):
     with open(os.path.join(out, "link.csv")) as f:
         for r in csv.DictReader(f):
             link.setdefault(r["what"], []).append(int(r["ns"]))
-    return sample_to_command(os.path.join(out, "run", "run.mcap")), arrived, link
+    return sample_to_command(os.path.join(out, "run", "run.mcap")), arrived, link, stages(out)
 
 
 def main():
@@ -157,14 +178,19 @@ def main():
     if os.geteuid() != 0 or not shutil.which("nsenter"):
         sys.exit("needs root and util-linux's nsenter (network namespaces)")
     rig = os.path.abspath(a.rig)
-    local, across, arrived, link = [], [], [], {}
+    local, across, arrived, link, stage_one, stage_two = [], [], [], {}, {}, {}
     for r in range(a.repetitions):
-        local += one_host(rig, os.path.join(a.out, f"one-{r}"), a.trials, a.speed)
-        s, d, l = two_hosts(rig, os.path.join(a.out, f"two-{r}"), a.trials, a.speed)
+        s, st = one_host(rig, os.path.join(a.out, f"one-{r}"), a.trials, a.speed)
+        local += s
+        for k, v in st.items():
+            stage_one.setdefault(k, []).extend(v)
+        s, d, l, st = two_hosts(rig, os.path.join(a.out, f"two-{r}"), a.trials, a.speed)
         across += s
         arrived += d
         for k, v in l.items():
             link.setdefault(k, []).extend(v)
+        for k, v in st.items():
+            stage_two.setdefault(k, []).extend(v)
         print(f"repetition {r + 1} of {a.repetitions} done", file=sys.stderr)
     lines = [
         f"machine: {platform.node()}, {os.cpu_count()} CPUs, {platform.platform()}, load {os.getloadavg()}",
@@ -179,7 +205,12 @@ def main():
         f"  ping round trip (network + bridges):        {quantiles(link.get('ping_round_trip', []))}",
         f"  one way rig -> driver (bridge to bridge):   {quantiles(link.get('command_hop', []))}",
         f"  one way driver -> rig (bridge to bridge):   {quantiles(link.get('sample_hop', []))}",
+        "",
+        "rig latency --driver, its stages (one host | two hosts):",
     ]
+    for name in list(stage_one) + [n for n in stage_two if n not in stage_one]:
+        lines.append(f"  {name:<20} one: {quantiles(stage_one.get(name, []))}")
+        lines.append(f"  {'':<20} two: {quantiles(stage_two.get(name, []))}")
     text = "\n".join(lines)
     print(text)
     with open(os.path.join(a.out, "summary.txt"), "w") as f:

@@ -7,23 +7,36 @@ use clap::Args as Flags;
 use observer::config::{ObserverKind, ObserverMode};
 use plant::config::Choice;
 
+use crate::external::DriverArgs;
+
 #[derive(Flags)]
 pub struct Args {
     /// Samples (cycles) to time, at least (whole 3 s trials are run).
     #[arg(long, default_value_t = 10_000)]
     cycles: usize,
-    /// Sampling period [ms] (the pendulum's Ts is 30 ms; a shorter period runs the
-    /// simulation faster than real time).
-    #[arg(long, value_name = "MS", default_value_t = 30.0)]
-    period_ms: f64,
+    /// Sampling period [ms] of the simulated plant (the pendulum's Ts is 30 ms; a
+    /// shorter period runs the simulation faster than real time) [default: 30]. With
+    /// `--driver`, the driver's own period applies.
+    #[arg(long, value_name = "MS", conflicts_with = "driver")]
+    period_ms: Option<f64>,
+    /// Measure against this external driver (docs/driver.md), on this host or across
+    /// hosts behind `rig bridge rig` (docs/across-hosts.md), instead of the simulated
+    /// plant: the stages run from the driver's sample to the command answering it, with
+    /// the link's share where there is one.
+    #[command(flatten)]
+    driver: DriverArgs,
+    /// The driver's task file (docs/tasks.md) [default: the pendulum].
+    #[arg(long, value_name = "FILE", requires = "driver")]
+    task: Option<PathBuf>,
     /// State observer on the angle encoder: finite-difference or predictive.
     #[arg(long, default_value = "predictive", value_parser = ObserverKind::parse)]
     observer: ObserverKind,
     /// Timing: predictive (the plant applies the action answering sample k at the next
     /// sample instant t_{k+1}; a deadline miss when it has not arrived by then; needs
-    /// `--observer predictive`) or direct (applied when it arrives, within the interval).
-    #[arg(long, default_value = "predictive", value_parser = ObserverMode::parse)]
-    observer_mode: ObserverMode,
+    /// `--observer predictive` and the simulated plant) or direct (applied when it
+    /// arrives, within the interval) [default: predictive; direct with `--driver`].
+    #[arg(long, value_parser = ObserverMode::parse)]
+    observer_mode: Option<ObserverMode>,
     /// Raw ping-pong round trips for the baseline.
     #[arg(long, default_value_t = 20_000)]
     raw_samples: usize,
@@ -37,8 +50,8 @@ pub struct Args {
     wait: runtime::process::Wait,
     /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
     /// until one misses a deadline; writes DIR/sweep.csv and names the fastest period
-    /// sustained for `--cycles` cycles without a miss.
-    #[arg(long)]
+    /// sustained for `--cycles` cycles without a miss (simulated plant only).
+    #[arg(long, conflicts_with = "driver")]
     sweep: bool,
     /// Output directory.
     #[arg(long, value_name = "DIR", default_value = "out/latency")]
@@ -47,12 +60,26 @@ pub struct Args {
 
 /// Runs the command.
 pub fn main(args: &Args) -> ExitCode {
+    let driver = match args.driver.driver.as_ref().map(|_| args.driver.resolve("")) {
+        Some(Err(e)) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+        d => d.and_then(Result::ok),
+    };
+    let mode = args.observer_mode.unwrap_or(if driver.is_some() {
+        ObserverMode::Direct
+    } else {
+        ObserverMode::Predictive
+    });
     let opts = bench::latency::LatencyOptions {
         cycles: args.cycles,
-        period_ms: args.period_ms,
+        period_ms: args.period_ms.unwrap_or(30.0),
+        driver,
+        task: args.task.clone(),
         out: args.out.clone(),
         observer: args.observer,
-        mode: args.observer_mode,
+        mode,
         raw_samples: args.raw_samples,
         scheduling: args.scheduling,
         spin: args.spin,

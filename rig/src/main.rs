@@ -66,7 +66,8 @@ enum Command {
     /// does, blocking on events and busy-polling; writes loop.csv and summary.txt.
     BenchLoop(bench_loop::Args),
     /// Measure the latency budget of the three-process loop in real time (angle sensor,
-    /// an observer, the default learner, recorded): per hop and per stage percentiles
+    /// an observer, the default learner, recorded), against the simulated plant or an
+    /// external driver (`--driver`, also across hosts): per hop and per stage percentiles
     /// from every message's timestamps, deadline misses, sample-instant jitter, next to
     /// a raw iceoryx2 ping-pong measured in the same run. Writes DIR/latency.csv (one row
     /// per cycle), DIR/summary.txt, a histogram (DIR/latency.png, .svg) and DIR/run/.

@@ -298,6 +298,28 @@ impl Across {
         );
     }
 
+    /// `rig latency --driver pend` across for `cycles` cycles into DIR/latency: it
+    /// succeeds; its summary.
+    fn latency(&self, cycles: usize) -> String {
+        let out = self
+            .hosts
+            .b
+            .command(RIG)
+            .args([
+                "latency",
+                "--driver",
+                "pend",
+                "--cycles",
+                &cycles.to_string(),
+            ])
+            .args(["--raw-samples", "200", "--out"])
+            .arg(self.dir.join("latency"))
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", text(&out));
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    }
+
     fn endpoint(&self) -> String {
         format!("tcp/{}:{PORT}", self.hosts.a.addr)
     }
@@ -344,6 +366,20 @@ fn p50(log: &str, label: &str) -> f64 {
 
 /// Field `field` of every `/driver/link` message of the recording `path` that has it
 /// measured (non-zero), sorted.
+/// The p50 \[µs\] of `stage` in a `rig latency` summary.
+fn stage_p50(summary: &str, stage: &str) -> f64 {
+    summary
+        .lines()
+        .find_map(|l| {
+            l.strip_prefix(stage)?
+                .split_whitespace()
+                .next()?
+                .parse()
+                .ok()
+        })
+        .unwrap_or_else(|| panic!("no stage {stage}: {summary}"))
+}
+
 fn recorded_link(path: &Path, field: &str) -> Vec<u64> {
     let bytes = std::fs::read(path).unwrap();
     let mut values: Vec<u64> = mcap::MessageStream::new(&bytes)
@@ -389,6 +425,21 @@ fn a_rig_on_one_host_checks_and_learns_from_a_driver_on_another() {
     };
     x.passes_check_driver();
     x.learns(20);
+    // Two clocks: the latency budget has the link's round trip and the rig's
+    // turnaround, and nothing that subtracts one host's stamp from the other's.
+    let budget = x.latency(200);
+    assert!(budget.contains("on two clocks") && budget.contains("round trips only"));
+    for stage in ["link_round_trip", "rig_turnaround", "rig_to_measurement"] {
+        assert!(budget.contains(stage), "{stage}: {budget}");
+    }
+    for stage in [
+        "driver_to_rig",
+        "rig_to_driver",
+        "sample_to_command",
+        "slack",
+    ] {
+        assert!(!budget.contains(stage), "{stage}: {budget}");
+    }
     let rig_side = x.rig_bridge.stop();
     for line in [
         "round trip, pings:          n ",
@@ -575,6 +626,23 @@ fn a_link_two_milliseconds_slower_each_way_completes_and_shows_in_the_timing() {
         return;
     };
     x.learns(20);
+    // The latency budget on one clock: both one-way hops, and their sum in the round
+    // trip and in the sample-to-command time.
+    let budget = x.latency(200);
+    assert!(
+        budget.contains("on one clock: one-way hops shown"),
+        "{budget}"
+    );
+    for (stage, at_least_us) in [
+        ("driver_to_rig", 2_000.0),
+        ("rig_to_driver", 2_000.0),
+        ("link_round_trip", 4_000.0),
+        ("sample_to_command", 2_000.0),
+        ("sample_to_actuation", 4_000.0),
+    ] {
+        let p50 = stage_p50(&budget, stage);
+        assert!(p50 >= at_least_us, "{stage}: {budget}");
+    }
     let rig_side = x.rig_bridge.stop();
     let ping = p50(&rig_side, "round trip, pings:");
     let out_hop = p50(&rig_side, "one way rig→driver:");

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 mod common;
+use common::drivers::{Driver, Kind};
 use common::{ok, pipelined, rig};
 
 fn tmp(name: &str) -> PathBuf {
@@ -138,4 +139,97 @@ fn latency_runs_under_a_real_time_priority_or_says_why_not() {
         .unwrap();
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("1..=99"));
+}
+
+#[test]
+fn latency_against_a_driver_times_its_samples_to_the_commands() {
+    // `rig sim-driver` at 10 × real time (3 ms periods) on this host: one clock.
+    let driver = Driver::launch(&Kind::Rust, "latency", &["--speed", "10"]);
+    let dir = tmp("latency-driver");
+    let out = ok(rig()
+        .args(["latency", "--driver", &driver.id])
+        .args(["--cycles", "150", "--raw-samples", "200", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap());
+    let summary = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        summary.contains(&format!(
+            "against driver {:?} at its period 3.000 ms",
+            driver.id
+        )) && summary.contains("driver on this host (one clock)"),
+        "{summary}"
+    );
+    for stage in [
+        "rig_to_measurement",
+        "agent_to_command",
+        "sample_to_command",
+        "slack",
+    ] {
+        assert!(summary.contains(stage), "{stage}: {summary}");
+    }
+    // No bridge, no link.
+    for stage in [
+        "driver_to_rig",
+        "link_round_trip",
+        "rig_turnaround",
+        "sample_to_actuation",
+    ] {
+        assert!(!summary.contains(stage), "{stage}: {summary}");
+    }
+    let csv = std::fs::read_to_string(dir.join("latency.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header.len(), 1 + 11 + 13 + 1, "{header:?}");
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    // Two trials of 100 actions each (the END sample's answer is not sent).
+    assert_eq!(rows.len(), 200);
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let mut in_time = 0;
+    for r in &rows {
+        assert_eq!(r.len(), header.len());
+        let v = |name: &str| r[col(name)].parse::<u64>().unwrap();
+        // The stamps are in cycle order and the stages add up to t_k → command.
+        assert!(v("t_sample_ns") <= v("t_measurement_publish_ns"));
+        assert!(v("t_observer_publish_ns") <= v("t_agent_received_ns"));
+        assert!(v("t_agent_publish_ns") <= v("t_command_publish_ns"));
+        let parts: u64 = bench::latency::DRIVER_STAGES[1..7]
+            .iter()
+            .map(|s| v(s))
+            .sum();
+        assert_eq!(parts, v("sample_to_command"));
+        if v("sample_to_command") <= 3_000_000 {
+            in_time += 1;
+            assert_eq!(v("sample_to_command") + v("slack"), 3_000_000);
+        }
+    }
+    assert!(
+        in_time > 150,
+        "{in_time} of {} commands in time",
+        rows.len()
+    );
+}
+
+#[test]
+fn latency_against_a_driver_refuses_what_only_the_simulated_plant_has() {
+    let dir = tmp("latency-driver-bad");
+    for (extra, says) in [
+        (&["--period-ms", "3"][..], "cannot be used with"),
+        (&["--sweep"][..], "cannot be used with"),
+        (
+            &["--observer-mode", "predictive"][..],
+            "an external driver applies each action as it arrives",
+        ),
+    ] {
+        let out = rig()
+            .args(["latency", "--driver", "nobody"])
+            .args(extra)
+            .arg("--out")
+            .arg(&dir)
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{extra:?}: {err}");
+    }
 }

@@ -14,8 +14,9 @@ use super::{STAGES, STAMPS};
 pub(super) struct Cycles {
     /// `latency.csv`: per cycle its stamps, its stages and whether it missed.
     pub(super) csv: String,
-    /// Per stage, its duration in every cycle that met its deadline (the jitter in
-    /// every cycle) \[ns\].
+    /// The stages' names, in `csv`'s and `stage_ns`'s order.
+    pub(super) names: &'static [&'static str],
+    /// Per stage, its duration in every cycle where it was measured \[ns\].
     pub(super) stage_ns: Vec<Vec<u64>>,
     /// Cycles timed.
     pub(super) cycles: usize,
@@ -23,9 +24,49 @@ pub(super) struct Cycles {
     pub(super) misses: usize,
 }
 
+impl Cycles {
+    /// No cycles yet, with these stamp and stage columns.
+    pub(super) fn new(stamps: &[&str], stages: &'static [&'static str]) -> Self {
+        Self {
+            csv: format!(
+                "seq,{},{},deadline_miss\n",
+                stamps.join(","),
+                stages.join(",")
+            ),
+            names: stages,
+            stage_ns: vec![Vec::new(); stages.len()],
+            cycles: 0,
+            misses: 0,
+        }
+    }
+
+    /// Adds cycle `seq`: its stamps, its stages (`None`: not measured, an empty column)
+    /// and whether it missed its deadline (`misses` is the caller's to count).
+    pub(super) fn push(&mut self, seq: u64, stamps: &[u64], stages: &[Option<u64>], missed: bool) {
+        self.cycles += 1;
+        let _ = write!(self.csv, "{seq}");
+        for s in stamps {
+            let _ = write!(self.csv, ",{s}");
+        }
+        for (all, v) in self.stage_ns.iter_mut().zip(stages) {
+            match v {
+                Some(v) => {
+                    all.push(*v);
+                    let _ = write!(self.csv, ",{v}");
+                }
+                None => self.csv.push(','),
+            }
+        }
+        let _ = writeln!(self.csv, ",{}", u8::from(missed));
+    }
+}
+
+/// The recording's messages of the topics `rig latency` reads, per topic.
+pub(super) type Messages = BTreeMap<String, Vec<Vec<u8>>>;
+
 /// Per-sequence-number stamps of a `/timing/...` channel.
-fn timing(
-    msgs: &BTreeMap<String, Vec<Vec<u8>>>,
+pub(super) fn timing(
+    msgs: &Messages,
     topic: &str,
     keys: &[&str],
 ) -> Result<BTreeMap<u64, Vec<u64>>> {
@@ -46,14 +87,16 @@ fn timing(
     Ok(out)
 }
 
-/// The `/timing/...` messages of `DIR/run.mcap`, per topic.
-fn timing_messages(run_dir: &Path) -> Result<BTreeMap<String, Vec<Vec<u8>>>> {
-    let bytes = std::fs::read(run_dir.join("run.mcap"))?;
-    let mut msgs: BTreeMap<String, Vec<Vec<u8>>> = BTreeMap::new();
+/// The `/timing/...` and `/driver/...` messages of `DIR/run.mcap`, per topic.
+pub(super) fn messages(run_dir: &Path) -> Result<Messages> {
+    let path = run_dir.join("run.mcap");
+    let bytes = std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut msgs = Messages::new();
     for m in mcap::MessageStream::new(&bytes)? {
         let m = m?;
-        if m.channel.topic.starts_with("/timing/") {
-            msgs.entry(m.channel.topic.clone())
+        let topic = &m.channel.topic;
+        if topic.starts_with("/timing/") || topic.starts_with("/driver/") {
+            msgs.entry(topic.clone())
                 .or_default()
                 .push(m.data.into_owned());
         }
@@ -64,7 +107,7 @@ fn timing_messages(run_dir: &Path) -> Result<BTreeMap<String, Vec<Vec<u8>>>> {
 /// The cycles of the run recorded in `run_dir`, whose plant wrote `cycles_path`, at
 /// period `period_ns`.
 pub(super) fn read(run_dir: &Path, cycles_path: &Path, period_ns: u64) -> Result<Cycles> {
-    let msgs = timing_messages(run_dir)?;
+    let msgs = messages(run_dir)?;
     let meas = timing(&msgs, "/timing/plant/measurement", &["t_publish_ns"])?;
     let est = timing(
         &msgs,
@@ -78,16 +121,7 @@ pub(super) fn read(run_dir: &Path, cycles_path: &Path, period_ns: u64) -> Result
     )?;
     let text = std::fs::read_to_string(cycles_path)
         .with_context(|| format!("cannot read {}", cycles_path.display()))?;
-    let mut c = Cycles {
-        csv: format!(
-            "seq,{},{},deadline_miss\n",
-            STAMPS.join(","),
-            STAGES.join(",")
-        ),
-        stage_ns: vec![Vec::new(); STAGES.len()],
-        cycles: 0,
-        misses: 0,
-    };
+    let mut c = Cycles::new(&STAMPS, &STAGES);
     for line in text.lines().skip(1) {
         let v: Vec<u64> = line
             .split(',')
@@ -118,37 +152,27 @@ pub(super) fn read(run_dir: &Path, cycles_path: &Path, period_ns: u64) -> Result
 }
 
 impl Cycles {
-    /// Adds cycle `seq` with its [`STAMPS`].
+    /// Adds cycle `seq` of a simulated plant with its [`STAMPS`].
     fn add(&mut self, seq: u64, stamps: [u64; 9]) {
         let [t_k, woke, .., t_action, deadline] = stamps;
-        self.cycles += 1;
         let missed = t_action == 0 || stamps[2..7].contains(&0);
-        let _ = write!(
-            self.csv,
-            "{seq},{}",
-            stamps.map(|s| s.to_string()).join(",")
-        );
-        let jitter = woke.saturating_sub(t_k);
-        if missed {
-            self.misses += usize::from(t_action == 0);
-            self.stage_ns[0].push(jitter);
-            let _ = writeln!(self.csv, ",{jitter}{},1", ",".repeat(STAGES.len() - 1));
-            return;
-        }
-        let stage = [
-            jitter,
-            stamps[2].saturating_sub(t_k),
-            stamps[3].saturating_sub(stamps[2]),
-            stamps[4].saturating_sub(stamps[3]),
-            stamps[5].saturating_sub(stamps[4]),
-            stamps[6].saturating_sub(stamps[5]),
-            t_action.saturating_sub(stamps[6]),
-            t_action.saturating_sub(t_k),
-            deadline.saturating_sub(t_action),
-        ];
-        for (all, v) in self.stage_ns.iter_mut().zip(&stage) {
-            all.push(*v);
-        }
-        let _ = writeln!(self.csv, ",{},0", stage.map(|s| s.to_string()).join(","));
+        self.misses += usize::from(t_action == 0);
+        let jitter = Some(woke.saturating_sub(t_k));
+        let stages = if missed {
+            [jitter, None, None, None, None, None, None, None, None]
+        } else {
+            [
+                jitter,
+                Some(stamps[2].saturating_sub(t_k)),
+                Some(stamps[3].saturating_sub(stamps[2])),
+                Some(stamps[4].saturating_sub(stamps[3])),
+                Some(stamps[5].saturating_sub(stamps[4])),
+                Some(stamps[6].saturating_sub(stamps[5])),
+                Some(t_action.saturating_sub(stamps[6])),
+                Some(t_action.saturating_sub(t_k)),
+                Some(deadline.saturating_sub(t_action)),
+            ]
+        };
+        self.push(seq, &stamps, &stages, missed);
     }
 }

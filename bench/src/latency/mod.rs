@@ -30,6 +30,14 @@
 //! slack               t_k + period − plant found the action
 //! ```
 //!
+//! **Against an external driver** (`rig latency --driver ID`, [`DRIVER_STAGES`]) the
+//! driver is the clock and the plant process is its episode master: a cycle runs from
+//! driver sample `k` to the command answering it. Across hosts the rig's bridge records
+//! the link's share per sample (`/driver/link`): the round trip through both bridges
+//! (`link_round_trip`, each host's share on its own clock), the rig's turnaround from
+//! the sample's arrival to the command, and — only where both hosts read one clock —
+//! the one-way hops and `t_k` to the command.
+//!
 //! A cycle whose action did not arrive within the period is a deadline miss (its later
 //! stages are left empty in `latency.csv`). The summary also reports what the machine
 //! did meanwhile ([`MachineLoad`]: load average, the hypervisor's steal time, interrupts
@@ -46,16 +54,18 @@ use observer::config::{ObserverKind, ObserverMode, SensorKind};
 use crate::loop_bench::{Stats, raw_round_trips};
 
 mod cycles;
+mod external;
 mod machine;
 mod sweep;
 
+pub use external::{DRIVER_STAGES, DRIVER_STAMPS, Reach};
 use machine::Counters;
 pub use machine::MachineLoad;
 use runtime::config::Overrides;
 use runtime::learn::write_atomic;
 use runtime::process::{CpuSet, Layout, Scheduling, Spin};
 use runtime::report::plot::{Histogram, plot_histograms};
-use runtime::run::{RunOptions, run};
+use runtime::run::{ExternalDriver, RunOptions, run};
 pub use sweep::{SweepPoint, sweep};
 
 /// What `rig latency` runs.
@@ -63,14 +73,19 @@ pub use sweep::{SweepPoint, sweep};
 pub struct LatencyOptions {
     /// Samples (cycles) to time, at least; whole trials are run.
     pub cycles: usize,
-    /// Sampling period \[ms\].
+    /// Sampling period \[ms\] of the simulated plant (a driver keeps its own).
     pub period_ms: f64,
+    /// An external driver in place of the simulated plant: its period, its stamps and,
+    /// across hosts, the link's ([`DRIVER_STAGES`]).
+    pub driver: Option<ExternalDriver>,
+    /// A task file in place of the pendulum (the driver's task).
+    pub task: Option<PathBuf>,
     /// Output directory.
     pub out: PathBuf,
     /// The observer (the sensor is the angle encoder).
     pub observer: ObserverKind,
     /// The timing: direct (an action is applied when it arrives) or predictive (at the
-    /// next sample instant; `observer` must be predictive).
+    /// next sample instant; `observer` must be predictive; simulated plant only).
     pub mode: ObserverMode,
     /// Raw ping-pong round trips for the baseline.
     pub raw_samples: usize,
@@ -111,6 +126,14 @@ pub const STAMPS: [&str; 9] = [
     "deadline_ns",
 ];
 
+/// Stages that are not one local hop: no ratio to the raw hop.
+const SPANS_HOSTS: [&str; 4] = [
+    "driver_to_rig",
+    "rig_to_driver",
+    "sample_to_command",
+    "sample_to_actuation",
+];
+
 /// What `rig latency` measured.
 #[derive(Clone, Debug)]
 pub struct LatencyReport {
@@ -124,6 +147,9 @@ pub struct LatencyReport {
     pub scheduling: Scheduling,
     /// How the plant waited for a sampling instant.
     pub spin: Spin,
+    /// The external driver's id and how its samples reached the rig; `None`: the
+    /// simulated plant.
+    pub driver: Option<(String, Reach)>,
     /// Raw round trips \[µs\].
     pub raw_rtt: Stats,
     /// Per stage ([`STAGES`]), over the cycles that met their deadline \[µs\].
@@ -146,24 +172,32 @@ impl LatencyReport {
     /// The one-screen summary.
     pub fn summary(&self) -> String {
         let mut s = String::new();
-        let _ = writeln!(
-            s,
-            "rig latency: {} cycles at {:.3} ms, angle sensor, plant spins {} µs, {}{}; deadline misses: {}",
-            self.cycles,
-            self.period_ns as f64 * 1e-6,
-            self.spin.spin_us,
-            self.scheduling
-                .rt_priority
-                .map_or("ordinary scheduling".to_string(), |p| format!(
-                    "SCHED_FIFO {p}"
-                )),
-            if self.scheduling.layout() == Some(Layout::PlantAlone) {
-                ", plant pinned to its own CPU"
-            } else {
-                ""
-            },
-            self.misses
-        );
+        let scheduling = self
+            .scheduling
+            .rt_priority
+            .map_or("ordinary scheduling".to_string(), |p| {
+                format!("SCHED_FIFO {p}")
+            });
+        let pinned = if self.scheduling.layout() == Some(Layout::PlantAlone) {
+            ", plant pinned to its own CPU"
+        } else {
+            ""
+        };
+        let period = self.period_ns as f64 * 1e-6;
+        let _ = match &self.driver {
+            None => writeln!(
+                s,
+                "rig latency: {} cycles at {period:.3} ms, angle sensor, plant spins {} µs, {scheduling}{pinned}; deadline misses: {}",
+                self.cycles, self.spin.spin_us, self.misses
+            ),
+            Some((id, reach)) => writeln!(
+                s,
+                "rig latency: {} cycles against driver {id:?} at its period {period:.3} ms, angle sensor, {scheduling}{pinned}; actions not applied by the next sample: {}\n{}",
+                self.cycles,
+                self.misses,
+                external::describe(*reach)
+            ),
+        };
         let _ = writeln!(
             s,
             "raw iceoryx2 ping-pong ({} round trips): RTT p50 {:.1} µs, p99 {:.1} µs → one-way hop p50 {:.1} µs",
@@ -191,7 +225,7 @@ impl LatencyReport {
             "stage [µs]", "p50", "p90", "p99", "p99.9", "max", "p50 / hop"
         );
         for (name, st) in &self.stages {
-            let ratio = if name.contains("_to_") {
+            let ratio = if name.contains("_to_") && !SPANS_HOSTS.contains(name) {
                 format!("{:.2}", st.p50 / self.raw_hop_p50())
             } else {
                 String::new()
@@ -230,9 +264,16 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     let run_dir = opts.out.join("run");
     let cycles_path = run_dir.join("plant_cycles.csv");
     let (period_ns, machine) = run_realtime(opts, &run_dir, &cycles_path)?;
-    let mut c = cycles::read(&run_dir, &cycles_path, period_ns)?;
+    let (mut c, reach) = match &opts.driver {
+        None => (cycles::read(&run_dir, &cycles_path, period_ns)?, None),
+        Some(_) => {
+            let (c, reach) = external::read(&cycles::messages(&run_dir)?, period_ns)?;
+            (c, Some(reach))
+        }
+    };
     write_atomic(&opts.out.join("latency.csv"), &c.csv)?;
-    let stages: Vec<(&'static str, Stats)> = STAGES
+    let stages: Vec<(&'static str, Stats)> = c
+        .names
         .iter()
         .zip(&mut c.stage_ns)
         .filter(|(_, v)| !v.is_empty())
@@ -244,6 +285,11 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
         misses: c.misses,
         scheduling: opts.scheduling,
         spin: opts.spin,
+        driver: opts
+            .driver
+            .as_ref()
+            .zip(reach)
+            .map(|(d, r)| (d.id.clone(), r)),
         raw_rtt,
         stages,
         machine,
@@ -253,7 +299,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     if opts.verbose {
         print!("{summary}");
     }
-    plot_stages(&opts.out, &report, &c.stage_ns)?;
+    plot_stages(&opts.out, &report, c.names, &c.stage_ns)?;
     Ok(report)
 }
 
@@ -271,6 +317,11 @@ fn validate(opts: &LatencyOptions) -> Result<()> {
     if let Some(layout) = opts.scheduling.layout() {
         layout.check()?;
     }
+    if opts.driver.is_some() && opts.mode == ObserverMode::Predictive {
+        bail!(
+            "`--observer-mode predictive` needs the simulated plant: an external driver applies each action as it arrives (`--observer-mode direct`, the default with `--driver`)"
+        );
+    }
     if opts.mode == ObserverMode::Predictive && opts.observer != ObserverKind::Predictive {
         bail!(
             "`--observer-mode predictive` (rig latency's default) needs `--observer predictive` (its process model predicts x̂_(k+1|k)); with `--observer {}` add `--observer-mode direct`",
@@ -280,20 +331,23 @@ fn validate(opts: &LatencyOptions) -> Result<()> {
     Ok(())
 }
 
-/// `rig run` in real time at the period of `opts` for at least its cycles, into
-/// `run_dir`, the plant's cycles into `cycles_path`; returns the period \[ns\] and what
-/// the machine did meanwhile.
+/// `rig run` in real time for at least the cycles of `opts` into `run_dir`: the
+/// simulated plant at the period of `opts`, its cycles into `cycles_path`, or the
+/// external driver at its own. Returns the period \[ns\] and what the machine did
+/// meanwhile.
 fn run_realtime(
     opts: &LatencyOptions,
     run_dir: &Path,
     cycles_path: &Path,
 ) -> Result<(u64, Option<MachineLoad>)> {
+    let mode = opts.mode;
     let mut cfg = runtime::config::resolve(
         None,
         &Overrides {
+            task: opts.task.clone(),
             sensor: Some(SensorKind::Angle),
             observer: Some(opts.observer),
-            observer_mode: Some(opts.mode),
+            observer_mode: Some(mode),
             eval_every: Some(0),
             ..Default::default()
         },
@@ -303,17 +357,18 @@ fn run_realtime(
     let per_trial = task.steps_per_trial() + 1;
     cfg.run.trials = opts.cycles.div_ceil(per_trial) as u32;
     let speed = task.ts / (opts.period_ms * 1e-3);
+    let simulated = opts.driver.is_none();
     let before = Counters::read();
-    run(
+    let summary = run(
         &cfg,
         &RunOptions {
             out: run_dir.to_owned(),
             run_id: None,
             progress: false,
-            realtime: Some(speed),
-            driver: None,
+            realtime: simulated.then_some(speed),
+            driver: opts.driver.clone(),
             resume: false,
-            cycles_out: Some(cycles_path.to_owned()),
+            cycles_out: simulated.then(|| cycles_path.to_owned()),
             scheduling: opts.scheduling,
             spin: opts.spin,
             waiting: opts.waiting,
@@ -326,20 +381,30 @@ fn run_realtime(
                 .then(runtime::process::cpus::last_cpu),
         )
     });
-    Ok(((task.ts * 1e9 / speed).round() as u64, machine))
+    let period_ns = match summary.driver {
+        Some(info) => info.period_ns,
+        None => (task.ts * 1e9 / speed).round() as u64,
+    };
+    Ok((period_ns, machine))
 }
 
 /// Histograms of the hops and compute stages, up to the largest p99.9 among them, as
 /// `DIR/latency.png` and `.svg`.
-fn plot_stages(out: &Path, report: &LatencyReport, stage_ns: &[Vec<u64>]) -> Result<()> {
-    let shown: Vec<&str> = STAGES
-        .into_iter()
-        .filter(|s| !matches!(*s, "plant" | "slack"))
+fn plot_stages(
+    out: &Path,
+    report: &LatencyReport,
+    names: &[&'static str],
+    stage_ns: &[Vec<u64>],
+) -> Result<()> {
+    let shown: Vec<&str> = names
+        .iter()
+        .copied()
+        .filter(|s| !matches!(*s, "plant" | "slack" | "sample_to_command"))
         .collect();
     let values: Vec<(&str, Vec<f64>)> = shown
         .iter()
         .filter_map(|name| {
-            let i = STAGES.iter().position(|s| s == name)?;
+            let i = names.iter().position(|s| s == name)?;
             Some((
                 *name,
                 stage_ns[i].iter().map(|&ns| ns as f64 / 1e3).collect(),

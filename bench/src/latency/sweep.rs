@@ -25,6 +25,9 @@ pub fn sweep(opts: &LatencyOptions, factor: f64) -> Result<Vec<SweepPoint>> {
     if !(factor.is_finite() && factor > 1.0) {
         bail!("sweep factor {factor} must be > 1");
     }
+    if opts.driver.is_some() {
+        bail!("`--sweep` needs the simulated plant: an external driver keeps its own period");
+    }
     std::fs::create_dir_all(&opts.out)
         .with_context(|| format!("cannot create {}", opts.out.display()))?;
     let mut points = Vec::new();
