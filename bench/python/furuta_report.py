@@ -139,9 +139,10 @@ def main():
             held, first, share, balanced = balance_summary(run)
             ok += balanced
             print(
-                f"{name} {run.name}: first within {UPRIGHT} rad of upright at "
-                f"{'never' if first is None else f'{first:.2f} s'}, {100 * share:.0f} % of the trial, "
-                f"the last {held:.2f} s{': swings up and balances' if balanced else ''}"
+                f"{name} {run.name}: "
+                + (f"never within {UPRIGHT} rad of upright" if first is None else
+                   f"first within {UPRIGHT} rad of upright at {first:.2f} s, {100 * share:.0f} % of the trial, "
+                   f"the last {held:.2f} s{': swings up and balances' if balanced else ''}")
             )
         print(f"{name}: {ok} of {len(runs)} runs swing up and balance")
     ax.set_xlabel("trial")
