@@ -8,12 +8,15 @@ time response of the last greedy trial of one run, from its recording.
 
 Writes OUT/curves.png, OUT/curves.svg, OUT/response-<LEARNER>.png/.svg (the run with the
 best last greedy return; with several start states, the greedy trial from the last) and
-prints a Markdown table (final greedy returns, best, wall time). Needs matplotlib and mcap
-(the official reader).
+prints a Markdown table (final greedy returns, best, wall time) and, per run, how its last
+greedy trial ends: a run *swings up and balances* if that trial runs its full length and
+its last max(1.5 s, a third of the trial) are all within 0.3 rad of upright. Needs
+matplotlib and mcap (the official reader).
 """
 
 import csv
 import json
+import math
 import statistics
 import sys
 from pathlib import Path
@@ -25,6 +28,40 @@ import matplotlib.pyplot as plt  # noqa: E402
 from mcap.reader import make_reader  # noqa: E402
 
 FLAG_GREEDY = 4
+TS = 0.02  # the task's sampling time [s]
+UPRIGHT = 0.3  # "upright": |alpha| below this [rad]
+
+
+def wrap(a: float) -> float:
+    """Angle to [-pi, pi)."""
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def trial_seconds(run_dir: Path) -> float:
+    """The task's trial length, from the run's resolved configuration."""
+    for line in open(run_dir / "config.toml"):
+        if line.startswith("trial_seconds"):
+            return float(line.split("=", 1)[1])
+    raise ValueError(f"{run_dir}/config.toml: no trial_seconds")
+
+
+def balance_summary(run_dir: Path):
+    """(time within UPRIGHT of upright at the end of the last greedy trial [s], that
+    trial's first time within UPRIGHT or None, the share of it within UPRIGHT, whether it
+    swings up and balances)."""
+    t, x, _ = last_greedy_trial(run_dir / "run.mcap")
+    length = trial_seconds(run_dir)
+    up = [abs(wrap(a)) < UPRIGHT for a in x[1]]
+    tail = 0
+    for u in reversed(up):
+        if not u:
+            break
+        tail += 1
+    full = t[-1] >= length - 1e-9
+    held = (tail - 1) * TS if full and tail else 0.0
+    first = next((ti for ti, u in zip(t, up) if u), None)
+    need = max(1.5, length / 3.0)
+    return held, first, sum(up[1:]) / (len(up) - 1), full and held >= need - 1e-9
 
 
 def greedy_curves(runs_csv: Path):
@@ -48,7 +85,7 @@ def last_greedy_trial(mcap_path: Path):
                     trials[m["trial"]] = []
                 trials.setdefault(m["trial"], []).append(m)
     msgs = trials[max(trials)]
-    t = [m["step"] * 0.02 for m in msgs]
+    t = [m["step"] * TS for m in msgs]
     x = [[m[f"y_{i}"] for m in msgs] for i in range(4)]
     u = [m["u_applied_0"] for m in msgs]
     return t, x, u
@@ -95,6 +132,19 @@ def main():
         rfig.tight_layout()
         for ext in ("png", "svg"):
             rfig.savefig(out / f"response-{name}.{ext}")
+    for name, d in learners:
+        runs = sorted(Path(d).glob("seed-*"), key=lambda p: int(p.name[5:]))
+        ok = 0
+        for run in runs:
+            held, first, share, balanced = balance_summary(run)
+            ok += balanced
+            print(
+                f"{name} {run.name}: "
+                + (f"never within {UPRIGHT} rad of upright" if first is None else
+                   f"first within {UPRIGHT} rad of upright at {first:.2f} s, {100 * share:.0f} % of the trial, "
+                   f"the last {held:.2f} s{': swings up and balances' if balanced else ''}")
+            )
+        print(f"{name}: {ok} of {len(runs)} runs swing up and balance")
     ax.set_xlabel("trial")
     ax.set_ylabel("greedy return")
     ax.set_title(f"{out.name}: learning against the Python driver (lockstep)")
