@@ -1,6 +1,7 @@
 //! `rig latency`: every stage of every cycle timed, under the scheduling asked for.
 
-use std::path::PathBuf;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
 
 mod common;
 use common::drivers::{Driver, Kind};
@@ -45,22 +46,16 @@ fn latency_times_every_stage_of_every_cycle() {
         assert!(summary.contains(stage), "{summary}");
     }
     assert!(summary.contains("deadline misses") && summary.contains("raw iceoryx2"));
-    let csv = std::fs::read_to_string(dir.join("latency.csv")).unwrap();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    assert_eq!(header.len(), 1 + 9 + 9 + 1, "{header:?}");
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let rows = latency_rows(&dir, 1 + 9 + 9 + 1);
     // Two whole trials (101 samples each), every sample a row.
     assert_eq!(rows.len(), 202);
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let mut met = 0;
     for r in &rows {
-        assert_eq!(r.len(), header.len());
-        if r[col("deadline_miss")] == "1" {
+        if r["deadline_miss"] == "1" {
             continue;
         }
         met += 1;
-        let v = |name: &str| r[col(name)].parse::<u64>().unwrap();
+        let v = |name: &str| r[name].parse::<u64>().unwrap();
         // The stamps are in cycle order and the stages add up.
         assert!(v("t_sample_ns") <= v("t_measurement_publish_ns"));
         assert!(v("t_measurement_publish_ns") <= v("t_observer_received_ns"));
@@ -80,6 +75,26 @@ fn latency_times_every_stage_of_every_cycle() {
     for f in ["latency.png", "latency.svg", "summary.txt", "run/run.mcap"] {
         assert!(dir.join(f).exists(), "{f}");
     }
+}
+
+/// The rows of DIR/latency.csv, each a map from column to cell, checked to have
+/// `columns` columns each.
+fn latency_rows(dir: &Path, columns: usize) -> Vec<HashMap<String, String>> {
+    let csv = std::fs::read_to_string(dir.join("latency.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(header.len(), columns, "{header:?}");
+    lines
+        .map(|l| {
+            let cells: Vec<&str> = l.split(',').collect();
+            assert_eq!(cells.len(), columns, "{l}");
+            header
+                .iter()
+                .zip(cells)
+                .map(|(h, c)| (h.to_string(), c.to_string()))
+                .collect()
+        })
+        .collect()
 }
 
 /// `rig latency` for 50 cycles at 3 ms with 200 raw round trips and `extra`, into
@@ -177,18 +192,12 @@ fn latency_against_a_driver_times_its_samples_to_the_commands() {
     ] {
         assert!(!summary.contains(stage), "{stage}: {summary}");
     }
-    let csv = std::fs::read_to_string(dir.join("latency.csv")).unwrap();
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    assert_eq!(header.len(), 1 + 11 + 13 + 1, "{header:?}");
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let rows = latency_rows(&dir, 1 + 11 + 13 + 1);
     // Two trials of 100 actions each (the END sample's answer is not sent).
     assert_eq!(rows.len(), 200);
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let mut in_time = 0;
     for r in &rows {
-        assert_eq!(r.len(), header.len());
-        let v = |name: &str| r[col(name)].parse::<u64>().unwrap();
+        let v = |name: &str| r[name].parse::<u64>().unwrap();
         // The stamps are in cycle order and the stages add up to t_k → command.
         assert!(v("t_sample_ns") <= v("t_measurement_publish_ns"));
         assert!(v("t_observer_publish_ns") <= v("t_agent_received_ns"));
