@@ -35,8 +35,10 @@ impl TaskArgs {
 /// external` only).
 #[derive(Args)]
 pub struct DriverArgs {
-    /// The external driver's id: its services are rig/driver/ID/{info,sample,command}
-    /// (`rig run`: needs `--plant external`) [default: the task's name, e.g. pendulum].
+    /// The external driver's id: its services are rig/driver/ID/{info,sample,command}.
+    /// `rig run` (with `--plant external`) and `rig check-driver`: default the task's
+    /// name, e.g. pendulum; `rig latency`: measure against it instead of the simulated
+    /// plant.
     #[arg(long, value_name = "ID")]
     pub(crate) driver: Option<String>,
     /// How long to wait for the driver to appear (its first info message) [s].

@@ -19,10 +19,10 @@ pub struct Args {
     /// `--driver`, the driver's own period applies.
     #[arg(long, value_name = "MS", conflicts_with = "driver")]
     period_ms: Option<f64>,
-    /// Measure against this external driver (docs/driver.md), on this host or across
-    /// hosts behind `rig bridge rig` (docs/across-hosts.md), instead of the simulated
-    /// plant: the stages run from the driver's sample to the command answering it, with
-    /// the link's share where there is one.
+    // `--driver ID`: against an external driver (docs/driver.md), on this host or across
+    // hosts behind `rig bridge rig` (docs/across-hosts.md), instead of the simulated
+    // plant: the stages run from the driver's sample to the command answering it, with
+    // the link's share where there is one (docs/latency.md).
     #[command(flatten)]
     driver: DriverArgs,
     /// The driver's task file (docs/tasks.md) [default: the pendulum].
