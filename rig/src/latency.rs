@@ -60,12 +60,14 @@ pub struct Args {
 
 /// Runs the command.
 pub fn main(args: &Args) -> ExitCode {
+    // `--driver` has no default here: without it, the simulated plant.
     let driver = match args.driver.driver.as_ref().map(|_| args.driver.resolve("")) {
+        None => None,
+        Some(Ok(d)) => Some(d),
         Some(Err(e)) => {
             eprintln!("error: {e}");
             return ExitCode::FAILURE;
         }
-        d => d.and_then(Result::ok),
     };
     let mode = args.observer_mode.unwrap_or(if driver.is_some() {
         ObserverMode::Direct
