@@ -260,6 +260,10 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
         wire::Waiting::Block,
     )?;
     let raw_rtt = Stats::of(&mut raw);
+    // This process records the run: under SCHED_FIFO at the loop's priority, each chunk's
+    // compression (about once a second at 1 kHz) would hold the observer and the agent
+    // on its CPU until done. As batch work it yields to them at once.
+    runtime::process::batch_thread();
 
     let run_dir = opts.out.join("run");
     let cycles_path = run_dir.join("plant_cycles.csv");
