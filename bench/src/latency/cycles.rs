@@ -64,27 +64,35 @@ impl Cycles {
 /// The recording's messages of the topics `rig latency` reads, per topic.
 pub(super) type Messages = BTreeMap<String, Vec<Vec<u8>>>;
 
-/// Per-sequence-number stamps of a `/timing/...` channel.
+/// The messages of `topic`, parsed.
+pub(super) fn json(msgs: &Messages, topic: &str) -> Result<Vec<serde_json::Value>> {
+    msgs.get(topic)
+        .ok_or_else(|| anyhow!("the recording has no {topic}"))?
+        .iter()
+        .map(|d| serde_json::from_slice(d).map_err(|e| anyhow!("{topic}: {e}")))
+        .collect()
+}
+
+/// Field `key` of a message of `topic`, an unsigned integer.
+pub(super) fn int(v: &serde_json::Value, key: &str, topic: &str) -> Result<u64> {
+    v[key]
+        .as_u64()
+        .ok_or_else(|| anyhow!("{topic}: a message without {key}"))
+}
+
+/// Per-sequence-number stamps of a `/timing/...` channel (0 where a key is missing).
 pub(super) fn timing(
     msgs: &Messages,
     topic: &str,
     keys: &[&str],
 ) -> Result<BTreeMap<u64, Vec<u64>>> {
-    let list = msgs
-        .get(topic)
-        .ok_or_else(|| anyhow!("the recording has no {topic}"))?;
-    let mut out = BTreeMap::new();
-    for data in list {
-        let v: serde_json::Value = serde_json::from_slice(data)?;
-        let seq = v["seq"]
-            .as_u64()
-            .ok_or_else(|| anyhow!("{topic}: a message without seq"))?;
-        out.insert(
-            seq,
-            keys.iter().map(|k| v[*k].as_u64().unwrap_or(0)).collect(),
-        );
-    }
-    Ok(out)
+    json(msgs, topic)?
+        .iter()
+        .map(|v| {
+            let stamps = keys.iter().map(|k| v[*k].as_u64().unwrap_or(0)).collect();
+            Ok((int(v, "seq", topic)?, stamps))
+        })
+        .collect()
 }
 
 /// The `/timing/...` and `/driver/...` messages of `DIR/run.mcap`, per topic.

@@ -12,10 +12,10 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use anyhow::{Result, anyhow, bail};
+use anyhow::{Result, bail};
 use driver::contract::kind;
 
-use super::cycles::{Cycles, Messages, timing};
+use super::cycles::{Cycles, Messages, int, json, timing};
 
 /// Stage names, in cycle order, as `latency.csv` columns (ns) and summary rows. A stage
 /// not measured in a run (no bridge, or two clocks) is left out of its summary.
@@ -293,22 +293,6 @@ fn acknowledging(
         }
     }
     out
-}
-
-/// The messages of `topic`, parsed.
-fn json(msgs: &Messages, topic: &str) -> Result<Vec<serde_json::Value>> {
-    msgs.get(topic)
-        .ok_or_else(|| anyhow!("the recording has no {topic}: was the run made against a driver?"))?
-        .iter()
-        .map(|d| serde_json::from_slice(d).map_err(|e| anyhow!("{topic}: {e}")))
-        .collect()
-}
-
-/// Field `key` of a message of `topic`, an unsigned integer.
-fn int(v: &serde_json::Value, key: &str, topic: &str) -> Result<u64> {
-    v[key]
-        .as_u64()
-        .ok_or_else(|| anyhow!("{topic}: a message without {key}"))
 }
 
 /// A line for the summary: how the samples reached the rig and what that allows.
