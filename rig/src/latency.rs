@@ -48,6 +48,8 @@ pub struct Args {
     /// `spin` and `yield` in real time) [default: block].
     #[command(flatten)]
     wait: runtime::process::Wait,
+    #[command(flatten)]
+    wakeup: runtime::process::Wakeup,
     /// Measure at `--period-ms`, then at periods shortened 1.5 × each (DIR/period-MS/),
     /// until one misses a deadline; writes DIR/sweep.csv and names the fastest period
     /// sustained for `--cycles` cycles without a miss (simulated plant only).
@@ -86,6 +88,7 @@ pub fn main(args: &Args) -> ExitCode {
         scheduling: args.scheduling,
         spin: args.spin,
         waiting: args.wait.waiting(runtime::process::WaitKind::Block),
+        wakeup: args.wakeup,
         verbose: true,
     };
     let done = if args.sweep {

@@ -38,6 +38,8 @@ pub struct Args {
     spin: runtime::process::Spin,
     #[command(flatten)]
     wait: runtime::process::Wait,
+    #[command(flatten)]
+    wakeup: runtime::process::Wakeup,
     /// `sim`: the plant process simulates the system. `external`: a driver someone else
     /// started (docs/driver.md; e.g. examples/python_driver/driver.py) is the system and
     /// the clock; `rig run` waits for it, and the plant process resets it before each
@@ -71,7 +73,16 @@ pub fn main(args: &Args) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    match run(&cfg, &opts) {
+    let wakeup = match args.wakeup.hold() {
+        Ok(w) => w,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let done = run(&cfg, &opts);
+    drop(wakeup);
+    match done {
         Ok(s) => {
             if !args.quiet {
                 print_summary(&cfg, &opts, &s);

@@ -157,6 +157,49 @@ fn latency_runs_under_a_real_time_priority_or_says_why_not() {
 }
 
 #[test]
+fn the_cpu_wakeup_limit_is_held_or_refused_naming_the_device() {
+    let out = short_latency("latency-wakeup", &["--cpu-wakeup-us", "0"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let refused = |stderr: &str| {
+        stderr.contains("--cpu-wakeup-us") && stderr.contains("/dev/cpu_dma_latency")
+    };
+    if out.status.success() {
+        assert!(stdout.contains("CPU wake-up limit 0 µs"), "{stdout}");
+    } else {
+        assert!(refused(&stderr), "{stderr}");
+    }
+    let dir = tmp("run-wakeup");
+    let run = rig()
+        .args([
+            "run",
+            "--quiet",
+            "--trials",
+            "2",
+            "--cpu-wakeup-us",
+            "0",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success() || refused(&stderr), "{stderr}");
+    assert_eq!(run.status.success(), out.status.success(), "{stderr}");
+    let bad = rig()
+        .args(["run", "--cpu-wakeup-us", "3000000000", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(
+        String::from_utf8_lossy(&bad.stderr).contains("0..=2147483647"),
+        "{}",
+        String::from_utf8_lossy(&bad.stderr)
+    );
+}
+
+#[test]
 fn latency_against_a_driver_times_its_samples_to_the_commands() {
     // `rig sim-driver` at 10 × real time (3 ms periods) on this host: one clock.
     let driver = Driver::launch(&Kind::Rust, "latency", &["--speed", "10"]);

@@ -63,7 +63,7 @@ use machine::Counters;
 pub use machine::MachineLoad;
 use runtime::config::Overrides;
 use runtime::learn::write_atomic;
-use runtime::process::{CpuSet, Layout, Scheduling, Spin};
+use runtime::process::{CpuSet, Layout, Scheduling, Spin, Wakeup};
 use runtime::report::plot::{Histogram, plot_histograms};
 use runtime::run::{ExternalDriver, RunOptions, run};
 pub use sweep::{SweepPoint, sweep};
@@ -96,6 +96,8 @@ pub struct LatencyOptions {
     pub spin: Spin,
     /// How the processes wait for their next message.
     pub waiting: wire::Waiting,
+    /// The CPU wake-up latency limit held while measuring (`--cpu-wakeup-us`).
+    pub wakeup: Wakeup,
     /// Print the summary.
     pub verbose: bool,
 }
@@ -147,6 +149,8 @@ pub struct LatencyReport {
     pub scheduling: Scheduling,
     /// How the plant waited for a sampling instant.
     pub spin: Spin,
+    /// The CPU wake-up latency limit held \[µs\], if one was.
+    pub wakeup_us: Option<u32>,
     /// The external driver's id and how its samples reached the rig; `None`: the
     /// simulated plant.
     pub driver: Option<(String, Reach)>,
@@ -178,11 +182,14 @@ impl LatencyReport {
             .map_or("ordinary scheduling".to_string(), |p| {
                 format!("SCHED_FIFO {p}")
             });
-        let pinned = if self.scheduling.layout() == Some(Layout::PlantAlone) {
-            ", plant pinned to its own CPU"
+        let mut pinned = if self.scheduling.layout() == Some(Layout::PlantAlone) {
+            ", plant pinned to its own CPU".to_string()
         } else {
-            ""
+            String::new()
         };
+        if let Some(us) = self.wakeup_us {
+            let _ = write!(pinned, ", CPU wake-up limit {us} µs");
+        }
         let period = self.period_ns as f64 * 1e-6;
         let _ = match &self.driver {
             None => writeln!(
@@ -248,6 +255,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     let exe = std::env::current_exe().context("cannot find the rig executable")?;
     // The baseline under the same policy: the ping-pong's partner process inherits it.
     runtime::process::set_rt_priority(opts.scheduling.rt_priority)?;
+    let _wakeup = opts.wakeup.hold()?;
     let plant_alone = opts.scheduling.layout() == Some(Layout::PlantAlone);
     if plant_alone {
         runtime::process::cpus::pin(CpuSet::Others)?;
@@ -289,6 +297,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
         misses: c.misses,
         scheduling: opts.scheduling,
         spin: opts.spin,
+        wakeup_us: opts.wakeup.cpu_wakeup_us,
         driver: opts
             .driver
             .as_ref()

@@ -24,12 +24,14 @@ mod args;
 pub mod cpus;
 pub mod observer;
 pub mod plant;
+pub mod wakeup;
 
 use std::time::Duration;
 
 use anyhow::Result;
 
 pub use cpus::{CpuSet, Layout, Part};
+pub use wakeup::{Wakeup, WakeupLimit};
 
 pub use args::{
     AgentArgs, NodeArgs, ObserverArgs, PlantArgs, SPIN_US, Scheduling, Spin, Wait, WaitKind,
