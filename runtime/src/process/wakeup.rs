@@ -16,7 +16,7 @@ use clap::Args;
 /// The PM QoS device of the CPU wake-up latency limit.
 pub const DEVICE: &str = "/dev/cpu_dma_latency";
 
-/// The largest limit the kernel takes [µs] (an `i32`).
+/// The largest limit the kernel takes \[µs\] (an `i32`).
 const MAX_US: u32 = i32::MAX as u32;
 
 /// The flag of `rig run` and `rig latency`.
@@ -69,7 +69,7 @@ fn hold_at(device: &Path, us: Option<u32>) -> Result<WakeupLimit> {
     })
 }
 
-/// The limit in force on this machine [µs] (the smallest request held), if it can be read.
+/// The limit in force on this machine \[µs\] (the smallest request held), if it can be read.
 pub fn current() -> Option<u32> {
     current_at(Path::new(DEVICE))
 }
