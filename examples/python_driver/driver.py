@@ -29,6 +29,7 @@ import math
 import os
 import random
 import signal
+import struct
 import sys
 import time
 
@@ -452,6 +453,19 @@ def main():
             print(
                 f"driver: --realtime-priority {args.realtime_priority}: {e} "
                 "(needs CAP_SYS_NICE; priority 1-99)",
+                file=sys.stderr,
+            )
+            return 1
+
+    wakeup_limit = None  # the request holds while the file stays open
+    if args.cpu_wakeup_us is not None:
+        try:
+            wakeup_limit = open("/dev/cpu_dma_latency", "wb", buffering=0)
+            wakeup_limit.write(struct.pack("=i", args.cpu_wakeup_us))
+        except OSError as e:
+            print(
+                f"driver: --cpu-wakeup-us {args.cpu_wakeup_us}: cannot hold the limit "
+                f"through /dev/cpu_dma_latency: {e} (needs root)",
                 file=sys.stderr,
             )
             return 1

@@ -32,6 +32,8 @@ pub struct Args {
     /// CAP_SYS_NICE or an rtprio limit [default: normal scheduling].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(1..=99))]
     rt_priority: Option<u8>,
+    #[command(flatten)]
+    wakeup: runtime::process::Wakeup,
     /// Spin (a busy core) instead of sleeping for the last this many µs before each
     /// sample instant, so that the instant does not depend on the operating system's
     /// wake-up latency; larger values trade CPU for less jitter.
@@ -77,6 +79,7 @@ pub fn main(args: &Args) -> ExitCode {
         }
     };
     let served = runtime::process::set_rt_priority(args.rt_priority).and_then(|()| {
+        let _wakeup = args.wakeup.hold()?;
         let task = driver::Device::task(&device);
         let sensed = match args.sensor.as_str() {
             "angle" => format!("positions only, {} counts/rev", args.counts_per_rev),

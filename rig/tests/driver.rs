@@ -711,3 +711,59 @@ fn a_process_killed_during_an_external_run_leaves_the_driver_safe_within_two_per
         );
     }
 }
+
+/// `--cpu-wakeup-us 17` of `rig sim-driver` and of the Python example: while the driver
+/// runs, the machine's CPU wake-up latency limit is at most 17 µs — or, where the limit
+/// cannot be set, the driver stops at once with an error naming the device and the flag.
+#[test]
+fn a_driver_holds_the_cpu_wakeup_limit_while_it_runs() {
+    let id = format!("wakeup-{}", std::process::id());
+    let mut rust = rig();
+    rust.args(["sim-driver", "--driver-id", &id]);
+    holds_the_limit(rust);
+    let Some(py) = python() else { return };
+    let mut python = std::process::Command::new(py);
+    python.arg(format!(
+        "{}/../examples/python_driver/driver.py",
+        env!("CARGO_MANIFEST_DIR")
+    ));
+    python.args(["--driver-id", &format!("{id}-py")]);
+    holds_the_limit(python);
+}
+
+fn holds_the_limit(mut driver: std::process::Command) {
+    let mut child = driver
+        .args(["--cpu-wakeup-us", "17"])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Until the driver holds the limit (it starts up first), stops, or 20 s have passed.
+    let t0 = Instant::now();
+    let mut limit = runtime::process::wakeup::current();
+    while child.try_wait().unwrap().is_none()
+        && limit.is_some_and(|us| us > 17)
+        && t0.elapsed() < Duration::from_secs(20)
+    {
+        std::thread::sleep(Duration::from_millis(20));
+        limit = runtime::process::wakeup::current();
+    }
+    if child.try_wait().unwrap().is_some() {
+        let out = child.wait_with_output().unwrap();
+        let (_, stderr) = text(&out);
+        assert!(!out.status.success(), "{stderr}");
+        assert!(
+            stderr.contains("--cpu-wakeup-us") && stderr.contains("/dev/cpu_dma_latency"),
+            "{stderr}"
+        );
+        return;
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    // Unreadable (not root): the driver could not have set it either, and stopped above.
+    if let Some(us) = limit {
+        assert!(
+            us <= 17,
+            "the limit in force is {us} µs while the driver holds 17"
+        );
+    }
+}

@@ -1,4 +1,4 @@
-//! The CPU wake-up latency limit of a real-time run (`--cpu-wakeup-us`): Linux's PM QoS
+//! The CPU wake-up latency limit of a real-time run or driver (`--cpu-wakeup-us`): Linux's PM QoS
 //! request through `/dev/cpu_dma_latency`, which holds while the file stays open.
 //!
 //! An idle CPU sleeps in an idle state, and waking it (the plant's timer, a message's
@@ -19,7 +19,7 @@ pub const DEVICE: &str = "/dev/cpu_dma_latency";
 /// The largest limit the kernel takes \[µs\] (an `i32`).
 const MAX_US: u32 = i32::MAX as u32;
 
-/// The flag of `rig run` and `rig latency`.
+/// The flag of `rig run`, `rig latency` and `rig sim-driver`.
 #[derive(Args, Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Wakeup {
     /// Hold the machine's CPU wake-up latency limit at this many µs while the command
