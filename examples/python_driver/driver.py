@@ -402,8 +402,19 @@ def main():
         "a loaded machine does not delay the sample instants by milliseconds; needs "
         "CAP_SYS_NICE (or root) [default: normal scheduling]",
     )
+    p.add_argument(
+        "--cpu-wakeup-us",
+        type=int,
+        metavar="US",
+        help="hold the machine's CPU wake-up latency limit at US microseconds while the "
+        "driver runs (Linux PM QoS, /dev/cpu_dma_latency; 0 keeps idle CPUs polling), so "
+        "that the sample instants do not wait for a CPU to leave a deep idle state; needs "
+        "root [default: the operating system's choice]",
+    )
     p.add_argument("--verbose", action="store_true", help="log resets and faults")
     args = p.parse_args()
+    if args.cpu_wakeup_us is not None and not 0 <= args.cpu_wakeup_us <= 2**31 - 1:
+        p.error(f"--cpu-wakeup-us {args.cpu_wakeup_us}: must be in [0, 2147483647]")
     if not (math.isfinite(args.speed) and 0.0 < args.speed <= 1000.0):
         p.error(f"--speed {args.speed}: must be in (0, 1000]")
     if args.clock == "lockstep" and args.speed != 1.0:
