@@ -1,5 +1,6 @@
-//! The CPU wake-up latency limit of a real-time run or driver (`--cpu-wakeup-us`): Linux's PM QoS
-//! request through `/dev/cpu_dma_latency`, which holds while the file stays open.
+//! The CPU wake-up latency limit of a real-time run or driver (`--cpu-wakeup-us`):
+//! Linux's PM QoS request through `/dev/cpu_dma_latency`, which holds while the file
+//! stays open.
 //!
 //! An idle CPU sleeps in an idle state, and waking it (the plant's timer, a message's
 //! event) first waits for the state's exit; a virtual CPU that halts is woken by its
