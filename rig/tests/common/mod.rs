@@ -37,6 +37,16 @@ pub fn ok(out: Output) -> Output {
     out
 }
 
+/// Asserts that `summary` names every stage of `present` and none of `absent`.
+pub fn names_stages(summary: &str, present: &[&str], absent: &[&str]) {
+    for stage in present {
+        assert!(summary.contains(stage), "{stage} missing: {summary}");
+    }
+    for stage in absent {
+        assert!(!summary.contains(stage), "{stage} present: {summary}");
+    }
+}
+
 /// Waits (at most 60 s) until the file at `path` has at least `n` lines: a run under way.
 pub fn wait_for_lines(path: &Path, n: usize) {
     let t0 = Instant::now();
