@@ -84,15 +84,15 @@ pub struct LearnSummary {
 /// Writes `runs.csv` in run order, each row as soon as it can be: the rows of the first
 /// unfinished run as its trials end (a study can follow a run trial by trial), those of
 /// later runs once every run before them has finished.
-struct OrderedWriter {
+struct OrderedWriter<W: Write> {
     /// The run whose rows are written as they come.
     next: u32,
     /// Rows of later runs, and whether each has finished.
     pending: BTreeMap<u32, (Vec<TrialRecord>, bool)>,
-    out: BufWriter<File>,
+    out: W,
 }
 
-impl OrderedWriter {
+impl<W: Write> OrderedWriter<W> {
     /// One trial of `run` has ended.
     fn trial(&mut self, run: u32, r: &TrialRecord) -> Result<()> {
         if run == self.next {
@@ -413,4 +413,55 @@ pub fn curves(
         report::curve(&t, &s, &v)?
     };
     Ok((curve, greedy_curve))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(run: u32, trial: u32) -> TrialRecord {
+        TrialRecord {
+            run,
+            trial,
+            sim_time_s: f64::from(trial),
+            ret: -1.0,
+            greedy: None,
+        }
+    }
+
+    fn rows(w: &OrderedWriter<Vec<u8>>) -> Vec<String> {
+        String::from_utf8(w.out.clone())
+            .unwrap()
+            .lines()
+            .map(|l| l[..3].to_string())
+            .collect()
+    }
+
+    #[test]
+    fn the_first_unfinished_run_is_written_as_its_trials_end_and_later_runs_wait() {
+        let mut w = OrderedWriter {
+            next: 0,
+            pending: BTreeMap::new(),
+            out: Vec::new(),
+        };
+        w.trial(1, &record(1, 1)).unwrap();
+        w.trial(0, &record(0, 1)).unwrap();
+        assert_eq!(rows(&w), ["0,1"], "run 0's row at once, run 1's held back");
+        w.trial(2, &record(2, 1)).unwrap();
+        w.trial(2, &record(2, 2)).unwrap();
+        w.finished(2).unwrap();
+        w.trial(0, &record(0, 2)).unwrap();
+        assert_eq!(rows(&w), ["0,1", "0,2"]);
+        w.finished(0).unwrap();
+        assert_eq!(rows(&w), ["0,1", "0,2", "1,1"], "run 1 is now written as it goes");
+        w.trial(1, &record(1, 2)).unwrap();
+        assert_eq!(rows(&w), ["0,1", "0,2", "1,1", "1,2"]);
+        w.finished(1).unwrap();
+        assert_eq!(
+            rows(&w),
+            ["0,1", "0,2", "1,1", "1,2", "2,1", "2,2"],
+            "the finished run 2 follows at once, in run order"
+        );
+        assert!(w.pending.is_empty());
+    }
 }

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 import sys
+import tempfile
 import warnings
+from pathlib import Path
 
 try:
     import optuna
@@ -40,21 +42,25 @@ def main(argv: list[str]) -> int:
 
 
 def space_for(args: argparse.Namespace) -> int:
-    """Prints the starting space of a preset."""
+    """Prints the starting space of a preset, once the rig has accepted its every end."""
     base = rig_config(selection(args, args.space_for))
     what = " ".join(selection(args, args.space_for))
-    print(starting_space(tunable(base), f"`{what}`"), end="")
+    text = starting_space(tunable(base), f"`{what}`")
+    with tempfile.TemporaryDirectory() as scratch:
+        path = Path(scratch) / "space.toml"
+        path.write_text(text)
+        searchable(base, load(path, tunable(base)), path, Path(scratch))
+    print(text, end="")
     return 0
 
 
-def searchable(base: dict, space: list[Param], args: argparse.Namespace) -> None:
+def searchable(base: dict, space: list[Param], source: Path, scratch: Path) -> None:
     """Refuses a space whose ends the rig would refuse, before any trial runs."""
-    scratch = args.out / "scratch" / "config.toml"
     for p in space:
         for v in p.extremes():
-            refused = accepted(with_values(base, {p.key: v}), scratch)
+            refused = accepted(with_values(base, {p.key: v}), scratch / "config.toml")
             if refused:
-                raise SpaceError(f'{args.space}: param "{p.key}": the rig refuses {v!r}: {refused}')
+                raise SpaceError(f'{source}: param "{p.key}": the rig refuses {v!r}: {refused}')
 
 
 def tune(args: argparse.Namespace, argv: list[str]) -> int:
@@ -72,7 +78,7 @@ def tune(args: argparse.Namespace, argv: list[str]) -> int:
         study.work(args, name, objective, trials // eval_every)
         return 0
     args.out.mkdir(parents=True, exist_ok=True)
-    searchable(base, space, args)
+    searchable(base, space, args.space, args.out / "scratch")
     url = study.storage_url(args)
     s = optuna.create_study(study_name=name, storage=study.storage(args), direction="maximize", load_if_exists=True)
     done = study.finished(s.get_trials(deepcopy=False))
