@@ -93,7 +93,11 @@ fn a_small_study_writes_the_best_configuration_and_the_same_command_continues_it
     let Some(py) = python() else { return };
     let dir = tmp("tune", "small");
     std::fs::write(dir.join("space.toml"), SPACE).unwrap();
-    let args = [&SHORT[..], &["--n-trials", "4", "--workers", "2", "--check-seeds", "2"]].concat();
+    let args = [
+        &SHORT[..],
+        &["--n-trials", "4", "--workers", "2", "--check-seeds", "2"],
+    ]
+    .concat();
     let out = ok(tune(&py, &dir, &args).output().unwrap());
     let stdout = text(&out);
     assert!(stdout.contains("best: trial"), "{stdout}");
@@ -103,9 +107,18 @@ fn a_small_study_writes_the_best_configuration_and_the_same_command_continues_it
     assert!(finished(&trials) >= 4, "{trials:?}");
     let numbers: BTreeSet<u32> = trials.iter().map(|t| t.0).collect();
     assert_eq!(numbers.len(), trials.len(), "a trial listed twice");
-    assert_eq!(folders(&study), numbers, "each trial ran once, in a folder of its own");
+    assert_eq!(
+        folders(&study),
+        numbers,
+        "each trial ran once, in a folder of its own"
+    );
     let report = std::fs::read_to_string(study.join("report.md")).unwrap();
-    for part in ["## Check on fresh seeds", "| best |", "| preset |", "plots/check.png"] {
+    for part in [
+        "## Check on fresh seeds",
+        "| best |",
+        "| preset |",
+        "plots/check.png",
+    ] {
         assert!(report.contains(part), "{part} missing from the report");
     }
     assert!(study.join("plots/check.png").is_file());
@@ -130,7 +143,10 @@ fn a_small_study_writes_the_best_configuration_and_the_same_command_continues_it
 
     // The same command again: nothing new to run. More trials: the same study goes on.
     let again = text(&ok(tune(&py, &dir, &args).output().unwrap()));
-    assert!(again.contains(&format!("{} of 4 trials finished", finished(&trials))), "{again}");
+    assert!(
+        again.contains(&format!("{} of 4 trials finished", finished(&trials))),
+        "{again}"
+    );
     assert_eq!(folders(&study), numbers, "no trial ran again");
     let more = [&SHORT[..], &["--n-trials", "6", "--check-seeds", "0"]].concat();
     ok(tune(&py, &dir, &more).output().unwrap());
@@ -153,8 +169,16 @@ fn start(py: &str, dir: &Path, args: &[&str]) -> std::process::Child {
 fn running(study: &Path, n: u32) {
     let rows = study.join(format!("trials/{n:05}/seed-1/runs.csv"));
     let t0 = Instant::now();
-    while std::fs::read_to_string(&rows).unwrap_or_default().lines().count() < 2 {
-        assert!(t0.elapsed() < Duration::from_secs(120), "trial {n} did not start");
+    while std::fs::read_to_string(&rows)
+        .unwrap_or_default()
+        .lines()
+        .count()
+        < 2
+    {
+        assert!(
+            t0.elapsed() < Duration::from_secs(120),
+            "trial {n} did not start"
+        );
         std::thread::sleep(Duration::from_millis(50));
     }
 }
@@ -173,8 +197,20 @@ fn ctrl_c_stops_cleanly_a_killed_worker_s_trial_fails_and_the_study_goes_on() {
     std::fs::write(dir.join("space.toml"), SPACE).unwrap();
     // Long runs, so that each is caught under way.
     let args = [
-        "--space", "space.toml", "--trials", "4000", "--seeds", "1", "--n-trials", "2",
-        "--check-seeds", "0", "--heartbeat", "1", "--pruner", "none",
+        "--space",
+        "space.toml",
+        "--trials",
+        "4000",
+        "--seeds",
+        "1",
+        "--n-trials",
+        "2",
+        "--check-seeds",
+        "0",
+        "--heartbeat",
+        "1",
+        "--pruner",
+        "none",
     ];
     let study = dir.join("out/tune");
 
@@ -184,7 +220,10 @@ fn ctrl_c_stops_cleanly_a_killed_worker_s_trial_fails_and_the_study_goes_on() {
     let out = child.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(130), "{stderr}");
-    assert!(stderr.contains("the same command continues the study"), "{stderr}");
+    assert!(
+        stderr.contains("the same command continues the study"),
+        "{stderr}"
+    );
 
     let child = start(&py, &dir, &args);
     running(&study, 1);
@@ -195,8 +234,16 @@ fn ctrl_c_stops_cleanly_a_killed_worker_s_trial_fails_and_the_study_goes_on() {
 
     ok(tune(&py, &dir, &args).output().unwrap());
     let trials = states(&study);
-    assert_eq!(trials[0], (0, "fail".to_string()), "the interrupted trial: {trials:?}");
-    assert_eq!(trials[1], (1, "fail".to_string()), "the killed worker's trial: {trials:?}");
+    assert_eq!(
+        trials[0],
+        (0, "fail".to_string()),
+        "the interrupted trial: {trials:?}"
+    );
+    assert_eq!(
+        trials[1],
+        (1, "fail".to_string()),
+        "the killed worker's trial: {trials:?}"
+    );
     assert!(finished(&trials) >= 2, "{trials:?}");
 }
 
@@ -204,7 +251,9 @@ fn ctrl_c_stops_cleanly_a_killed_worker_s_trial_fails_and_the_study_goes_on() {
 fn two_machines_finish_one_study_in_postgresql_with_no_trial_run_twice() {
     let Some(py) = python() else { return };
     let Ok(url) = std::env::var("RIG_TEST_POSTGRES") else {
-        println!("skipped: RIG_TEST_POSTGRES is not set (a postgresql:// URL; .ci/run starts a server)");
+        println!(
+            "skipped: RIG_TEST_POSTGRES is not set (a postgresql:// URL; .ci/run starts a server)"
+        );
         return;
     };
     let dir = tmp("tune", "postgres");
@@ -213,7 +262,18 @@ fn two_machines_finish_one_study_in_postgresql_with_no_trial_run_twice() {
     let machine = |out: &str| {
         let args = [
             &SHORT[..],
-            &["--n-trials", "6", "--check-seeds", "0", "--storage", &url, "--study", &name, "--out", out],
+            &[
+                "--n-trials",
+                "6",
+                "--check-seeds",
+                "0",
+                "--storage",
+                &url,
+                "--study",
+                &name,
+                "--out",
+                out,
+            ],
         ]
         .concat();
         tune(&py, &dir, &args).spawn().unwrap()
@@ -225,10 +285,32 @@ fn two_machines_finish_one_study_in_postgresql_with_no_trial_run_twice() {
     let trials = states(&dir.join("a"));
     assert!(finished(&trials) >= 6, "{trials:?}");
     let (on_a, on_b) = (folders(&dir.join("a")), folders(&dir.join("b")));
-    assert!(!on_a.is_empty() && !on_b.is_empty(), "both machines ran trials: {on_a:?} {on_b:?}");
-    assert!(on_a.is_disjoint(&on_b), "a trial ran on both: {on_a:?} {on_b:?}");
+    assert!(
+        !on_a.is_empty() && !on_b.is_empty(),
+        "both machines ran trials: {on_a:?} {on_b:?}"
+    );
+    assert!(
+        on_a.is_disjoint(&on_b),
+        "a trial ran on both: {on_a:?} {on_b:?}"
+    );
     let all: BTreeSet<u32> = trials.iter().map(|t| t.0).collect();
-    assert_eq!(&on_a | &on_b, all, "every trial of the study ran on one machine");
+    assert_eq!(
+        &on_a | &on_b,
+        all,
+        "every trial of the study ran on one machine"
+    );
+    let configs: BTreeSet<String> = all
+        .iter()
+        .map(|n| {
+            let on = if on_a.contains(n) { "a" } else { "b" };
+            std::fs::read_to_string(dir.join(format!("{on}/trials/{n:05}/config.toml"))).unwrap()
+        })
+        .collect();
+    assert_eq!(
+        configs.len(),
+        all.len(),
+        "two trials ran the same configuration"
+    );
 }
 
 #[test]
@@ -236,26 +318,59 @@ fn bad_space_files_are_one_line_errors_naming_file_and_key() {
     let Some(py) = python() else { return };
     let dir = tmp("tune", "bad");
     let cases: [(&str, &str); 10] = [
-        ("[param.\"actor.alfa\"]\nlow = 0.1\nhigh = 1.0\n", "param \"actor.alfa\": not a configuration key of this learner (did you mean \"actor.alpha\"?)"),
-        ("[param.\"actor.alpha\"]\nlow = 0.5\nhigh = 0.1\n", "param \"actor.alpha\": low (0.5) must be below high (0.1)"),
-        ("[param.\"actor.alpha\"]\nlow = 0.0\nhigh = 0.1\nlog = true\n", "param \"actor.alpha\": a log scale needs low > 0"),
-        ("[param.\"actor.alpha\"]\nlow = 0.1\nhigh = 0.2\nscale = \"log\"\n", "param \"actor.alpha\": unknown field \"scale\""),
-        ("[param.\"learning.gamma\"]\nchoices = []\n", "param \"learning.gamma\": choices must be a non-empty list"),
-        ("[param.\"actor.memory\"]\nlow = 10.5\nhigh = 100\n", "param \"actor.memory\": an integer key needs integer bounds"),
-        ("[param.\"actor.eviction\"]\nlow = 1\nhigh = 2\n", "param \"actor.eviction\": the preset's value 'redundant' is not a number"),
-        ("[param.\"actor.alpha\"]\nlow = 1.0\nhigh = 1000.0\n", "param \"actor.alpha\": the rig refuses 1000.0"),
+        (
+            "[param.\"actor.alfa\"]\nlow = 0.1\nhigh = 1.0\n",
+            "param \"actor.alfa\": not a configuration key of this learner (did you mean \"actor.alpha\"?)",
+        ),
+        (
+            "[param.\"actor.alpha\"]\nlow = 0.5\nhigh = 0.1\n",
+            "param \"actor.alpha\": low (0.5) must be below high (0.1)",
+        ),
+        (
+            "[param.\"actor.alpha\"]\nlow = 0.0\nhigh = 0.1\nlog = true\n",
+            "param \"actor.alpha\": a log scale needs low > 0",
+        ),
+        (
+            "[param.\"actor.alpha\"]\nlow = 0.1\nhigh = 0.2\nscale = \"log\"\n",
+            "param \"actor.alpha\": unknown field \"scale\"",
+        ),
+        (
+            "[param.\"learning.gamma\"]\nchoices = []\n",
+            "param \"learning.gamma\": choices must be a non-empty list",
+        ),
+        (
+            "[param.\"actor.memory\"]\nlow = 10.5\nhigh = 100\n",
+            "param \"actor.memory\": an integer key needs integer bounds",
+        ),
+        (
+            "[param.\"actor.eviction\"]\nlow = 1\nhigh = 2\n",
+            "param \"actor.eviction\": the preset's value 'redundant' is not a number",
+        ),
+        (
+            "[param.\"actor.alpha\"]\nlow = 1.0\nhigh = 1000.0\n",
+            "param \"actor.alpha\": the rig refuses 1000.0",
+        ),
         ("[param\n", "not TOML"),
         ("", "no [param.\"KEY\"] table"),
     ];
     for (i, (space, fragment)) in cases.iter().enumerate() {
         let file = format!("space-{i}.toml");
         std::fs::write(dir.join(&file), space).unwrap();
-        let out = tune(&py, &dir, &["--space", &file, "--trials", "30"]).output().unwrap();
+        let out = tune(&py, &dir, &["--space", &file, "--trials", "30"])
+            .output()
+            .unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(2), "{file}: {stderr}");
-        assert_eq!(stderr.trim().lines().count(), 1, "{file}: one line: {stderr}");
+        assert_eq!(
+            stderr.trim().lines().count(),
+            1,
+            "{file}: one line: {stderr}"
+        );
         assert!(stderr.starts_with(&format!("error: {file}: ")), "{stderr}");
-        assert!(stderr.contains(fragment), "{file}: {fragment} not in: {stderr}");
+        assert!(
+            stderr.contains(fragment),
+            "{file}: {fragment} not in: {stderr}"
+        );
     }
     assert!(!dir.join("out/tune/trials").exists(), "nothing ran");
     let out = tune(&py, &dir, &["--trials", "30"]).output().unwrap();
@@ -267,12 +382,21 @@ fn bad_space_files_are_one_line_errors_naming_file_and_key() {
 fn every_learner_s_preset_gives_a_starting_space_the_rig_accepts() {
     let Some(py) = python() else { return };
     let dir = tmp("tune", "space-for");
-    for (algo, approx) in [("sac", "tiles"), ("mlac", "llr"), ("rmac", "rbf"), ("vgbp", "lstd"), ("sarsa", "rbf")] {
+    for (algo, approx) in [
+        ("sac", "tiles"),
+        ("mlac", "llr"),
+        ("rmac", "rbf"),
+        ("vgbp", "lstd"),
+        ("sarsa", "rbf"),
+    ] {
         let out = ok(tune(&py, &dir, &["--space-for", algo, "--approx", approx])
             .output()
             .unwrap());
         let space = text(&out);
-        assert!(space.contains("[param.\"learning.gamma\"]"), "{algo}: {space}");
+        assert!(
+            space.contains("[param.\"learning.gamma\"]"),
+            "{algo}: {space}"
+        );
         assert!(space.contains("# preset: "), "{algo}: {space}");
     }
 }

@@ -453,7 +453,11 @@ mod tests {
         w.trial(0, &record(0, 2)).unwrap();
         assert_eq!(rows(&w), ["0,1", "0,2"]);
         w.finished(0).unwrap();
-        assert_eq!(rows(&w), ["0,1", "0,2", "1,1"], "run 1 is now written as it goes");
+        assert_eq!(
+            rows(&w),
+            ["0,1", "0,2", "1,1"],
+            "run 1 is now written as it goes"
+        );
         w.trial(1, &record(1, 2)).unwrap();
         assert_eq!(rows(&w), ["0,1", "0,2", "1,1", "1,2"]);
         w.finished(1).unwrap();

@@ -76,8 +76,9 @@ def parser() -> argparse.ArgumentParser:
     )
     study.add_argument("--sampler", choices=("tpe", "random"), default="tpe", help="Optuna's sampler (default: tpe)")
     study.add_argument(
-        "--sampler-seed", type=int, default=0, metavar="S",
-        help="seed of the sampler; worker k uses S + k (default: 0)",
+        "--sampler-seed", type=int, metavar="S",
+        help="seed of the sampler, for a study repeatable on one machine: worker k uses S + k (default: a fresh "
+        "seed for every worker, so that workers on several machines do not propose the same configurations)",
     )
     study.add_argument(
         "--pruner", choices=("median", "none"), default="median",

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import os
+import random
 import subprocess
 import sys
 import time
@@ -13,6 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import optuna
+import sqlalchemy.exc
 from optuna.trial import FrozenTrial, TrialState
 
 from .objective import Objective
@@ -20,6 +22,7 @@ from .runner import Driver, Runner, RunFailed
 
 FINISHED = (TrialState.COMPLETE, TrialState.PRUNED)
 PROGRESS_S = 2.0
+SCHEMA_ATTEMPTS = 5
 
 
 def storage_url(args: argparse.Namespace) -> str:
@@ -28,12 +31,22 @@ def storage_url(args: argparse.Namespace) -> str:
 
 
 def storage(args: argparse.Namespace) -> optuna.storages.RDBStorage:
-    """The study's storage, with a heartbeat so that a killed worker's trial is failed."""
+    """The study's storage, with a heartbeat so that a killed worker's trial is failed.
+
+    Machines that open a new database at the same moment race to create its tables; the
+    losers find them made when they try again."""
     url = storage_url(args)
     engine = {"connect_args": {"timeout": 60}} if url.startswith("sqlite") else None
-    return optuna.storages.RDBStorage(
-        url, engine_kwargs=engine, heartbeat_interval=args.heartbeat, grace_period=2 * args.heartbeat
-    )
+    for attempt in range(SCHEMA_ATTEMPTS):
+        try:
+            return optuna.storages.RDBStorage(
+                url, engine_kwargs=engine, heartbeat_interval=args.heartbeat, grace_period=2 * args.heartbeat
+            )
+        except sqlalchemy.exc.IntegrityError:
+            if attempt + 1 == SCHEMA_ATTEMPTS:
+                raise
+            time.sleep(random.uniform(0.2, 1.0))
+    raise AssertionError("unreachable")
 
 
 def name(args: argparse.Namespace, base_text: str, space_text: str) -> str:
@@ -46,7 +59,7 @@ def name(args: argparse.Namespace, base_text: str, space_text: str) -> str:
 
 
 def sampler(args: argparse.Namespace, worker: int) -> optuna.samplers.BaseSampler:
-    seed = args.sampler_seed + worker
+    seed = None if args.sampler_seed is None else args.sampler_seed + worker
     if args.sampler == "random":
         return optuna.samplers.RandomSampler(seed=seed)
     return optuna.samplers.TPESampler(seed=seed)
