@@ -314,6 +314,58 @@ fn two_machines_finish_one_study_in_postgresql_with_no_trial_run_twice() {
 }
 
 #[test]
+fn a_study_against_lockstep_drivers_starts_one_per_worker_and_keeps_the_returns_only() {
+    let Some(py) = python() else { return };
+    let dir = tmp("tune", "external");
+    std::fs::write(dir.join("space.toml"), SPACE).unwrap();
+    let driver = format!(
+        "{} sim-driver --clock lockstep --driver-id {{id}}",
+        env!("CARGO_BIN_EXE_rig")
+    );
+    let args = [
+        &SHORT[..],
+        &[
+            "--n-trials",
+            "2",
+            "--check-seeds",
+            "1",
+            "--driver-cmd",
+            &driver,
+        ],
+    ]
+    .concat();
+    let stdout = text(&ok(tune(&py, &dir, &args).output().unwrap()));
+    assert!(stdout.contains("On the check's 1 fresh seeds"), "{stdout}");
+    let study = dir.join("out/tune");
+    let trials = states(&study);
+    assert!(finished(&trials) >= 2, "{trials:?}");
+    for n in folders(&study) {
+        let run = study.join(format!("trials/{n:05}/seed-1"));
+        let rows = std::fs::read_to_string(run.join("returns.csv")).unwrap();
+        assert_eq!(
+            rows.lines().count(),
+            31,
+            "trial {n}: a row per learning trial"
+        );
+        assert!(
+            !run.join("run.mcap").exists(),
+            "trial {n}: the recording is not kept"
+        );
+    }
+    let logs = std::fs::read_dir(study.join("drivers")).unwrap().count();
+    assert_eq!(logs, 1, "one driver for the one worker");
+    let left = Command::new("pgrep")
+        .args(["-f", "sim-driver --clock lockstep --driver-id tune-"])
+        .output()
+        .unwrap();
+    assert!(
+        left.stdout.is_empty(),
+        "drivers left running: {}",
+        String::from_utf8_lossy(&left.stdout)
+    );
+}
+
+#[test]
 fn bad_space_files_are_one_line_errors_naming_file_and_key() {
     let Some(py) = python() else { return };
     let dir = tmp("tune", "bad");

@@ -72,7 +72,8 @@ def tune(args: argparse.Namespace, argv: list[str]) -> int:
     eval_every = base["run"]["eval_every"]
     if eval_every == 0 or trials < eval_every:
         raise RigError(f"no greedy evaluation in a run of {trials} trials with run.eval_every = {eval_every}: a study needs them")
-    objective = Objective(base, space, list(range(1, args.seeds + 1)), args.last, Runner(args.trials), args.out)
+    runner = Runner(args.trials, keep_recordings=args.keep_recordings)
+    objective = Objective(base, space, list(range(1, args.seeds + 1)), args.last, runner, args.out)
     name = study.name(args, str(sorted(base.items())), args.space.read_text())
     if args.worker_index is not None:
         study.work(args, name, objective, trials // eval_every)
@@ -93,10 +94,12 @@ def tune(args: argparse.Namespace, argv: list[str]) -> int:
             print(f"stopped with {done} of {args.n_trials} trials finished; the same command continues the study",
                   file=sys.stderr)
             return INTERRUPTED
-    return conclude(args, s, base, url, eval_every)
+    return conclude(args, s, base, url, eval_every, runner)
 
 
-def conclude(args: argparse.Namespace, s: optuna.Study, base: dict, url: str, eval_every: int) -> int:
+def conclude(
+    args: argparse.Namespace, s: optuna.Study, base: dict, url: str, eval_every: int, runner: Runner
+) -> int:
     """The check and the report, once the study has its trials."""
     trials = s.get_trials(deepcopy=False)
     if study.finished(trials) < args.n_trials:
@@ -110,7 +113,7 @@ def conclude(args: argparse.Namespace, s: optuna.Study, base: dict, url: str, ev
     arms = []
     if args.check_seeds > 0:
         print(f"check: the best and the preset on seeds {check.seeds(args.check_seeds)}", flush=True)
-        arms = check.check(args, s, base, Runner(args.trials))
+        arms = check.check(args, s, base, runner)
         finals = {a.label: a.finals(args.last) for a in arms}
         print(check.verdict(finals["best"], finals["preset"]), flush=True)
     path = report.write(args, s, url, arms, eval_every)

@@ -110,6 +110,11 @@ def parser() -> argparse.ArgumentParser:
         help="learn against an external lockstep driver: the command that starts one, with {id} for its "
         "driver id (each worker starts its own), e.g. 'python3 examples/furuta/driver.py --driver-id {id} --clock lockstep'",
     )
+    runs.add_argument(
+        "--keep-recordings", action="store_true",
+        help="with --driver-cmd: keep each run's run.mcap and checkpoints (default: removed once the run has "
+        "finished, its returns.csv kept)",
+    )
     p.add_argument("--worker-index", type=int, help=argparse.SUPPRESS)
     return p
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import io
 import shlex
+import shutil
 import signal
 import subprocess
 import time
@@ -34,6 +35,7 @@ class Runner:
 
     trials: int | None = None
     driver: str | None = None
+    keep_recordings: bool = False
     extra: list[str] = field(default_factory=list)
 
     def command(self, config: Path, seed: int, out: Path) -> list[str]:
@@ -75,7 +77,16 @@ class Runner:
         if proc.returncode != 0:
             reason = last_line(log.read_text(errors="replace"))
             raise RunFailed(f"`{shlex.join(cmd)}` exited with {proc.returncode}: {reason}")
+        if self.driver is not None and not self.keep_recordings:
+            discard_recording(out)
         return follower.greedy
+
+
+def discard_recording(out: Path) -> None:
+    """Removes what a finished `rig run` keeps besides its returns: the recording of every
+    message and the checkpoints (megabytes a run, where a study makes hundreds)."""
+    (out / "run.mcap").unlink(missing_ok=True)
+    shutil.rmtree(out / "checkpoints", ignore_errors=True)
 
 
 def end(proc: subprocess.Popen) -> None:
