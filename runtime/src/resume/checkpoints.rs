@@ -8,6 +8,7 @@ use std::thread::JoinHandle;
 use agent::checkpoint::Checkpoint;
 use anyhow::{Context, Result, anyhow};
 
+use crate::lock::FolderLock;
 use crate::process::{Layout, Part};
 
 /// The checkpoint directory of run directory `out`.
@@ -54,6 +55,8 @@ pub fn prune(dir: &Path, trial: u32) {
 pub struct CheckpointWriter {
     tx: Option<mpsc::Sender<Checkpoint>>,
     thread: Option<JoinHandle<Result<()>>>,
+    /// The folder is this writer's while it lasts.
+    _folder: FolderLock,
 }
 
 impl CheckpointWriter {
@@ -61,6 +64,7 @@ impl CheckpointWriter {
     /// the checkpoint writer.
     pub fn new(dir: &Path, layout: Option<Layout>) -> Result<Self> {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        let folder = FolderLock::acquire(dir)?;
         let (tx, rx) = mpsc::channel::<Checkpoint>();
         let dir = dir.to_owned();
         let thread = std::thread::spawn(move || -> Result<()> {
@@ -88,6 +92,7 @@ impl CheckpointWriter {
         Ok(Self {
             tx: Some(tx),
             thread: Some(thread),
+            _folder: folder,
         })
     }
 

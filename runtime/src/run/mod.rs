@@ -18,6 +18,7 @@
 //!   it also subscribes to the plant's ground truth ([`wire::Truth`], `rig/<id>/truth`,
 //!   which no other process reads), records it as `/plant/truth`, and takes a finite
 //!   horizon's terminal reward `τ_N(x_N)` of the true state, as `rig learn` does.
+//! * The output folder is this run's while it lasts ([`crate::lock`]).
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -30,6 +31,7 @@ use wire::{Bus, Waiting};
 use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
 use crate::learn::{progress_bar, write_atomic};
+use crate::lock::FolderLock;
 use crate::process::{Scheduling, Spin, wire_err};
 use crate::resume;
 
@@ -117,6 +119,16 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let mut cfg = cfg.clone();
     cfg.run.runs = 1;
     let run_id = free_run_id(opts)?;
+    if !opts.resume {
+        std::fs::create_dir_all(&opts.out)
+            .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
+    }
+    let _folder = FolderLock::acquire(&opts.out)?;
+    let checkpoints = resume::checkpoint_dir(&opts.out);
+    if checkpoints.exists() {
+        // Not in use by an agent started by hand; free again for this run's agent.
+        drop(FolderLock::acquire(&checkpoints)?);
+    }
     // Where a resumed run continues; checked before anything is written.
     let point = match opts.resume {
         true => Some(resume::prepare(&opts.out, &cfg, opts.driver.is_some())?),
@@ -125,9 +137,6 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     for note in point.iter().flat_map(|p| &p.notes) {
         eprintln!("note: {note}");
     }
-    std::fs::create_dir_all(&opts.out)
-        .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
-    let checkpoints = resume::checkpoint_dir(&opts.out);
     if point.is_none() {
         // A new run in an old directory: old checkpoints must not be taken for its own.
         resume::prune(&checkpoints, u32::MAX);
