@@ -2,7 +2,6 @@
 //! process into a folder in use is refused with one line naming the holder, the first
 //! one's outputs stay intact, and a folder whose run was killed can be resumed at once.
 
-use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Output, Stdio};
 use std::time::Duration;
@@ -128,21 +127,9 @@ fn a_folder_whose_run_was_killed_resumes() {
         .output()
         .unwrap());
     let out = dir.join("killed");
-    let mut run = rig()
-        .arg("run")
-        .args(args)
-        .arg(&out)
-        .process_group(0)
-        .spawn()
-        .unwrap();
+    let mut run = rig().arg("run").args(args).arg(&out).spawn().unwrap();
     common::wait_for_lines(&out.join("returns.csv"), 10);
-    common::signal(run.id(), "-KILL");
-    // Its processes too, as a power cut or `kill -9 -- -PGID` would.
-    let group = format!("-{}", run.id());
-    std::process::Command::new("kill")
-        .args(["-KILL", "--", &group])
-        .status()
-        .unwrap();
+    common::kill_run(run.id());
     run.wait().unwrap();
     assert!(out.join(".lock").exists());
     ok(rig()

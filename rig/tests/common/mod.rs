@@ -171,3 +171,16 @@ pub fn check_mcap(dir: &Path) {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// Kills (`kill -9`) the `rig run` process `pid` and the processes it started, all at
+/// once, as a power cut would: each is stopped first, so that none sees another die.
+pub fn kill_run(pid: u32) {
+    let mut all = children_of(pid);
+    all.push(pid);
+    for p in &all {
+        signal(*p, "-STOP");
+    }
+    for p in &all {
+        signal(*p, "-KILL");
+    }
+}

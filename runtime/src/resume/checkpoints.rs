@@ -41,17 +41,27 @@ pub fn checkpoints(dir: &Path) -> Vec<u32> {
 
 /// Removes the checkpoints of trials before `trial`.
 pub fn prune(dir: &Path, trial: u32) {
+    remove(dir, |t| t < trial);
+}
+
+/// Removes the checkpoints of trials after `trial`.
+pub fn discard_after(dir: &Path, trial: u32) {
+    remove(dir, |t| t > trial);
+}
+
+fn remove(dir: &Path, which: impl Fn(u32) -> bool) {
     for t in checkpoints(dir) {
-        if t < trial {
+        if which(t) {
             let _ = std::fs::remove_file(checkpoint_path(dir, t));
         }
     }
 }
 
 /// Writes checkpoints on a background thread (atomically: [`Checkpoint::write`]) and keeps
-/// the two newest. When the disk is slower than the trials, checkpoints queued behind the
-/// one being written are skipped, except the newest: the loop never waits, and a resume
-/// redoes the few trials after the newest checkpoint written.
+/// the `keep` newest (0: all; `rig run` prunes them itself, keeping what a resume needs).
+/// When the disk is slower than the trials, checkpoints queued behind the one being
+/// written are skipped, except the newest: the loop never waits, and a resume redoes the
+/// few trials after the newest checkpoint written. Dropped, it writes what is queued.
 pub struct CheckpointWriter {
     tx: Option<mpsc::Sender<Checkpoint>>,
     thread: Option<JoinHandle<Result<()>>>,
@@ -60,9 +70,9 @@ pub struct CheckpointWriter {
 }
 
 impl CheckpointWriter {
-    /// A writer into `dir` (created if missing), its thread placed as `layout` places
-    /// the checkpoint writer.
-    pub fn new(dir: &Path, layout: Option<Layout>) -> Result<Self> {
+    /// A writer into `dir` (created if missing, and held: [`FolderLock`]), its thread
+    /// placed as `layout` places the checkpoint writer, keeping the `keep` newest (0: all).
+    pub fn new(dir: &Path, layout: Option<Layout>, keep: usize) -> Result<Self> {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
         let folder = FolderLock::acquire(dir)?;
         let (tx, rx) = mpsc::channel::<Checkpoint>();
@@ -74,7 +84,7 @@ impl CheckpointWriter {
             if let Some(l) = layout {
                 let _ = l.place(Part::CheckpointWriter);
             }
-            let mut previous = None;
+            let mut written = std::collections::VecDeque::new();
             while let Ok(mut c) = rx.recv() {
                 // Only the newest of those waiting.
                 if let Some(newer) = rx.try_iter().last() {
@@ -83,8 +93,10 @@ impl CheckpointWriter {
                 let path = checkpoint_path(&dir, c.trial);
                 c.write(&path)
                     .with_context(|| format!("cannot write checkpoint {}", path.display()))?;
-                if let Some(p) = previous.replace(c.trial) {
-                    prune(&dir, p);
+                written.push_back(c.trial);
+                if keep > 0 && written.len() > keep {
+                    written.pop_front();
+                    prune(&dir, written[0]);
                 }
             }
             Ok(())
@@ -114,5 +126,13 @@ impl CheckpointWriter {
                 .map_err(|_| anyhow!("the checkpoint writer panicked"))?,
             None => Ok(()),
         }
+    }
+}
+
+impl Drop for CheckpointWriter {
+    /// Writes what is queued (a run stopped by an error or Ctrl-C keeps its newest
+    /// checkpoint).
+    fn drop(&mut self) {
+        let _ = self.finish();
     }
 }

@@ -36,6 +36,7 @@ use crate::process::{Scheduling, Spin, wire_err};
 use crate::resume;
 
 mod recording;
+mod retention;
 mod returns;
 mod spawn;
 mod supervisor;
@@ -96,6 +97,9 @@ pub struct RunSummary {
     pub deadline_misses: u64,
     /// The external driver's info, if one was used.
     pub driver: Option<DriverInfo>,
+    /// A resumed run: the trial it continued after (`records` begins with the trials
+    /// up to it, kept).
+    pub resumed_after: Option<u32>,
 }
 
 /// Refuses waiting that would leave a process unwoken: polling without end
@@ -137,10 +141,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     for note in point.iter().flat_map(|p| &p.notes) {
         eprintln!("note: {note}");
     }
-    if point.is_none() {
-        // A new run in an old directory: old checkpoints must not be taken for its own.
-        resume::prune(&checkpoints, u32::MAX);
-    }
+    // A new run in an old directory: old checkpoints must not be taken for its own; a
+    // resumed run's after its resume point are of trials it redoes.
+    resume::discard_after(&checkpoints, point.as_ref().map_or(0, |p| p.trial));
     let config_path = opts.out.join("config.toml");
     write_atomic(&config_path, &cfg.to_toml())?;
 
@@ -176,6 +179,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     };
     let first_seq = point.as_ref().map_or(0, |p| p.first_seq);
     let mut sup = Supervisor::new(bus, recording, returns, &opts.out, first_seq, watch, grace)?;
+    if let Some(d) = &opts.driver {
+        sup.resume_flags = format!(" --plant external --driver {}", d.id);
+    }
 
     let args = spawn::role_args(opts, point.as_ref(), &checkpoints);
     sup.children = spawn::processes(&run_id, &config_path, &opts.out, &args)?;
@@ -203,6 +209,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         wall: t0.elapsed(),
         deadline_misses,
         driver: driver_info,
+        resumed_after: point.as_ref().map(|p| p.trial),
     })
 }
 

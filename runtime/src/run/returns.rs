@@ -38,6 +38,11 @@ pub(super) struct Returns {
     /// Sum of the returns of the greedy trials after the pending trial, and their count.
     pub(super) greedy: (f64, u32),
     pub(super) records: Vec<TrialRecord>,
+    /// Per row written by this run: its trial and the sequence number of the first sample
+    /// after it and its greedy evaluations.
+    pub(super) ends: Vec<(u32, u64)>,
+    /// The sequence number of the sample being accounted for.
+    seq: u64,
 }
 
 impl Returns {
@@ -71,6 +76,8 @@ impl Returns {
             greedy_trial: 0.0,
             greedy: (0.0, 0),
             records: kept.to_vec(),
+            ends: Vec::new(),
+            seq: 0,
             task,
         })
     }
@@ -81,6 +88,7 @@ impl Returns {
     /// from the observer's estimates instead: their rewards and `x̂`.
     pub(super) fn sample(&mut self, h: &wire::Header, reward: f64, x: &[f64]) -> Result<()> {
         let f = h.flags;
+        self.seq = h.seq;
         let greedy = f & flags::GREEDY != 0;
         if f & flags::SHUTDOWN != 0 || (f & flags::START != 0 && !greedy) {
             self.flush()?;
@@ -141,6 +149,7 @@ impl Returns {
         if let Some(r) = self.pending.take() {
             write_row(&mut self.out, &r)?;
             self.out.flush()?;
+            self.ends.push((r.trial, self.seq));
             self.records.push(r);
         }
         Ok(())

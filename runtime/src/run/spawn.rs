@@ -45,9 +45,12 @@ pub(super) fn role_args(
     if let (Some(path), Some(_), None) = (&opts.cycles_out, opts.realtime, &opts.driver) {
         plant.extend(["--cycles-out".to_string(), path.display().to_string()]);
     }
+    // All kept: the supervisor removes those a resume can no longer need.
     let mut agent = vec![
         "--checkpoints".to_string(),
         checkpoints.display().to_string(),
+        "--keep-checkpoints".to_string(),
+        "0".to_string(),
     ];
     if let Some(p) = point {
         if let Some(c) = &p.checkpoint {
@@ -86,7 +89,9 @@ pub(super) fn processes(
         let log = out.join(format!("{role}.log"));
         let log_file =
             File::create(&log).with_context(|| format!("cannot create {}", log.display()))?;
-        let child = Command::new(&exe)
+        let mut command = Command::new(&exe);
+        in_own_group(&mut command);
+        let child = command
             .arg(role)
             .args(["--run-id", run_id, "--receivers", "2", "--config"])
             .arg(config)
@@ -99,4 +104,23 @@ pub(super) fn processes(
         children.0.push((role, child));
     }
     Ok(children)
+}
+
+/// Starts `command` in a process group of its own, so that Ctrl-C at a terminal reaches
+/// the supervisor only, which stops the processes once it has recorded what they sent
+/// ([`super::supervisor::Children::freeze`]); and so that it is told to stop (SIGTERM)
+/// when the supervisor dies.
+fn in_own_group(command: &mut Command) {
+    use std::os::unix::process::CommandExt;
+    command.process_group(0);
+    // SAFETY: between fork and exec the closure calls `prctl`, an async-signal-safe
+    // system call on this process only, and allocates nothing.
+    unsafe {
+        command.pre_exec(|| {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
 }

@@ -15,6 +15,7 @@ use crate::experiment::TrialRecord;
 use crate::process::wire_err;
 
 use super::recording::Recording;
+use super::retention::{Progress, Retention};
 use super::returns::Returns;
 
 /// How long the supervisor watches after a process exits early, to see which process
@@ -42,6 +43,19 @@ impl Continuity {
 
 /// The child processes; killed when dropped.
 pub(super) struct Children(pub(super) Vec<(&'static str, Child)>);
+
+impl Children {
+    /// Stops every process where it is (SIGSTOP): nothing more is sent, and what they
+    /// sent stays readable (it would be gone with a process that exits).
+    pub(super) fn freeze(&self) {
+        for (_, c) in &self.0 {
+            // SAFETY: `kill` sends a signal to the child's pid; it touches no memory.
+            unsafe {
+                libc::kill(c.id() as libc::pid_t, libc::SIGSTOP);
+            }
+        }
+    }
+}
 
 impl Drop for Children {
     fn drop(&mut self) {
@@ -85,6 +99,10 @@ pub(super) struct Supervisor {
     /// so that the recording shows the plant's reaction (its watchdog, or the driver's,
     /// applying the safe action within two periods).
     pub(super) grace: Option<Duration>,
+    /// Removes the checkpoints no resume can need.
+    pub(super) retention: Retention,
+    /// The flags beside `--resume DIR` that continue this run (an external driver's).
+    pub(super) resume_flags: String,
 }
 
 impl Supervisor {
@@ -124,11 +142,26 @@ impl Supervisor {
             deadline_misses: 0,
             driver,
             grace,
+            retention: Retention::new(crate::resume::checkpoint_dir(out)),
+            resume_flags: String::new(),
         })
     }
 
-    /// Records everything waiting; returns whether the run's end came by.
+    /// Records everything waiting, then removes the checkpoints no resume can need any
+    /// more; returns whether the run's end came by.
     pub(super) fn drain(&mut self, bar: &ProgressBar) -> Result<bool> {
+        let before = Progress {
+            recorded: self.continuity.iter().map(|c| c.next).min().unwrap_or(0),
+            rows: self.returns.ends.len(),
+        };
+        let done = self.record_waiting(bar)?;
+        self.retention
+            .after_drain(before, self.recording.rec.flushes(), &self.returns.ends);
+        Ok(done)
+    }
+
+    /// Records everything waiting; returns whether the run's end came by.
+    fn record_waiting(&mut self, bar: &ProgressBar) -> Result<bool> {
         let mut done = false;
         if let Some(a) = self
             .actions
@@ -270,12 +303,15 @@ impl Supervisor {
         Ok(())
     }
 
-    /// How far the run got, and how to continue it.
-    pub(super) fn resume_hint(&self) -> String {
+    /// How far the run got — its complete trials written to `returns.csv` first —, and
+    /// how to continue it.
+    pub(super) fn resume_hint(&mut self) -> String {
+        let _ = self.returns.flush_complete();
         format!(
-            "{} completed trials are in returns.csv; continue with `rig run --resume {}`",
+            "{} completed trials are in returns.csv; continue with `rig run --resume {}{}`",
             self.returns.records.len(),
-            self.out.display()
+            self.out.display(),
+            self.resume_flags
         )
     }
 
@@ -292,12 +328,26 @@ impl Supervisor {
         Ok((self.returns.records, self.messages, self.deadline_misses))
     }
 
+    /// After Ctrl-C: stops the processes and records what they sent, so that every
+    /// trial in `returns.csv` is complete in the recording too.
+    fn record_the_rest(&mut self, bar: &ProgressBar) {
+        self.children.freeze();
+        loop {
+            let before = self.messages;
+            // An error here is a consequence of the interrupt, which is reported.
+            if !matches!(self.drain(bar), Ok(false)) || self.messages == before {
+                break;
+            }
+        }
+    }
+
     pub(super) fn supervise(&mut self, bar: &ProgressBar) -> Result<()> {
         loop {
             if self.drain(bar)? {
                 break;
             }
             if self.bus.interrupted() {
+                self.record_the_rest(bar);
                 bail!(
                     "interrupted: stopped the plant, observer and agent processes; {}",
                     self.resume_hint()
