@@ -41,12 +41,12 @@ pub enum LockError {
         folder: String,
     },
     /// The lock file could not be opened or written.
-    #[error("cannot lock {path}: {source}")]
+    #[error("cannot lock {path}: {error}")]
     Io {
         /// The lock file.
         path: String,
         /// What the operating system said.
-        source: std::io::Error,
+        error: std::io::Error,
     },
 }
 
@@ -61,9 +61,9 @@ impl FolderLock {
     /// Locks the existing folder `folder` for this process, or says who holds it.
     pub fn acquire(folder: &Path) -> Result<Self, LockError> {
         let path = folder.join(LOCK_FILE);
-        let io = |source| LockError::Io {
+        let io = |error| LockError::Io {
             path: path.display().to_string(),
-            source,
+            error,
         };
         let mut file = OpenOptions::new()
             .read(true)

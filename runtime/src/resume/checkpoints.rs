@@ -44,6 +44,14 @@ pub fn prune(dir: &Path, trial: u32) {
     remove(dir, |t| t < trial);
 }
 
+/// Keeps the newest checkpoint of a trial up to `trial` and those after it: removes the
+/// older ones (none when there is no such checkpoint).
+pub fn keep_from_newest(dir: &Path, trial: u32) {
+    if let Some(newest) = checkpoints(dir).into_iter().rev().find(|&t| t <= trial) {
+        prune(dir, newest);
+    }
+}
+
 /// Removes the checkpoints of trials after `trial`.
 pub fn discard_after(dir: &Path, trial: u32) {
     remove(dir, |t| t > trial);

@@ -33,7 +33,8 @@ mod checkpoints;
 mod recorded;
 
 pub use checkpoints::{
-    CheckpointWriter, checkpoint_dir, checkpoint_path, checkpoints, discard_after, prune,
+    CheckpointWriter, checkpoint_dir, checkpoint_path, checkpoints, discard_after,
+    keep_from_newest, prune,
 };
 pub use recorded::RecordedMessage;
 use recorded::{Recorded, index, kept, read_recording, read_returns, same_plant};
@@ -68,7 +69,7 @@ pub struct ResumePoint {
 pub fn prepare(out: &Path, cfg: &ExperimentConfig, external: bool) -> Result<ResumePoint> {
     resumable(out, cfg)?;
     let mut notes = Vec::new();
-    let rows = read_returns(&out.join("returns.csv"))?;
+    let rows = read_returns(&out.join("returns.csv"), &mut notes)?;
     let done = rows.len() as u32;
     if done >= cfg.run.trials {
         bail!(

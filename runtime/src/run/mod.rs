@@ -35,6 +35,7 @@ use crate::lock::FolderLock;
 use crate::process::{Scheduling, Spin, wire_err};
 use crate::resume;
 
+mod logs;
 mod recording;
 mod retention;
 mod returns;
@@ -184,7 +185,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     }
 
     let args = spawn::role_args(opts, point.as_ref(), &checkpoints);
-    sup.children = spawn::processes(&run_id, &config_path, &opts.out, &args)?;
+    (sup.children, sup.logs) = spawn::processes(&run_id, &config_path, &opts.out, &args)?;
     // Placed after the processes started: they place themselves, from anywhere.
     opts.scheduling.place(crate::process::Part::Recorder)?;
     if opts.realtime.is_none() && opts.driver.is_none() {
@@ -203,6 +204,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let outcome = sup.supervise(&bar);
     bar.finish_and_clear();
     let (records, messages, deadline_misses) = sup.finish(outcome)?;
+    // Every trial is complete everywhere: the last one's checkpoint is all a resume
+    // (`--trials N`, to learn on) needs.
+    resume::keep_from_newest(&checkpoints, records.last().map_or(0, |r| r.trial));
     Ok(RunSummary {
         records,
         messages,

@@ -46,15 +46,8 @@ impl Retention {
             .rev()
             .find(|&&(_, end)| end <= before.recorded)
             .map(|&(trial, _)| trial);
-        let Some(safe) = safe else {
-            return;
-        };
-        let newest = resume::checkpoints(&self.dir)
-            .into_iter()
-            .rev()
-            .find(|&t| t <= safe);
-        if let Some(keep) = newest {
-            resume::prune(&self.dir, keep);
+        if let Some(safe) = safe {
+            resume::keep_from_newest(&self.dir, safe);
         }
     }
 }

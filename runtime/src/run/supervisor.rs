@@ -14,6 +14,7 @@ use wire::{Action, Bus, Estimate, Measurement, Truth, flags, topic};
 use crate::experiment::TrialRecord;
 use crate::process::wire_err;
 
+use super::logs::Logs;
 use super::recording::Recording;
 use super::retention::{Progress, Retention};
 use super::returns::Returns;
@@ -66,12 +67,6 @@ impl Drop for Children {
     }
 }
 
-pub(super) fn log_tail(path: &Path) -> String {
-    let text = std::fs::read_to_string(path).unwrap_or_default();
-    let lines: Vec<&str> = text.lines().collect();
-    lines[lines.len().saturating_sub(5)..].join("\n")
-}
-
 /// Everything the supervision loop works on.
 pub(super) struct Supervisor {
     pub(super) bus: Bus,
@@ -87,6 +82,8 @@ pub(super) struct Supervisor {
     pub(super) recording: Recording,
     pub(super) returns: Returns,
     pub(super) children: Children,
+    /// Their output.
+    pub(super) logs: Logs,
     pub(super) out: PathBuf,
     pub(super) messages: u64,
     pub(super) continuity: [Continuity; 3],
@@ -136,6 +133,7 @@ impl Supervisor {
             recording,
             returns,
             children: Children(Vec::new()),
+            logs: Logs::default(),
             out: out.to_owned(),
             messages: 0,
             continuity: std::array::from_fn(|_| Continuity { next: first_seq }),
@@ -248,13 +246,11 @@ impl Supervisor {
         Ok(a.header.flags & flags::SHUTDOWN != 0)
     }
 
-    /// A process that has exited, if any: its role, exit status and log file.
-    pub(super) fn exited(
-        &mut self,
-    ) -> Result<Option<(&'static str, std::process::ExitStatus, PathBuf)>> {
+    /// A process that has exited, if any: its role and exit status.
+    pub(super) fn exited(&mut self) -> Result<Option<(&'static str, std::process::ExitStatus)>> {
         for (role, child) in &mut self.children.0 {
             if let Some(status) = child.try_wait()? {
-                return Ok(Some((*role, status, self.out.join(format!("{role}.log")))));
+                return Ok(Some((*role, status)));
             }
         }
         Ok(None)
@@ -262,12 +258,12 @@ impl Supervisor {
 
     /// Of the processes that have exited, the one that caused the others to: killed by a
     /// signal rather than stopped by an error (a process whose peer dies stops with one).
-    pub(super) fn cause(&mut self) -> Result<(&'static str, std::process::ExitStatus, PathBuf)> {
+    pub(super) fn cause(&mut self) -> Result<(&'static str, std::process::ExitStatus)> {
         use std::os::unix::process::ExitStatusExt;
         let mut first = None;
         for (role, child) in &mut self.children.0 {
             if let Some(status) = child.try_wait()? {
-                let found = (*role, status, self.out.join(format!("{role}.log")));
+                let found = (*role, status);
                 if status.signal().is_some() {
                     return Ok(found);
                 }
@@ -284,11 +280,9 @@ impl Supervisor {
             loop {
                 if let Some(status) = child.try_wait()? {
                     if !status.success() {
-                        let log = self.out.join(format!("{role}.log"));
                         bail!(
-                            "the {role} process failed ({status}); last lines of {}:\n{}",
-                            log.display(),
-                            log_tail(&log)
+                            "the {role} process failed ({status}); {}",
+                            self.logs.last_lines(role)
                         );
                     }
                     break;
@@ -343,8 +337,10 @@ impl Supervisor {
 
     pub(super) fn supervise(&mut self, bar: &ProgressBar) -> Result<()> {
         loop {
-            if self.drain(bar)? {
-                break;
+            match self.drain(bar) {
+                Ok(true) => break,
+                Ok(false) => {}
+                Err(e) => bail!("{e:#}; {}", self.resume_hint()),
             }
             if self.bus.interrupted() {
                 self.record_the_rest(bar);
@@ -353,7 +349,7 @@ impl Supervisor {
                     self.resume_hint()
                 );
             }
-            if let Some((_, status, _)) = self.exited()? {
+            if let Some((_, status)) = self.exited()? {
                 // A process that ends cleanly after its last message can be seen to exit
                 // before that message is read: look once more.
                 if status.success() && self.drain(bar)? {
@@ -374,17 +370,19 @@ impl Supervisor {
                         Err(_) => break,
                     }
                 }
-                if done && self.cause().is_ok_and(|(_, s, _)| s.success()) {
+                if done && self.cause().is_ok_and(|(_, s)| s.success()) {
                     // The run's end came after all: processes exit as it passes.
                     break;
                 }
-                let (role, status, log) = self.cause()?;
+                let (role, status) = self.cause()?;
                 bail!(
-                    "the {role} process exited ({status}) before the run finished; {}; last lines of {}:\n{}",
+                    "the {role} process exited ({status}) before the run finished; {}; {}",
                     self.resume_hint(),
-                    log.display(),
-                    log_tail(&log)
+                    self.logs.last_lines(role)
                 );
+            }
+            if let Some(e) = self.logs.error() {
+                bail!("{e}; {}", self.resume_hint());
             }
         }
         // Everything is read: the processes, waiting for this, may exit.
