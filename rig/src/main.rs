@@ -127,11 +127,5 @@ fn main() -> ExitCode {
 
 /// One process of a run (`rig plant|observer|agent`).
 fn process<A>(node: fn(&A) -> anyhow::Result<()>, args: &A) -> ExitCode {
-    match node(args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+    runtime::process::exit_code(node(args))
 }

@@ -169,6 +169,7 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
     cfg.check_simulated()?;
     std::fs::create_dir_all(&opts.out)
         .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
+    let _folder = crate::lock::FolderLock::acquire(&opts.out)?;
     write_atomic(&opts.out.join("config.toml"), &cfg.to_toml())?;
     let runs_path = opts.out.join("runs.csv");
     let mut out = BufWriter::new(
