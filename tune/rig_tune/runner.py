@@ -89,10 +89,10 @@ def discard_recording(out: Path) -> None:
     shutil.rmtree(out / "checkpoints", ignore_errors=True)
 
 
-def end(proc: subprocess.Popen) -> None:
-    """Stops a run still going (as Ctrl-C would), then waits for it."""
+def end(proc: subprocess.Popen, sig: int = signal.SIGINT) -> None:
+    """Stops a process still going (a run as Ctrl-C would), then waits for it."""
     if proc.poll() is None:
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(sig)
         try:
             proc.wait(timeout=10)
         except subprocess.TimeoutExpired:
@@ -143,11 +143,5 @@ class Driver:
         self.proc = subprocess.Popen(argv, stdout=self.sink, stderr=subprocess.STDOUT)
 
     def close(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
+        end(self.proc, signal.SIGTERM)
         self.sink.close()
