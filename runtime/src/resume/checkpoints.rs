@@ -44,11 +44,18 @@ pub fn prune(dir: &Path, trial: u32) {
     remove(dir, |t| t < trial);
 }
 
-/// Keeps the newest checkpoint of a trial up to `trial` and those after it: removes the
-/// older ones (none when there is no such checkpoint).
+/// Keeps the newest checkpoint of a trial up to `trial`, the one before it (to fall back
+/// on should the newest be corrupt after a power failure: they are not synced) and those
+/// after `trial`: removes the older ones.
 pub fn keep_from_newest(dir: &Path, trial: u32) {
-    if let Some(newest) = checkpoints(dir).into_iter().rev().find(|&t| t <= trial) {
-        prune(dir, newest);
+    let oldest_kept = checkpoints(dir)
+        .into_iter()
+        .rev()
+        .filter(|&t| t <= trial)
+        .take(2)
+        .last();
+    if let Some(t) = oldest_kept {
+        prune(dir, t);
     }
 }
 

@@ -37,9 +37,13 @@ impl Logs {
         }
     }
 
-    /// The first log that could not be written, and why.
+    /// The first log that could not be written: why, and the last lines meant for it.
     pub(super) fn error(&self) -> Option<String> {
-        self.0.iter().find_map(|(_, l)| l.error())
+        let (role, e) = self
+            .0
+            .iter()
+            .find_map(|(role, l)| Some((role, l.error()?)))?;
+        Some(format!("{e}; {}", self.last_lines(role)))
     }
 }
 

@@ -204,7 +204,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let outcome = sup.supervise(&bar);
     bar.finish_and_clear();
     let (records, messages, deadline_misses) = sup.finish(outcome)?;
-    // Every trial is complete everywhere: the last one's checkpoint is all a resume
+    // Every trial is complete everywhere: the last one's checkpoint is what a resume
     // (`--trials N`, to learn on) needs.
     resume::keep_from_newest(&checkpoints, records.last().map_or(0, |r| r.trial));
     Ok(RunSummary {

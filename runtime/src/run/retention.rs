@@ -4,8 +4,9 @@
 //! supervisor has recorded (by up to a whole buffer of samples). A resume continues from
 //! the last trial complete everywhere: in `returns.csv`, in the recording that survives
 //! a crash (the chunks written out) and in the checkpoints. So the supervisor removes a
-//! checkpoint only when a newer one is of a trial complete everywhere, and keeps every
-//! checkpoint from that one on.
+//! checkpoint only when two newer ones are of trials complete everywhere (the newest,
+//! and one to fall back on should it be corrupt), and keeps every checkpoint from
+//! those on.
 
 use std::path::PathBuf;
 
@@ -34,8 +35,9 @@ impl Retention {
 
     /// After a drain that began at `before`, when the recorder has written everything out
     /// since (`flushes` grew): the trials complete in both `ends` (the rows' trials and
-    /// the first sample after each) and the written-out recording are safe, and
-    /// the checkpoints before the newest of them that has one are removed.
+    /// the first sample after each) and the written-out recording are safe, and the
+    /// checkpoints before the two newest of them are removed
+    /// ([`resume::keep_from_newest`]).
     pub(super) fn after_drain(&mut self, before: Progress, flushes: u64, ends: &[(u32, u64)]) {
         if flushes == self.flushes {
             return;

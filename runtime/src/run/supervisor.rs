@@ -382,7 +382,7 @@ impl Supervisor {
                 );
             }
             if let Some(e) = self.logs.error() {
-                bail!("{e}; {}", self.resume_hint());
+                bail!("{}; {e}", self.resume_hint());
             }
         }
         // Everything is read: the processes, waiting for this, may exit.
