@@ -111,7 +111,7 @@ fn resume(dir: &Path, extra: &[&str]) -> (Output, u32) {
     (out, after)
 }
 
-const TRIALS: &str = "1500";
+const TRIALS: &str = "600";
 
 /// Interrupts at points drawn from seed 36: after a number of rows, then a pause,
 /// alternately SIGINT and SIGKILL. The last complete trial is the resume point: after
@@ -131,7 +131,7 @@ fn lockstep_runs_interrupted_at_random_points_resume_from_their_last_complete_tr
     let mut rng = ChaCha8Rng::seed_from_u64(36);
     for point in 0..6 {
         let out = dir.join(format!("point-{point}"));
-        let after_rows = rng.random_range(20..900);
+        let after_rows = rng.random_range(20..500);
         let pause_ms = rng.random_range(0..400);
         let signal = ["-INT", "-KILL"][point % 2];
         let run = start(&args, &out);

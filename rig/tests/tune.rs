@@ -365,6 +365,46 @@ fn a_study_against_lockstep_drivers_starts_one_per_worker_and_keeps_the_returns_
     );
 }
 
+/// A driver command that exits (a misspelt flag) fails its trial at once with the
+/// driver's own last words, not after the rig's wait for a driver; the worker stops
+/// after `--max-failures` such trials.
+#[test]
+fn a_driver_that_exits_fails_its_trial_at_once_naming_why() {
+    let Some(py) = python() else { return };
+    let dir = tmp("tune", "driver-exits");
+    std::fs::write(dir.join("space.toml"), SPACE).unwrap();
+    let driver = format!("{py} -c \"import sys; sys.exit('no simulator for {{id}}')\"");
+    let args = [
+        &SHORT[..],
+        &[
+            "--n-trials",
+            "3",
+            "--max-failures",
+            "2",
+            "--driver-cmd",
+            &driver,
+        ],
+    ]
+    .concat();
+    let started = Instant::now();
+    let out = tune(&py, &dir, &args).output().unwrap();
+    let (stdout, stderr) = (text(&out), String::from_utf8_lossy(&out.stderr));
+    assert!(
+        started.elapsed() < Duration::from_secs(30),
+        "the trials waited for a driver that had exited: {:?}",
+        started.elapsed()
+    );
+    let failed = stdout
+        .lines()
+        .filter(|l| l.contains(": failed: the driver"))
+        .count();
+    assert_eq!(failed, 2, "{stdout}\n{stderr}");
+    assert!(
+        stdout.contains("exited with 1: no simulator for tune-"),
+        "{stdout}"
+    );
+}
+
 #[test]
 fn bad_space_files_are_one_line_errors_naming_file_and_key() {
     let Some(py) = python() else { return };

@@ -65,7 +65,7 @@ def run_arm(args: argparse.Namespace, runner: Runner, path: Path, out: Path) -> 
         return {str(s): g for s, g in zip(todo, curves)}
     driver = Driver(args.driver_cmd, f"tune-check-{out.name}", out / "driver.log")
     try:
-        external = Runner(runner.trials, driver.id, runner.keep_recordings)
+        external = Runner(runner.trials, driver, runner.keep_recordings)
         return {str(s): external.run(path, s, out / f"seed-{s}") for s in todo}
     finally:
         driver.close()

@@ -108,7 +108,7 @@ def parser() -> argparse.ArgumentParser:
     runs.add_argument(
         "--driver-cmd", metavar="TEMPLATE",
         help="learn against an external lockstep driver: the command that starts one, with {id} for its "
-        "driver id (each worker starts its own), e.g. 'python3 examples/furuta/driver.py --driver-id {id} --clock lockstep'",
+        "driver id (each worker starts its own), e.g. 'python3 examples/furuta/driver.py --driver-id {id}'",
     )
     runs.add_argument(
         "--keep-recordings", action="store_true",

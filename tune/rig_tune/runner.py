@@ -31,10 +31,10 @@ class Stopped(Exception):
 @dataclass
 class Runner:
     """How a study's runs are made: `trials` learning trials each (None: the
-    configuration's), against an external driver when `driver` names one."""
+    configuration's), against an external driver when there is one."""
 
     trials: int | None = None
-    driver: str | None = None
+    driver: Driver | None = None
     keep_recordings: bool = False
     extra: list[str] = field(default_factory=list)
 
@@ -43,7 +43,7 @@ class Runner:
         if self.driver is None:
             cmd = [rig(), "learn", "--runs", "1", "--threads", "1"]
         else:
-            cmd = [rig(), "run", "--plant", "external", "--driver", self.driver]
+            cmd = [rig(), "run", "--plant", "external", "--driver", self.driver.id]
         cmd += ["--config", str(config), "--seed", str(seed), "--out", str(out), "--quiet"]
         if self.trials is not None:
             cmd += ["--trials", str(self.trials)]
@@ -58,6 +58,8 @@ class Runner:
         """Runs one seed; calls `on_greedy` with each greedy return as it is written (a
         true answer stops the run: `Stopped`); returns every greedy return."""
         out.mkdir(parents=True, exist_ok=True)
+        if self.driver is not None:
+            self.driver.ensure()
         cmd = self.command(config, seed, out)
         log = out / "rig.log"
         with open(log, "w") as sink:
@@ -71,6 +73,8 @@ class Runner:
                             raise Stopped()
                     if done:
                         break
+                    if self.driver is not None and not self.driver.alive():
+                        raise RunFailed(self.driver.ended())
                     time.sleep(POLL_S)
             finally:
                 end(proc)
@@ -137,10 +141,30 @@ class Driver:
 
     def __init__(self, template: str, driver_id: str, log: Path) -> None:
         self.id = driver_id
-        argv = shlex.split(template.replace("{id}", driver_id))
+        self.argv = shlex.split(template.replace("{id}", driver_id))
+        self.log = log
         log.parent.mkdir(parents=True, exist_ok=True)
         self.sink = open(log, "w")
-        self.proc = subprocess.Popen(argv, stdout=self.sink, stderr=subprocess.STDOUT)
+        self.proc = self.start()
+
+    def start(self) -> subprocess.Popen:
+        return subprocess.Popen(self.argv, stdout=self.sink, stderr=subprocess.STDOUT)
+
+    def alive(self) -> bool:
+        return self.proc.poll() is None
+
+    def ended(self) -> str:
+        """Why the driver is gone: its command, exit status and last line of its log."""
+        self.sink.flush()
+        reason = last_line(self.log.read_text(errors="replace"))
+        return f"the driver `{shlex.join(self.argv)}` exited with {self.proc.returncode}: {reason} (log: {self.log})"
+
+    def ensure(self) -> None:
+        """Starts the driver again if it has exited (a crash ends one run, not the study)."""
+        if not self.alive():
+            self.sink.write(f"--- {self.ended()}; started again\n")
+            self.sink.flush()
+            self.proc = self.start()
 
     def close(self) -> None:
         end(self.proc, signal.SIGTERM)

@@ -101,7 +101,7 @@ def work(args: argparse.Namespace, study_name: str, objective: Objective, evalua
     if args.driver_cmd:
         driver_id = f"tune-{os.getpid()}-{k}"
         driver = Driver(args.driver_cmd, driver_id, args.out / "drivers" / f"{driver_id}.log")
-        objective.runner = Runner(objective.runner.trials, driver_id, args.keep_recordings)
+        objective.runner = Runner(objective.runner.trials, driver, args.keep_recordings)
     try:
         study.optimize(
             objective,
