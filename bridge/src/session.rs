@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow, bail};
 use zenoh::{Config, Session, Wait};
 
-use crate::message::Topic;
+use crate::message::{Topic, check_user};
 
 /// Where a bridge meets the other and with what.
 #[derive(Clone, Debug)]
@@ -84,10 +84,25 @@ fn others_may_read(path: &Path) -> Option<u32> {
     (mode & 0o077 != 0).then_some(mode)
 }
 
-/// Opens the driver's side's session: listens on the endpoint, admits the users of the
-/// credentials file, lets them reach driver `id`'s topics only.
-pub fn driver_side(id: &str, net: &Network) -> Result<Session> {
+/// The users of the credentials file, checked to name keys ([`check_user`]).
+fn users(net: &Network) -> Result<Vec<(String, String)>> {
     let users = read_credentials(&net.credentials)?;
+    for (u, _) in &users {
+        check_user(u).with_context(|| format!("credentials file {}", net.credentials.display()))?;
+    }
+    Ok(users)
+}
+
+/// The user this side connects as: the first of the credentials file.
+pub fn own_user(net: &Network) -> Result<String> {
+    Ok(users(net)?.swap_remove(0).0)
+}
+
+/// Opens the driver's side's session: listens on the endpoint, admits the users of the
+/// credentials file, lets them reach driver `id`'s topics only, and each its own
+/// commands' keys only.
+pub fn driver_side(id: &str, net: &Network) -> Result<Session> {
+    let users = users(net)?;
     let mut c = base(net)?;
     set(&mut c, "listen/endpoints", &json(&[net.endpoint.as_str()]))?;
     set(&mut c, "connect/endpoints", "[]")?;
@@ -110,10 +125,7 @@ pub fn driver_side(id: &str, net: &Network) -> Result<Session> {
 /// Opens the rig's side's session: connects to the endpoint as the first user of the
 /// credentials file, and keeps reconnecting while the link is down.
 pub fn rig_side(net: &Network) -> Result<Session> {
-    connecting(
-        net,
-        Some(read_credentials(&net.credentials)?.swap_remove(0)),
-    )
+    connecting(net, Some(users(net)?.swap_remove(0)))
 }
 
 /// Opens a probe's session: as the rig's side, or without credentials (`anonymous`).
@@ -166,31 +178,47 @@ fn base(net: &Network) -> Result<Config> {
     Ok(c)
 }
 
-/// Default deny; the users may put commands and pings of driver `id`, subscribe to its
-/// info, samples and pongs, and receive those (and this side's subscriptions to the
-/// commands and pings may reach them).
+/// Default deny; the users may put pings of driver `id` and each user its own commands
+/// and claims (`command/<user>`, `claim/<user>`: the key names who commands), subscribe
+/// to its info, samples, pongs and refusals, and receive those (and this side's
+/// subscriptions to the commands, claims and pings may reach them).
 fn access_control(id: &str, users: &[&str]) -> String {
-    let keys = |from_rig: bool| {
-        let k: Vec<String> = Topic::ALL
-            .iter()
-            .filter(|t| t.from_rig() == from_rig)
-            .map(|t| t.key(id))
-            .collect();
+    let keys = |topics: &[Topic]| {
+        let k: Vec<String> = topics.iter().map(|t| t.key(id)).collect();
         json(&k.iter().map(String::as_str).collect::<Vec<_>>())
     };
-    let (to_driver, from_driver) = (keys(true), keys(false));
+    let from_driver = keys(&[Topic::Info, Topic::Sample, Topic::Pong, Topic::Refused]);
+    let to_driver = keys(&[Topic::Command, Topic::Claim, Topic::Ping]);
+    let pings = keys(&[Topic::Ping]);
+    let (mut rules, mut subjects, mut policies) = (String::new(), String::new(), String::new());
+    for (i, user) in users.iter().enumerate() {
+        let own = [Topic::Command, Topic::Claim].map(|t| t.key_of(id, user));
+        let own = json(&own.iter().map(String::as_str).collect::<Vec<_>>());
+        rules += &format!(
+            "    {{ id: \"puts-{i}\", messages: [\"put\"], flows: [\"ingress\"], permission: \"allow\", key_exprs: {own} }},\n"
+        );
+        subjects += &format!(
+            "    {{ id: \"user-{i}\", usernames: {} }},\n",
+            json(&[user])
+        );
+        policies += &format!("    {{ rules: [\"puts-{i}\"], subjects: [\"user-{i}\"] }},\n");
+    }
     format!(
         r#"{{
   enabled: true,
   default_permission: "deny",
   rules: [
-    {{ id: "rig-puts", messages: ["put"], flows: ["ingress"], permission: "allow", key_exprs: {to_driver} }},
+    {{ id: "rig-pings", messages: ["put"], flows: ["ingress"], permission: "allow", key_exprs: {pings} }},
     {{ id: "driver-puts", messages: ["put"], flows: ["egress"], permission: "allow", key_exprs: {from_driver} }},
     {{ id: "rig-subscribes", messages: ["declare_subscriber"], flows: ["ingress"], permission: "allow", key_exprs: {from_driver} }},
     {{ id: "driver-subscribes", messages: ["declare_subscriber"], flows: ["egress"], permission: "allow", key_exprs: {to_driver} }},
-  ],
-  subjects: [{{ id: "rigs", usernames: {users} }}],
-  policies: [{{ rules: ["rig-puts", "driver-puts", "rig-subscribes", "driver-subscribes"], subjects: ["rigs"] }}],
+{rules}  ],
+  subjects: [
+    {{ id: "rigs", usernames: {users} }},
+{subjects}  ],
+  policies: [
+    {{ rules: ["rig-pings", "driver-puts", "rig-subscribes", "driver-subscribes"], subjects: ["rigs"] }},
+{policies}  ],
 }}"#,
         users = json(users)
     )
@@ -269,12 +297,17 @@ mod tests {
         };
         assert_eq!(c.get_json("access_control/enabled").unwrap(), "true");
         assert!(
-            acl.contains(r#"["rig/driver/qube/command", "rig/driver/qube/ping"]"#),
+            acl.contains(r#"["rig/driver/qube/command/*", "rig/driver/qube/claim/*", "rig/driver/qube/ping"]"#),
             "{acl}"
         );
         assert!(acl.contains(
-            r#"["rig/driver/qube/info", "rig/driver/qube/sample", "rig/driver/qube/pong"]"#
+            r#"["rig/driver/qube/info", "rig/driver/qube/sample", "rig/driver/qube/pong", "rig/driver/qube/refused"]"#
         ));
+        // Each user puts commands under its own name only.
+        assert!(acl.contains(
+            r#"key_exprs: ["rig/driver/qube/command/rig", "rig/driver/qube/claim/rig"]"#
+        ));
+        assert!(acl.contains(r#"{ rules: ["puts-0"], subjects: ["user-0"] }"#));
         assert!(!acl.contains("**"));
     }
 }
