@@ -194,6 +194,9 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
             s.messages / 3
         );
     }
+    if opts.driver.is_some() || opts.realtime.is_some() {
+        println!("  trials cut by gaps and redone: {} (gaps.csv)", s.gaps);
+    }
     if let Some(g) = s.records.iter().rev().find_map(|r| r.greedy) {
         println!("  last greedy return: {g:.1}");
     }

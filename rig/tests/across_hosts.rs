@@ -922,6 +922,108 @@ fn a_rig_whose_clock_is_ahead_locks_no_later_rig_out() {
     drop(x.driver);
 }
 
+/// The flag of a sample after a gap (`wire::flags::GAP`).
+const GAP: u64 = 512;
+
+/// Every recorded measurement: `(seq, trial, step, flags, t_sample_ns, t_publish_ns)`.
+fn recorded_samples(path: &Path) -> Vec<[u64; 6]> {
+    let field = |topic, name| recorded_field(path, topic, name);
+    let m = "/plant/measurement";
+    let t = "/timing/plant/measurement";
+    let (seq, trial, step, flags) = (
+        field(m, "seq"),
+        field(m, "trial"),
+        field(m, "step"),
+        field(m, "flags"),
+    );
+    let (tseq, sampled, published) = (
+        field(t, "seq"),
+        field(t, "t_sample_ns"),
+        field(t, "t_publish_ns"),
+    );
+    assert_eq!(seq, tseq, "the timing channel follows the measurements");
+    (0..seq.len())
+        .map(|i| {
+            [
+                seq[i],
+                trial[i],
+                step[i],
+                flags[i],
+                sampled[i],
+                published[i],
+            ]
+        })
+        .collect()
+}
+
+#[test]
+fn a_half_second_cut_is_flagged_never_learned_and_the_trial_redone() {
+    if Command::new("nft").arg("--version").output().is_err() {
+        println!("skipped: no `nft` (nftables) to cut the link with");
+        return;
+    }
+    // Zenoh keeps the link through the cut (its lease is longer): the samples of the
+    // cut arrive late or not at all, and the run goes on.
+    let long_lease = ["--link-timeout-ms", "3000"];
+    let flags: [&[&str]; 3] = [&["--speed", "2"], &[], &long_lease];
+    let Some(x) = Across::linked(10, "gap", flags, Link::Direct) else {
+        return;
+    };
+    let run = x.dir.join("run");
+    let out = std::thread::scope(|s| {
+        s.spawn(|| {
+            common::wait_for_lines(&run.join("returns.csv"), 2);
+            std::thread::sleep(Duration::from_millis(700));
+            for on in [true, false] {
+                x.hosts.a.cut(on);
+                x.hosts.b.cut(on);
+                if on {
+                    std::thread::sleep(Duration::from_millis(500));
+                }
+            }
+        });
+        x.run(&run, &["--trials", "4"])
+    });
+    assert!(out.status.success(), "{}", text(&out));
+    let returns = std::fs::read_to_string(run.join("returns.csv")).unwrap();
+    assert_eq!(returns.lines().count(), 5, "{returns}");
+    // The recording shows the gap, and no transition without the flag spans more than
+    // a period (its instants on the driver's clock) or, by when the samples were
+    // published, more than the period the contract allows for an answer and the next.
+    let period = 15_000_000;
+    let samples = recorded_samples(&run.join("run.mcap"));
+    let flagged = samples.iter().filter(|s| s[3] & GAP != 0).count();
+    assert!(flagged >= 1, "no sample flagged");
+    for w in samples.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let within = b[3] & 1 == 0 && a[3] & (2 | 8) == 0 && b[3] & 8 == 0;
+        if !within || b[3] & GAP != 0 {
+            continue;
+        }
+        assert!(
+            b[4] - a[4] <= period * 3 / 2 && b[5] - a[5] <= period * 5 / 2,
+            "an unflagged transition spans {} ms between instants, {} ms between publications: {a:?} → {b:?}",
+            (b[4] - a[4]) / 1_000_000,
+            (b[5] - a[5]) / 1_000_000
+        );
+    }
+    // The summary and gaps.csv count the trial cut and redone.
+    let said = text(&out);
+    let cut: usize = said
+        .split("trials cut by gaps and redone: ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no count of trials cut: {said}"));
+    assert_eq!(cut, flagged, "{said}");
+    let gaps = std::fs::read_to_string(run.join("gaps.csv")).unwrap();
+    assert_eq!(gaps.lines().count(), cut + 1, "{gaps}");
+    check_mcap(&run);
+    drop(x.rig_bridge);
+    drop(x.driver_bridge);
+    drop(x.driver);
+}
+
 #[test]
 fn resets_reach_the_driver_through_a_link_too_slow_for_the_actions() {
     if Command::new("nft").arg("--version").output().is_err() {

@@ -33,11 +33,13 @@ use crate::learn::{progress_bar, write_atomic};
 use crate::process::{Scheduling, Spin, wire_err};
 use crate::resume;
 
+mod gaps;
 mod recording;
 mod returns;
 mod spawn;
 mod supervisor;
 
+pub use gaps::GAPS_HEADER;
 use recording::{About, Recording};
 use returns::Returns;
 use supervisor::Supervisor;
@@ -92,6 +94,9 @@ pub struct RunSummary {
     pub wall: Duration,
     /// Deadlines the plant missed (realtime and external driver only).
     pub deadline_misses: u64,
+    /// Trial attempts cut short by gaps and run again (`gaps.csv`; realtime and
+    /// external driver only).
+    pub gaps: u64,
     /// The external driver's info, if one was used.
     pub driver: Option<DriverInfo>,
 }
@@ -165,8 +170,17 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         (None, Some(speed)) => Some(Duration::from_secs_f64(4.0 * task.ts / speed)),
         (None, None) => None,
     };
+    let gaps = gaps::Gaps::create(&opts.out.join("gaps.csv"), point.as_ref())?;
     let first_seq = point.as_ref().map_or(0, |p| p.first_seq);
-    let mut sup = Supervisor::new(bus, recording, returns, &opts.out, first_seq, watch, grace)?;
+    let mut sup = Supervisor::new(
+        bus,
+        recording,
+        (returns, gaps),
+        &opts.out,
+        first_seq,
+        watch,
+        grace,
+    )?;
 
     let args = spawn::role_args(opts, point.as_ref(), &checkpoints);
     sup.children = spawn::processes(&run_id, &config_path, &opts.out, &args)?;
@@ -187,12 +201,14 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let t0 = Instant::now();
     let outcome = sup.supervise(&bar);
     bar.finish_and_clear();
+    let gaps = sup.gaps.now;
     let (records, messages, deadline_misses) = sup.finish(outcome)?;
     Ok(RunSummary {
         records,
         messages,
         wall: t0.elapsed(),
         deadline_misses,
+        gaps,
         driver: driver_info,
     })
 }

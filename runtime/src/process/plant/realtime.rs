@@ -10,6 +10,10 @@
 //! trips the plant's watchdog ([`plant::safety::Supervisor::period`]): zero from its end
 //! on, until an action arrives. A late answer to the previous trial's last sample is
 //! dropped, not applied in this one. Nothing is allocated per interval.
+//!
+//! A sample the plant takes more than a period after its instant (the process was held
+//! up: the agent can no longer answer it in its interval) is a gap ([`flags::GAP`]): the
+//! attempt ends there, cut short, and the trial is run again, from a fresh instant.
 
 use ::plant::episode::{Episode, Step};
 use ::plant::safety::SafetyCounts;
@@ -19,9 +23,9 @@ use anyhow::Result;
 use wire::{Header, MAX_U, flags, now_ns};
 
 use super::super::{SILENCE, wire_err};
-use super::Trials;
 use super::arrivals::Arrivals;
 use super::link::{Link, TrialHeader, end_flags};
+use super::{Ended, Gap, Trials};
 
 /// Absolute sampling deadlines on the monotonic clock.
 struct Clock {
@@ -213,7 +217,7 @@ impl Realtime {
 }
 
 impl Trials for Realtime {
-    fn trial(&mut self, trial: &Trial) -> Result<usize> {
+    fn trial(&mut self, trial: &Trial) -> Result<Ended> {
         let steps = self.link.task.steps_per_trial();
         self.episode.reset(&trial.x0);
         let mut held = Held {
@@ -234,7 +238,13 @@ impl Trials for Realtime {
         if self.record_cycles {
             self.link.cycles.reserve(steps + 2);
         }
-        let mut t_k = self.clock.next_ns;
+        // A trial starts within a period of its instant: after an attempt cut short by
+        // a late plant, the clock moves on to now.
+        let (c, now) = (&mut self.clock, now_ns());
+        if now > c.next_ns + c.period_ns {
+            c.next_ns = now;
+        }
+        let mut t_k = c.next_ns;
         sleep_until(t_k, self.clock.spin_ns);
         let mut woke = now_ns();
         self.publish(header.at(self.link.seq, 0, first), 0.0, t_k)?;
@@ -246,18 +256,30 @@ impl Trials for Realtime {
             arrivals.collect(actions, deadline, waiting_for, self.clock.spin_ns)?;
             let woke_next = now_ns();
             self.account(&arrivals, waiting_for, t_k, woke);
-            if let Some(skipped) = ended {
+            if let Some(end) = ended {
                 // The END sample's answer only acknowledges learning; the trial is over.
                 self.clock.next_ns = deadline;
-                return Ok(skipped);
+                return Ok(end);
             }
             let step = self.interval(&arrivals, &mut held, (t_k, deadline));
             woke = woke_next;
             t_k = deadline;
+            let late_ns = woke.saturating_sub(t_k);
+            if late_ns > self.clock.period_ns {
+                // A gap: the sample only ends the attempt, without a reward to learn.
+                let h = header.at(self.link.seq, step.sample, flags::END | flags::GAP);
+                self.publish(h, 0.0, t_k)?;
+                let gap = Gap {
+                    missing: 0,
+                    late_ns,
+                };
+                ended = Some(gap.cut(trial, step.sample));
+                continue;
+            }
             let h = header.at(self.link.seq, step.sample, end_flags(&step));
             self.publish(h, step.reward, t_k)?;
             if step.ended() {
-                ended = Some(self.episode.skipped());
+                ended = Some(Ended::Done(self.episode.skipped()));
             }
         }
     }
