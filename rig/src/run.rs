@@ -49,6 +49,14 @@ pub struct Args {
     plant: String,
     #[command(flatten)]
     driver: DriverArgs,
+    /// Realtime and `--plant external`: what a gap in the loop's timing does — samples
+    /// missing, or one reaching the plant more than a period after its instant
+    /// (docs/run.md). `cut`: the trial's attempt ends there, nothing learned across it,
+    /// and the trial is run again (listed in gaps.csv). `learn`: the trial goes on and
+    /// learns across the gap, counted only as deadline misses — for a simulation run
+    /// faster than the machine can keep the period.
+    #[arg(long, default_value = "cut", value_parser = ["cut", "learn"])]
+    gaps: String,
     /// Continue the run in DIR after a crash, a killed process or Ctrl-C: from its last
     /// trial that is complete in returns.csv, in the agent's checkpoints
     /// (DIR/checkpoints) and in run.mcap. The configuration is DIR/config.toml; of the
@@ -160,6 +168,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
         scheduling,
         spin: args.spin,
         waiting,
+        learn_across_gaps: args.gaps == "learn",
     };
     Ok((cfg, opts))
 }

@@ -922,40 +922,6 @@ fn a_rig_whose_clock_is_ahead_locks_no_later_rig_out() {
     drop(x.driver);
 }
 
-/// The flag of a sample after a gap (`wire::flags::GAP`).
-const GAP: u64 = 512;
-
-/// Every recorded measurement: `(seq, trial, step, flags, t_sample_ns, t_publish_ns)`.
-fn recorded_samples(path: &Path) -> Vec<[u64; 6]> {
-    let field = |topic, name| recorded_field(path, topic, name);
-    let m = "/plant/measurement";
-    let t = "/timing/plant/measurement";
-    let (seq, trial, step, flags) = (
-        field(m, "seq"),
-        field(m, "trial"),
-        field(m, "step"),
-        field(m, "flags"),
-    );
-    let (tseq, sampled, published) = (
-        field(t, "seq"),
-        field(t, "t_sample_ns"),
-        field(t, "t_publish_ns"),
-    );
-    assert_eq!(seq, tseq, "the timing channel follows the measurements");
-    (0..seq.len())
-        .map(|i| {
-            [
-                seq[i],
-                trial[i],
-                step[i],
-                flags[i],
-                sampled[i],
-                published[i],
-            ]
-        })
-        .collect()
-}
-
 #[test]
 fn a_half_second_cut_is_flagged_never_learned_and_the_trial_redone() {
     if Command::new("nft").arg("--version").output().is_err() {
@@ -987,37 +953,12 @@ fn a_half_second_cut_is_flagged_never_learned_and_the_trial_redone() {
     assert!(out.status.success(), "{}", text(&out));
     let returns = std::fs::read_to_string(run.join("returns.csv")).unwrap();
     assert_eq!(returns.lines().count(), 5, "{returns}");
-    // The recording shows the gap, and no transition without the flag spans more than
-    // a period (its instants on the driver's clock) or, by when the samples were
-    // published, more than the period the contract allows for an answer and the next.
-    let period = 15_000_000;
-    let samples = recorded_samples(&run.join("run.mcap"));
-    let flagged = samples.iter().filter(|s| s[3] & GAP != 0).count();
-    assert!(flagged >= 1, "no sample flagged");
-    for w in samples.windows(2) {
-        let (a, b) = (w[0], w[1]);
-        let within = b[3] & 1 == 0 && a[3] & (2 | 8) == 0 && b[3] & 8 == 0;
-        if !within || b[3] & GAP != 0 {
-            continue;
-        }
-        assert!(
-            b[4] - a[4] <= period * 3 / 2 && b[5] - a[5] <= period * 5 / 2,
-            "an unflagged transition spans {} ms between instants, {} ms between publications: {a:?} → {b:?}",
-            (b[4] - a[4]) / 1_000_000,
-            (b[5] - a[5]) / 1_000_000
-        );
-    }
-    // The summary and gaps.csv count the trial cut and redone.
-    let said = text(&out);
-    let cut: usize = said
-        .split("trials cut by gaps and redone: ")
-        .nth(1)
-        .and_then(|r| r.split_whitespace().next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("no count of trials cut: {said}"));
-    assert_eq!(cut, flagged, "{said}");
-    let gaps = std::fs::read_to_string(run.join("gaps.csv")).unwrap();
-    assert_eq!(gaps.lines().count(), cut + 1, "{gaps}");
+    // The recording shows the gap, and no transition learned spans more than a period
+    // (its instants on the driver's clock) or, by when the samples were published, more
+    // than the period the contract allows for an answer and the next; the summary and
+    // gaps.csv count the trial cut and redone.
+    let flagged = common::gaps::flagged_and_never_learned(&run.join("run.mcap"), 15_000_000);
+    common::gaps::counted(&text(&out), &run, flagged);
     check_mcap(&run);
     drop(x.rig_bridge);
     drop(x.driver_bridge);

@@ -70,6 +70,9 @@ pub struct RunOptions {
     pub spin: Spin,
     /// How the three processes wait for their next message.
     pub waiting: Waiting,
+    /// Realtime and external driver: learn across gaps in the loop's timing instead of
+    /// cutting the attempt short and running the trial again (`--gaps learn`).
+    pub learn_across_gaps: bool,
 }
 
 /// An external driver in place of the simulated plant (`rig run --plant external`).

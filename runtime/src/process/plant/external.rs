@@ -14,9 +14,10 @@
 //! The driver is the clock. When the agent answers late — the driver's next sample shows
 //! that the action was not applied by then — the trial goes on and the miss is counted
 //! in [`wire::Measurement::deadline_misses`]. When the loop loses the driver's timing —
-//! samples missing before the newest (whole periods passed, also counted as misses), or
-//! a sample reaching this process more than a period after its instant (a network that
-//! held it back) — that sample is a gap ([`flags::GAP`]): the attempt ends there, cut
+//! samples missing before the newest (whole periods passed, also counted as misses), a
+//! sample whose instant comes more than 1.5 periods after the previous one's (the
+//! driver's clock slipped), or a sample reaching this process more than a period after
+//! its instant (a network that held it back) — that sample is a gap ([`flags::GAP`]): the attempt ends there, cut
 //! short, without the transition into it, and the trial is run again ([`super::Ended`]).
 
 use std::time::Duration;
@@ -49,6 +50,8 @@ pub struct Bridge {
     positions_only: Option<bool>,
     /// The samples of the trial.
     limit: TimeLimit,
+    /// Whether a gap cuts the attempt short (`--gaps`).
+    cut_gaps: bool,
 }
 
 impl Bridge {
@@ -74,6 +77,7 @@ impl Bridge {
             driver,
             info,
             positions_only: None,
+            cut_gaps: args.gaps == "cut",
         })
     }
 
@@ -166,17 +170,20 @@ impl Bridge {
     }
 
     /// Whether `next`, the sample after `s`, reached this process at `arrived` after a
-    /// gap: samples missing between them, or it more than a period after its instant
-    /// (a lockstep driver has no instants to keep).
+    /// gap: samples missing between them, its instant more than 1.5 periods after the
+    /// previous one's (the driver's clock slipped), or it more than a period after its
+    /// instant (a lockstep driver has no instants to keep).
     fn gap(&self, s: &DriverSample, next: &DriverSample, arrived: u64) -> Option<Gap> {
+        let clocked = !self.info.lockstep();
         let gap = Gap {
             missing: next.seq - s.seq - 1,
-            late_ns: match self.info.lockstep() {
-                true => 0,
-                false => arrived.saturating_sub(next.t_sample_ns),
-            },
+            span_ns: next.t_sample_ns.saturating_sub(s.t_sample_ns),
+            late_ns: arrived.saturating_sub(next.t_sample_ns),
+            unanswered: false,
         };
-        (gap.missing > 0 || gap.late_ns > self.info.period_ns).then_some(gap)
+        let period = self.info.period_ns;
+        let slipped = clocked && (gap.span_ns > period * 3 / 2 || gap.late_ns > period);
+        (self.cut_gaps && (gap.missing > 0 || slipped)).then_some(gap)
     }
 
     /// One period after driver sample `s` (of reset `reset_id`), published at

@@ -136,18 +136,31 @@ pub(super) enum Ended {
 pub(super) struct Gap {
     /// Samples missing before it.
     pub(super) missing: u64,
-    /// How long after its instant it reached the plant process \[ns\].
+    /// From the previous sample's instant to its own \[ns\].
+    pub(super) span_ns: u64,
+    /// How long after its instant it reached (or was taken by) the plant process \[ns\].
     pub(super) late_ns: u64,
+    /// The sample before the last was still unanswered a period after its deadline
+    /// (realtime: the watchdog's limit passed without the agent's action).
+    pub(super) unanswered: bool,
 }
 
 impl Gap {
     /// Says so in the plant's log: `trial`'s attempt cut at sample `step`.
     pub(super) fn cut(self, trial: &Trial, step: usize) -> Ended {
+        let why = if self.unanswered {
+            "no answer for a period after its deadline".to_string()
+        } else {
+            format!(
+                "{} samples missing, {:.1} ms since the previous instant, the sample {:.1} ms late",
+                self.missing,
+                self.span_ns as f64 * 1e-6,
+                self.late_ns as f64 * 1e-6
+            )
+        };
         eprintln!(
-            "{} cut short at sample {step} by a gap ({} samples missing, the sample {:.1} ms late): run again",
-            trial_name(trial),
-            self.missing,
-            self.late_ns as f64 * 1e-6
+            "{} cut short at sample {step} by a gap ({why}): run again",
+            trial_name(trial)
         );
         Ended::Cut
     }
@@ -203,14 +216,17 @@ fn runner(
     let actuator = crate::experiment::actuator(&task, cfg, run_seed);
     let episode = Episode::new(Plant::new(task.clone()), actuator);
     Ok(if realtime {
-        Box::new(realtime::Realtime::new(
-            link,
-            episode,
-            &task,
-            args.speed,
-            args.spin.spin_us,
-            args.cycles_out.is_some(),
-        ))
+        Box::new(
+            realtime::Realtime::new(
+                link,
+                episode,
+                &task,
+                args.speed,
+                args.spin.spin_us,
+                args.cycles_out.is_some(),
+            )
+            .cutting_gaps(args.gaps == "cut"),
+        )
     } else {
         Box::new(lockstep::Lockstep::new(link, episode))
     })

@@ -12,8 +12,10 @@
 //! dropped, not applied in this one. Nothing is allocated per interval.
 //!
 //! A sample the plant takes more than a period after its instant (the process was held
-//! up: the agent can no longer answer it in its interval) is a gap ([`flags::GAP`]): the
-//! attempt ends there, cut short, and the trial is run again, from a fresh instant.
+//! up: the agent can no longer answer it in its interval), or one at which the sample
+//! before the last is still unanswered (its action more than a period past its deadline:
+//! what a driver's watchdog allows), is a gap ([`flags::GAP`]): the attempt ends there,
+//! cut short, and the trial is run again, from a fresh instant.
 
 use ::plant::episode::{Episode, Step};
 use ::plant::safety::SafetyCounts;
@@ -117,6 +119,8 @@ pub(super) struct Realtime {
     /// Predictive timing (`observer.mode`): the action that answers sample `k` is
     /// applied at `t_{k+1}` for the whole interval.
     pipelined: bool,
+    /// Whether a sample taken more than a period late cuts the attempt short (`--gaps`).
+    cut_gaps: bool,
 }
 
 impl Realtime {
@@ -143,6 +147,31 @@ impl Realtime {
             link,
             clock,
             record_cycles,
+            cut_gaps: true,
+        }
+    }
+
+    /// Whether a sample taken more than a period late cuts the attempt short
+    /// (`--gaps cut`, the default) or the trial learns across it (`--gaps learn`).
+    pub(super) fn cutting_gaps(mut self, cut: bool) -> Self {
+        self.cut_gaps = cut;
+        self
+    }
+
+    /// After a gap at sample `seq`: waits until the agent has answered it (it has caught
+    /// up with the samples before), so that the next attempt starts on a loop that keeps
+    /// time; the clock moves on to now.
+    fn caught_up(&mut self, seq: u64) -> Result<()> {
+        loop {
+            let a = self
+                .link
+                .actions
+                .recv(&self.link.bus, SILENCE)
+                .map_err(wire_err)?;
+            if a.header.seq >= seq {
+                self.clock.next_ns = now_ns();
+                return Ok(());
+            }
         }
     }
 
@@ -230,6 +259,7 @@ impl Trials for Realtime {
         if self.pipelined {
             self.link.u_next.clone_from(&held.u);
             self.prime(header.at(self.link.seq, 0, flags::START), &mut held)?;
+            arrivals.newest = self.link.seq - 1;
             first = flags::PRIMED;
         }
         // Room for the trial's timing records now, before the clock runs: a vector that
@@ -264,17 +294,18 @@ impl Trials for Realtime {
             let step = self.interval(&arrivals, &mut held, (t_k, deadline));
             woke = woke_next;
             t_k = deadline;
-            let late_ns = woke.saturating_sub(t_k);
-            if late_ns > self.clock.period_ns {
+            let gap = Gap {
+                missing: 0,
+                span_ns: self.clock.period_ns,
+                late_ns: woke.saturating_sub(t_k),
+                unanswered: arrivals.newest + 1 < waiting_for,
+            };
+            if self.cut_gaps && (gap.late_ns > self.clock.period_ns || gap.unanswered) {
                 // A gap: the sample only ends the attempt, without a reward to learn.
                 let h = header.at(self.link.seq, step.sample, flags::END | flags::GAP);
                 self.publish(h, 0.0, t_k)?;
-                let gap = Gap {
-                    missing: 0,
-                    late_ns,
-                };
-                ended = Some(gap.cut(trial, step.sample));
-                continue;
+                self.caught_up(h.seq)?;
+                return Ok(gap.cut(trial, step.sample));
             }
             let h = header.at(self.link.seq, step.sample, end_flags(&step));
             self.publish(h, step.reward, t_k)?;
