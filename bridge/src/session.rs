@@ -304,6 +304,14 @@ mod tests {
         dir
     }
 
+    /// The one line refusing `what` at `path` of `mode`.
+    fn refusal(what: &str, path: &Path, mode: u32) -> String {
+        let p = path.display();
+        format!(
+            "{what} {p} is open to others than its owner (mode {mode:04o}); refused: `chmod 600 {p}`"
+        )
+    }
+
     #[test]
     fn credentials_open_to_group_or_others_are_refused() {
         let dir = scratch("cred-mode");
@@ -312,14 +320,7 @@ mod tests {
         for mode in [0o644, 0o640, 0o604, 0o620] {
             chmod(&f, mode);
             let e = read_credentials(&f).unwrap_err().to_string();
-            assert_eq!(
-                e,
-                format!(
-                    "credentials file {} is open to others than its owner (mode {mode:04o}); refused: `chmod 600 {}`",
-                    f.display(),
-                    f.display()
-                )
-            );
+            assert_eq!(e, refusal("credentials file", &f, mode));
         }
         chmod(&f, 0o600);
         assert_eq!(read_credentials(&f).unwrap().len(), 1);
@@ -348,14 +349,7 @@ mod tests {
         for mode in [0o644, 0o640] {
             chmod(&key, mode);
             let e = base(&net).unwrap_err().to_string();
-            assert_eq!(
-                e,
-                format!(
-                    "private key {} is open to others than its owner (mode {mode:04o}); refused: `chmod 600 {}`",
-                    key.display(),
-                    key.display()
-                )
-            );
+            assert_eq!(e, refusal("private key", &key, mode));
         }
         chmod(&key, 0o600);
         base(&net).unwrap();
