@@ -16,7 +16,8 @@ use crate::selection::{Selection, resolve_selection, resume_selection};
 pub struct Args {
     #[command(flatten)]
     selection: Selection,
-    /// Output directory.
+    /// Output directory. It is this command's while it runs (DIR/.lock): another `rig
+    /// run` or `rig learn` into it is refused, naming this process.
     #[arg(long, value_name = "DIR", default_value = "out/run")]
     out: PathBuf,
     /// Run id shared by the three processes [default: unique per invocation].
