@@ -7,7 +7,7 @@
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use wire::{Measurement, flags};
@@ -20,6 +20,8 @@ pub const GAPS_HEADER: &str = "trial,greedy,step,seq,span_ms,late_ms";
 /// Streams `gaps.csv` from the plant's measurements.
 pub(super) struct Gaps {
     out: BufWriter<File>,
+    /// Where `out` writes.
+    path: PathBuf,
     /// Attempts cut in the part of the run that is running now.
     pub(super) now: u64,
     /// Attempts cut in the trials a resumed run keeps.
@@ -42,11 +44,13 @@ impl Gaps {
             .with_context(|| format!("cannot create {}", path.display()))?;
         let mut out = BufWriter::new(file);
         if !resumed {
-            writeln!(out, "{GAPS_HEADER}")?;
-            out.flush()?;
+            writeln!(out, "{GAPS_HEADER}")
+                .and_then(|()| out.flush())
+                .with_context(|| format!("cannot write {}", path.display()))?;
         }
         Ok(Self {
             out,
+            path: path.to_owned(),
             now: 0,
             kept: point.map_or(0, kept_cuts),
             previous_ns: 0,
@@ -67,8 +71,9 @@ impl Gaps {
                 h.seq,
                 ms(m.t_sample_ns.saturating_sub(self.previous_ns)),
                 ms(m.t_publish_ns.saturating_sub(m.t_sample_ns))
-            )?;
-            self.out.flush()?;
+            )
+            .and_then(|()| self.out.flush())
+            .with_context(|| format!("cannot write {}", self.path.display()))?;
             self.now += 1;
         }
         self.previous_ns = m.t_sample_ns;
