@@ -9,6 +9,8 @@
 //! * The link down for a second mid-trial: the driver applies the safe action within two
 //!   periods (said by the driver's bridge, on the driver's host), the rig stops with
 //!   one line, the rig's bridge reports the loss and the return, and `--resume` finishes.
+//! * Both hosts drop every packet for 400 ms as each RESET goes out: every reset
+//!   completes (the rig's bridge sends it again), and so does the run.
 
 mod common;
 
@@ -999,6 +1001,61 @@ fn resets_reach_the_driver_through_a_link_too_slow_for_the_actions() {
     assert!(counted(&driver_side, "stale") > 0, "{driver_side}");
     counted(&driver_side, "lost");
     drop(x.rig_bridge);
+    drop(x.driver);
+}
+
+#[test]
+fn every_reset_completes_while_the_link_drops_its_packets() {
+    if Command::new("nft").arg("--version").output().is_err() {
+        println!("skipped: no `nft` (nftables) to drop packets with");
+        return;
+    }
+    // The rig's socket buffer small, so that a link that takes nothing fills it and
+    // Zenoh's queue behind it at once; the link's lease longer than the drops.
+    let config = tmp("hosts", "drops-config").join("rig.json5");
+    std::fs::write(
+        &config,
+        "{ transport: { link: { tcp: { so_sndbuf: 4096 } } } }",
+    )
+    .unwrap();
+    let rig_flags = ["--zenoh-config", config.to_str().unwrap()];
+    let long_lease = ["--link-timeout-ms", "3000"];
+    let flags: [&[&str]; 3] = [&["--speed", "5"], &rig_flags, &long_lease];
+    let Some(x) = Across::linked(14, "drops", flags, Link::Direct) else {
+        return;
+    };
+    let (run, trials) = (x.dir.join("run"), 6);
+    let out = std::thread::scope(|s| {
+        // A trial's row is written as it ends, when the next trial's RESET goes out:
+        // both hosts then drop every TCP packet they send for 400 ms (twice the time
+        // after which the rig's bridge sends an unacknowledged RESET again).
+        s.spawn(|| {
+            for rows in 2..=trials {
+                common::wait_for_lines(&run.join("returns.csv"), rows);
+                x.hosts.a.cut(true);
+                x.hosts.b.cut(true);
+                std::thread::sleep(Duration::from_millis(400));
+                x.hosts.a.cut(false);
+                x.hosts.b.cut(false);
+            }
+        });
+        x.run(
+            &run,
+            &["--trials", &trials.to_string(), "--eval-every", "0"],
+        )
+    });
+    // Every reset completed: the run finished, every trial in returns.csv.
+    assert!(out.status.success(), "{}", text(&out));
+    let returns = std::fs::read_to_string(run.join("returns.csv")).unwrap();
+    assert_eq!(returns.lines().count(), trials + 1, "{returns}");
+    // The drops met RESETs: the rig's bridge sent one again for want of an answer.
+    let rig_side = x.rig_bridge.stop();
+    assert!(rig_side.contains(" sent again: "), "{rig_side}");
+    let driver_side = x.driver_bridge.stop();
+    assert!(
+        driver_side.contains(" 0 out of order, 0 malformed"),
+        "{driver_side}"
+    );
     drop(x.driver);
 }
 
