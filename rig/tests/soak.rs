@@ -30,7 +30,16 @@ fn a_short_soak_finishes_with_no_foreign_command_and_no_gap_learned() {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../bench/scripts/soak.py");
     let run = Command::new(&python)
         .arg(script)
-        .args(["--seconds", "30", "--speed", "2", "--seed", "3", "--subnet", "79"])
+        .args([
+            "--seconds",
+            "30",
+            "--speed",
+            "2",
+            "--seed",
+            "3",
+            "--subnet",
+            "79",
+        ])
         .args(["--rig", env!("CARGO_BIN_EXE_rig"), "--out"])
         .arg(&out)
         .output()
@@ -49,11 +58,18 @@ fn a_short_soak_finishes_with_no_foreign_command_and_no_gap_learned() {
             .unwrap_or_else(|| panic!("{key}: {said}"))
     };
     assert_eq!(figures["done"], true, "{said}");
-    assert_eq!(n("second_session_commands_reaching_the_driver"), 0, "{said}");
+    assert_eq!(
+        n("second_session_commands_reaching_the_driver"),
+        0,
+        "{said}"
+    );
     assert_eq!(n("trials_in_returns_with_a_gap"), 0, "{said}");
     assert_eq!(n("trials_checked_in_recording"), n("trials"), "{said}");
     // The seed's faults: at least one cut, survived, and a second session refused.
     assert!(n("cuts") >= 1 && n("cuts_survived") == n("cuts"), "{said}");
-    assert!(n("probes_told_who_holds") + n("second_rigs_told_who_holds") >= 1, "{said}");
+    assert!(
+        n("probes_told_who_holds") + n("second_rigs_told_who_holds") >= 1,
+        "{said}"
+    );
     assert!(run.status.success(), "{said}");
 }
