@@ -282,6 +282,30 @@ impl Across {
         })
     }
 
+    /// As [`Self::linked`] with the driver at speed 5, a small socket buffer (4 kB) on
+    /// the rig's side and the link's lease (3 s) longer than what the test does to it;
+    /// `None`, with the reason printed, without `nft` to do it with.
+    fn cramped(n: u8, name: &str) -> Option<Self> {
+        if Command::new("nft").arg("--version").output().is_err() {
+            println!("skipped: no `nft` (nftables) to drop packets with");
+            return None;
+        }
+        let config = tmp("hosts", &format!("{name}-config")).join("rig.json5");
+        std::fs::write(
+            &config,
+            "{ transport: { link: { tcp: { so_sndbuf: 4096 } } } }",
+        )
+        .unwrap();
+        let rig_flags = ["--zenoh-config", config.to_str().unwrap()];
+        let long_lease = ["--link-timeout-ms", "3000"];
+        Self::linked(
+            n,
+            name,
+            [&["--speed", "5"], &rig_flags, &long_lease],
+            Link::Direct,
+        )
+    }
+
     /// `program` on the rig's host; with `ahead`, in a time namespace of its own whose
     /// monotonic clock is that many seconds ahead of the machine's.
     fn on_b(&self, program: &str, ahead: Option<u64>) -> Command {
@@ -969,23 +993,10 @@ fn a_half_second_cut_is_flagged_never_learned_and_the_trial_redone() {
 
 #[test]
 fn resets_reach_the_driver_through_a_link_too_slow_for_the_actions() {
-    if Command::new("nft").arg("--version").output().is_err() {
-        println!("skipped: no `nft` (nftables) to throttle the link with");
-        return;
-    }
-    // A small socket buffer on the rig's side, and its sending throttled far below what
-    // the actions need: the buffer and Zenoh's queue stay full, and the link delivers
-    // late, in bursts, or closes for a while — what is in flight then is gone.
-    let config = tmp("hosts", "slow-config").join("rig.json5");
-    std::fs::write(
-        &config,
-        "{ transport: { link: { tcp: { so_sndbuf: 4096 } } } }",
-    )
-    .unwrap();
-    let rig_flags = ["--zenoh-config", config.to_str().unwrap()];
-    let long_lease = ["--link-timeout-ms", "3000"];
-    let flags: [&[&str]; 3] = [&["--speed", "5"], &rig_flags, &long_lease];
-    let Some(x) = Across::linked(11, "slow", flags, Link::Direct) else {
+    // Its sending throttled far below what the actions need: the buffer and Zenoh's
+    // queue stay full, and the link delivers late, in bursts, or closes for a while —
+    // what is in flight then is gone.
+    let Some(x) = Across::cramped(11, "slow") else {
         return;
     };
     x.hosts.b.throttle(&x.hosts.a.addr, PORT, 8);
@@ -1006,22 +1017,9 @@ fn resets_reach_the_driver_through_a_link_too_slow_for_the_actions() {
 
 #[test]
 fn every_reset_completes_while_the_link_drops_its_packets() {
-    if Command::new("nft").arg("--version").output().is_err() {
-        println!("skipped: no `nft` (nftables) to drop packets with");
-        return;
-    }
-    // The rig's socket buffer small, so that a link that takes nothing fills it and
-    // Zenoh's queue behind it at once; the link's lease longer than the drops.
-    let config = tmp("hosts", "drops-config").join("rig.json5");
-    std::fs::write(
-        &config,
-        "{ transport: { link: { tcp: { so_sndbuf: 4096 } } } }",
-    )
-    .unwrap();
-    let rig_flags = ["--zenoh-config", config.to_str().unwrap()];
-    let long_lease = ["--link-timeout-ms", "3000"];
-    let flags: [&[&str]; 3] = [&["--speed", "5"], &rig_flags, &long_lease];
-    let Some(x) = Across::linked(14, "drops", flags, Link::Direct) else {
+    // A link that takes nothing fills the small buffer and Zenoh's queue behind it at
+    // once.
+    let Some(x) = Across::cramped(14, "drops") else {
         return;
     };
     let (run, trials) = (x.dir.join("run"), 6);
