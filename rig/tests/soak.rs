@@ -1,5 +1,5 @@
 //! The soak benchmark's short version (`bench/scripts/soak.py`, docs/results/soak.md):
-//! 30 s of link cuts, loss bursts, probes and second rigs against a run across two
+//! 20 s of link cuts, loss bursts, probes and second rigs against a run across two
 //! hosts, resumed until done. Needs root, iproute2, nftables and Python with `mcap`
 //! (RIG_PYTHON); without them it prints why and passes.
 
