@@ -32,13 +32,13 @@ fn a_short_soak_finishes_with_no_foreign_command_and_no_gap_learned() {
         .arg(script)
         .args([
             "--seconds",
-            "30",
+            "20",
             "--speed",
             "2",
             "--seed",
-            "3",
-            "--subnet",
-            "79",
+            "1",
+            "--trials",
+            "8",
         ])
         .args(["--rig", env!("CARGO_BIN_EXE_rig"), "--out"])
         .arg(&out)
