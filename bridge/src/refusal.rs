@@ -137,8 +137,11 @@ struct Listening {
     echo: bool,
     /// The listening side: prefix of its log lines, and the address of the link Zenoh
     /// accepted last; refusals said, to say each once a minute.
-    listener: Option<(String, Mutex<(String, Vec<(String, Instant)>)>)>,
+    listener: Option<(String, Said)>,
 }
+
+/// The address of the link Zenoh accepted last, and each refusal said with when.
+type Said = Mutex<(String, Vec<(String, Instant)>)>;
 
 /// The message of an event.
 #[derive(Default)]

@@ -370,8 +370,7 @@ impl<'a> Stand<'a> {
     /// went unanswered, or the link is lost.
     fn explain_refusal(&mut self) {
         let latest = self.refusals.as_ref().and_then(|h| h.latest());
-        if latest.is_some() && latest != self.said {
-            let r = latest.expect("some");
+        if let Some(r) = latest.filter(|r| self.said.as_ref() != Some(r)) {
             eprintln!(
                 "bridge for driver {:?}: {}",
                 self.opts.id,
