@@ -1,28 +1,28 @@
 //! The bridge on the driver's host (`rig bridge driver`): the driver's info and samples
-//! out to the network, the rig's commands in to the driver, pings answered.
+//! out to the network, the rig's commands in to the driver ([`crate::gate`]), pings
+//! answered.
 //!
 //! Safety stays here, beside the motor, and needs nothing from the network: the driver's
 //! own watchdog applies the safe action one period after the last action, whatever
-//! happened to the link. The bridge only keeps stale commands away from it — a command
-//! that answers a sample more than `max_age_periods` older than the newest (a burst the
-//! network delivers late, after an outage) or that is not newer than the last one — and
-//! says, measured on this host, when the watchdog engaged and how long after the last
-//! command.
+//! happened to the link. The bridge lets one rig session command the driver at a time
+//! ([`crate::claim`]), keeps stale commands away from it — an action that answers a
+//! sample more than `max_age_periods` older than the newest (a burst the network
+//! delivers late, after an outage) — and says, measured on this host, when the watchdog
+//! engaged and how long after the last command.
 
 use std::collections::VecDeque;
-use std::io::Write as _;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use anyhow::{Result, anyhow};
-use driver::contract::{
-    DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, kind, service, status, topic,
-};
+use driver::contract::{DRIVER_QOS, DriverInfo, DriverSample, service, status, topic};
 use wire::{Bus, now_ns};
 use zenoh::Wait;
 use zenoh::pubsub::Publisher;
 
+use crate::claim::Lease;
+use crate::gate::Gate;
 use crate::message::{Ping, Stamps, Topic, from_bytes, to_bytes};
 use crate::session::{Network, driver_side};
 use crate::{Counts, publisher, wire_err};
@@ -39,6 +39,8 @@ pub struct DriverSide {
     pub max_age_periods: u64,
     /// Silence of the rig's pings after which the link is reported lost.
     pub link_timeout: Duration,
+    /// How long a rig session holds the driver without a word from it.
+    pub lease: Lease,
     /// Each action's sample-to-actuation delay across the link as CSV, if given
     /// (`seq,t_sample_ns,t_arrived_ns,sample_to_actuation`, ns on this host's clock: a
     /// file `rig learn --delay-from` takes).
@@ -47,17 +49,19 @@ pub struct DriverSide {
 
 /// What the two halves share.
 #[derive(Default)]
-struct Shared {
-    stop: AtomicBool,
+pub(crate) struct Shared {
+    pub(crate) stop: AtomicBool,
     /// `seq` of the last command passed to the driver, and when it arrived.
-    command: AtomicU64,
-    command_arrived: AtomicU64,
+    pub(crate) command: AtomicU64,
+    pub(crate) command_arrived: AtomicU64,
     /// The newest sample's `seq`.
-    newest: AtomicU64,
+    pub(crate) newest: AtomicU64,
+    /// The driver's period (0 until its info came) \[ns\].
+    pub(crate) period_ns: AtomicU64,
     /// When the last ping arrived.
     pinged: AtomicU64,
     /// The recent samples' `(seq, t_sample_ns)`, the newest last.
-    sampled: Mutex<VecDeque<(u64, u64)>>,
+    pub(crate) sampled: Mutex<VecDeque<(u64, u64)>>,
 }
 
 /// Samples remembered for the actions that answer them.
@@ -66,6 +70,7 @@ const RECENT: usize = 1024;
 /// Serves until Ctrl-C or a termination request; returns what was forwarded.
 pub fn serve_driver(opts: &DriverSide) -> Result<Counts> {
     driver::contract::check_id(&opts.id).map_err(wire_err)?;
+    let _refusals = crate::refusal::listen(Some(format!("bridge for driver {:?}", opts.id)));
     let session = driver_side(&opts.id, &opts.net)?;
     eprintln!(
         "bridge for driver {:?}: listening on {} (session {})",
@@ -125,58 +130,7 @@ fn answer_pings(
 /// The rig's commands, from the network to the driver, until stopped.
 fn commands_down(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -> Result<Counts> {
     let bus = Bus::with_node(&format!("rig-bridge-{}", opts.id), "driver").map_err(wire_err)?;
-    let tx = bus
-        .tx_on::<DriverCommand>(&service(&opts.id, topic::COMMAND), DRIVER_QOS)
-        .map_err(|e| {
-            anyhow!(
-                "commanding driver {:?} on this host: {e} (is a rig commanding it here?)",
-                opts.id
-            )
-        })?;
-    let commands = session
-        .declare_subscriber(Topic::Command.key(&opts.id))
-        .wait()
-        .map_err(|e| anyhow!("subscribing to commands: {e}"))?;
-    let mut timing = match &opts.timing_out {
-        Some(path) => Some(timing_file(path)?),
-        None => None,
-    };
-    let mut counts = Counts::default();
-    while !bus.interrupted() && !shared.stop.load(Relaxed) {
-        let Ok(Some(s)) = commands.recv_timeout(Duration::from_millis(100)) else {
-            continue;
-        };
-        let arrived = now_ns();
-        let c: DriverCommand = match from_bytes(&s.payload().to_bytes()) {
-            Ok(c) => c,
-            Err(e) => {
-                counts.malformed += 1;
-                eprintln!("bridge for driver {:?}: dropped a command: {e}", opts.id);
-                continue;
-            }
-        };
-        let last = shared.command.load(Relaxed);
-        let newest = shared.newest.load(Relaxed);
-        if c.seq <= last {
-            counts.out_of_order += 1;
-        } else if c.kind == kind::ACTION && c.sample_seq + opts.max_age_periods < newest {
-            counts.stale += 1;
-        } else {
-            tx.send(c).map_err(wire_err)?;
-            shared.command.store(c.seq, Relaxed);
-            shared.command_arrived.store(arrived, Relaxed);
-            counts.commands += 1;
-            if let Some(f) = &mut timing
-                && c.kind == kind::ACTION
-            {
-                write_delay(f, shared, &c, arrived)?;
-            }
-        }
-    }
-    if let Some(f) = &mut timing {
-        f.flush()?;
-    }
-    Ok(counts)
+    Gate::open(opts, session, shared, &bus)?.serve(&bus)
 }
 
 /// The driver's info and samples, to the network, until stopped; what the driver's
@@ -197,6 +151,7 @@ fn samples_up(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -> R
     while !shared.stop.load(Relaxed) {
         while let Some(i) = info_rx.try_recv().map_err(wire_err)? {
             watch.period_ns = i.period_ns;
+            shared.period_ns.store(i.period_ns, Relaxed);
             put(&info_pub, to_bytes(&i), None)?;
             counts.infos += 1;
         }
@@ -224,37 +179,6 @@ fn samples_up(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -> R
         watch.link(shared.pinged.load(Relaxed));
     }
     Ok(counts)
-}
-
-/// `--timing-out`'s file, with its header.
-fn timing_file(path: &std::path::Path) -> Result<std::io::BufWriter<std::fs::File>> {
-    let f =
-        std::fs::File::create(path).map_err(|e| anyhow!("--timing-out {}: {e}", path.display()))?;
-    let mut f = std::io::BufWriter::new(f);
-    writeln!(f, "seq,t_sample_ns,t_arrived_ns,sample_to_actuation")?;
-    Ok(f)
-}
-
-/// The row of action `c`, arrived at `arrived`: from its sample's instant to its arrival,
-/// both on this host's clock.
-fn write_delay(
-    f: &mut impl std::io::Write,
-    shared: &Shared,
-    c: &DriverCommand,
-    arrived: u64,
-) -> Result<()> {
-    let sampled = {
-        let q = shared.sampled.lock().expect("no panics while holding it");
-        q.iter()
-            .rev()
-            .find(|(seq, _)| *seq == c.sample_seq)
-            .map(|&(_, t)| t)
-    };
-    if let Some(t) = sampled {
-        let delay = arrived.saturating_sub(t);
-        writeln!(f, "{},{t},{arrived},{delay}", c.sample_seq)?;
-    }
-    Ok(())
 }
 
 fn put(p: &Publisher<'_>, bytes: Vec<u8>, attachment: Option<Vec<u8>>) -> Result<()> {

@@ -21,10 +21,14 @@
 //!   reach.
 //! - [`message`]: what crosses, as bytes, under which keys.
 
+pub mod claim;
 pub mod clock;
 mod driver_side;
+mod gate;
 pub mod message;
+mod outbox;
 mod probe;
+pub mod refusal;
 mod rig_side;
 pub mod session;
 pub mod timing;
@@ -51,10 +55,17 @@ pub struct Counts {
     pub infos: u64,
     /// Commands dropped as stale (answering a sample too old).
     pub stale: u64,
-    /// Commands dropped for not being newer than the last one.
+    /// Commands dropped for not being after the last one of their session.
     pub out_of_order: u64,
     /// Messages of the wrong length.
     pub malformed: u64,
+    /// RESETs dropped for having been passed on already (driver side), or sent again
+    /// for want of an acknowledgement (rig side).
+    pub repeated: u64,
+    /// Commands of the holding session that never arrived (gaps in its numbers).
+    pub lost: u64,
+    /// Commands refused: another session held the driver.
+    pub refused: u64,
     /// Times the driver's watchdog engaged (driver side), or the link was lost (rig
     /// side).
     pub watchdog: u64,
@@ -64,8 +75,16 @@ impl std::fmt::Display for Counts {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} commands, {} samples, {} infos passed on; dropped {} stale, {} out of order, {} malformed",
-            self.commands, self.samples, self.infos, self.stale, self.out_of_order, self.malformed
+            "{} commands, {} samples, {} infos passed on; dropped {} stale, {} out of order, {} malformed, {} repeated; {} lost; {} refused",
+            self.commands,
+            self.samples,
+            self.infos,
+            self.stale,
+            self.out_of_order,
+            self.malformed,
+            self.repeated,
+            self.lost,
+            self.refused
         )
     }
 }
@@ -73,11 +92,26 @@ impl std::fmt::Display for Counts {
 /// A publisher for the loop's messages: real-time priority, sent at once (no
 /// batching), dropped rather than queued when the link cannot take them.
 fn publisher(session: &zenoh::Session, key: &str) -> Result<Publisher<'static>> {
+    declare(session, key, CongestionControl::Drop)
+}
+
+/// A publisher for what must not be lost (resets, claims): as [`publisher`], but a put
+/// waits for room on the link instead of being dropped. Of the same priority as the
+/// loop's, so that the driver receives both in the order they were put.
+fn reliable_publisher(session: &zenoh::Session, key: &str) -> Result<Publisher<'static>> {
+    declare(session, key, CongestionControl::Block)
+}
+
+fn declare(
+    session: &zenoh::Session,
+    key: &str,
+    congestion: CongestionControl,
+) -> Result<Publisher<'static>> {
     session
         .declare_publisher(key.to_string())
         .priority(Priority::RealTime)
         .express(true)
-        .congestion_control(CongestionControl::Drop)
+        .congestion_control(congestion)
         .wait()
         .map_err(|e| anyhow!("publisher on {key}: {e}"))
 }

@@ -2,12 +2,17 @@
 //! key per topic, with the bridges' own stamps beside them.
 //!
 //! ```text
-//! rig/driver/<id>/info      DriverInfo     driver's host → rig's host
-//! rig/driver/<id>/sample    DriverSample   driver's host → rig's host   (+ Stamps)
-//! rig/driver/<id>/command   DriverCommand  rig's host → driver's host
-//! rig/driver/<id>/ping      Ping           rig's host → driver's host
-//! rig/driver/<id>/pong      Ping           driver's host → rig's host
+//! rig/driver/<id>/info             DriverInfo     driver's host → rig's host
+//! rig/driver/<id>/sample           DriverSample   driver's host → rig's host   (+ Stamps)
+//! rig/driver/<id>/command/<user>   DriverCommand  rig's host → driver's host   (+ Claim)
+//! rig/driver/<id>/claim/<user>     Claim          rig's host → driver's host   (hold, release)
+//! rig/driver/<id>/ping             Ping           rig's host → driver's host
+//! rig/driver/<id>/pong             Ping           driver's host → rig's host
+//! rig/driver/<id>/refused          text           driver's host → rig's host   (+ Claim)
 //! ```
+//!
+//! Commands and claims go under the user who puts them: the driver's side lets each user
+//! put on its own keys only, so the key names the commanding user ([`crate::claim`]).
 //!
 //! A message is its `#[repr(C)]` layout's bytes (both hosts little-endian, as every
 //! platform iceoryx2 supports); the receiver checks the length, so a bridge of another
@@ -15,6 +20,8 @@
 
 use anyhow::{Result, bail};
 use driver::contract::{DriverCommand, DriverInfo, DriverSample, service};
+
+use crate::claim::Claim;
 
 /// A message the bridges carry: a `#[repr(C)]` struct of `u64`, `f64` and `u8` arrays,
 /// without padding, for which every bit pattern is a value.
@@ -47,6 +54,10 @@ unsafe impl Message for Ping {
 // SAFETY: three u64.
 unsafe impl Message for Stamps {
     const NAME: &'static str = "rig.BridgeStamps.v1";
+}
+// SAFETY: [u8; 16] and three u64 (40 bytes).
+unsafe impl Message for Claim {
+    const NAME: &'static str = "rig.BridgeClaim.v1";
 }
 
 /// The bytes of `m`.
@@ -102,45 +113,84 @@ pub enum Topic {
     Info,
     /// [`DriverSample`] with [`Stamps`], driver → rig.
     Sample,
-    /// [`DriverCommand`], rig → driver.
+    /// [`DriverCommand`] with its [`Claim`], rig → driver, per user.
     Command,
+    /// A [`Claim`] held on to or let go, rig → driver, per user.
+    Claim,
     /// [`Ping`], rig → driver.
     Ping,
     /// [`Ping`] answered, driver → rig.
     Pong,
+    /// Who holds the driver, in words, to a session refused (its [`Claim`] attached),
+    /// driver → rig.
+    Refused,
 }
 
 impl Topic {
     /// Every topic.
-    pub const ALL: [Topic; 5] = [
+    pub const ALL: [Topic; 7] = [
         Topic::Info,
         Topic::Sample,
         Topic::Command,
+        Topic::Claim,
         Topic::Ping,
         Topic::Pong,
+        Topic::Refused,
     ];
 
-    /// The topic's last key chunk.
+    /// The topic's chunk of the key.
     pub fn name(self) -> &'static str {
         match self {
             Topic::Info => driver::contract::topic::INFO,
             Topic::Sample => driver::contract::topic::SAMPLE,
             Topic::Command => driver::contract::topic::COMMAND,
+            Topic::Claim => "claim",
             Topic::Ping => "ping",
             Topic::Pong => "pong",
+            Topic::Refused => "refused",
         }
     }
 
     /// Whether the rig's host sends it (else the driver's host does).
     pub fn from_rig(self) -> bool {
-        matches!(self, Topic::Command | Topic::Ping)
+        matches!(self, Topic::Command | Topic::Claim | Topic::Ping)
     }
 
-    /// The Zenoh key of driver `id`'s topic: its iceoryx2 service name,
-    /// `rig/driver/<id>/<topic>`.
-    pub fn key(self, id: &str) -> String {
-        service(id, self.name())
+    /// Whether it goes under the user who puts it (`<topic>/<user>`).
+    pub fn per_user(self) -> bool {
+        matches!(self, Topic::Command | Topic::Claim)
     }
+
+    /// The Zenoh key of driver `id`'s topic: `rig/driver/<id>/<topic>` (its iceoryx2
+    /// service name), and for a topic [`per_user`](Self::per_user) every user's
+    /// (`…/<topic>/*`).
+    pub fn key(self, id: &str) -> String {
+        match self.per_user() {
+            true => format!("{}/*", service(id, self.name())),
+            false => service(id, self.name()),
+        }
+    }
+
+    /// The Zenoh key of `user`'s puts on driver `id`'s topic.
+    pub fn key_of(self, id: &str, user: &str) -> String {
+        format!("{}/{user}", service(id, self.name()))
+    }
+}
+
+/// The user a key of a topic [`per_user`](Topic::per_user) names (its last chunk).
+pub fn user_of(key: &str) -> &str {
+    key.rsplit('/').next().unwrap_or_default()
+}
+
+/// Checks that `user` can name a key: letters, digits, `.`, `-` and `_`.
+pub fn check_user(user: &str) -> Result<()> {
+    let fits = |c: char| c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_');
+    if user.is_empty() || !user.chars().all(fits) {
+        bail!(
+            "user {user:?}: a user's name may hold letters, digits, '.', '-' and '_' only (it names the keys it commands on)"
+        );
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -175,6 +225,16 @@ mod tests {
     fn keys_are_the_driver_services() {
         assert_eq!(Topic::Sample.key("qube"), "rig/driver/qube/sample");
         assert_eq!(Topic::Pong.key("qube"), "rig/driver/qube/pong");
-        assert_eq!(Topic::ALL.iter().filter(|t| t.from_rig()).count(), 2);
+        assert_eq!(Topic::ALL.iter().filter(|t| t.from_rig()).count(), 3);
+        assert_eq!(Topic::Command.key("qube"), "rig/driver/qube/command/*");
+        let mine = Topic::Command.key_of("qube", "lab-1");
+        assert_eq!(
+            (mine.as_str(), user_of(&mine)),
+            ("rig/driver/qube/command/lab-1", "lab-1")
+        );
+        assert!(check_user("lab_1.b").is_ok());
+        for bad in ["", "a/b", "*", "a b", "$x"] {
+            assert!(check_user(bad).is_err(), "{bad:?}");
+        }
     }
 }

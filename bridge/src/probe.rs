@@ -1,10 +1,12 @@
 //! `rig bridge probe`: what a peer with given credentials — or none — can do at a
 //! driver's bridge, seen from its own host: whether the driver's info and samples reach
 //! it, and whether the zero actions it puts reach the driver (the driver's bridge counts
-//! what it passed on). To check an access-control setup from another machine.
+//! what it passed on, and tells a probe refused who holds the driver: a probe is a rig
+//! session of its own, [`crate::claim`]). To check an access-control setup from another
+//! machine.
 
-use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use anyhow::{Result, anyhow};
@@ -12,12 +14,13 @@ use driver::contract::{DriverCommand, DriverSample, kind};
 use wire::now_ns;
 use zenoh::Wait;
 
+use crate::claim::{Claim, Claimant};
 use crate::message::{Topic, from_bytes, to_bytes};
 use crate::publisher;
-use crate::session::{Network, probe_side};
+use crate::session::{Network, own_user, probe_side};
 
 /// What a probe saw.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Probed {
     /// Info messages that arrived.
     pub infos: u64,
@@ -25,6 +28,18 @@ pub struct Probed {
     pub samples: u64,
     /// Zero actions put (whether they arrived is the driver's bridge's count).
     pub commands: u64,
+    /// What the driver's bridge said when it refused the zero actions: who holds the
+    /// driver.
+    pub refused: Option<String>,
+    /// Why this side's connection did not become a session, as far as Zenoh said.
+    pub unconnected: Option<String>,
+}
+
+impl Probed {
+    /// Whether anything arrived from the driver.
+    pub fn received(&self) -> bool {
+        self.infos + self.samples > 0
+    }
 }
 
 /// Connects to `net.endpoint` with `net`'s credentials (or, if `anonymous`, none) for
@@ -38,6 +53,11 @@ pub fn probe(
     seconds: f64,
 ) -> Result<Probed> {
     driver::contract::check_id(id).map_err(|e| anyhow!("{e}"))?;
+    let user = match anonymous {
+        true => "anonymous".to_string(),
+        false => own_user(net)?,
+    };
+    let heard = crate::refusal::listen(None);
     let session = probe_side(net, anonymous)?;
     // Infos, samples, the newest sample's seq (the one a zero action answers).
     let counters = Arc::new([AtomicU64::new(0), AtomicU64::new(0), AtomicU64::new(0)]);
@@ -58,7 +78,26 @@ pub fn probe(
                 .map_err(|e| anyhow!("subscribing to {}: {e}", t.key(id)))
         })
         .collect::<Result<_>>()?;
-    let out = publisher(&session, &Topic::Command.key(id))?;
+    let mut claimant = Claimant::new(session.zid().to_le_bytes());
+    let refused = Arc::new(Mutex::new(None));
+    let _refusals = {
+        let (refused, peer) = (refused.clone(), session.zid().to_le_bytes());
+        session
+            .declare_subscriber(Topic::Refused.key(id))
+            .callback(move |m| {
+                let ours = m
+                    .attachment()
+                    .and_then(|a| from_bytes::<Claim>(&a.to_bytes()).ok())
+                    .is_some_and(|c| c.peer == peer);
+                if ours {
+                    let text = String::from_utf8_lossy(&m.payload().to_bytes()).into_owned();
+                    *refused.lock().expect("no panics while holding it") = Some(text);
+                }
+            })
+            .wait()
+            .map_err(|e| anyhow!("subscribing to {}: {e}", Topic::Refused.key(id)))?
+    };
+    let out = publisher(&session, &Topic::Command.key_of(id, &user))?;
     let mut commands = 0;
     let t0 = Instant::now();
     while t0.elapsed().as_secs_f64() < seconds {
@@ -72,15 +111,26 @@ pub fn probe(
                 ..Default::default()
             };
             // A refused session drops the put without an error, as it should.
-            let _ = out.put(to_bytes(&c)).wait();
+            let claim = to_bytes(&claimant.command());
+            let _ = out.put(to_bytes(&c)).attachment(claim).wait();
             commands += 1;
         }
         std::thread::sleep(Duration::from_millis(10));
     }
+    if claimant.is_open() {
+        let release = claimant.release();
+        let claims = publisher(&session, &Topic::Claim.key_of(id, &user))?;
+        let _ = claims.put(to_bytes(&release)).wait();
+    }
+    // Time for a last refusal on its way.
+    std::thread::sleep(Duration::from_millis(100));
     let _ = session.close().wait();
+    let refused = refused.lock().expect("no panics while holding it").take();
     Ok(Probed {
         infos: counters[0].load(Relaxed),
         samples: counters[1].load(Relaxed),
         commands,
+        refused,
+        unconnected: heard.latest().map(|r| r.explain(&net.endpoint)),
     })
 }

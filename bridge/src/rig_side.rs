@@ -11,21 +11,22 @@
 use std::collections::VecDeque;
 use std::io::Write as _;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, AtomicI64, Ordering::Relaxed};
+use std::sync::atomic::{AtomicBool, AtomicI64, AtomicU64, Ordering::Relaxed};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow};
-use driver::contract::{
-    DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, LinkSample, service, topic,
-};
+use driver::contract::{DRIVER_QOS, DriverInfo, DriverSample, LinkSample, service, topic};
 use wire::{Bus, Tx, now_ns};
 use zenoh::Wait;
 
+use crate::claim::Claim;
 use crate::clock::{ClockMap, Exchange};
 use crate::message::{Ping, Stamps, Topic, from_bytes, to_bytes};
-use crate::session::{Network, rig_side};
+use crate::outbox::commands_up;
+use crate::refusal::{Heard, Refusal};
+use crate::session::{Network, own_user, rig_side};
 use crate::timing::{Durations, LinkTiming};
 use crate::{Counts, publisher, wire_err};
 
@@ -60,27 +61,33 @@ const SILENT_START: Duration = Duration::from_secs(3);
 
 /// What the commands' thread shares with the main one.
 #[derive(Default)]
-struct Shared {
-    stop: AtomicBool,
+pub(crate) struct Shared {
+    pub(crate) stop: AtomicBool,
     /// The driver's clock minus the rig's (ns).
-    offset: AtomicI64,
+    pub(crate) offset: AtomicI64,
+    /// The driver's period (0 until its info came) \[ns\].
+    pub(crate) period_ns: AtomicU64,
+    /// The newest sample's `reset_id`: the RESET it acknowledges.
+    pub(crate) reset_id: AtomicU64,
     /// Commands sent: `(seq, when)`, the newest last.
-    sent: Mutex<VecDeque<(u64, u64)>>,
+    pub(crate) sent: Mutex<VecDeque<(u64, u64)>>,
 }
 
 /// Serves until Ctrl-C or a termination request; returns what was forwarded and the
 /// link's timing.
 pub fn serve_rig(opts: &RigSide) -> Result<(Counts, LinkTiming)> {
     driver::contract::check_id(&opts.id).map_err(wire_err)?;
+    let user = own_user(&opts.net)?;
+    let refusals = crate::refusal::listen(None);
     let session = rig_side(&opts.net)?;
     eprintln!(
-        "bridge for driver {:?}: connecting to {} (session {})",
+        "bridge for driver {:?}: connecting to {} as user {user} (session {})",
         opts.id,
         opts.net.endpoint,
         session.zid()
     );
     let (tx, rx) = channel();
-    let _subs: Vec<_> = [Topic::Info, Topic::Sample, Topic::Pong]
+    let _subs: Vec<_> = [Topic::Info, Topic::Sample, Topic::Pong, Topic::Refused]
         .into_iter()
         .map(|t| listen(&session, &opts.id, t, tx.clone()))
         .collect::<Result<_>>()?;
@@ -91,20 +98,22 @@ pub fn serve_rig(opts: &RigSide) -> Result<(Counts, LinkTiming)> {
             .name("bridge-commands".into())
             .spawn(move || {
                 // Whichever half ends, the other follows.
-                let r = commands_up(&session, &id, &shared);
+                let r = commands_up(&session, &id, &user, &shared);
                 shared.stop.store(true, Relaxed);
                 r
             })?
     };
     let mut side = Stand::new(opts, &session, shared.clone())?;
+    side.refusals = Some(refusals);
     let result = side.run(&rx);
     shared.stop.store(true, Relaxed);
-    let commands = up
+    let (commands, resent) = up
         .join()
         .map_err(|_| anyhow!("the commands' thread panicked"))??;
     let _ = session.close().wait();
     result?;
     side.counts.commands = commands;
+    side.counts.repeated = resent;
     if let Some(f) = &mut side.log {
         f.flush()?;
     }
@@ -141,38 +150,6 @@ fn listen(
         .map_err(|e| anyhow!("subscribing to {}: {e}", t.key(id)))
 }
 
-/// The rig's commands to the network, until stopped; how many.
-fn commands_up(session: &zenoh::Session, id: &str, shared: &Shared) -> Result<u64> {
-    let bus = Bus::with_node(&format!("rig-bridge-{id}"), "driver").map_err(wire_err)?;
-    let rx = bus
-        .rx_on::<DriverCommand>(&service(id, topic::COMMAND), DRIVER_QOS)
-        .map_err(wire_err)?;
-    let out = publisher(session, &Topic::Command.key(id))?;
-    let mut n = 0;
-    while !shared.stop.load(Relaxed) {
-        let Some(mut c) = rx
-            .recv_timeout(Duration::from_millis(20))
-            .map_err(wire_err)?
-        else {
-            continue;
-        };
-        let sent = now_ns();
-        c.t_publish_ns = c
-            .t_publish_ns
-            .saturating_add_signed(shared.offset.load(Relaxed));
-        out.put(to_bytes(&c))
-            .wait()
-            .map_err(|e| anyhow!("publishing a command: {e}"))?;
-        let mut q = shared.sent.lock().expect("no panics while holding it");
-        if q.len() == 4096 {
-            q.pop_front();
-        }
-        q.push_back((c.seq, sent));
-        n += 1;
-    }
-    Ok(n)
-}
-
 /// The stand-in driver on this host.
 struct Stand<'a> {
     opts: &'a RigSide,
@@ -195,6 +172,13 @@ struct Stand<'a> {
     /// The latest ping's round trip.
     last_ping: u64,
     link: Tx<LinkSample>,
+    /// This side's Zenoh id (whether a refusal is about this side's session).
+    zid: [u8; 16],
+    /// When the driver's side last said that it refused this side's commands.
+    refused_at: u64,
+    /// Why this side's connection failed, as Zenoh said, and what was said of it.
+    refusals: Option<Arc<Heard>>,
+    said: Option<Refusal>,
 }
 
 impl<'a> Stand<'a> {
@@ -241,6 +225,10 @@ impl<'a> Stand<'a> {
             acknowledged: 0,
             last_ping: 0,
             link,
+            zid: session.zid().to_le_bytes(),
+            refused_at: 0,
+            refusals: None,
+            said: None,
         })
     }
 
@@ -283,9 +271,11 @@ impl<'a> Stand<'a> {
                 self.last_ping = e.round_trip;
                 self.row("ping_round_trip", 0, e.round_trip)?;
             }
+            Topic::Refused => self.refused(&a),
             _ if !self.timing.clock.ready() => {}
             Topic::Info => {
                 let mut i: DriverInfo = from_bytes(&a.payload)?;
+                self.shared.period_ns.store(i.period_ns, Relaxed);
                 i.t_start_ns = self.timing.clock.to_rig(i.t_start_ns);
                 i.t_publish_ns = self.timing.clock.to_rig(i.t_publish_ns);
                 self.info.send(i).map_err(wire_err)?;
@@ -293,6 +283,7 @@ impl<'a> Stand<'a> {
             }
             Topic::Sample => {
                 let mut s: DriverSample = from_bytes(&a.payload)?;
+                self.shared.reset_id.store(s.reset_id, Relaxed);
                 let stamps = match &a.attachment {
                     Some(b) => from_bytes::<Stamps>(b)?,
                     None => Stamps::default(),
@@ -304,9 +295,31 @@ impl<'a> Stand<'a> {
                 let l = self.time_sample(s.seq, &stamps, a.at)?;
                 self.link.send(l).map_err(wire_err)?;
             }
-            Topic::Command | Topic::Ping => {}
+            Topic::Command | Topic::Claim | Topic::Ping => {}
         }
         Ok(())
+    }
+
+    /// The driver's side refused a session's commands: said when it is this side's (at
+    /// most every 5 s: the driver's side repeats it every second).
+    fn refused(&mut self, a: &Arrival) {
+        let Some(claim) = a
+            .attachment
+            .as_ref()
+            .and_then(|b| from_bytes::<Claim>(b).ok())
+        else {
+            return;
+        };
+        if claim.peer != self.zid || a.at.saturating_sub(self.refused_at) < 5_000_000_000 {
+            return;
+        }
+        self.refused_at = a.at;
+        self.counts.refused += 1;
+        eprintln!(
+            "bridge for driver {:?}: refused: {}",
+            self.opts.id,
+            String::from_utf8_lossy(&a.payload)
+        );
     }
 
     /// What the link did with sample `seq`, arrived at `at`: the one-way hops on one
@@ -353,8 +366,33 @@ impl<'a> Stand<'a> {
         Some(sent)
     }
 
+    /// Says why the connection fails, when Zenoh said and it is news: once the start
+    /// went unanswered, or the link is lost.
+    fn explain_refusal(&mut self) {
+        let latest = self.refusals.as_ref().and_then(|h| h.latest());
+        if let Some(r) = latest.filter(|r| self.said.as_ref() != Some(r)) {
+            eprintln!(
+                "bridge for driver {:?}: {}",
+                self.opts.id,
+                r.explain(&self.opts.net.endpoint)
+            );
+            self.said = Some(r);
+        }
+    }
+
     /// Reports the link lost after the timeout's silence, and back when it speaks.
     fn watch_link(&mut self, now: u64) {
+        if (self.heard == 0 && self.unanswered) || self.lost_at.is_some() {
+            self.explain_refusal();
+        }
+        if self.heard == 0
+            && !self.unanswered
+            && now - self.started > SILENT_START.as_nanos() as u64
+            && self.refusals.as_ref().and_then(|h| h.latest()).is_some()
+        {
+            self.unanswered = true;
+            self.explain_refusal();
+        }
         if self.heard == 0
             && !self.unanswered
             && now - self.started > SILENT_START.as_nanos() as u64

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, anyhow, bail};
 use zenoh::{Config, Session, Wait};
 
-use crate::message::Topic;
+use crate::message::{Topic, check_user};
 
 /// Where a bridge meets the other and with what.
 #[derive(Clone, Debug)]
@@ -39,7 +39,7 @@ pub struct Network {
 pub fn read_credentials(path: &Path) -> Result<Vec<(String, String)>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("credentials file {}", path.display()))?;
-    warn_if_readable_by_others(path);
+    owner_only(path, "credentials file")?;
     let mut found = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();
@@ -66,28 +66,78 @@ pub fn read_credentials(path: &Path) -> Result<Vec<(String, String)>> {
     Ok(found)
 }
 
-/// Says so when others than the owner may read the credentials file.
-fn warn_if_readable_by_others(path: &Path) {
-    if let Some(mode) = others_may_read(path) {
-        eprintln!(
-            "warning: credentials file {} may be read by others than its owner (mode {mode:o}): `chmod 600 {}`",
+/// The Zenoh configuration's keys that name a private key file.
+const PRIVATE_KEY_FILES: [&str; 3] = [
+    "transport/link/tls/listen_private_key",
+    "transport/link/tls/connect_private_key",
+    "transport/auth/pubkey/private_key_file",
+];
+
+/// What in a Zenoh configuration file makes the file itself a secret: a private key
+/// written into it.
+const INLINE_PRIVATE_KEYS: [&str; 2] = ["private_key_base64", "private_key_pem"];
+
+/// Refuses a secret file — credentials, a private key — that others than its owner may
+/// read or write, as ssh does with its keys: one line naming the file, its mode and the
+/// fix.
+fn owner_only(path: &Path, what: &str) -> Result<()> {
+    use std::os::unix::fs::PermissionsExt;
+    let mode = std::fs::metadata(path)
+        .with_context(|| format!("{what} {}", path.display()))?
+        .permissions()
+        .mode()
+        & 0o777;
+    if mode & 0o077 != 0 {
+        bail!(
+            "{what} {} is open to others than its owner (mode {mode:04o}); refused: `chmod 600 {}`",
             path.display(),
             path.display()
         );
     }
+    Ok(())
 }
 
-/// The file's permission bits if its group or others may read or write it.
-fn others_may_read(path: &Path) -> Option<u32> {
-    use std::os::unix::fs::PermissionsExt;
-    let mode = std::fs::metadata(path).ok()?.permissions().mode() & 0o777;
-    (mode & 0o077 != 0).then_some(mode)
+/// Refuses the private keys configuration `c` names (TLS, public-key authentication), and
+/// the configuration file `file` if it holds a private key itself, when others than
+/// their owner may read them.
+fn private_keys_owner_only(c: &Config, file: &Path) -> Result<()> {
+    for key in PRIVATE_KEY_FILES {
+        let value = c
+            .get_json(key)
+            .map_err(|e| anyhow!("Zenoh configuration {key}: {e}"))?;
+        let path: Option<String> = serde_json::from_str(&value)
+            .map_err(|e| anyhow!("Zenoh configuration {key} = {value}: {e}"))?;
+        if let Some(path) = path {
+            owner_only(Path::new(&path), "private key")?;
+        }
+    }
+    let text = std::fs::read_to_string(file)
+        .with_context(|| format!("Zenoh configuration {}", file.display()))?;
+    if INLINE_PRIVATE_KEYS.iter().any(|k| text.contains(k)) {
+        owner_only(file, "Zenoh configuration (it holds a private key)")?;
+    }
+    Ok(())
+}
+
+/// The users of the credentials file, checked to name keys ([`check_user`]).
+fn users(net: &Network) -> Result<Vec<(String, String)>> {
+    let users = read_credentials(&net.credentials)?;
+    for (u, _) in &users {
+        check_user(u).with_context(|| format!("credentials file {}", net.credentials.display()))?;
+    }
+    Ok(users)
+}
+
+/// The user this side connects as: the first of the credentials file.
+pub fn own_user(net: &Network) -> Result<String> {
+    Ok(users(net)?.swap_remove(0).0)
 }
 
 /// Opens the driver's side's session: listens on the endpoint, admits the users of the
-/// credentials file, lets them reach driver `id`'s topics only.
+/// credentials file, lets them reach driver `id`'s topics only, and each its own
+/// commands' keys only.
 pub fn driver_side(id: &str, net: &Network) -> Result<Session> {
-    let users = read_credentials(&net.credentials)?;
+    let users = users(net)?;
     let mut c = base(net)?;
     set(&mut c, "listen/endpoints", &json(&[net.endpoint.as_str()]))?;
     set(&mut c, "connect/endpoints", "[]")?;
@@ -110,10 +160,7 @@ pub fn driver_side(id: &str, net: &Network) -> Result<Session> {
 /// Opens the rig's side's session: connects to the endpoint as the first user of the
 /// credentials file, and keeps reconnecting while the link is down.
 pub fn rig_side(net: &Network) -> Result<Session> {
-    connecting(
-        net,
-        Some(read_credentials(&net.credentials)?.swap_remove(0)),
-    )
+    connecting(net, Some(users(net)?.swap_remove(0)))
 }
 
 /// Opens a probe's session: as the rig's side, or without credentials (`anonymous`).
@@ -147,7 +194,10 @@ fn connecting(net: &Network, user: Option<(String, String)>) -> Result<Session> 
 fn base(net: &Network) -> Result<Config> {
     let mut c = match &net.zenoh_config {
         Some(p) => {
-            Config::from_file(p).map_err(|e| anyhow!("Zenoh configuration {}: {e}", p.display()))?
+            let c = Config::from_file(p)
+                .map_err(|e| anyhow!("Zenoh configuration {}: {e}", p.display()))?;
+            private_keys_owner_only(&c, p)?;
+            c
         }
         None => Config::default(),
     };
@@ -166,31 +216,47 @@ fn base(net: &Network) -> Result<Config> {
     Ok(c)
 }
 
-/// Default deny; the users may put commands and pings of driver `id`, subscribe to its
-/// info, samples and pongs, and receive those (and this side's subscriptions to the
-/// commands and pings may reach them).
+/// Default deny; the users may put pings of driver `id` and each user its own commands
+/// and claims (`command/<user>`, `claim/<user>`: the key names who commands), subscribe
+/// to its info, samples, pongs and refusals, and receive those (and this side's
+/// subscriptions to the commands, claims and pings may reach them).
 fn access_control(id: &str, users: &[&str]) -> String {
-    let keys = |from_rig: bool| {
-        let k: Vec<String> = Topic::ALL
-            .iter()
-            .filter(|t| t.from_rig() == from_rig)
-            .map(|t| t.key(id))
-            .collect();
+    let keys = |topics: &[Topic]| {
+        let k: Vec<String> = topics.iter().map(|t| t.key(id)).collect();
         json(&k.iter().map(String::as_str).collect::<Vec<_>>())
     };
-    let (to_driver, from_driver) = (keys(true), keys(false));
+    let from_driver = keys(&[Topic::Info, Topic::Sample, Topic::Pong, Topic::Refused]);
+    let to_driver = keys(&[Topic::Command, Topic::Claim, Topic::Ping]);
+    let pings = keys(&[Topic::Ping]);
+    let (mut rules, mut subjects, mut policies) = (String::new(), String::new(), String::new());
+    for (i, user) in users.iter().enumerate() {
+        let own = [Topic::Command, Topic::Claim].map(|t| t.key_of(id, user));
+        let own = json(&own.iter().map(String::as_str).collect::<Vec<_>>());
+        rules += &format!(
+            "    {{ id: \"puts-{i}\", messages: [\"put\"], flows: [\"ingress\"], permission: \"allow\", key_exprs: {own} }},\n"
+        );
+        subjects += &format!(
+            "    {{ id: \"user-{i}\", usernames: {} }},\n",
+            json(&[user])
+        );
+        policies += &format!("    {{ rules: [\"puts-{i}\"], subjects: [\"user-{i}\"] }},\n");
+    }
     format!(
         r#"{{
   enabled: true,
   default_permission: "deny",
   rules: [
-    {{ id: "rig-puts", messages: ["put"], flows: ["ingress"], permission: "allow", key_exprs: {to_driver} }},
+    {{ id: "rig-pings", messages: ["put"], flows: ["ingress"], permission: "allow", key_exprs: {pings} }},
     {{ id: "driver-puts", messages: ["put"], flows: ["egress"], permission: "allow", key_exprs: {from_driver} }},
     {{ id: "rig-subscribes", messages: ["declare_subscriber"], flows: ["ingress"], permission: "allow", key_exprs: {from_driver} }},
     {{ id: "driver-subscribes", messages: ["declare_subscriber"], flows: ["egress"], permission: "allow", key_exprs: {to_driver} }},
-  ],
-  subjects: [{{ id: "rigs", usernames: {users} }}],
-  policies: [{{ rules: ["rig-puts", "driver-puts", "rig-subscribes", "driver-subscribes"], subjects: ["rigs"] }}],
+{rules}  ],
+  subjects: [
+    {{ id: "rigs", usernames: {users} }},
+{subjects}  ],
+  policies: [
+    {{ rules: ["rig-pings", "driver-puts", "rig-subscribes", "driver-subscribes"], subjects: ["rigs"] }},
+{policies}  ],
 }}"#,
         users = json(users)
     )
@@ -226,6 +292,7 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let f = dir.join("users.txt");
         std::fs::write(&f, "rig:s3cret\n\n lab : pa:ss \n").unwrap();
+        chmod(&f, 0o600);
         assert_eq!(
             read_credentials(&f).unwrap(),
             [
@@ -233,11 +300,6 @@ mod tests {
                 ("lab".into(), "pa:ss".into())
             ]
         );
-        use std::os::unix::fs::PermissionsExt;
-        std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o644)).unwrap();
-        assert_eq!(others_may_read(&f), Some(0o644));
-        std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o600)).unwrap();
-        assert_eq!(others_may_read(&f), None);
         std::fs::write(&f, "rig\n").unwrap();
         let e = read_credentials(&f).unwrap_err().to_string();
         assert!(
@@ -259,6 +321,80 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
+    fn chmod(path: &Path, mode: u32) {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(path, std::fs::Permissions::from_mode(mode)).unwrap();
+    }
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("bridge-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// The one line refusing `what` at `path` of `mode`.
+    fn refusal(what: &str, path: &Path, mode: u32) -> String {
+        let p = path.display();
+        format!(
+            "{what} {p} is open to others than its owner (mode {mode:04o}); refused: `chmod 600 {p}`"
+        )
+    }
+
+    #[test]
+    fn credentials_open_to_group_or_others_are_refused() {
+        let dir = scratch("cred-mode");
+        let f = dir.join("lab.users");
+        std::fs::write(&f, "rig:s3cret\n").unwrap();
+        for mode in [0o644, 0o640, 0o604, 0o620] {
+            chmod(&f, mode);
+            let e = read_credentials(&f).unwrap_err().to_string();
+            assert_eq!(e, refusal("credentials file", &f, mode));
+        }
+        chmod(&f, 0o600);
+        assert_eq!(read_credentials(&f).unwrap().len(), 1);
+        chmod(&f, 0o400);
+        assert_eq!(read_credentials(&f).unwrap().len(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn private_keys_open_to_group_or_others_are_refused() {
+        let dir = scratch("key-mode");
+        let key = dir.join("key.pem");
+        std::fs::write(&key, "-----BEGIN PRIVATE KEY-----\n").unwrap();
+        let conf = dir.join("driver.json5");
+        std::fs::write(
+            &conf,
+            format!("{{ transport: {{ link: {{ tls: {{ listen_private_key: {key:?}, listen_certificate: \"cert.pem\" }} }} }} }}"),
+        )
+        .unwrap();
+        let net = Network {
+            endpoint: "tls/127.0.0.1:7447".into(),
+            credentials: dir.join("unused"),
+            zenoh_config: Some(conf.clone()),
+            lease_ms: 1000,
+        };
+        for mode in [0o644, 0o640] {
+            chmod(&key, mode);
+            let e = base(&net).unwrap_err().to_string();
+            assert_eq!(e, refusal("private key", &key, mode));
+        }
+        chmod(&key, 0o600);
+        base(&net).unwrap();
+        // A key written into the configuration makes the configuration a secret.
+        std::fs::write(
+            &conf,
+            "{ transport: { link: { tls: { listen_private_key_base64: \"c2VjcmV0\" } } } }",
+        )
+        .unwrap();
+        chmod(&conf, 0o644);
+        let e = base(&net).unwrap_err().to_string();
+        assert!(e.contains("driver.json5") && e.contains("mode 0644"), "{e}");
+        chmod(&conf, 0o600);
+        base(&net).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn the_access_control_names_this_drivers_keys_only() {
         let acl = access_control("qube", &["rig"]);
@@ -269,12 +405,17 @@ mod tests {
         };
         assert_eq!(c.get_json("access_control/enabled").unwrap(), "true");
         assert!(
-            acl.contains(r#"["rig/driver/qube/command", "rig/driver/qube/ping"]"#),
+            acl.contains(r#"["rig/driver/qube/command/*", "rig/driver/qube/claim/*", "rig/driver/qube/ping"]"#),
             "{acl}"
         );
         assert!(acl.contains(
-            r#"["rig/driver/qube/info", "rig/driver/qube/sample", "rig/driver/qube/pong"]"#
+            r#"["rig/driver/qube/info", "rig/driver/qube/sample", "rig/driver/qube/pong", "rig/driver/qube/refused"]"#
         ));
+        // Each user puts commands under its own name only.
+        assert!(acl.contains(
+            r#"key_exprs: ["rig/driver/qube/command/rig", "rig/driver/qube/claim/rig"]"#
+        ));
+        assert!(acl.contains(r#"{ rules: ["puts-0"], subjects: ["user-0"] }"#));
         assert!(!acl.contains("**"));
     }
 }

@@ -16,9 +16,10 @@ pub struct Args {
 #[derive(Subcommand)]
 enum Side {
     /// On the driver's host, beside the driver: listen at ENDPOINT, admit the users of
-    /// the credentials file, pass their commands for this driver only to it, and its
-    /// info and samples to them. The driver's own watchdog keeps the actuator safe when
-    /// the link goes; stale commands are dropped. Runs until Ctrl-C or SIGTERM.
+    /// the credentials file, pass their commands for this driver only to it — one rig
+    /// session's at a time — and its info and samples to them. The driver's own watchdog
+    /// keeps the actuator safe when the link goes; stale commands are dropped. Runs
+    /// until Ctrl-C or SIGTERM.
     Driver {
         #[command(flatten)]
         common: Common,
@@ -26,6 +27,11 @@ enum Side {
         /// (a late burst after an outage); 1 or more.
         #[arg(long, value_name = "N", default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..))]
         max_age_periods: u64,
+        /// A rig session holds the driver until it lets go or N periods of the driver
+        /// (and at least 250 ms) pass without a command or a hold from it; meanwhile
+        /// every other session's commands are refused; 2 or more.
+        #[arg(long, value_name = "N", default_value_t = bridge::claim::Lease::DEFAULT.periods, value_parser = clap::value_parser!(u64).range(2..=10_000))]
+        lease_periods: u64,
         /// Write each action's sample-to-actuation delay across the link to FILE as CSV
         /// (`seq,t_sample_ns,t_arrived_ns,sample_to_actuation`: from the driver's sample
         /// instant to the action's arrival here, ns, on this host's clock alone) — for
@@ -57,9 +63,12 @@ enum Side {
     },
     /// From any host: connect to the driver's bridge at ENDPOINT with the credentials
     /// (or none) for a while, listen to the driver's info and samples and, with
-    /// `--zero-actions`, put zero actions; prints what arrived. The driver's bridge
+    /// `--zero-actions`, put zero actions (a rig session of its own: refused while
+    /// another session holds the driver); prints what arrived. The driver's bridge
     /// prints how many commands it passed on. To check an access-control setup: a peer
-    /// without listed credentials must see nothing and command nothing.
+    /// without listed credentials must see nothing and command nothing. Exits 1 when
+    /// nothing arrived (saying why, where Zenoh tells: nothing listening, the user or
+    /// password refused, a failed TLS handshake) or its zero actions were refused.
     Probe {
         #[command(flatten)]
         common: Common,
@@ -117,6 +126,7 @@ pub fn main(args: &Args) -> ExitCode {
         Side::Driver {
             common,
             max_age_periods,
+            lease_periods,
             timing_out,
         } => bridge::serve_driver(&bridge::DriverSide {
             timing_out: timing_out.clone(),
@@ -124,6 +134,10 @@ pub fn main(args: &Args) -> ExitCode {
             net: common.network(),
             max_age_periods: *max_age_periods,
             link_timeout: Duration::from_millis(common.link_timeout_ms),
+            lease: bridge::claim::Lease {
+                periods: *lease_periods,
+                ..bridge::claim::Lease::DEFAULT
+            },
         })
         .map(|counts| eprintln!("bridge for driver {:?}: {counts}", common.driver)),
         Side::Rig {
@@ -155,11 +169,21 @@ pub fn main(args: &Args) -> ExitCode {
             *zero_actions,
             *seconds,
         )
-        .map(|p| {
+        .and_then(|p| {
             println!(
                 "probe of driver {:?} at {}: {} infos and {} samples arrived; {} zero actions put",
                 common.driver, common.endpoint, p.infos, p.samples, p.commands
-            )
+            );
+            if !p.received() {
+                let why = p.unconnected.clone().unwrap_or_else(|| {
+                    "Zenoh did not say why: check the endpoint, the driver's id, the credentials and `rig bridge driver` there".into()
+                });
+                return Err(anyhow::anyhow!("nothing arrived: {why}"));
+            }
+            match p.refused {
+                Some(why) => Err(anyhow::anyhow!("the zero actions were refused: {why}")),
+                None => Ok(()),
+            }
         }),
     };
     match result {

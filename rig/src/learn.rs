@@ -13,7 +13,8 @@ use crate::selection::{Selection, resolve_selection};
 pub struct Args {
     #[command(flatten)]
     selection: Selection,
-    /// Output directory.
+    /// Output directory. It is this command's while it runs (DIR/.lock): another `rig
+    /// run` or `rig learn` into it is refused, naming this process.
     #[arg(long, value_name = "DIR", default_value = "out/learn")]
     out: PathBuf,
     /// Worker threads [default: one per core].

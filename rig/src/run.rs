@@ -16,7 +16,8 @@ use crate::selection::{Selection, resolve_selection, resume_selection};
 pub struct Args {
     #[command(flatten)]
     selection: Selection,
-    /// Output directory.
+    /// Output directory. It is this command's while it runs (DIR/.lock): another `rig
+    /// run` or `rig learn` into it is refused, naming this process.
     #[arg(long, value_name = "DIR", default_value = "out/run")]
     out: PathBuf,
     /// Run id shared by the three processes [default: unique per invocation].
@@ -49,6 +50,14 @@ pub struct Args {
     plant: String,
     #[command(flatten)]
     driver: DriverArgs,
+    /// Realtime and `--plant external`: what a gap in the loop's timing does — samples
+    /// missing, or one reaching the plant more than a period after its instant
+    /// (docs/run.md). `cut`: the trial's attempt ends there, nothing learned across it,
+    /// and the trial is run again (listed in gaps.csv). `learn`: the trial goes on and
+    /// learns across the gap, counted only as deadline misses — for a simulation run
+    /// faster than the machine can keep the period.
+    #[arg(long, default_value = "cut", value_parser = ["cut", "learn"])]
+    gaps: String,
     /// Continue the run in DIR after a crash, a killed process or Ctrl-C: from its last
     /// trial that is complete in returns.csv, in the agent's checkpoints
     /// (DIR/checkpoints) and in run.mcap. The configuration is DIR/config.toml; of the
@@ -160,6 +169,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
         scheduling,
         spin: args.spin,
         waiting,
+        learn_across_gaps: args.gaps == "learn",
     };
     Ok((cfg, opts))
 }
@@ -200,6 +210,9 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
             s.deadline_misses,
             s.messages / 3
         );
+    }
+    if opts.driver.is_some() || opts.realtime.is_some() {
+        println!("  trials cut by gaps and redone: {} (gaps.csv)", s.gaps);
     }
     if let Some(g) = s.records.iter().rev().find_map(|r| r.greedy) {
         println!("  last greedy return: {g:.1}");

@@ -46,9 +46,15 @@ fn check_driver(id: &str) -> Output {
 }
 
 /// `rig run --plant external --driver ID` with `extra` flags, writing to `dir`.
+/// `rig run --plant external` against driver `id`. The drivers here run at 10 × real
+/// time on a machine shared with other tests, where the loop cannot keep 3 ms periods:
+/// the runs learn across gaps (`--gaps learn`, the behaviour these tests measure); the
+/// gap rule is tested in `across_hosts.rs` and `faults.rs`.
 fn run_external(id: &str, extra: &[&str], dir: &std::path::Path) -> Output {
     rig()
-        .args(["run", "--plant", "external", "--driver", id])
+        .args([
+            "run", "--plant", "external", "--driver", id, "--gaps", "learn",
+        ])
         .args(extra)
         .arg("--out")
         .arg(dir)
@@ -205,7 +211,7 @@ fn a_run_against_a_driver_resumes_only_against_a_driver() {
 
     let resumed = rig()
         .args([
-            "run", "--plant", "external", "--driver", &d.id, "--trials", "3",
+            "run", "--plant", "external", "--driver", &d.id, "--trials", "3", "--gaps", "learn",
         ])
         .args(["--driver-timeout", "20", "--resume"])
         .arg(&dir)
@@ -633,7 +639,9 @@ fn a_process_killed_during_an_external_run_leaves_the_driver_safe_within_two_per
         let who = format!("{role} ({})", d.id);
         let dir = tmp(&format!("kill-{}", d.id));
         let sup = rig()
-            .args(["run", "--plant", "external", "--driver", &d.id])
+            .args([
+                "run", "--plant", "external", "--driver", &d.id, "--gaps", "learn",
+            ])
             .args(["--trials", "50", "--eval-every", "0", "--quiet", "--out"])
             .arg(&dir)
             .stderr(Stdio::piped())
@@ -766,4 +774,41 @@ fn holds_the_limit(mut driver: std::process::Command) {
             "the limit in force is {us} µs while the driver holds 17"
         );
     }
+}
+
+/// The gap rule on one host: the agent stopped (SIGSTOP) for about seven periods of a
+/// driver at real time, mid-trial. The plant waits for its answer meanwhile; the driver's
+/// clock goes on, so the next sample comes after missing ones: a gap. The attempt is cut
+/// short unlearned, the trial run again, and the run completes.
+#[test]
+fn a_stalled_agent_against_a_driver_cuts_the_trial_short_and_it_is_run_again() {
+    let d = Driver::launch(&Kind::Rust, "stall", &[]);
+    let dir = tmp(&format!("stall-{}", d.id));
+    let sup = rig()
+        .args(["run", "--plant", "external", "--driver", &d.id])
+        .args([
+            "--trials",
+            "3",
+            "--eval-every",
+            "0",
+            "--driver-timeout",
+            "20",
+        ])
+        .arg("--out")
+        .arg(&dir)
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    common::wait_for_lines(&dir.join("returns.csv"), 2);
+    std::thread::sleep(Duration::from_millis(1000));
+    let agent = common::child_running(sup.id(), "agent");
+    common::signal(agent, "-STOP");
+    std::thread::sleep(Duration::from_millis(200));
+    common::signal(agent, "-CONT");
+    let out = sup.wait_with_output().unwrap();
+    assert!(out.status.success());
+    let returns = std::fs::read_to_string(dir.join("returns.csv")).unwrap();
+    assert_eq!(returns.lines().count(), 4, "{returns}");
+    let flagged = common::gaps::flagged_and_never_learned(&dir.join("run.mcap"), 30_000_000);
+    common::gaps::counted(&String::from_utf8_lossy(&out.stdout), &dir, flagged);
 }

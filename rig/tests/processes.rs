@@ -167,13 +167,16 @@ fn bench_loop_measures_the_loop_against_one_process_and_the_transport() {
 #[test]
 fn realtime_runs_on_the_plants_clock_and_counts_misses() {
     let dir = tmp("realtime");
-    // 3 trials of 101 samples at 20 × real time: 1.5 ms periods, ≈ 0.45 s.
+    // 3 trials of 101 samples at 20 × real time: 1.5 ms periods, ≈ 0.45 s (learning
+    // across gaps: 1.5 ms is beyond a shared machine).
     let t0 = Instant::now();
     let out = ok(rig()
         .args([
             "run",
             "--timing",
             "realtime",
+            "--gaps",
+            "learn",
             "--speed",
             "20",
             "--trials",
@@ -307,6 +310,10 @@ fn a_stalled_agent_meets_the_watchdog_within_two_periods() {
             "run",
             "--timing",
             "realtime",
+            // The plant's watchdog is what is measured: the trial goes on through the
+            // stall (the gap rule would cut it short, below).
+            "--gaps",
+            "learn",
             "--speed",
             "5",
             "--trials",
@@ -367,6 +374,40 @@ fn a_stalled_agent_meets_the_watchdog_within_two_periods() {
             "sample {k}: the safe action (stall after sample {l})"
         );
     }
+}
+
+#[test]
+fn a_plant_held_up_in_real_time_cuts_the_trial_short_and_runs_it_again() {
+    // Realtime at real time (30 ms periods); the plant is stopped (SIGSTOP) for about
+    // four periods in the second trial: the sample it then takes is late, a gap.
+    let dir = tmp("held-plant");
+    let sup = rig()
+        .args([
+            "run",
+            "--timing",
+            "realtime",
+            "--trials",
+            "3",
+            "--eval-every",
+            "0",
+        ])
+        .arg("--out")
+        .arg(&dir)
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for_lines(&dir.join("returns.csv"), 2);
+    std::thread::sleep(Duration::from_millis(1000));
+    let plant = common::child_running(sup.id(), "plant");
+    common::signal(plant, "-STOP");
+    std::thread::sleep(Duration::from_millis(120));
+    common::signal(plant, "-CONT");
+    let out = sup.wait_with_output().unwrap();
+    assert!(out.status.success());
+    let returns = std::fs::read_to_string(dir.join("returns.csv")).unwrap();
+    assert_eq!(returns.lines().count(), 4, "{returns}");
+    let flagged = common::gaps::flagged_and_never_learned(&dir.join("run.mcap"), 30_000_000);
+    common::gaps::counted(&String::from_utf8_lossy(&out.stdout), &dir, flagged);
 }
 
 #[test]

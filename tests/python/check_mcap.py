@@ -66,6 +66,7 @@ FLAG_GREEDY = 1 << 2
 FLAG_SHUTDOWN = 1 << 3
 FLAG_PRIMED = 1 << 7
 FLAG_ESTIMATED_REWARD = 1 << 8
+FLAG_GAP = 1 << 9
 
 MAGIC_SIZE = 8
 # opcode (1) + record length (8) + summary_start (8) + summary_offset_start (8) + crc (4)
@@ -395,11 +396,14 @@ def trial_returns(
     (predictive timing; reward 0) if any, then r_1 + ... + r_N in step order, plus
     `terminal` of the END sample's true state when given (finite horizon). A trial number
     has one learning trial and a greedy trial from each start state (several on arm-6.4),
-    each opened by a START message; its greedy return is their mean, (0.0 + g_1 + ...) / n."""
+    each opened by a START message; its greedy return is their mean, (0.0 + g_1 + ...) / n.
+    An attempt cut short by a gap (its last sample flagged GAP, with END) does not count:
+    the trial is run again, from its START."""
     trials: dict[tuple[int, bool, int], dict[int, float]] = {}
     primed: dict[tuple[int, bool, int], float] = {}
     finals: dict[tuple[int, bool, int], float] = {}
     starts: dict[tuple[int, bool], int] = {}
+    cut: set[tuple[int, bool, int]] = set()
     for m in measurements:
         try:
             trial, step, flags = int(m["trial"]), int(m["step"]), int(m["flags"])
@@ -412,11 +416,17 @@ def trial_returns(
         kind = "greedy trial" if is_greedy else "trial"
         if flags & FLAG_TRIAL_START:
             starts[(trial, is_greedy)] = starts.get((trial, is_greedy), -1) + 1
-            if not is_greedy and starts[(trial, False)] > 0:
+            again = (trial, False, starts[(trial, False)] - 1) in cut if not is_greedy else True
+            if not is_greedy and starts[(trial, False)] > 0 and not again:
                 raise CheckError(f"{MEASUREMENT_TOPIC}: trial {trial} starts twice")
         if (trial, is_greedy) not in starts:
             raise CheckError(f"{MEASUREMENT_TOPIC}: {kind} {trial}: a sample before its START")
         key = (trial, is_greedy, starts[(trial, is_greedy)])
+        if flags & FLAG_GAP:
+            if not flags & FLAG_TRIAL_END:
+                raise CheckError(f"{MEASUREMENT_TOPIC}: {kind} {trial}: GAP without END")
+            cut.add(key)
+            continue
         if flags & FLAG_PRIMED:
             if step != 0 or key in primed:
                 raise CheckError(
@@ -433,6 +443,8 @@ def trial_returns(
     learning: dict[int, float] = {}
     greedy_sums: dict[int, tuple[float, int]] = {}
     for key, steps in sorted(trials.items()):
+        if key in cut:
+            continue
         trial, is_greedy, _ = key
         kind = "greedy trial" if is_greedy else "trial"
         n = max(steps)

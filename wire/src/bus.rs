@@ -222,6 +222,7 @@ impl Bus {
         Ok(Rx {
             subscriber,
             listener,
+            service: factory,
             waiting: self.waiting,
         })
     }

@@ -36,6 +36,11 @@ pub mod flags {
     /// is NaN (a terminal penalty excepted) and the observer computes `ρ(x̂_k, u_k)`
     /// from its estimate; the estimates carry the rewards the learning curves sum.
     pub const ESTIMATED_REWARD: u64 = 256;
+    /// Plant → observer (with [`END`]): the loop lost its timing before this sample —
+    /// samples went missing, or this one reached the plant process more than a period
+    /// after its instant. The transition into it is not learned (no agent call learns
+    /// it), the trial's attempt ends here, cut short, and the trial is run again.
+    pub const GAP: u64 = 512;
 }
 
 /// Header fields shared by all messages.

@@ -25,6 +25,8 @@ pub struct Tx<T: std::fmt::Debug + ZeroCopySend + 'static> {
 pub struct Rx<T: std::fmt::Debug + ZeroCopySend + 'static> {
     pub(crate) subscriber: Subscriber<ipc::Service, T, ()>,
     pub(crate) listener: Listener<ipc::Service>,
+    pub(crate) service:
+        iceoryx2::service::port_factory::publish_subscribe::PortFactory<ipc::Service, T, ()>,
     pub(crate) waiting: Waiting,
 }
 
@@ -109,6 +111,12 @@ impl Recorded {
 const PASSING_ON: Duration = Duration::from_millis(250);
 
 impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
+    /// Senders currently connected (a process that died may count until iceoryx2 has
+    /// cleaned up after it).
+    pub fn senders(&self) -> usize {
+        self.service.dynamic_config().number_of_publishers()
+    }
+
     /// The next message, if one is waiting.
     pub fn try_recv(&self) -> Result<Option<T>, Error> {
         Ok(self.subscriber.receive()?.map(|s| *s))

@@ -385,6 +385,8 @@ fn run_realtime(
             scheduling: opts.scheduling,
             spin: opts.spin,
             waiting: opts.waiting,
+            // The loop's timing is measured, gaps and all.
+            learn_across_gaps: true,
         },
     )?;
     let machine = before.zip(Counters::read()).map(|(b, a)| {

@@ -165,26 +165,79 @@ fn run(args: &[&str]) {
 }
 
 impl Host {
-    /// Drops `percent` % of the TCP packets this host sends, at random (nftables).
-    pub fn lose(&self, percent: u32) {
-        let nft = |args: &[&str]| {
-            let mut all = vec!["ip", "netns", "exec", &self.netns, "nft"];
-            all.extend(args);
-            run(&all);
-        };
-        nft(&["add", "table", "inet", "rigloss"]);
-        nft(&[
+    /// `nft ARGS` in this host's network namespace.
+    fn nft(&self, args: &[&str]) {
+        let mut all = vec!["ip", "netns", "exec", &self.netns, "nft"];
+        all.extend(args);
+        run(&all);
+    }
+
+    /// Adds nftables table `table` with an output chain dropping what `rule` matches.
+    fn drop_out(&self, table: &str, rule: &str) {
+        self.nft(&["add", "table", "inet", table]);
+        self.nft(&[
             "add",
             "chain",
             "inet",
-            "rigloss",
+            table,
             "out",
             "{ type filter hook output priority 0; }",
         ]);
-        let rule = format!("meta l4proto tcp numgen random mod 100 < {percent} counter drop");
-        let mut args = vec!["add", "rule", "inet", "rigloss", "out"];
+        let mut args = vec!["add", "rule", "inet", table, "out"];
         args.extend(rule.split(' '));
-        nft(&args);
+        self.nft(&args);
+    }
+
+    /// Drops `percent` % of the TCP packets this host sends, at random (nftables).
+    pub fn lose(&self, percent: u32) {
+        self.drop_out(
+            "rigloss",
+            &format!("meta l4proto tcp numgen random mod 100 < {percent} counter drop"),
+        );
+    }
+
+    /// Drops the TCP packets with data this host sends to `port` at `addr` beyond
+    /// `kbytes` kB/s (nftables; the acknowledgements of what it receives all go): its
+    /// sending is throttled, its receiving is not.
+    pub fn throttle(&self, addr: &str, port: u16, kbytes: u32) {
+        // Packets of one segment each (the policer sees what is sent, not 64 kB of
+        // segments to come), and a loss-based congestion control, which backs off before
+        // a policer (BBR, the machine's default here, goes on sending into it).
+        run(&[
+            "ip",
+            "-n",
+            &self.netns,
+            "link",
+            "set",
+            "dev",
+            &self.dev,
+            "gso_max_segs",
+            "1",
+        ]);
+        run(&[
+            "ip",
+            "netns",
+            "exec",
+            &self.netns,
+            "sysctl",
+            "-q",
+            "net.ipv4.tcp_congestion_control=reno",
+        ]);
+        self.drop_out(
+            "rigthrottle",
+            &format!(
+                "ip daddr {addr} tcp dport {port} ip length > 80 limit rate over {kbytes} kbytes/second counter drop"
+            ),
+        );
+    }
+
+    /// Drops every TCP packet this host sends (`true`, nftables), or none again: the
+    /// link cut while the interfaces stay up.
+    pub fn cut(&self, on: bool) {
+        match on {
+            true => self.drop_out("rigcut", "meta l4proto tcp counter drop"),
+            false => self.nft(&["delete", "table", "inet", "rigcut"]),
+        }
     }
 
     /// A TCP relay on this host, listening on `listen` (`addr:port`) and forwarding to

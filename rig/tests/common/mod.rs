@@ -8,6 +8,7 @@ use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
 pub mod drivers;
+pub mod gaps;
 pub mod hosts;
 
 /// The flags of VGBP-LSTD on the §6.4.2 manipulator.

@@ -61,6 +61,8 @@ struct Learner {
     checkpoints: Option<CheckpointWriter>,
     /// The next learning trial.
     expect_trial: u64,
+    /// Whether the last learning trial's attempt was cut short by a gap: it is run again.
+    cut: bool,
     /// Predictive timing (`observer.mode`).
     predictive: bool,
     /// Action dimension.
@@ -98,6 +100,7 @@ impl Learner {
             origin,
             checkpoints,
             expect_trial,
+            cut: false,
             predictive: cfg.observer.mode == ObserverMode::Predictive,
             m: task.action_dim(),
         })
@@ -110,14 +113,19 @@ impl Learner {
         let call = super::observer::call_of(f);
         let greedy = f & flags::GREEDY != 0;
         if !greedy && call == Call::Start {
-            if e.header.trial != self.expect_trial {
+            // A trial cut short by a gap is run again.
+            let again = std::mem::take(&mut self.cut) && e.header.trial + 1 == self.expect_trial;
+            if !again && e.header.trial != self.expect_trial {
                 bail!(
                     "the plant started trial {} where trial {} was due (a resumed agent continues after its checkpoint's trial)",
                     e.header.trial,
                     self.expect_trial
                 );
             }
-            self.expect_trial += 1;
+            self.expect_trial += u64::from(!again);
+        }
+        if !greedy && f & flags::GAP != 0 {
+            self.cut = true;
         }
         let t = ToAgent {
             call,
@@ -129,7 +137,7 @@ impl Learner {
             step: e.header.step as usize + usize::from(self.predictive && call != Call::Start),
         };
         act(self.agent.as_mut(), greedy, &t, u);
-        if !greedy && f & flags::END != 0 {
+        if !greedy && f & flags::END != 0 && f & flags::GAP == 0 {
             // The trial's learning is complete: checkpoint it before acknowledging.
             self.checkpoint(e)?;
         }

@@ -231,6 +231,13 @@ pub struct PlantArgs {
     /// With `--after-trial`: the sequence number of the first sample.
     #[arg(long, value_name = "SEQ", default_value_t = 0)]
     pub first_seq: u64,
+    /// Realtime and `--driver`: what a gap in the loop's timing does — samples missing,
+    /// or one a period late (docs/run.md). `cut`: the attempt ends there, unlearned, and
+    /// the trial is run again. `learn`: the trial goes on and learns across it, the gap
+    /// counted only as deadline misses (a simulation run faster than this machine can
+    /// keep up with).
+    #[arg(long, default_value = "cut", value_parser = ["cut", "learn"])]
+    pub gaps: String,
 }
 
 /// Command-line arguments of the observer node ([`super::observer::run`]).

@@ -24,11 +24,12 @@ pub fn call_flags(measured: u64, call: Call) -> u64 {
         }
 }
 
-/// The agent call an estimate's [`flags`] ask for (the inverse of [`call_flags`]).
+/// The agent call an estimate's [`flags`] ask for (the inverse of [`call_flags`]); a
+/// sample after a gap ([`flags::GAP`]) asks for none.
 pub fn call_of(f: u64) -> Call {
     if f & flags::START != 0 {
         Call::Start
-    } else if f & flags::HOLD != 0 {
+    } else if f & (flags::HOLD | flags::GAP) != 0 {
         Call::Hold
     } else if f & flags::TERMINAL != 0 {
         Call::Terminal
@@ -85,7 +86,8 @@ pub fn run(args: &ObserverArgs) -> Result<()> {
                 u_next: &m.u_next[..nu],
             });
             e.header.flags = call_flags(f, t.call);
-            e.reward = t.reward;
+            // After a gap there is no transition, and no reward, to learn.
+            e.reward = if f & flags::GAP != 0 { 0.0 } else { t.reward };
             e.x = pack(t.x);
             e.u_applied = pack(t.u_prev);
         }

@@ -195,7 +195,9 @@ impl Recorded {
         let ends = self
             .measurements
             .iter()
-            .filter(|&&(_, t, f)| t == c && f & flags::END != 0 && f & flags::SHUTDOWN == 0)
+            .filter(|&&(_, t, f)| {
+                t == c && f & (flags::END | flags::GAP | flags::SHUTDOWN) == flags::END
+            })
             .count();
         let complete = self.seqs.iter().all(|s| s.range(..q).count() as u64 == q);
         (c == 0 || ends == 1 + evals)

@@ -35,6 +35,7 @@ use crate::lock::FolderLock;
 use crate::process::{Scheduling, Spin, wire_err};
 use crate::resume;
 
+mod gaps;
 mod logs;
 mod recording;
 mod retention;
@@ -42,6 +43,7 @@ mod returns;
 mod spawn;
 mod supervisor;
 
+pub use gaps::GAPS_HEADER;
 use recording::{About, Recording};
 use returns::Returns;
 use supervisor::Supervisor;
@@ -72,6 +74,9 @@ pub struct RunOptions {
     pub spin: Spin,
     /// How the three processes wait for their next message.
     pub waiting: Waiting,
+    /// Realtime and external driver: learn across gaps in the loop's timing instead of
+    /// cutting the attempt short and running the trial again (`--gaps learn`).
+    pub learn_across_gaps: bool,
 }
 
 /// An external driver in place of the simulated plant (`rig run --plant external`).
@@ -96,6 +101,9 @@ pub struct RunSummary {
     pub wall: Duration,
     /// Deadlines the plant missed (realtime and external driver only).
     pub deadline_misses: u64,
+    /// Trial attempts cut short by gaps and run again (`gaps.csv`; realtime and
+    /// external driver only).
+    pub gaps: u64,
     /// The external driver's info, if one was used.
     pub driver: Option<DriverInfo>,
     /// A resumed run: the trial it continued after (`records` begins with the trials
@@ -178,8 +186,17 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         (None, Some(speed)) => Some(Duration::from_secs_f64(4.0 * task.ts / speed)),
         (None, None) => None,
     };
+    let gaps = gaps::Gaps::create(&opts.out.join("gaps.csv"), point.as_ref())?;
     let first_seq = point.as_ref().map_or(0, |p| p.first_seq);
-    let mut sup = Supervisor::new(bus, recording, returns, &opts.out, first_seq, watch, grace)?;
+    let mut sup = Supervisor::new(
+        bus,
+        recording,
+        (returns, gaps),
+        &opts.out,
+        first_seq,
+        watch,
+        grace,
+    )?;
     if let Some(d) = &opts.driver {
         sup.resume_flags = format!(" --plant external --driver {}", d.id);
     }
@@ -203,6 +220,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let t0 = Instant::now();
     let outcome = sup.supervise(&bar);
     bar.finish_and_clear();
+    let gaps = sup.gaps.now;
     let (records, messages, deadline_misses) = sup.finish(outcome)?;
     // Every trial is complete everywhere: the last one's checkpoint is what a resume
     // (`--trials N`, to learn on) needs.
@@ -212,6 +230,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         messages,
         wall: t0.elapsed(),
         deadline_misses,
+        gaps,
         driver: driver_info,
         resumed_after: point.as_ref().map(|p| p.trial),
     })

@@ -114,6 +114,13 @@ impl Returns {
             }
             return Ok(());
         }
+        if f & flags::GAP != 0 {
+            // An attempt cut short by a gap: it is run again, and only that run counts.
+            if !greedy {
+                self.pending = None;
+            }
+            return Ok(());
+        }
         let pending = self
             .pending
             .as_mut()

@@ -42,6 +42,9 @@ pub(super) fn role_args(
             opts.spin.spin_us.to_string(),
         ],
     };
+    if opts.learn_across_gaps {
+        plant.extend(["--gaps".to_string(), "learn".to_string()]);
+    }
     if let (Some(path), Some(_), None) = (&opts.cycles_out, opts.realtime, &opts.driver) {
         plant.extend(["--cycles-out".to_string(), path.display().to_string()]);
     }

@@ -14,6 +14,7 @@ use wire::{Action, Bus, Estimate, Measurement, Truth, flags, topic};
 use crate::experiment::TrialRecord;
 use crate::process::wire_err;
 
+use super::gaps::Gaps;
 use super::logs::Logs;
 use super::recording::Recording;
 use super::retention::{Progress, Retention};
@@ -81,6 +82,8 @@ pub(super) struct Supervisor {
     pub(super) truth_queue: std::collections::VecDeque<Truth>,
     pub(super) recording: Recording,
     pub(super) returns: Returns,
+    /// The trial attempts cut short by gaps.
+    pub(super) gaps: Gaps,
     pub(super) children: Children,
     /// Their output.
     pub(super) logs: Logs,
@@ -108,7 +111,7 @@ impl Supervisor {
     pub(super) fn new(
         bus: Bus,
         recording: Recording,
-        returns: Returns,
+        (returns, gaps): (Returns, Gaps),
         out: &Path,
         first_seq: u64,
         driver: Option<DriverWatch>,
@@ -132,6 +135,7 @@ impl Supervisor {
             truth_queue: std::collections::VecDeque::new(),
             recording,
             returns,
+            gaps,
             children: Children(Vec::new()),
             logs: Logs::default(),
             out: out.to_owned(),
@@ -187,8 +191,9 @@ impl Supervisor {
             self.continuity[0].check(topic::MEASUREMENT, m.header.seq)?;
             self.deadline_misses = self.deadline_misses.max(m.deadline_misses);
             self.recording.measurement(m)?;
+            self.gaps.measurement(m)?;
             self.messages += 1;
-            if m.header.flags & flags::END != 0 {
+            if m.header.flags & (flags::END | flags::GAP) == flags::END {
                 bar.inc(1);
             }
             let n = m.n_x as usize;
@@ -316,8 +321,10 @@ impl Supervisor {
     pub(super) fn finish(mut self, outcome: Result<()>) -> Result<(Vec<TrialRecord>, u64, u64)> {
         drop(std::mem::replace(&mut self.children, Children(Vec::new())));
         let _ = self.returns.flush_complete();
+        let counted = self.recording.rec.metadata("gaps", &self.gaps.metadata());
         let finished = self.recording.rec.finish();
         outcome?;
+        counted?;
         finished?;
         Ok((self.returns.records, self.messages, self.deadline_misses))
     }

@@ -25,6 +25,9 @@ pub(super) struct Arrivals {
     /// An action received only after the instant it was waited for: the next
     /// interval's.
     late: Option<(u64, Action)>,
+    /// The newest sample of the trial answered so far (before the trial: the one
+    /// before its first).
+    pub(super) newest: u64,
 }
 
 impl Arrivals {
@@ -35,6 +38,7 @@ impl Arrivals {
             answered: None,
             first_seq,
             late: None,
+            newest: first_seq.saturating_sub(1),
         }
     }
 
@@ -51,6 +55,7 @@ impl Arrivals {
             return;
         }
         self.list.push((t_a, a.u));
+        self.newest = self.newest.max(a.header.seq);
         if a.header.seq == waiting_for {
             self.answered = Some(t_a);
         }

@@ -12,9 +12,13 @@
 //! estimate; its start samples take the velocities of `x0` (READY is at rest there).
 //!
 //! The driver is the clock. When the agent answers late — the driver's next sample shows
-//! that the action was not applied by then, or whole periods passed — the trial goes on
-//! with the newest sample and the miss is counted in
-//! [`wire::Measurement::deadline_misses`].
+//! that the action was not applied by then — the trial goes on and the miss is counted
+//! in [`wire::Measurement::deadline_misses`]. When the loop loses the driver's timing —
+//! samples missing before the newest (whole periods passed, also counted as misses), a
+//! sample whose instant comes more than 1.5 periods after the previous one's (the
+//! driver's clock slipped), or a sample reaching this process more than a period after
+//! its instant (a network that held it back) — that sample is a gap ([`flags::GAP`]): the attempt ends there, cut
+//! short, without the transition into it, and the trial is run again ([`super::Ended`]).
 
 use std::time::Duration;
 
@@ -26,8 +30,8 @@ use driver::contract::{DriverInfo, DriverLink, DriverSample, status};
 use wire::{flags, now_ns};
 
 use super::super::{PlantArgs, SILENCE, STARTUP, seconds, wire_err};
-use super::Trials;
 use super::link::{Link, TrialHeader, end_flags};
+use super::{Ended, Gap, Trials};
 
 /// The episode master for an external driver.
 pub struct Bridge {
@@ -46,6 +50,8 @@ pub struct Bridge {
     positions_only: Option<bool>,
     /// The samples of the trial.
     limit: TimeLimit,
+    /// Whether a gap cuts the attempt short (`--gaps`).
+    cut_gaps: bool,
 }
 
 impl Bridge {
@@ -71,6 +77,7 @@ impl Bridge {
             driver,
             info,
             positions_only: None,
+            cut_gaps: args.gaps == "cut",
         })
     }
 
@@ -162,20 +169,38 @@ impl Bridge {
         Ok((s, reset_id, t_publish))
     }
 
+    /// Whether `next`, the sample after `s`, reached this process at `arrived` after a
+    /// gap: samples missing between them, its instant more than 1.5 periods after the
+    /// previous one's (the driver's clock slipped), or it more than a period after its
+    /// instant (a lockstep driver has no instants to keep).
+    fn gap(&self, s: &DriverSample, next: &DriverSample, arrived: u64) -> Option<Gap> {
+        let clocked = !self.info.lockstep();
+        let gap = Gap {
+            missing: next.seq - s.seq - 1,
+            span_ns: next.t_sample_ns.saturating_sub(s.t_sample_ns),
+            late_ns: arrived.saturating_sub(next.t_sample_ns),
+            unanswered: false,
+        };
+        let period = self.info.period_ns;
+        let slipped = clocked && (gap.span_ns > period * 3 / 2 || gap.late_ns > period);
+        (self.cut_gaps && (gap.missing > 0 || slipped)).then_some(gap)
+    }
+
     /// One period after driver sample `s` (of reset `reset_id`), published at
     /// `t_publish`: the agent's answer, made safe into `u`, goes to the driver; returns
-    /// the driver's next sample and what the period came to.
+    /// the driver's next sample, what the period came to, and whether a gap came first.
     fn period(
         &mut self,
         s: &DriverSample,
         t_publish: u64,
         reset_id: u64,
         u: &mut [f64],
-    ) -> Result<(DriverSample, Step)> {
+    ) -> Result<(DriverSample, Step, Option<Gap>)> {
         let requested = self.action(self.link.seq - 1, t_publish)?;
         self.safety.admit(&requested, u);
         let command = self.driver.act(u, s.seq).map_err(wire_err)?;
         let next = self.next_sample(s.seq, reset_id)?;
+        let gap = self.gap(s, &next, now_ns());
         // Periods that passed without a measurement, and an action the driver had not
         // applied by the next sample, are missed deadlines.
         self.link.misses += next.seq - s.seq - 1 + u64::from(next.last_command != command);
@@ -190,32 +215,40 @@ impl Bridge {
             self.link.task.reward.reward(s.state(), next.applied())
         };
         let step = self.limit.step(left.unwrap_or(reward), left.is_some());
-        Ok((next, step))
+        Ok((next, step, gap))
     }
 }
 
 impl Trials for Bridge {
-    fn trial(&mut self, trial: &Trial) -> Result<usize> {
+    fn trial(&mut self, trial: &Trial) -> Result<Ended> {
         let header = TrialHeader::new(trial, self.link.task.ts);
         let (mut s, reset_id, mut t_publish) = self.start(&trial.x0, &header)?;
         self.limit.reset();
         let mut u = vec![0.0; self.link.task.action_dim()];
         loop {
-            let (next, step) = self.period(&s, t_publish, reset_id, &mut u)?;
+            let (next, step, gap) = self.period(&s, t_publish, reset_id, &mut u)?;
+            // After a gap the sample only ends the attempt: no reward, nothing learned.
+            let (marks, reward) = match gap {
+                Some(_) => (flags::END | flags::GAP, 0.0),
+                None => (end_flags(&step), step.reward),
+            };
             t_publish = self.link.publish(
-                header.at(self.link.seq, step.sample, end_flags(&step)),
-                step.reward,
+                header.at(self.link.seq, step.sample, marks),
+                reward,
                 next.state(),
                 next.applied(),
                 next.t_sample_ns,
             )?;
             s = next;
-            if step.ended() {
+            if marks & flags::END != 0 {
                 // The END sample's answer only acknowledges learning: nothing to apply
                 // (the next trial's reset follows, and the driver's watchdog stops the
                 // last action).
                 self.action(self.link.seq - 1, t_publish)?;
-                return Ok(self.limit.skipped());
+                return Ok(match gap {
+                    Some(g) => g.cut(trial, step.sample),
+                    None => Ended::Done(self.limit.skipped()),
+                });
             }
         }
     }

@@ -8,8 +8,8 @@ use anyhow::Result;
 use wire::{Header, flags, now_ns};
 
 use super::super::{SILENCE, wire_err};
-use super::Trials;
 use super::link::{Link, TrialHeader, end_flags};
+use super::{Ended, Trials};
 
 /// The simulated system in lockstep.
 pub(super) struct Lockstep {
@@ -25,7 +25,7 @@ impl Lockstep {
 }
 
 impl Trials for Lockstep {
-    fn trial(&mut self, trial: &Trial) -> Result<usize> {
+    fn trial(&mut self, trial: &Trial) -> Result<Ended> {
         let header = TrialHeader::new(trial, self.link.task.ts);
         let mut u = vec![0.0; self.link.task.action_dim()];
         let link = &mut self.link;
@@ -38,7 +38,7 @@ impl Trials for Lockstep {
             let h = header.at(self.link.seq, step.sample, end_flags(&step));
             exchange(&mut self.link, &self.episode, h, step.reward, &mut u)?;
             if step.ended() {
-                return Ok(self.episode.skipped());
+                return Ok(Ended::Done(self.episode.skipped()));
             }
         }
     }

@@ -74,9 +74,9 @@ pub fn run(args: &PlantArgs) -> Result<()> {
     let mut schedule = Schedule::new(task.clone(), cfg.run.trials, cfg.run.eval_every);
     schedule.resume(args.after_trial, args.sim_time);
     while let Some(trial) = schedule.next_trial() {
-        let skipped = runner.trial(&trial)?;
+        let skipped = whole(runner.as_mut(), &trial)?;
         for greedy in schedule.end_trial(skipped).into_iter().flatten() {
-            runner.trial(&greedy)?;
+            whole(runner.as_mut(), &greedy)?;
         }
     }
     eprintln!("safety: {}", runner.safety());
@@ -95,12 +95,82 @@ fn schedule_clock(s: &Scheduling) -> Result<()> {
     s.place(super::Part::Plant)
 }
 
+/// Attempts of one trial cut by gaps in a row after which the run stops.
+pub const MAX_CUTS: u32 = 20;
+
+/// Runs `trial` until an attempt is not cut short by a gap (at most [`MAX_CUTS`] are);
+/// returns how many of its samples were not run because it left the operating range.
+fn whole(runner: &mut dyn Trials, trial: &Trial) -> Result<usize> {
+    for cuts in 1.. {
+        match runner.trial(trial)? {
+            Ended::Done(skipped) => return Ok(skipped),
+            Ended::Cut if cuts == MAX_CUTS => bail!(
+                "{} was cut short by gaps {MAX_CUTS} times in a row: the loop does not keep the period (see gaps.csv)",
+                trial_name(trial)
+            ),
+            Ended::Cut => {}
+        }
+    }
+    unreachable!("the loop returns")
+}
+
+/// "learning trial 12", "greedy trial after trial 10".
+fn trial_name(t: &Trial) -> String {
+    match t.greedy {
+        true => format!("the greedy trial after trial {}", t.number),
+        false => format!("learning trial {}", t.number),
+    }
+}
+
+/// How an attempt at a trial ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Ended {
+    /// It ran to its end; the samples it did not run (it left the operating range).
+    Done(usize),
+    /// A gap cut it short ([`wire::flags::GAP`]): the trial is run again.
+    Cut,
+}
+
+/// The loop losing its timing before a sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Gap {
+    /// Samples missing before it.
+    pub(super) missing: u64,
+    /// From the previous sample's instant to its own \[ns\].
+    pub(super) span_ns: u64,
+    /// How long after its instant it reached (or was taken by) the plant process \[ns\].
+    pub(super) late_ns: u64,
+    /// The sample before the last was still unanswered a period after its deadline
+    /// (realtime: the watchdog's limit passed without the agent's action).
+    pub(super) unanswered: bool,
+}
+
+impl Gap {
+    /// Says so in the plant's log: `trial`'s attempt cut at sample `step`.
+    pub(super) fn cut(self, trial: &Trial, step: usize) -> Ended {
+        let why = if self.unanswered {
+            "no answer for a period after its deadline".to_string()
+        } else {
+            format!(
+                "{} samples missing, {:.1} ms since the previous instant, the sample {:.1} ms late",
+                self.missing,
+                self.span_ns as f64 * 1e-6,
+                self.late_ns as f64 * 1e-6
+            )
+        };
+        eprintln!(
+            "{} cut short at sample {step} by a gap ({why}): run again",
+            trial_name(trial)
+        );
+        Ended::Cut
+    }
+}
+
 /// Runs trials: the simulation in lockstep or in real time, or an external driver
 /// ([`external::Bridge`]).
 trait Trials {
-    /// Runs `trial`. Returns how many of its samples were not run because it left the
-    /// operating range.
-    fn trial(&mut self, trial: &Trial) -> Result<usize>;
+    /// Runs an attempt at `trial`.
+    fn trial(&mut self, trial: &Trial) -> Result<Ended>;
     /// The run topics.
     fn link(&mut self) -> &mut Link;
     /// How often the plant side's safety measures acted.
@@ -146,14 +216,17 @@ fn runner(
     let actuator = crate::experiment::actuator(&task, cfg, run_seed);
     let episode = Episode::new(Plant::new(task.clone()), actuator);
     Ok(if realtime {
-        Box::new(realtime::Realtime::new(
-            link,
-            episode,
-            &task,
-            args.speed,
-            args.spin.spin_us,
-            args.cycles_out.is_some(),
-        ))
+        Box::new(
+            realtime::Realtime::new(
+                link,
+                episode,
+                &task,
+                args.speed,
+                args.spin.spin_us,
+                args.cycles_out.is_some(),
+            )
+            .cutting_gaps(args.gaps == "cut"),
+        )
     } else {
         Box::new(lockstep::Lockstep::new(link, episode))
     })

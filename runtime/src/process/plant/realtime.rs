@@ -10,6 +10,12 @@
 //! trips the plant's watchdog ([`plant::safety::Supervisor::period`]): zero from its end
 //! on, until an action arrives. A late answer to the previous trial's last sample is
 //! dropped, not applied in this one. Nothing is allocated per interval.
+//!
+//! A sample the plant takes more than a period after its instant (the process was held
+//! up: the agent can no longer answer it in its interval), or one at which the sample
+//! before the last is still unanswered (its action more than a period past its deadline:
+//! what a driver's watchdog allows), is a gap ([`flags::GAP`]): the attempt ends there,
+//! cut short, and the trial is run again, from a fresh instant.
 
 use ::plant::episode::{Episode, Step};
 use ::plant::safety::SafetyCounts;
@@ -19,9 +25,9 @@ use anyhow::Result;
 use wire::{Header, MAX_U, flags, now_ns};
 
 use super::super::{SILENCE, wire_err};
-use super::Trials;
 use super::arrivals::Arrivals;
 use super::link::{Link, TrialHeader, end_flags};
+use super::{Ended, Gap, Trials};
 
 /// Absolute sampling deadlines on the monotonic clock.
 struct Clock {
@@ -113,6 +119,8 @@ pub(super) struct Realtime {
     /// Predictive timing (`observer.mode`): the action that answers sample `k` is
     /// applied at `t_{k+1}` for the whole interval.
     pipelined: bool,
+    /// Whether a sample taken more than a period late cuts the attempt short (`--gaps`).
+    cut_gaps: bool,
 }
 
 impl Realtime {
@@ -139,6 +147,31 @@ impl Realtime {
             link,
             clock,
             record_cycles,
+            cut_gaps: true,
+        }
+    }
+
+    /// Whether a sample taken more than a period late cuts the attempt short
+    /// (`--gaps cut`, the default) or the trial learns across it (`--gaps learn`).
+    pub(super) fn cutting_gaps(mut self, cut: bool) -> Self {
+        self.cut_gaps = cut;
+        self
+    }
+
+    /// After a gap at sample `seq`: waits until the agent has answered it (it has caught
+    /// up with the samples before), so that the next attempt starts on a loop that keeps
+    /// time; the clock moves on to now.
+    fn caught_up(&mut self, seq: u64) -> Result<()> {
+        loop {
+            let a = self
+                .link
+                .actions
+                .recv(&self.link.bus, SILENCE)
+                .map_err(wire_err)?;
+            if a.header.seq >= seq {
+                self.clock.next_ns = now_ns();
+                return Ok(());
+            }
         }
     }
 
@@ -213,7 +246,7 @@ impl Realtime {
 }
 
 impl Trials for Realtime {
-    fn trial(&mut self, trial: &Trial) -> Result<usize> {
+    fn trial(&mut self, trial: &Trial) -> Result<Ended> {
         let steps = self.link.task.steps_per_trial();
         self.episode.reset(&trial.x0);
         let mut held = Held {
@@ -226,6 +259,7 @@ impl Trials for Realtime {
         if self.pipelined {
             self.link.u_next.clone_from(&held.u);
             self.prime(header.at(self.link.seq, 0, flags::START), &mut held)?;
+            arrivals.newest = self.link.seq - 1;
             first = flags::PRIMED;
         }
         // Room for the trial's timing records now, before the clock runs: a vector that
@@ -234,7 +268,13 @@ impl Trials for Realtime {
         if self.record_cycles {
             self.link.cycles.reserve(steps + 2);
         }
-        let mut t_k = self.clock.next_ns;
+        // A trial starts within a period of its instant: after an attempt cut short by
+        // a late plant, the clock moves on to now.
+        let (c, now) = (&mut self.clock, now_ns());
+        if now > c.next_ns + c.period_ns {
+            c.next_ns = now;
+        }
+        let mut t_k = c.next_ns;
         sleep_until(t_k, self.clock.spin_ns);
         let mut woke = now_ns();
         self.publish(header.at(self.link.seq, 0, first), 0.0, t_k)?;
@@ -246,18 +286,31 @@ impl Trials for Realtime {
             arrivals.collect(actions, deadline, waiting_for, self.clock.spin_ns)?;
             let woke_next = now_ns();
             self.account(&arrivals, waiting_for, t_k, woke);
-            if let Some(skipped) = ended {
+            if let Some(end) = ended {
                 // The END sample's answer only acknowledges learning; the trial is over.
                 self.clock.next_ns = deadline;
-                return Ok(skipped);
+                return Ok(end);
             }
             let step = self.interval(&arrivals, &mut held, (t_k, deadline));
             woke = woke_next;
             t_k = deadline;
+            let gap = Gap {
+                missing: 0,
+                span_ns: self.clock.period_ns,
+                late_ns: woke.saturating_sub(t_k),
+                unanswered: arrivals.newest + 1 < waiting_for,
+            };
+            if self.cut_gaps && (gap.late_ns > self.clock.period_ns || gap.unanswered) {
+                // A gap: the sample only ends the attempt, without a reward to learn.
+                let h = header.at(self.link.seq, step.sample, flags::END | flags::GAP);
+                self.publish(h, 0.0, t_k)?;
+                self.caught_up(h.seq)?;
+                return Ok(gap.cut(trial, step.sample));
+            }
             let h = header.at(self.link.seq, step.sample, end_flags(&step));
             self.publish(h, step.reward, t_k)?;
             if step.ended() {
-                ended = Some(self.episode.skipped());
+                ended = Some(Ended::Done(self.episode.skipped()));
             }
         }
     }

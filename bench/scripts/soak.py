@@ -1,0 +1,446 @@
+#!/usr/bin/env python3
+"""The soak benchmark: a learning run across two hosts under a link that fails.
+
+Usage (as root, with iproute2, util-linux and nftables; Python with `mcap`):
+
+    bench/scripts/soak.py [--minutes N | --seconds S] [--rig PATH] [--out DIR]
+                          [--seed K] [--speed X] [--trials T]
+
+Two hosts are made of network namespaces joined by a veth pair, each with its own shared
+memory (as rig/tests/across_hosts.rs makes them): host A runs `rig sim-driver` and its
+`rig bridge driver`, host B the rig's bridge and `rig run --plant external`. For the
+first N minutes, at random moments drawn from the seed, the link is cut for 0.1-5 s
+(every TCP packet dropped, nftables), loses 10-40 % of its packets for 0.5-3 s, a
+`rig bridge probe --zero-actions` tries to command the driver, or a second rig (its own
+bridge and `rig run`, a third host on B's network) tries to take it over. Whenever the
+run stops, the script resumes it (`rig run --resume DIR --plant external --driver ID`)
+once the link is back, until every trial is done. Printed, and written to
+DIR/figures.json:
+
+* cuts: how many were made, how many the run survived (it completed a trial after them);
+* runs stopped and resumed; trial attempts cut by gaps and redone (`gaps.csv`);
+* the longest time to zero action after a cut: from the driver's bridge's own log, the
+  time from the last command's arrival to the sample at which the driver's watchdog
+  applied the safe action;
+* probes and second rigs told who holds the driver, and the commands of a second session that reached the
+  driver while the run held it (must be 0): values of the driver's `last_command` in the
+  recording that the run never sent;
+* trials in `returns.csv` with a gap in their recorded samples (must be 0): a learning
+  trial whose recorded attempt has a sample flagged GAP, or two consecutive samples more
+  than 1.5 periods apart.
+"""
+import argparse
+import json
+import os
+import random
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+from mcap.reader import make_reader
+
+DRIVER = "soak"
+PORT = 7447
+GAP, START, END, GREEDY, SHUTDOWN = 512, 1, 2, 4, 8
+
+
+def sh(*args, check=True):
+    """Runs a command, raising with its stderr when it fails."""
+    out = subprocess.run(args, capture_output=True, text=True)
+    if check and out.returncode != 0:
+        raise RuntimeError(f"{' '.join(args)}: {out.stderr.strip()}")
+    return out
+
+
+class Hosts:
+    """Hosts A (driver) and B (rig) on a veth pair, and C: B's network, its own memory."""
+
+    def __init__(self, subnet):
+        tag = str(os.getpid() % 100000)
+        self.ns = {"a": f"soaka{tag}", "b": f"soakb{tag}"}
+        self.dev = {"a": f"sva{tag}", "b": f"svb{tag}"}
+        self.addr = {"a": f"10.{subnet}.0.1", "b": f"10.{subnet}.0.2"}
+        self.anchors = {}
+        for h in "ab":
+            sh("ip", "netns", "add", self.ns[h])
+        sh("ip", "link", "add", self.dev["a"], "type", "veth", "peer", "name", self.dev["b"])
+        for h in "ab":
+            ns, dev = self.ns[h], self.dev[h]
+            sh("ip", "link", "set", dev, "netns", ns)
+            sh("ip", "-n", ns, "addr", "add", f"{self.addr[h]}/24", "dev", dev)
+            sh("ip", "-n", ns, "link", "set", dev, "up")
+            sh("ip", "-n", ns, "link", "set", "lo", "up")
+        for h, ns in [("a", self.ns["a"]), ("b", self.ns["b"]), ("c", self.ns["b"])]:
+            self.anchors[h] = subprocess.Popen(
+                ["ip", "netns", "exec", ns, "unshare", "--mount", "--propagation", "private",
+                 "sh", "-c", "mount -t tmpfs tmpfs /dev/shm && mkdir -p /tmp/iceoryx2 && "
+                 "mount -t tmpfs tmpfs /tmp/iceoryx2 && exec sleep infinity"],
+                stdin=subprocess.DEVNULL)
+        for p in self.anchors.values():
+            for _ in range(1000):
+                if Path(f"/proc/{p.pid}/cmdline").read_bytes().startswith(b"sleep"):
+                    break
+                time.sleep(0.01)
+
+    def command(self, host, args):
+        """`args` run on `host`."""
+        return ["nsenter", "--target", str(self.anchors[host].pid), "--mount", "--net", *args]
+
+    def drop(self, table, rule):
+        """Both hosts drop the TCP packets they send that `rule` matches (nftables)."""
+        for h in "ab":
+            nft = ["ip", "netns", "exec", self.ns[h], "nft"]
+            sh(*nft, "add", "table", "inet", table)
+            sh(*nft, "add", "chain", "inet", table, "out",
+               "{ type filter hook output priority 0; }")
+            sh(*nft, "add", "rule", "inet", table, "out", *rule.split())
+
+    def undrop(self, table):
+        for h in "ab":
+            sh("ip", "netns", "exec", self.ns[h], "nft", "delete", "table", "inet", table,
+               check=False)
+
+    def remove(self):
+        for p in self.anchors.values():
+            p.kill()
+            p.wait()
+        for ns in self.ns.values():
+            sh("ip", "netns", "del", ns, check=False)
+
+
+class Soak:
+    def __init__(self, args):
+        self.args = args
+        self.rng = random.Random(args.seed)
+        self.out = Path(args.out).resolve()
+        self.run_dir = self.out / "run"
+        self.hosts = Hosts(args.subnet)
+        self.endpoint = f"tcp/{self.hosts.addr['a']}:{PORT}"
+        self.procs = []
+        self.lock = threading.Lock()
+        self.link_ok = threading.Event()
+        self.link_ok.set()
+        self.stop = threading.Event()
+        self.events = {"cut": [], "loss": [], "probe": [], "second_rig": []}
+        self.attempts = []  # (start monotonic ns, exit code, last line)
+        self.rows = []  # (monotonic ns, rows of returns.csv)
+
+    def rig(self, host, args, log=None, **kw):
+        cmd = self.hosts.command(host, [self.args.rig, *args])
+        if log is None:
+            return subprocess.run(cmd, capture_output=True, text=True, **kw)
+        p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=open(log, "w"),
+                             stdin=subprocess.DEVNULL)
+        self.procs.append(p)
+        return p
+
+    def start(self):
+        self.out.mkdir(parents=True, exist_ok=True)
+        users = self.out / "users.txt"
+        old = os.umask(0o077)
+        users.write_text(f"rig:{os.urandom(12).hex()}\nsecond:{os.urandom(12).hex()}\n")
+        os.umask(old)
+        self.users = str(users)
+        second = self.out / "second.txt"
+        old = os.umask(0o077)
+        second.write_text(users.read_text().splitlines()[1] + "\n")
+        os.umask(old)
+        self.second_users = str(second)
+        speed = ["--speed", str(self.args.speed)]
+        self.rig("a", ["sim-driver", "--driver-id", DRIVER, *speed], self.out / "driver.log")
+        common = ["--driver", DRIVER, "--endpoint", self.endpoint]
+        self.driver_log = self.out / "driver-bridge.log"
+        self.rig("a", ["bridge", "driver", *common, "--credentials", self.users],
+                 self.driver_log)
+        time.sleep(0.5)
+        self.rig("b", ["bridge", "rig", *common, "--credentials", self.users],
+                 self.out / "rig-bridge.log")
+        time.sleep(0.5)
+
+    def chaos(self, until):
+        """Cuts, loss bursts, probes and second rigs at random moments until `until`."""
+        kinds = ["cut", "cut", "loss", "probe", "second_rig"]
+        while not self.stop.is_set() and time.monotonic() < until:
+            self.stop.wait(self.rng.uniform(2.0, 8.0))
+            if self.stop.is_set() or time.monotonic() >= until:
+                return
+            kind = self.rng.choice(kinds)
+            getattr(self, kind)()
+
+    def cut(self):
+        seconds = self.rng.uniform(0.1, 5.0)
+        self.link_ok.clear()
+        t0 = time.monotonic_ns()
+        self.hosts.drop("soakcut", "meta l4proto tcp counter drop")
+        time.sleep(seconds)
+        self.hosts.undrop("soakcut")
+        self.events["cut"].append({"start_ns": t0, "end_ns": time.monotonic_ns(),
+                                   "seconds": round(seconds, 3)})
+        self.link_ok.set()
+
+    def loss(self):
+        percent, seconds = self.rng.randint(10, 40), self.rng.uniform(0.5, 3.0)
+        self.hosts.drop("soakloss", f"meta l4proto tcp numgen random mod 100 < {percent} drop")
+        time.sleep(seconds)
+        self.hosts.undrop("soakloss")
+        self.events["loss"].append({"percent": percent, "seconds": round(seconds, 3)})
+
+    def probe(self):
+        out = self.rig("b", ["bridge", "probe", "--driver", DRIVER, "--endpoint", self.endpoint,
+                             "--credentials", self.second_users, "--zero-actions",
+                             "--seconds", "0.3"], timeout=60)
+        said = (out.stdout + out.stderr).strip().splitlines()
+        self.events["probe"].append({"at_ns": time.monotonic_ns(), "exit": out.returncode,
+                                     "held": any("held by" in l for l in said),
+                                     "said": said[-1] if said else ""})
+
+    def second_rig(self):
+        n = len(self.events["second_rig"])
+        bridge = self.rig("c", ["bridge", "rig", "--driver", DRIVER, "--endpoint", self.endpoint,
+                                "--credentials", self.second_users],
+                          self.out / f"second-bridge-{n}.log")
+        time.sleep(0.5)
+        try:
+            out = self.rig("c", ["run", "--plant", "external", "--driver", DRIVER, "--quiet",
+                                 "--trials", "2", "--reset-timeout", "3", "--out",
+                                 str(self.out / f"second-{n}")], timeout=60)
+            code, said = out.returncode, (out.stdout + out.stderr).strip().splitlines()
+        except subprocess.TimeoutExpired:
+            code, said = None, ["did not end within 60 s"]
+        stop(bridge)
+        # Its bridge is told who holds the driver; the run itself sees its reset unanswered.
+        told = Path(self.out / f"second-bridge-{n}.log").read_text()
+        self.events["second_rig"].append({"exit": code, "said": said[-1] if said else "",
+                                          "held": " is held by " in told})
+
+    def watch_rows(self):
+        """Notes when `returns.csv` grows."""
+        last = -1
+        while not self.stop.wait(0.2):
+            rows = count_rows(self.run_dir / "returns.csv")
+            if rows != last:
+                self.rows.append((time.monotonic_ns(), rows))
+                last = rows
+
+    def learn(self, hard_limit):
+        """Runs, and resumes after each stop, until every trial is done or `hard_limit`."""
+        base = ["--plant", "external", "--driver", DRIVER, "--quiet"]
+        first = ["run", *base, "--trials", str(self.args.trials), "--out", str(self.run_dir)]
+        resume = ["run", *base, "--resume", str(self.run_dir)]
+        args, stuck = first, 0
+        while time.monotonic() < hard_limit and stuck < 5:
+            before = count_rows(self.run_dir / "returns.csv")
+            t0 = time.monotonic_ns()
+            out = self.rig("b", args)
+            lines = (out.stdout + out.stderr).strip().splitlines()
+            self.attempts.append({"start_ns": t0, "end_ns": time.monotonic_ns(),
+                                  "exit": out.returncode, "said": lines[-1] if lines else ""})
+            with open(self.out / "runs.log", "a") as f:
+                f.write(f"$ rig {' '.join(args)}\n{out.stdout}{out.stderr}\n")
+            if out.returncode == 0:
+                return True
+            # Five stops in a row without a trial done: something other than the faults.
+            stuck = stuck + 1 if count_rows(self.run_dir / "returns.csv") == before else 0
+            args = resume
+            self.link_ok.wait()
+            time.sleep(1.0)
+        return False
+
+    def figures(self, done):
+        log = self.driver_log.read_text()
+        zero_ms = [float(m) for m in re.findall(
+            r"applies the safe action \(watchdog\) from between .*?, ([0-9.]+) ms\)", log)]
+        # When the last trial was done: the first moment the final row count was seen.
+        last_growth = min((t for t, r in self.rows if r == self.rows[-1][1]), default=0)
+        gaps = read_csv(self.run_dir / "gaps.csv")
+        trials = {int(r["trial"]) for r in read_csv(self.run_dir / "returns.csv")}
+        foreign, gap_trials, checked = recorded(self.run_dir / "run.mcap", self.attempts,
+                                                self.args.period_ms * 1e6 / self.args.speed,
+                                                trials)
+        return {
+            "done": done,
+            "trials": count_rows(self.run_dir / "returns.csv"),
+            "cuts": len(self.events["cut"]),
+            "cuts_survived": sum(c["end_ns"] < last_growth for c in self.events["cut"]),
+            "longest_cut_s": max((c["seconds"] for c in self.events["cut"]), default=0.0),
+            "loss_bursts": len(self.events["loss"]),
+            "runs_stopped_and_resumed": len(self.attempts) - 1,
+            "attempts_cut_by_gaps_and_redone": len(gaps),
+            "learning_attempts_cut_by_gaps": sum(g["greedy"] == "0" for g in gaps),
+            "longest_ms_to_zero_action_after_a_cut": max(zero_ms, default=None),
+            "watchdog_engagements": len(zero_ms),
+            "probes": len(self.events["probe"]),
+            "probes_told_who_holds": sum(p["held"] for p in self.events["probe"]),
+            "second_rigs": len(self.events["second_rig"]),
+            "second_rigs_told_who_holds": sum(s["held"] for s in self.events["second_rig"]),
+            "second_rigs_that_ran": sum(s["exit"] == 0 for s in self.events["second_rig"]),
+            "second_session_commands_reaching_the_driver": foreign,
+            "trials_checked_in_recording": checked,
+            "trials_in_returns_with_a_gap": gap_trials,
+        }
+
+
+def stop(p):
+    """SIGINT to `p` (its child, when started through nsenter), then waits."""
+    for pid in children(p.pid) or [p.pid]:
+        try:
+            os.kill(pid, signal.SIGINT)
+        except ProcessLookupError:
+            pass
+    try:
+        p.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        p.wait()
+
+
+def children(pid):
+    try:
+        return [int(c) for c in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
+    except OSError:
+        return []
+
+
+def count_rows(path):
+    try:
+        return max(0, len(Path(path).read_text().splitlines()) - 1)
+    except OSError:
+        return 0
+
+
+def read_csv(path):
+    import csv
+    try:
+        with open(path) as f:
+            return list(csv.DictReader(f))
+    except OSError:
+        return []
+
+
+def recorded(path, attempts, period_ns, trials):
+    """From the recording: commands applied by the driver that the run never sent (counted
+    from each attempt's first sample showing one of its own), and the learning trials of
+    `trials` (those in returns.csv) whose recorded attempt has a gap; and how many of
+    `trials` the recording holds."""
+    sent, applied, measured, timing = set(), [], {}, {}
+    if not Path(path).exists():
+        return None, None, 0
+    with open(path, "rb") as f:
+        for _, channel, message in make_reader(f).iter_messages():
+            topic = channel.topic
+            if topic not in ("/driver/command", "/driver/sample", "/plant/measurement",
+                             "/timing/plant/measurement"):
+                continue
+            m = json.loads(message.data)
+            if topic == "/driver/command":
+                sent.add(m["seq"])
+            elif topic == "/driver/sample":
+                applied.append((m["t_sample_ns"], m["last_command"]))
+            elif topic == "/plant/measurement":
+                measured[m["seq"]] = (m["trial"], m["flags"])
+            else:
+                timing[m["seq"]] = m["t_sample_ns"]
+    foreign = set()
+    starts = [a["start_ns"] for a in attempts] + [float("inf")]
+    for begin, end in zip(starts, starts[1:]):
+        ours = False
+        for t, c in applied:
+            if not begin <= t < end or c == 0:
+                continue
+            ours = ours or c in sent
+            if ours and c not in sent:
+                foreign.add(c)
+    # The last attempt of each learning trial is the one in returns.csv.
+    attempt, last = [], {}
+    for seq in sorted(measured):
+        trial, flags = measured[seq]
+        if flags & GREEDY:
+            continue
+        if flags & START:
+            attempt = []
+        attempt.append((seq, flags))
+        if flags & (END | GAP | SHUTDOWN):
+            last[trial] = attempt
+            attempt = []
+    bad = 0
+    last = {t: a for t, a in last.items() if t in trials}
+    for samples in last.values():
+        flagged = any(f & GAP for _, f in samples)
+        spans = [timing[b] - timing[a] for (a, _), (b, _) in zip(samples, samples[1:])
+                 if a in timing and b in timing]
+        if flagged or any(s > 1.5 * period_ns for s in spans):
+            bad += 1
+    return len(foreign), bad, len(last)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    span = p.add_mutually_exclusive_group()
+    span.add_argument("--minutes", type=float, help="minutes of faults (default 30)")
+    span.add_argument("--seconds", type=float, help="seconds of faults (the CI's short soak)")
+    p.add_argument("--rig", default="target/release/rig", help="the rig binary")
+    p.add_argument("--out", default="out/soak", help="the output folder (replaced)")
+    p.add_argument("--seed", type=int, default=1, help="seed of the faults' moments and kinds")
+    p.add_argument("--speed", type=float, default=1.0, help="the driver's speed (sim-driver)")
+    p.add_argument("--trials", type=int,
+                   help="trials of the run (default: about as many as the faults last)")
+    p.add_argument("--period-ms", type=float, default=30.0,
+                   help="the task's sampling period at speed 1 [ms]")
+    p.add_argument("--subnet", type=int, default=78, help="hosts at 10.SUBNET.0.1 and .2")
+    args = p.parse_args()
+    args.rig = str(Path(args.rig).resolve())
+    if not os.access(args.rig, os.X_OK):
+        sys.exit(f"error: --rig {args.rig}: no such executable (cargo build --release -p rig)")
+    seconds = args.seconds if args.seconds is not None else 60 * (args.minutes or 30)
+    if args.trials is None:
+        # A pendulum trial (3 s at speed 1) and its share of greedy evaluations.
+        args.trials = max(4, int(seconds * args.speed / 4.0))
+    if os.geteuid() != 0:
+        sys.exit("error: the soak makes network namespaces: run it as root")
+    out = Path(args.out)
+    if out.exists():
+        subprocess.run(["rm", "-rf", str(out)], check=True)
+    soak = Soak(args)
+    try:
+        soak.start()
+        t0 = time.monotonic()
+        watcher = threading.Thread(target=soak.watch_rows, daemon=True)
+        watcher.start()
+        chaos = threading.Thread(target=soak.chaos, args=(t0 + seconds,), daemon=True)
+        chaos.start()
+        done = soak.learn(t0 + 3 * seconds + 300)
+        soak.stop.set()
+        chaos.join()
+        soak.link_ok.wait()
+        time.sleep(0.5)
+        for proc in reversed(soak.procs):
+            stop(proc)
+        figures = soak.figures(done)
+        figures["seconds_of_faults"] = seconds
+        figures["wall_s"] = round(time.monotonic() - t0, 1)
+        figures["seed"] = args.seed
+    finally:
+        soak.stop.set()
+        for proc in soak.procs:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+        soak.hosts.undrop("soakcut")
+        soak.hosts.undrop("soakloss")
+        soak.hosts.remove()
+    (soak.out / "figures.json").write_text(json.dumps(figures, indent=1) + "\n")
+    (soak.out / "events.json").write_text(json.dumps(
+        {"faults": soak.events, "runs": soak.attempts}, indent=1) + "\n")
+    for k, v in figures.items():
+        print(f"{k}: {v}")
+    ok = done and figures["second_session_commands_reaching_the_driver"] == 0 \
+        and figures["trials_in_returns_with_a_gap"] == 0
+    sys.exit(0 if ok else 1)
+
+
+if __name__ == "__main__":
+    main()

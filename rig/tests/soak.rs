@@ -1,0 +1,75 @@
+//! The soak benchmark's short version (`bench/scripts/soak.py`, docs/results/soak.md):
+//! 20 s of link cuts, loss bursts, probes and second rigs against a run across two
+//! hosts, resumed until done. Needs root, iproute2, nftables and Python with `mcap`
+//! (RIG_PYTHON); without them it prints why and passes.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+
+#[test]
+fn a_short_soak_finishes_with_no_foreign_command_and_no_gap_learned() {
+    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
+    let has_mcap = Command::new(&python).args(["-c", "import mcap"]).output();
+    if !has_mcap.is_ok_and(|o| o.status.success()) {
+        println!("skipped: {python} cannot import mcap (pip install mcap==1.6.0)");
+        return;
+    }
+    // The scratch hosts of common::hosts check root and the tools; the script makes its
+    // own.
+    let Some(hosts) = common::hosts::Hosts::new(1) else {
+        return;
+    };
+    drop(hosts);
+    if Command::new("nft").arg("--version").output().is_err() {
+        println!("skipped: no `nft` (nftables) to cut the link with");
+        return;
+    }
+    let out = common::tmp("soak", "short");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../bench/scripts/soak.py");
+    let run = Command::new(&python)
+        .arg(script)
+        .args([
+            "--seconds",
+            "20",
+            "--speed",
+            "2",
+            "--seed",
+            "1",
+            "--trials",
+            "8",
+        ])
+        .args(["--rig", env!("CARGO_BIN_EXE_rig"), "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let said = format!(
+        "{}{}",
+        String::from_utf8_lossy(&run.stdout),
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let figures: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("figures.json")).unwrap())
+            .unwrap_or_else(|e| panic!("{e}: {said}"));
+    let n = |key: &str| {
+        figures[key]
+            .as_u64()
+            .unwrap_or_else(|| panic!("{key}: {said}"))
+    };
+    assert_eq!(figures["done"], true, "{said}");
+    assert_eq!(
+        n("second_session_commands_reaching_the_driver"),
+        0,
+        "{said}"
+    );
+    assert_eq!(n("trials_in_returns_with_a_gap"), 0, "{said}");
+    assert_eq!(n("trials_checked_in_recording"), n("trials"), "{said}");
+    // The seed's faults: at least one cut, survived, and a second session refused.
+    assert!(n("cuts") >= 1 && n("cuts_survived") == n("cuts"), "{said}");
+    assert!(
+        n("probes_told_who_holds") + n("second_rigs_told_who_holds") >= 1,
+        "{said}"
+    );
+    assert!(run.status.success(), "{said}");
+}
