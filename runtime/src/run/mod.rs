@@ -125,16 +125,6 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     for note in point.iter().flat_map(|p| &p.notes) {
         eprintln!("note: {note}");
     }
-    std::fs::create_dir_all(&opts.out)
-        .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
-    let checkpoints = resume::checkpoint_dir(&opts.out);
-    if point.is_none() {
-        // A new run in an old directory: old checkpoints must not be taken for its own.
-        resume::prune(&checkpoints, u32::MAX);
-    }
-    let config_path = opts.out.join("config.toml");
-    write_atomic(&config_path, &cfg.to_toml())?;
-
     let bus = Bus::join(&run_id, "rig").map_err(wire_err)?;
     let task = Arc::new(cfg.task());
     let (watch, driver_info) = match &opts.driver {
@@ -144,6 +134,17 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         }
         None => (None, None),
     };
+    // Nothing is written before the driver is found and fits: a refused run leaves no
+    // folder behind.
+    std::fs::create_dir_all(&opts.out)
+        .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
+    let checkpoints = resume::checkpoint_dir(&opts.out);
+    if point.is_none() {
+        // A new run in an old directory: old checkpoints must not be taken for its own.
+        resume::prune(&checkpoints, u32::MAX);
+    }
+    let config_path = opts.out.join("config.toml");
+    write_atomic(&config_path, &cfg.to_toml())?;
     let about = About {
         cfg: &cfg,
         task: &task,
@@ -239,22 +240,9 @@ fn wait_for_driver(
     verbose: bool,
 ) -> Result<(DriverWatch, DriverInfo)> {
     let watch = DriverWatch::open(bus, &d.id).map_err(wire_err)?;
-    let first = Duration::from_secs(1).min(d.timeout);
-    let info = match driver::contract::wait_info(bus, &watch.info, &d.id, first) {
-        Ok(i) => i,
-        Err(_) => {
-            if verbose {
-                eprintln!(
-                    "waiting up to {:.0} s for driver {:?} (services {}) ...",
-                    d.timeout.as_secs_f64(),
-                    d.id,
-                    driver::contract::service(&d.id, "*")
-                );
-            }
-            driver::contract::wait_info(bus, &watch.info, &d.id, d.timeout.saturating_sub(first))
-                .map_err(wire_err)?
-        }
-    };
+    let serve = driver::contract::how_to_serve(task, &d.id, None);
+    let info = driver::contract::wait_info(bus, &watch.info, &d.id, d.timeout, verbose, &serve)
+        .map_err(wire_err)?;
     info.validate()
         .and_then(|()| driver::fits_task(&info, task))
         .map_err(|e| anyhow!("driver {:?} does not fit the task: {e}", d.id))?;
