@@ -42,7 +42,7 @@ impl Region {
         match self {
             Region::Box { low, high } => (0..x.len()).all(|i| {
                 let (lo, hi) = (low[i], high[i]);
-                if !(lo.is_finite() && hi.is_finite()) || !angles[i] {
+                if !(lo.is_finite() && hi.is_finite() && angles[i]) {
                     return (lo..=hi).contains(&x[i]);
                 }
                 // On the circle: the offset from the middle within the half-width.
@@ -67,11 +67,7 @@ impl Region {
             Region::Box { low, high } => (0u8, low, high),
             Region::Ball { centre, radius } => (1u8, centre, radius),
         };
-        b.push(kind);
-        for (a, c) in first.iter().zip(second) {
-            b.extend_from_slice(&a.to_le_bytes());
-            b.extend_from_slice(&c.to_le_bytes());
-        }
+        crate::task::digest::kind_and_pairs(b, kind, first, second);
     }
 }
 

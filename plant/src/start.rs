@@ -89,11 +89,7 @@ impl StartDistribution {
             StartDistribution::Uniform { low, high } => (0u8, low, high),
             StartDistribution::Normal { mean, std } => (1u8, mean, std),
         };
-        b.push(kind);
-        for (a, c) in first.iter().zip(second) {
-            b.extend_from_slice(&a.to_le_bytes());
-            b.extend_from_slice(&c.to_le_bytes());
-        }
+        crate::task::digest::kind_and_pairs(b, kind, first, second);
     }
 }
 

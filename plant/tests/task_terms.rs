@@ -7,6 +7,8 @@ use std::path::PathBuf;
 use plant::region::Region;
 use plant::reward::Term;
 use plant::start::StartDistribution;
+mod common;
+
 use plant::task::builtin;
 use plant::{SystemName, Task, TaskFile};
 
@@ -19,13 +21,8 @@ fn reach_text() -> String {
     std::fs::read_to_string(reach_path()).unwrap()
 }
 
-/// `text` written to a file of its own.
 fn write(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rig-task-terms-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
+    common::write("task-terms", name, text)
 }
 
 /// The thesis's task files hash as they did before the new keys existed (the values a
@@ -235,17 +232,5 @@ fn bad_terms_endings_and_starts_are_one_line_errors() {
             "`start_distribution.low[0]`: [2.827433388230814, 2.5132741228718345]: the lower bound must not exceed the upper",
         ),
     ];
-    for (what, text, want) in cases {
-        let path = write("bad.toml", text);
-        let e = match Task::from_file(&path) {
-            Ok(_) => panic!("{what}: accepted"),
-            Err(e) => e.to_string(),
-        };
-        assert!(!e.contains('\n'), "{what}: one line: {e}");
-        assert!(
-            e.starts_with(&format!("{}: ", path.display())),
-            "{what}: {e}"
-        );
-        assert!(e.contains(want), "{what}: {e}\n  should contain: {want}");
-    }
+    common::assert_refused("task-terms", cases);
 }

@@ -356,20 +356,12 @@ fn a_goal_task_with_drawn_starts_runs_the_same_in_both_drivers() {
     .unwrap();
     let task = task.to_str().unwrap();
     for (tag, learner) in [("vgbp", ["vgbp", "lstd"]), ("mlac", ["mlac", "llr"])] {
+        // MLAC_FH's 6 trials, 2 evaluations, quiet, `--out`.
         let args = [
-            "--task",
-            task,
-            "--algo",
-            learner[0],
-            "--approx",
-            learner[1],
-            "--trials",
-            "6",
-            "--eval-every",
-            "3",
-            "--quiet",
-            "--out",
-        ];
+            ["--task", task, "--algo", learner[0], "--approx", learner[1]].as_slice(),
+            &MLAC_FH[6..],
+        ]
+        .concat();
         let ran = learn_and_run(&dir, tag, &args);
         let t: Vec<f64> = ran
             .lines()
@@ -382,7 +374,7 @@ fn a_goal_task_with_drawn_starts_runs_the_same_in_both_drivers() {
             early.filter(|(a, b)| *b - a < 4.0 - 1e-9).count() > 0,
             "{tag}: {ran}"
         );
-        let mut seeded = args.to_vec();
+        let mut seeded = args.clone();
         seeded.splice(0..0, ["--seed", "2"]);
         assert_ne!(
             learn_and_run(&dir, &format!("{tag}-seed2"), &seeded),

@@ -168,8 +168,11 @@ mod tests {
             angle_mask: vec![true, true, false, false],
             terms: Vec::new(),
         };
-        let x = [-3.0, 1.0, 0.3, -0.2];
-        let u = [0.4, -1.2];
+        assert_gradients(&r, [-3.0, 1.0, 0.3, -0.2], [0.4, -1.2]);
+    }
+
+    /// `∂ρ/∂x` and `∂ρ/∂u` of `r` at `(x, u)` against central differences.
+    fn assert_gradients(r: &Reward, x: [f64; 4], u: [f64; 2]) {
         let h = 1e-6;
         let mut gx = [0.0; 4];
         let mut gu = [0.0; 2];
@@ -187,7 +190,7 @@ mod tests {
             a[j] += h;
             b[j] -= h;
             let fd = (r.reward(&x, &a) - r.reward(&x, &b)) / (2.0 * h);
-            assert!((fd - gu[j]).abs() < 1e-5);
+            assert!((fd - gu[j]).abs() < 1e-5, "u{j}: {fd} vs {}", gu[j]);
         }
     }
 
@@ -254,27 +257,8 @@ mod tests {
             r.reward(&x, &u)
         );
         assert_eq!(r.state_reward(&x), r.reward(&x, &[0.0, 0.0]));
-        let h = 1e-6;
-        for (x, u) in [(x, u), ([-3.0, 2.5, 0.3, -0.2], [-0.4, 1.2])] {
-            let mut gx = [0.0; 4];
-            let mut gu = [0.0; 2];
-            r.grad_x(&x, &mut gx);
-            r.grad_u(&u, &mut gu);
-            for i in 0..4 {
-                let (mut a, mut b) = (x, x);
-                a[i] += h;
-                b[i] -= h;
-                let fd = (r.reward(&a, &u) - r.reward(&b, &u)) / (2.0 * h);
-                assert!((fd - gx[i]).abs() < 1e-5, "x{i}: {fd} vs {}", gx[i]);
-            }
-            for j in 0..2 {
-                let (mut a, mut b) = (u, u);
-                a[j] += h;
-                b[j] -= h;
-                let fd = (r.reward(&x, &a) - r.reward(&x, &b)) / (2.0 * h);
-                assert!((fd - gu[j]).abs() < 1e-5, "u{j}: {fd} vs {}", gu[j]);
-            }
-        }
+        assert_gradients(&r, x, u);
+        assert_gradients(&r, [-3.0, 2.5, 0.3, -0.2], [-0.4, 1.2]);
     }
 
     /// VGBP's action maximises `−p u² − c |u| + s u`: the soft threshold

@@ -83,3 +83,13 @@ pub fn hash(task: &Task) -> u64 {
     let d = Sha256::digest(canonical_bytes(task));
     u64::from_le_bytes(d[..8].try_into().expect("SHA-256 has 32 bytes"))
 }
+
+/// Appends `kind` and then `(first_i, second_i)` per component as little-endian `f64` to
+/// `b`: the canonical bytes of a region or a start distribution.
+pub(crate) fn kind_and_pairs(b: &mut Vec<u8>, kind: u8, first: &[f64], second: &[f64]) {
+    b.push(kind);
+    for (a, c) in first.iter().zip(second) {
+        b.extend_from_slice(&a.to_le_bytes());
+        b.extend_from_slice(&c.to_le_bytes());
+    }
+}

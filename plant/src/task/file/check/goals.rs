@@ -75,7 +75,7 @@ fn region(key: &str, g: &GoalSpec, n: usize) -> Result<Region, ConfigError> {
         (None, None, Some(centre), Some(radius)) => {
             let centre = vector(&format!("{key}.centre"), centre, n, "state", false)?;
             let radius = numbers(&format!("{key}.radius"), radius, n)?;
-            if let Some(i) = (0..n).find(|&i| !(radius[i] > 0.0)) {
+            if let Some(i) = (0..n).find(|&i| radius[i] <= 0.0) {
                 return Err(ConfigError::new(
                     &format!("{key}.radius[{i}]"),
                     format!("{} must be a number > 0, or inf", radius[i]),
