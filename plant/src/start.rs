@@ -5,8 +5,9 @@
 //! at position `n`: a ChaCha8 generator keyed by the run seed, on stream [`STREAM`],
 //! advanced to word `n · 2³²` — so a trial's start depends on the run seed and the trial's
 //! number alone, the same in every process and after a resume, and no two trials share
-//! numbers. A normal draw outside the operating range is drawn again (at most
-//! [`REDRAWS`] times; then the mean, which lies inside, is the start).
+//! numbers. A normal draw outside the operating range (or beyond the largest f64) is
+//! drawn again (at most [`REDRAWS`] times; then the mean, which lies inside, is the
+//! start).
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -75,7 +76,9 @@ impl StartDistribution {
                 };
                 (0..REDRAWS)
                     .map(|_| draw())
-                    .find(|x| range.is_none_or(|r| !r.excludes(x)))
+                    .find(|x| {
+                        x.iter().all(|v| v.is_finite()) && range.is_none_or(|r| !r.excludes(x))
+                    })
                     .unwrap_or_else(|| mean.clone())
             }
         }

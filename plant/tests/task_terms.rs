@@ -231,6 +231,14 @@ fn bad_terms_endings_and_starts_are_one_line_errors() {
             edited("high = [\"1.1pi\", 0.5]", "high = [\"0.8pi\", 0.5]"),
             "`start_distribution.low[0]`: [2.827433388230814, 2.5132741228718345]: the lower bound must not exceed the upper",
         ),
+        (
+            "a uniform box too wide to draw from",
+            edited("low = [\"0.9pi\", -0.5]", "low = [\"0.9pi\", -1e308]")
+                .replace("high = [\"1.1pi\", 0.5]", "high = [\"1.1pi\", 1e308]")
+                .replace("low = [-inf, \"-6pi\"]", "low = [-inf, -inf]")
+                .replace("high = [inf, \"6pi\"]", "high = [inf, inf]"),
+            "`start_distribution.low[1]`: [-100000000",
+        ),
     ];
     common::assert_refused("task-terms", cases);
 }

@@ -53,11 +53,13 @@ pub(super) fn distribution(
         s.kind == StartKind::Normal,
     )?;
     for i in 0..n {
-        if s.kind == StartKind::Uniform && a[i] > b[i] {
+        // A width beyond the largest f64 cannot be drawn from.
+        let width = b[i] - a[i];
+        if s.kind == StartKind::Uniform && !(width >= 0.0 && width.is_finite()) {
             return Err(ConfigError::new(
                 &format!("{key}.low[{i}]"),
                 format!(
-                    "[{}, {}]: the lower bound must not exceed the upper",
+                    "[{}, {}]: the lower bound must not exceed the upper, nor lie more than 1.7e308 below it",
                     a[i], b[i]
                 ),
             ));
