@@ -328,8 +328,14 @@ impl Checkpoint {
     /// checkpoint may be corrupt, which its CRC reveals.
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         let tmp = path.with_extension("ckpt.tmp");
-        std::fs::File::create(&tmp)?.write_all(&self.to_bytes())?;
-        std::fs::rename(&tmp, path)
+        let written = std::fs::File::create(&tmp)
+            .and_then(|mut f| f.write_all(&self.to_bytes()))
+            .and_then(|()| std::fs::rename(&tmp, path));
+        if written.is_err() {
+            // What did fit (a full disk) is of no use.
+            let _ = std::fs::remove_file(&tmp);
+        }
+        written
     }
 
     /// Reads a checkpoint file; the error names the file.

@@ -19,6 +19,7 @@ mod reproduce;
 mod run;
 mod selection;
 mod sim_driver;
+mod tune;
 
 /// Learning controllers of Grondman's thesis "Online Model Learning Algorithms for
 /// Actor-Critic Control": run experiments, write learning curves.
@@ -88,6 +89,13 @@ enum Command {
     /// DIR/REPORT.md: per figure the plot (PNG, SVG), "thesis says / we measured" and the
     /// thesis's claims checked against the new data.
     Reproduce(reproduce::Args),
+    /// Find the learner configuration that learns a task: a hyperparameter study with
+    /// Optuna (TPE sampler, median pruner) over a search space in TOML, on N worker
+    /// processes, stored in a file next to the output or shared by several machines
+    /// through a PostgreSQL URL; writes the best configuration (for `--config`) and a
+    /// report with the best re-run on fresh seeds beside the preset (docs/tune.md).
+    /// `rig tune --help` lists its arguments.
+    Tune(tune::Args),
     /// The plant process of a run (started by `rig run`, or by hand).
     Plant(PlantArgs),
     /// The observer process of a run (started by `rig run`, or by hand).
@@ -110,6 +118,7 @@ fn main() -> ExitCode {
         Command::Latency(args) => latency::main(&args),
         Command::DelayStudy(args) => delay_study::main(&args),
         Command::Reproduce(args) => reproduce::main(&args),
+        Command::Tune(args) => tune::main(&args),
         Command::Plant(args) => process(runtime::process::plant::run, &args),
         Command::Observer(args) => process(runtime::process::observer::run, &args),
         Command::Agent(args) => process(runtime::process::agent::run, &args),
@@ -118,11 +127,5 @@ fn main() -> ExitCode {
 
 /// One process of a run (`rig plant|observer|agent`).
 fn process<A>(node: fn(&A) -> anyhow::Result<()>, args: &A) -> ExitCode {
-    match node(args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+    runtime::process::exit_code(node(args))
 }

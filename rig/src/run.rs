@@ -167,12 +167,19 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
 /// What the run did, in a few lines.
 fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
     let steps = s.messages as f64 / 3.0;
+    let trials = match s.resumed_after {
+        Some(after) => format!(
+            "{} trials now (resumed after trial {after}), {} in all,",
+            s.records.len() - after as usize,
+            s.records.len()
+        ),
+        None => format!("{} trials", s.records.len()),
+    };
     println!(
-        "{} {}/{} over three processes: {} trials in {:.1} s wall ({:.1} µs per sample)",
+        "{} {}/{} over three processes: {trials} in {:.1} s wall ({:.1} µs per sample)",
         cfg.task_name(),
         cfg.agent.algo,
         cfg.agent.approx,
-        s.records.len(),
         s.wall.as_secs_f64(),
         s.wall.as_secs_f64() * 1e6 / steps
     );

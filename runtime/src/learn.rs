@@ -6,7 +6,8 @@
 //! * `config.toml` — the fully resolved configuration (feed it back with `--config` to
 //!   repeat the experiment), written first;
 //! * `runs.csv` — `run,trial,sim_time_s,return,greedy_return`, one row per learning
-//!   trial, streamed in run order as runs complete (a crash loses only unfinished runs);
+//!   trial, in run order, each row as soon as every run before it has finished (the first
+//!   unfinished run's rows as its trials end);
 //!   `greedy_return` is blank except every `eval_every` trials;
 //! * `curve.csv` — `trial,sim_time_s,mean,min,max,ci_low,ci_high` of `return` across
 //!   runs (95 % confidence interval of the mean), `greedy_curve.csv` the same for the
@@ -80,23 +81,42 @@ pub struct LearnSummary {
     pub acted_on_rmse: Vec<Vec<f64>>,
 }
 
-/// Writes finished runs to `runs.csv` in run order.
-struct OrderedWriter {
+/// Writes `runs.csv` in run order, each row as soon as it can be: the rows of the first
+/// unfinished run as its trials end (a study can follow a run trial by trial), those of
+/// later runs once every run before them has finished.
+struct OrderedWriter<W: Write> {
+    /// The run whose rows are written as they come.
     next: u32,
-    pending: BTreeMap<u32, Vec<TrialRecord>>,
-    out: BufWriter<File>,
+    /// Rows of later runs, and whether each has finished.
+    pending: BTreeMap<u32, (Vec<TrialRecord>, bool)>,
+    out: W,
 }
 
-impl OrderedWriter {
-    fn push(&mut self, run: u32, records: Vec<TrialRecord>) -> Result<()> {
-        self.pending.insert(run, records);
-        while let Some(records) = self.pending.remove(&self.next) {
-            for r in &records {
-                write_row(&mut self.out, r)?;
-            }
+impl<W: Write> OrderedWriter<W> {
+    /// One trial of `run` has ended.
+    fn trial(&mut self, run: u32, r: &TrialRecord) -> Result<()> {
+        if run == self.next {
+            write_row(&mut self.out, r)?;
             self.out.flush()?;
-            self.next += 1;
+        } else {
+            self.pending.entry(run).or_default().0.push(r.clone());
         }
+        Ok(())
+    }
+
+    /// Every trial of `run` has ended.
+    fn finished(&mut self, run: u32) -> Result<()> {
+        self.pending.entry(run).or_default().1 = true;
+        while self.pending.get(&self.next).is_some_and(|(_, done)| *done) {
+            self.pending.remove(&self.next);
+            self.next += 1;
+            if let Some((rows, _)) = self.pending.get_mut(&self.next) {
+                for r in rows.drain(..) {
+                    write_row(&mut self.out, &r)?;
+                }
+            }
+        }
+        self.out.flush()?;
         Ok(())
     }
 }
@@ -149,6 +169,7 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
     cfg.check_simulated()?;
     std::fs::create_dir_all(&opts.out)
         .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
+    let _folder = crate::lock::FolderLock::acquire(&opts.out)?;
     write_atomic(&opts.out.join("config.toml"), &cfg.to_toml())?;
     let runs_path = opts.out.join("runs.csv");
     let mut out = BufWriter::new(
@@ -185,6 +206,7 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
                 let mut records = Vec::with_capacity(trials as usize);
                 while let Some(r) = exp.next_trial() {
                     bar.inc(1);
+                    writer.lock().expect("writer poisoned").trial(run, &r)?;
                     records.push(r);
                 }
                 let acted_on = exp.acted_on_error().rmse();
@@ -193,10 +215,7 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
                     .lock()
                     .expect("responses poisoned")
                     .insert(run, (response, acted_on));
-                writer
-                    .lock()
-                    .expect("writer poisoned")
-                    .push(run, records.clone())?;
+                writer.lock().expect("writer poisoned").finished(run)?;
                 Ok(records)
             })
             .collect()
@@ -395,4 +414,59 @@ pub fn curves(
         report::curve(&t, &s, &v)?
     };
     Ok((curve, greedy_curve))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(run: u32, trial: u32) -> TrialRecord {
+        TrialRecord {
+            run,
+            trial,
+            sim_time_s: f64::from(trial),
+            ret: -1.0,
+            greedy: None,
+        }
+    }
+
+    fn rows(w: &OrderedWriter<Vec<u8>>) -> Vec<String> {
+        String::from_utf8(w.out.clone())
+            .unwrap()
+            .lines()
+            .map(|l| l[..3].to_string())
+            .collect()
+    }
+
+    #[test]
+    fn the_first_unfinished_run_is_written_as_its_trials_end_and_later_runs_wait() {
+        let mut w = OrderedWriter {
+            next: 0,
+            pending: BTreeMap::new(),
+            out: Vec::new(),
+        };
+        w.trial(1, &record(1, 1)).unwrap();
+        w.trial(0, &record(0, 1)).unwrap();
+        assert_eq!(rows(&w), ["0,1"], "run 0's row at once, run 1's held back");
+        w.trial(2, &record(2, 1)).unwrap();
+        w.trial(2, &record(2, 2)).unwrap();
+        w.finished(2).unwrap();
+        w.trial(0, &record(0, 2)).unwrap();
+        assert_eq!(rows(&w), ["0,1", "0,2"]);
+        w.finished(0).unwrap();
+        assert_eq!(
+            rows(&w),
+            ["0,1", "0,2", "1,1"],
+            "run 1 is now written as it goes"
+        );
+        w.trial(1, &record(1, 2)).unwrap();
+        assert_eq!(rows(&w), ["0,1", "0,2", "1,1", "1,2"]);
+        w.finished(1).unwrap();
+        assert_eq!(
+            rows(&w),
+            ["0,1", "0,2", "1,1", "1,2", "2,1", "2,2"],
+            "the finished run 2 follows at once, in run order"
+        );
+        assert!(w.pending.is_empty());
+    }
 }

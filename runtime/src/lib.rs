@@ -6,13 +6,15 @@
 //!   parallel, `runs.csv`, curves and plots through [`report`]).
 //! - As processes over iceoryx2: the nodes in [`process`] (plant, observer, agent), the
 //!   supervisor that starts, watches and records them ([`run`]), the MCAP writer
-//!   ([`record`]) and [`resume`] after a crash.
+//!   ([`record`]) and [`resume`] after a crash; [`lock`]: an output folder belongs to one
+//!   command.
 //! - Against an external driver: [`check_driver`] (`rig check-driver`).
 
 pub mod check_driver;
 pub mod config;
 pub mod experiment;
 pub mod learn;
+pub mod lock;
 pub mod process;
 pub mod record;
 pub mod report;

@@ -13,11 +13,5 @@ struct Cli {
 }
 
 fn main() -> std::process::ExitCode {
-    match runtime::process::plant::run(&Cli::parse().args) {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            std::process::ExitCode::FAILURE
-        }
-    }
+    runtime::process::exit_code(runtime::process::plant::run(&Cli::parse().args))
 }

@@ -149,3 +149,38 @@ pub fn pipelined(mcap_path: &Path) -> usize {
     }
     checked
 }
+
+/// Checks the recording in run folder `dir` with `tests/python/check_mcap.py` (the
+/// official Python `mcap` reader: the file is whole, its CRCs hold, and its returns are
+/// those of `returns.csv`), where `$RIG_PYTHON` (default `python3`) has `mcap`; says so
+/// and checks nothing where it has not.
+pub fn check_mcap(dir: &Path) {
+    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
+    let probe = Command::new(&python).args(["-c", "import mcap"]).output();
+    if !probe.is_ok_and(|o| o.status.success()) {
+        println!("check_mcap.py skipped: {python} cannot import mcap (pip install mcap==1.6.0)");
+        return;
+    }
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/python/check_mcap.py");
+    let out = Command::new(&python).arg(script).arg(dir).output().unwrap();
+    assert!(
+        out.status.success(),
+        "check_mcap.py {}: {}{}",
+        dir.display(),
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Kills (`kill -9`) the `rig run` process `pid` and the processes it started, all at
+/// once, as a power cut would: each is stopped first, so that none sees another die.
+pub fn kill_run(pid: u32) {
+    let mut all = children_of(pid);
+    all.push(pid);
+    for p in &all {
+        signal(*p, "-STOP");
+    }
+    for p in &all {
+        signal(*p, "-KILL");
+    }
+}

@@ -89,7 +89,9 @@ impl Learner {
         let checkpoints = args
             .checkpoints
             .as_deref()
-            .map(|dir| CheckpointWriter::new(dir, args.node.scheduling.layout()))
+            .map(|dir| {
+                CheckpointWriter::new(dir, args.node.scheduling.layout(), args.keep_checkpoints)
+            })
             .transpose()?;
         Ok(Self {
             agent,

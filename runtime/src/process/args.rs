@@ -254,6 +254,10 @@ pub struct AgentArgs {
     /// this directory (`trial-NNNNNN.ckpt`, atomically).
     #[arg(long, value_name = "DIR")]
     pub checkpoints: Option<PathBuf>,
+    /// With `--checkpoints`: keep only the N newest checkpoints (0: keep all; `rig run`
+    /// passes 0 and removes those a resume can no longer need itself).
+    #[arg(long, value_name = "N", default_value_t = 2)]
+    pub keep_checkpoints: usize,
     /// Start from this checkpoint's learned state (the run's trials continue after the
     /// checkpoint's trial; the plant is started with `--after-trial`).
     #[arg(long, value_name = "FILE")]

@@ -87,6 +87,20 @@ pub fn pack<const N: usize>(v: &[f64]) -> [f64; N] {
     a
 }
 
+/// A node process's exit: success, or its error on one line of standard error and
+/// failure. Standard error is `rig run`'s pipe or a terminal; should it fail (the
+/// reader gone), the error is lost rather than turned into a panic.
+pub fn exit_code(done: Result<()>) -> std::process::ExitCode {
+    use std::io::Write;
+    match done {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            let _ = writeln!(std::io::stderr(), "error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
 /// Converts a transport error.
 pub fn wire_err(e: wire::Error) -> anyhow::Error {
     anyhow::anyhow!("{e}")

@@ -44,7 +44,9 @@
 //!   reader sorts all messages before yielding any, so it yields none.
 //!
 //! [`Recorder::flush`] closes the current chunk and writes it out, which bounds what a
-//! crash can lose; without it a chunk closes every 1 MiB of messages.
+//! crash can lose; without it a chunk closes every 1 MiB of messages, written out the
+//! same way. [`Recorder::flushes`] counts them: what was recorded before the last one
+//! survives a crash.
 
 use std::collections::{BTreeMap, HashSet};
 use std::ffi::OsString;
@@ -65,6 +67,9 @@ const SCHEMA_ENCODING: &str = "jsonschema";
 const COMPRESSION_LEVEL: u32 = 5;
 /// Target uncompressed size of a chunk, in bytes.
 const CHUNK_SIZE: u64 = 1024 * 1024;
+/// The bytes of a message record beside its data: opcode, length, channel id, sequence,
+/// log and publish time.
+const MESSAGE_RECORD: u64 = 1 + 8 + 2 + 4 + 8 + 8;
 
 mod schema;
 #[cfg(test)]
@@ -100,6 +105,10 @@ pub struct Recorder {
     path: PathBuf,
     /// The message being encoded (reused: no allocation per message).
     buf: Vec<u8>,
+    /// Uncompressed bytes of the message records in the open chunk.
+    chunk_bytes: u64,
+    /// How often everything recorded was written out ([`Recorder::flushes`]).
+    flushes: u64,
 }
 
 impl Recorder {
@@ -118,7 +127,8 @@ impl Recorder {
             .compression_level(COMPRESSION_LEVEL)
             .compression_threads(0)
             .profile("")
-            .chunk_size(Some(CHUNK_SIZE))
+            // Chunks close in `put`, where the recorder knows it: `flushes`.
+            .chunk_size(None)
             .use_chunks(true);
         let writer = options
             .create(BufWriter::with_capacity(1 << 16, file))
@@ -130,6 +140,8 @@ impl Recorder {
             part,
             path: path.to_owned(),
             buf: Vec::with_capacity(1024),
+            chunk_bytes: 0,
+            flushes: 0,
         })
     }
 
@@ -252,6 +264,12 @@ impl Recorder {
         publish_time_ns: u64,
         data: &[u8],
     ) -> Result<()> {
+        // As the `mcap` writer closes a chunk grown past its target size, but written
+        // out at once and counted.
+        if self.chunk_bytes > CHUNK_SIZE {
+            self.flush()?;
+        }
+        self.chunk_bytes += MESSAGE_RECORD + data.len() as u64;
         let ch = &mut self.channels[index];
         let header = MessageHeader {
             channel_id: ch.id,
@@ -301,6 +319,7 @@ impl Recorder {
         self.writer.start_attachment(data.len() as u64, header)?;
         self.writer.put_attachment_bytes(data)?;
         self.writer.finish_attachment()?;
+        self.chunk_bytes = 0;
         Ok(())
     }
 
@@ -312,6 +331,7 @@ impl Recorder {
             metadata: entries.clone(),
         };
         self.writer.write_metadata(&metadata)?;
+        self.chunk_bytes = 0;
         Ok(())
     }
 
@@ -320,8 +340,19 @@ impl Recorder {
     /// documentation). Calling it often makes smaller chunks; the summary is still written
     /// only by [`finish`](Self::finish).
     pub fn flush(&mut self) -> Result<()> {
-        self.writer.flush()?;
+        self.writer
+            .flush()
+            .with_context(|| format!("cannot write {}", self.part.display()))?;
+        self.chunk_bytes = 0;
+        self.flushes += 1;
         Ok(())
+    }
+
+    /// How many times everything recorded so far was written out to the operating system
+    /// ([`flush`](Self::flush), also when a chunk reaches its size): a crash loses nothing
+    /// recorded before the last of them.
+    pub fn flushes(&self) -> u64 {
+        self.flushes
     }
 
     /// Writes the summary section and footer, syncs the file to disk and renames it to the

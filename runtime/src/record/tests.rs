@@ -329,6 +329,7 @@ fn many_chunks() {
         }
         r.write(c, k, k, &values).unwrap();
     }
+    let flushed = r.flushes();
     r.finish().unwrap();
     let bytes = std::fs::read(&path).unwrap();
     let summary = Summary::read(&bytes).unwrap().unwrap();
@@ -337,6 +338,8 @@ fn many_chunks() {
         "{} chunks",
         summary.chunk_indexes.len()
     );
+    // Every chunk but the last (closed by `finish`) was counted when written out.
+    assert_eq!(summary.chunk_indexes.len() as u64, flushed + 1);
     let mut k = 0u32;
     for m in MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
@@ -344,5 +347,38 @@ fn many_chunks() {
         k += 1;
     }
     assert_eq!(k as u64, n);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_crash_keeps_every_message_recorded_before_the_last_flush() {
+    let dir = tmpdir("crash-after-flush");
+    let path = dir.join("run.mcap");
+    let mut r = Recorder::create(&path).unwrap();
+    let mut fields = vec![Field::integer("seq")];
+    fields.extend(Field::array("x", 8, FieldKind::Number));
+    let c = r.channel("/x", "X", &fields).unwrap();
+    let mut values = vec![Value::Int(0); 9];
+    let mut before_flush = 0;
+    for k in 0..20_000u64 {
+        let flushes = r.flushes();
+        values[0] = Value::Int(k);
+        for i in 0..8 {
+            values[1 + i] = Value::Num(k as f64 / (i as f64 + 3.0));
+        }
+        r.write(c, k, k, &values).unwrap();
+        if r.flushes() > flushes {
+            before_flush = k;
+        }
+    }
+    assert!(r.flushes() >= 2);
+    // As a process killed now: no summary, no buffered bytes written.
+    std::mem::forget(r);
+    let bytes = std::fs::read(dir.join("run.mcap.part")).unwrap();
+    let read = MessageStream::new(&bytes)
+        .unwrap()
+        .take_while(Result::is_ok)
+        .count();
+    assert_eq!(read as u64, before_flush);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -8,6 +8,7 @@ use std::thread::JoinHandle;
 use agent::checkpoint::Checkpoint;
 use anyhow::{Context, Result, anyhow};
 
+use crate::lock::FolderLock;
 use crate::process::{Layout, Part};
 
 /// The checkpoint directory of run directory `out`.
@@ -40,27 +41,55 @@ pub fn checkpoints(dir: &Path) -> Vec<u32> {
 
 /// Removes the checkpoints of trials before `trial`.
 pub fn prune(dir: &Path, trial: u32) {
+    remove(dir, |t| t < trial);
+}
+
+/// Keeps the newest checkpoint of a trial up to `trial`, the one before it (to fall back
+/// on should the newest be corrupt after a power failure: they are not synced) and those
+/// after `trial`: removes the older ones.
+pub fn keep_from_newest(dir: &Path, trial: u32) {
+    let oldest_kept = checkpoints(dir)
+        .into_iter()
+        .rev()
+        .filter(|&t| t <= trial)
+        .take(2)
+        .last();
+    if let Some(t) = oldest_kept {
+        prune(dir, t);
+    }
+}
+
+/// Removes the checkpoints of trials after `trial`.
+pub fn discard_after(dir: &Path, trial: u32) {
+    remove(dir, |t| t > trial);
+}
+
+fn remove(dir: &Path, which: impl Fn(u32) -> bool) {
     for t in checkpoints(dir) {
-        if t < trial {
+        if which(t) {
             let _ = std::fs::remove_file(checkpoint_path(dir, t));
         }
     }
 }
 
 /// Writes checkpoints on a background thread (atomically: [`Checkpoint::write`]) and keeps
-/// the two newest. When the disk is slower than the trials, checkpoints queued behind the
-/// one being written are skipped, except the newest: the loop never waits, and a resume
-/// redoes the few trials after the newest checkpoint written.
+/// the `keep` newest (0: all; `rig run` prunes them itself, keeping what a resume needs).
+/// When the disk is slower than the trials, checkpoints queued behind the one being
+/// written are skipped, except the newest: the loop never waits, and a resume redoes the
+/// few trials after the newest checkpoint written. Dropped, it writes what is queued.
 pub struct CheckpointWriter {
     tx: Option<mpsc::Sender<Checkpoint>>,
     thread: Option<JoinHandle<Result<()>>>,
+    /// The folder is this writer's while it lasts.
+    _folder: FolderLock,
 }
 
 impl CheckpointWriter {
-    /// A writer into `dir` (created if missing), its thread placed as `layout` places
-    /// the checkpoint writer.
-    pub fn new(dir: &Path, layout: Option<Layout>) -> Result<Self> {
+    /// A writer into `dir` (created if missing, and held: [`FolderLock`]), its thread
+    /// placed as `layout` places the checkpoint writer, keeping the `keep` newest (0: all).
+    pub fn new(dir: &Path, layout: Option<Layout>, keep: usize) -> Result<Self> {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        let folder = FolderLock::acquire(dir)?;
         let (tx, rx) = mpsc::channel::<Checkpoint>();
         let dir = dir.to_owned();
         let thread = std::thread::spawn(move || -> Result<()> {
@@ -70,7 +99,7 @@ impl CheckpointWriter {
             if let Some(l) = layout {
                 let _ = l.place(Part::CheckpointWriter);
             }
-            let mut previous = None;
+            let mut written = std::collections::VecDeque::new();
             while let Ok(mut c) = rx.recv() {
                 // Only the newest of those waiting.
                 if let Some(newer) = rx.try_iter().last() {
@@ -79,8 +108,10 @@ impl CheckpointWriter {
                 let path = checkpoint_path(&dir, c.trial);
                 c.write(&path)
                     .with_context(|| format!("cannot write checkpoint {}", path.display()))?;
-                if let Some(p) = previous.replace(c.trial) {
-                    prune(&dir, p);
+                written.push_back(c.trial);
+                if keep > 0 && written.len() > keep {
+                    written.pop_front();
+                    prune(&dir, written[0]);
                 }
             }
             Ok(())
@@ -88,6 +119,7 @@ impl CheckpointWriter {
         Ok(Self {
             tx: Some(tx),
             thread: Some(thread),
+            _folder: folder,
         })
     }
 
@@ -109,5 +141,13 @@ impl CheckpointWriter {
                 .map_err(|_| anyhow!("the checkpoint writer panicked"))?,
             None => Ok(()),
         }
+    }
+}
+
+impl Drop for CheckpointWriter {
+    /// Writes what is queued (a run stopped by an error or Ctrl-C keeps its newest
+    /// checkpoint).
+    fn drop(&mut self) {
+        let _ = self.finish();
     }
 }

@@ -3,7 +3,9 @@
 //! While a run goes on, the agent process writes a checkpoint of its learned state at the
 //! end of every learning trial ([`agent::checkpoint`], `DIR/checkpoints/trial-NNNNNN.ckpt`,
 //! atomically, from a background thread so the control loop never waits for the disk),
-//! and the supervisor keeps the last two. To resume, [`prepare`] picks the latest trial
+//! and the supervisor removes those no resume can need (every one older than the newest
+//! checkpoint of a trial complete in `returns.csv` and in the recording written out
+//! so far). To resume, [`prepare`] picks the latest trial
 //! `C` that is complete everywhere:
 //!
 //! * `returns.csv` has its row (a row is written only when the trial and its greedy
@@ -30,7 +32,10 @@ use crate::experiment::TrialRecord;
 mod checkpoints;
 mod recorded;
 
-pub use checkpoints::{CheckpointWriter, checkpoint_dir, checkpoint_path, checkpoints, prune};
+pub use checkpoints::{
+    CheckpointWriter, checkpoint_dir, checkpoint_path, checkpoints, discard_after,
+    keep_from_newest, prune,
+};
 pub use recorded::RecordedMessage;
 use recorded::{Recorded, index, kept, read_recording, read_returns, same_plant};
 
@@ -64,7 +69,7 @@ pub struct ResumePoint {
 pub fn prepare(out: &Path, cfg: &ExperimentConfig, external: bool) -> Result<ResumePoint> {
     resumable(out, cfg)?;
     let mut notes = Vec::new();
-    let rows = read_returns(&out.join("returns.csv"))?;
+    let rows = read_returns(&out.join("returns.csv"), &mut notes)?;
     let done = rows.len() as u32;
     if done >= cfg.run.trials {
         bail!(

@@ -31,14 +31,24 @@ struct Head {
     flags: u64,
 }
 
-/// Reads the rows of a `returns.csv`.
-pub(super) fn read_returns(path: &Path) -> Result<Vec<TrialRecord>> {
-    let mut reader = csv::Reader::from_path(path).with_context(|| {
+/// Reads the rows of a `returns.csv`, but a last line cut short (a row being written when
+/// the disk filled up), which `notes` then mentions.
+pub(super) fn read_returns(path: &Path, notes: &mut Vec<String>) -> Result<Vec<TrialRecord>> {
+    let text = std::fs::read_to_string(path).with_context(|| {
         format!(
             "{}: cannot read (is this a `rig run` directory?)",
             path.display()
         )
     })?;
+    let lines = text.rfind('\n').map_or("", |end| &text[..=end]);
+    if lines.len() < text.len() {
+        notes.push(format!(
+            "{}: left out its last line, which was cut short: {:?}",
+            path.display(),
+            &text[lines.len()..]
+        ));
+    }
+    let mut reader = csv::Reader::from_reader(lines.as_bytes());
     let mut rows = Vec::new();
     for (i, rec) in reader.records().enumerate() {
         let line = i + 2;
@@ -219,4 +229,30 @@ pub(super) fn kept(messages: Vec<RecordedMessage>, first_seq: u64) -> Vec<Record
         }
     };
     messages.into_iter().filter(keep).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_last_row_cut_short_is_left_out_with_a_note() {
+        let dir = std::env::temp_dir().join(format!("rig-returns-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("returns.csv");
+        let whole =
+            "run,trial,sim_time_s,return,greedy_return\n0,1,3,-4000.5,\n0,2,6,-3900,-3000\n";
+        std::fs::write(&path, whole).unwrap();
+        let mut notes = Vec::new();
+        assert_eq!(read_returns(&path, &mut notes).unwrap().len(), 2);
+        assert!(notes.is_empty());
+        std::fs::write(&path, format!("{whole}0,3,9,-38")).unwrap();
+        let rows = read_returns(&path, &mut notes).unwrap();
+        assert_eq!(rows.len(), 2);
+        assert!(
+            notes[0].contains("cut short") && notes[0].contains("0,3,9,-38"),
+            "{notes:?}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

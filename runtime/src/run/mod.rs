@@ -18,6 +18,7 @@
 //!   it also subscribes to the plant's ground truth ([`wire::Truth`], `rig/<id>/truth`,
 //!   which no other process reads), records it as `/plant/truth`, and takes a finite
 //!   horizon's terminal reward `τ_N(x_N)` of the true state, as `rig learn` does.
+//! * The output folder is this run's while it lasts ([`crate::lock`]).
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -30,10 +31,13 @@ use wire::{Bus, Waiting};
 use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
 use crate::learn::{progress_bar, write_atomic};
+use crate::lock::FolderLock;
 use crate::process::{Scheduling, Spin, wire_err};
 use crate::resume;
 
+mod logs;
 mod recording;
+mod retention;
 mod returns;
 mod spawn;
 mod supervisor;
@@ -94,6 +98,9 @@ pub struct RunSummary {
     pub deadline_misses: u64,
     /// The external driver's info, if one was used.
     pub driver: Option<DriverInfo>,
+    /// A resumed run: the trial it continued after (`records` begins with the trials
+    /// up to it, kept).
+    pub resumed_after: Option<u32>,
 }
 
 /// Refuses waiting that would leave a process unwoken: polling without end
@@ -117,6 +124,19 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let mut cfg = cfg.clone();
     cfg.run.runs = 1;
     let run_id = free_run_id(opts)?;
+    // A folder this run creates is removed again if the run is refused before it
+    // writes anything.
+    let created = !opts.resume && !opts.out.exists();
+    if !opts.resume {
+        std::fs::create_dir_all(&opts.out)
+            .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
+    }
+    let _folder = FolderLock::acquire(&opts.out)?;
+    let checkpoints = resume::checkpoint_dir(&opts.out);
+    if checkpoints.exists() {
+        // Not in use by an agent started by hand; free again for this run's agent.
+        drop(FolderLock::acquire(&checkpoints)?);
+    }
     // Where a resumed run continues; checked before anything is written.
     let point = match opts.resume {
         true => Some(resume::prepare(&opts.out, &cfg, opts.driver.is_some())?),
@@ -128,21 +148,22 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let bus = Bus::join(&run_id, "rig").map_err(wire_err)?;
     let task = Arc::new(cfg.task());
     let (watch, driver_info) = match &opts.driver {
-        Some(d) => {
-            let (watch, info) = wait_for_driver(&bus, d, &task, opts.progress)?;
-            (Some(watch), Some(info))
-        }
+        Some(d) => match wait_for_driver(&bus, d, &task, opts.progress) {
+            Ok((watch, info)) => (Some(watch), Some(info)),
+            Err(e) => {
+                if created {
+                    // Holds only the lock file: a refused run leaves no folder behind.
+                    let _ = std::fs::remove_dir_all(&opts.out);
+                }
+                return Err(e);
+            }
+        },
         None => (None, None),
     };
-    // Nothing is written before the driver is found and fits: a refused run leaves no
-    // folder behind.
-    std::fs::create_dir_all(&opts.out)
-        .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
-    let checkpoints = resume::checkpoint_dir(&opts.out);
-    if point.is_none() {
-        // A new run in an old directory: old checkpoints must not be taken for its own.
-        resume::prune(&checkpoints, u32::MAX);
-    }
+    // Nothing is written before the driver is found and fits. A new run in an old
+    // directory: old checkpoints must not be taken for its own; a resumed run's after its
+    // resume point are of trials it redoes.
+    resume::discard_after(&checkpoints, point.as_ref().map_or(0, |p| p.trial));
     let config_path = opts.out.join("config.toml");
     write_atomic(&config_path, &cfg.to_toml())?;
     let about = About {
@@ -168,9 +189,12 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     };
     let first_seq = point.as_ref().map_or(0, |p| p.first_seq);
     let mut sup = Supervisor::new(bus, recording, returns, &opts.out, first_seq, watch, grace)?;
+    if let Some(d) = &opts.driver {
+        sup.resume_flags = format!(" --plant external --driver {}", d.id);
+    }
 
     let args = spawn::role_args(opts, point.as_ref(), &checkpoints);
-    sup.children = spawn::processes(&run_id, &config_path, &opts.out, &args)?;
+    (sup.children, sup.logs) = spawn::processes(&run_id, &config_path, &opts.out, &args)?;
     // Placed after the processes started: they place themselves, from anywhere.
     opts.scheduling.place(crate::process::Part::Recorder)?;
     if opts.realtime.is_none() && opts.driver.is_none() {
@@ -189,12 +213,16 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let outcome = sup.supervise(&bar);
     bar.finish_and_clear();
     let (records, messages, deadline_misses) = sup.finish(outcome)?;
+    // Every trial is complete everywhere: the last one's checkpoint is what a resume
+    // (`--trials N`, to learn on) needs.
+    resume::keep_from_newest(&checkpoints, records.last().map_or(0, |r| r.trial));
     Ok(RunSummary {
         records,
         messages,
         wall: t0.elapsed(),
         deadline_misses,
         driver: driver_info,
+        resumed_after: point.as_ref().map(|p| p.trial),
     })
 }
 

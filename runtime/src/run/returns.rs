@@ -4,7 +4,7 @@
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use ::agent::horizon::Horizon;
@@ -19,6 +19,8 @@ use crate::resume::ResumePoint;
 /// Builds `returns.csv` rows from the plant's measurements.
 pub(super) struct Returns {
     pub(super) out: BufWriter<File>,
+    /// Where `out` writes.
+    path: PathBuf,
     pub(super) task: Arc<plant::Task>,
     pub(super) steps_per_trial: u64,
     /// Samples not run because trials ended early (left the operating range).
@@ -38,6 +40,11 @@ pub(super) struct Returns {
     /// Sum of the returns of the greedy trials after the pending trial, and their count.
     pub(super) greedy: (f64, u32),
     pub(super) records: Vec<TrialRecord>,
+    /// Per row written by this run: its trial and the sequence number of the first sample
+    /// after it and its greedy evaluations.
+    pub(super) ends: Vec<(u32, u64)>,
+    /// The sequence number of the sample being accounted for.
+    seq: u64,
 }
 
 impl Returns {
@@ -51,15 +58,15 @@ impl Returns {
         let mut out = BufWriter::new(
             File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
         );
-        writeln!(out, "{RUNS_HEADER}")?;
         let kept = point.map_or(&[][..], |p| &p.records[..]);
-        for r in kept {
-            write_row(&mut out, r)?;
-        }
-        out.flush()?;
+        writeln!(out, "{RUNS_HEADER}")
+            .and_then(|()| kept.iter().try_for_each(|r| write_row(&mut out, r)))
+            .and_then(|()| out.flush())
+            .with_context(|| format!("cannot write {}", path.display()))?;
         let (after, sim_time) = point.map_or((0, 0.0), |p| (p.trial, p.sim_time_s));
         Ok(Self {
             out,
+            path: path.to_owned(),
             steps_per_trial: task.steps_per_trial() as u64,
             skipped_samples: task.skipped_samples(after.into(), sim_time),
             horizon: cfg.agent.horizon.of(&task),
@@ -71,6 +78,8 @@ impl Returns {
             greedy_trial: 0.0,
             greedy: (0.0, 0),
             records: kept.to_vec(),
+            ends: Vec::new(),
+            seq: 0,
             task,
         })
     }
@@ -81,6 +90,7 @@ impl Returns {
     /// from the observer's estimates instead: their rewards and `x̂`.
     pub(super) fn sample(&mut self, h: &wire::Header, reward: f64, x: &[f64]) -> Result<()> {
         let f = h.flags;
+        self.seq = h.seq;
         let greedy = f & flags::GREEDY != 0;
         if f & flags::SHUTDOWN != 0 || (f & flags::START != 0 && !greedy) {
             self.flush()?;
@@ -139,8 +149,10 @@ impl Returns {
 
     pub(super) fn flush(&mut self) -> Result<()> {
         if let Some(r) = self.pending.take() {
-            write_row(&mut self.out, &r)?;
-            self.out.flush()?;
+            write_row(&mut self.out, &r)
+                .and_then(|()| self.out.flush())
+                .with_context(|| format!("cannot write {}", self.path.display()))?;
+            self.ends.push((r.trial, self.seq));
             self.records.push(r);
         }
         Ok(())

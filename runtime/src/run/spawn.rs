@@ -2,7 +2,6 @@
 //! its output to `DIR/<process>.log`.
 
 use std::collections::BTreeMap;
-use std::fs::File;
 use std::path::Path;
 use std::process::{Command, Stdio};
 
@@ -12,6 +11,7 @@ use crate::process::Wait;
 use crate::resume::ResumePoint;
 
 use super::RunOptions;
+use super::logs::{Log, Logs};
 use super::supervisor::Children;
 
 /// The processes in the order they start: the plant last, once its receivers are up.
@@ -45,9 +45,12 @@ pub(super) fn role_args(
     if let (Some(path), Some(_), None) = (&opts.cycles_out, opts.realtime, &opts.driver) {
         plant.extend(["--cycles-out".to_string(), path.display().to_string()]);
     }
+    // All kept: the supervisor removes those a resume can no longer need.
     let mut agent = vec![
         "--checkpoints".to_string(),
         checkpoints.display().to_string(),
+        "--keep-checkpoints".to_string(),
+        "0".to_string(),
     ];
     if let Some(p) = point {
         if let Some(c) = &p.checkpoint {
@@ -72,31 +75,55 @@ pub(super) fn role_args(
 }
 
 /// Starts the three processes of run `run_id` with configuration `config`, each with
-/// its `args`, their output to `out/<process>.log`; they wait for two receivers each
-/// (the next process and the recorder).
+/// its `args`, their output to `out/<process>.log` ([`Logs`]); they wait for two
+/// receivers each (the next process and the recorder).
 pub(super) fn processes(
     run_id: &str,
     config: &Path,
     out: &Path,
     args: &BTreeMap<&'static str, Vec<String>>,
-) -> Result<Children> {
+) -> Result<(Children, Logs)> {
     let exe = std::env::current_exe().context("cannot find the rig executable")?;
     let mut children = Children(Vec::new());
+    let mut logs = Logs::default();
     for role in ROLES {
-        let log = out.join(format!("{role}.log"));
-        let log_file =
-            File::create(&log).with_context(|| format!("cannot create {}", log.display()))?;
-        let child = Command::new(&exe)
+        let (log, pipe) = Log::open(&out.join(format!("{role}.log")))?;
+        logs.0.push((role, log));
+        let mut command = Command::new(&exe);
+        in_own_group(&mut command);
+        let child = command
             .arg(role)
             .args(["--run-id", run_id, "--receivers", "2", "--config"])
             .arg(config)
             .args(args.get(role).map_or(&[][..], |a| &a[..]))
             .stdin(Stdio::null())
-            .stdout(log_file.try_clone()?)
-            .stderr(log_file)
+            .stdout(pipe.try_clone()?)
+            .stderr(pipe)
             .spawn()
             .with_context(|| format!("cannot start the {role} process"))?;
+        // The command, dropped, closes this process's copy of the pipe's writing end:
+        // the log's relay ends when the process does.
+        drop(command);
         children.0.push((role, child));
     }
-    Ok(children)
+    Ok((children, logs))
+}
+
+/// Starts `command` in a process group of its own, so that Ctrl-C at a terminal reaches
+/// the supervisor only, which stops the processes once it has recorded what they sent
+/// ([`super::supervisor::Children::freeze`]); and so that it is told to stop (SIGTERM)
+/// when the supervisor dies.
+fn in_own_group(command: &mut Command) {
+    use std::os::unix::process::CommandExt;
+    command.process_group(0);
+    // SAFETY: between fork and exec the closure calls `prctl`, an async-signal-safe
+    // system call on this process only, and allocates nothing.
+    unsafe {
+        command.pre_exec(|| {
+            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            Ok(())
+        });
+    }
 }

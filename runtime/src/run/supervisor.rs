@@ -14,7 +14,9 @@ use wire::{Action, Bus, Estimate, Measurement, Truth, flags, topic};
 use crate::experiment::TrialRecord;
 use crate::process::wire_err;
 
+use super::logs::Logs;
 use super::recording::Recording;
+use super::retention::{Progress, Retention};
 use super::returns::Returns;
 
 /// How long the supervisor watches after a process exits early, to see which process
@@ -43,6 +45,19 @@ impl Continuity {
 /// The child processes; killed when dropped.
 pub(super) struct Children(pub(super) Vec<(&'static str, Child)>);
 
+impl Children {
+    /// Stops every process where it is (SIGSTOP): nothing more is sent, and what they
+    /// sent stays readable (it would be gone with a process that exits).
+    pub(super) fn freeze(&self) {
+        for (_, c) in &self.0 {
+            // SAFETY: `kill` sends a signal to the child's pid; it touches no memory.
+            unsafe {
+                libc::kill(c.id() as libc::pid_t, libc::SIGSTOP);
+            }
+        }
+    }
+}
+
 impl Drop for Children {
     fn drop(&mut self) {
         for (_, c) in &mut self.0 {
@@ -50,12 +65,6 @@ impl Drop for Children {
             let _ = c.wait();
         }
     }
-}
-
-pub(super) fn log_tail(path: &Path) -> String {
-    let text = std::fs::read_to_string(path).unwrap_or_default();
-    let lines: Vec<&str> = text.lines().collect();
-    lines[lines.len().saturating_sub(5)..].join("\n")
 }
 
 /// Everything the supervision loop works on.
@@ -73,6 +82,8 @@ pub(super) struct Supervisor {
     pub(super) recording: Recording,
     pub(super) returns: Returns,
     pub(super) children: Children,
+    /// Their output.
+    pub(super) logs: Logs,
     pub(super) out: PathBuf,
     pub(super) messages: u64,
     pub(super) continuity: [Continuity; 3],
@@ -85,6 +96,10 @@ pub(super) struct Supervisor {
     /// so that the recording shows the plant's reaction (its watchdog, or the driver's,
     /// applying the safe action within two periods).
     pub(super) grace: Option<Duration>,
+    /// Removes the checkpoints no resume can need.
+    pub(super) retention: Retention,
+    /// The flags beside `--resume DIR` that continue this run (an external driver's).
+    pub(super) resume_flags: String,
 }
 
 impl Supervisor {
@@ -118,17 +133,33 @@ impl Supervisor {
             recording,
             returns,
             children: Children(Vec::new()),
+            logs: Logs::default(),
             out: out.to_owned(),
             messages: 0,
             continuity: std::array::from_fn(|_| Continuity { next: first_seq }),
             deadline_misses: 0,
             driver,
             grace,
+            retention: Retention::new(crate::resume::checkpoint_dir(out)),
+            resume_flags: String::new(),
         })
     }
 
-    /// Records everything waiting; returns whether the run's end came by.
+    /// Records everything waiting, then removes the checkpoints no resume can need any
+    /// more; returns whether the run's end came by.
     pub(super) fn drain(&mut self, bar: &ProgressBar) -> Result<bool> {
+        let before = Progress {
+            recorded: self.continuity.iter().map(|c| c.next).min().unwrap_or(0),
+            rows: self.returns.ends.len(),
+        };
+        let done = self.record_waiting(bar)?;
+        self.retention
+            .after_drain(before, self.recording.rec.flushes(), &self.returns.ends);
+        Ok(done)
+    }
+
+    /// Records everything waiting; returns whether the run's end came by.
+    fn record_waiting(&mut self, bar: &ProgressBar) -> Result<bool> {
         let mut done = false;
         if let Some(a) = self
             .actions
@@ -215,13 +246,11 @@ impl Supervisor {
         Ok(a.header.flags & flags::SHUTDOWN != 0)
     }
 
-    /// A process that has exited, if any: its role, exit status and log file.
-    pub(super) fn exited(
-        &mut self,
-    ) -> Result<Option<(&'static str, std::process::ExitStatus, PathBuf)>> {
+    /// A process that has exited, if any: its role and exit status.
+    pub(super) fn exited(&mut self) -> Result<Option<(&'static str, std::process::ExitStatus)>> {
         for (role, child) in &mut self.children.0 {
             if let Some(status) = child.try_wait()? {
-                return Ok(Some((*role, status, self.out.join(format!("{role}.log")))));
+                return Ok(Some((*role, status)));
             }
         }
         Ok(None)
@@ -229,12 +258,12 @@ impl Supervisor {
 
     /// Of the processes that have exited, the one that caused the others to: killed by a
     /// signal rather than stopped by an error (a process whose peer dies stops with one).
-    pub(super) fn cause(&mut self) -> Result<(&'static str, std::process::ExitStatus, PathBuf)> {
+    pub(super) fn cause(&mut self) -> Result<(&'static str, std::process::ExitStatus)> {
         use std::os::unix::process::ExitStatusExt;
         let mut first = None;
         for (role, child) in &mut self.children.0 {
             if let Some(status) = child.try_wait()? {
-                let found = (*role, status, self.out.join(format!("{role}.log")));
+                let found = (*role, status);
                 if status.signal().is_some() {
                     return Ok(found);
                 }
@@ -251,11 +280,9 @@ impl Supervisor {
             loop {
                 if let Some(status) = child.try_wait()? {
                     if !status.success() {
-                        let log = self.out.join(format!("{role}.log"));
                         bail!(
-                            "the {role} process failed ({status}); last lines of {}:\n{}",
-                            log.display(),
-                            log_tail(&log)
+                            "the {role} process failed ({status}); {}",
+                            self.logs.last_lines(role)
                         );
                     }
                     break;
@@ -270,12 +297,15 @@ impl Supervisor {
         Ok(())
     }
 
-    /// How far the run got, and how to continue it.
-    pub(super) fn resume_hint(&self) -> String {
+    /// How far the run got — its complete trials written to `returns.csv` first —, and
+    /// how to continue it.
+    pub(super) fn resume_hint(&mut self) -> String {
+        let _ = self.returns.flush_complete();
         format!(
-            "{} completed trials are in returns.csv; continue with `rig run --resume {}`",
+            "{} completed trials are in returns.csv; continue with `rig run --resume {}{}`",
             self.returns.records.len(),
-            self.out.display()
+            self.out.display(),
+            self.resume_flags
         )
     }
 
@@ -292,18 +322,34 @@ impl Supervisor {
         Ok((self.returns.records, self.messages, self.deadline_misses))
     }
 
-    pub(super) fn supervise(&mut self, bar: &ProgressBar) -> Result<()> {
+    /// After Ctrl-C: stops the processes and records what they sent, so that every
+    /// trial in `returns.csv` is complete in the recording too.
+    fn record_the_rest(&mut self, bar: &ProgressBar) {
+        self.children.freeze();
         loop {
-            if self.drain(bar)? {
+            let before = self.messages;
+            // An error here is a consequence of the interrupt, which is reported.
+            if !matches!(self.drain(bar), Ok(false)) || self.messages == before {
                 break;
             }
+        }
+    }
+
+    pub(super) fn supervise(&mut self, bar: &ProgressBar) -> Result<()> {
+        loop {
+            match self.drain(bar) {
+                Ok(true) => break,
+                Ok(false) => {}
+                Err(e) => bail!("{e:#}; {}", self.resume_hint()),
+            }
             if self.bus.interrupted() {
+                self.record_the_rest(bar);
                 bail!(
                     "interrupted: stopped the plant, observer and agent processes; {}",
                     self.resume_hint()
                 );
             }
-            if let Some((_, status, _)) = self.exited()? {
+            if let Some((_, status)) = self.exited()? {
                 // A process that ends cleanly after its last message can be seen to exit
                 // before that message is read: look once more.
                 if status.success() && self.drain(bar)? {
@@ -324,17 +370,19 @@ impl Supervisor {
                         Err(_) => break,
                     }
                 }
-                if done && self.cause().is_ok_and(|(_, s, _)| s.success()) {
+                if done && self.cause().is_ok_and(|(_, s)| s.success()) {
                     // The run's end came after all: processes exit as it passes.
                     break;
                 }
-                let (role, status, log) = self.cause()?;
+                let (role, status) = self.cause()?;
                 bail!(
-                    "the {role} process exited ({status}) before the run finished; {}; last lines of {}:\n{}",
+                    "the {role} process exited ({status}) before the run finished; {}; {}",
                     self.resume_hint(),
-                    log.display(),
-                    log_tail(&log)
+                    self.logs.last_lines(role)
                 );
+            }
+            if let Some(e) = self.logs.error() {
+                bail!("{}; {e}", self.resume_hint());
             }
         }
         // Everything is read: the processes, waiting for this, may exit.
