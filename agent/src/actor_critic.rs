@@ -43,8 +43,14 @@
 //! Measured (MLAC-FH, 20 runs × 600 trials, last greedy return, mean ± sample std, seeds
 //! 1 and 2): −901 ± 148 and −888 ± 113 with this order, −858 ± 56 and −906 ± 114 with
 //! the action chosen after the update — no systematic difference.
+//!
+//! **Trial endings.** A termination (the operating range left, §6.4.2; the goal reached)
+//! targets the reward alone, `δ_k = r_{k+1} − V(x_k)` ([`Agent::learn_terminal`]), with
+//! either horizon: the terminal transition's reward stands for everything after it, `τ_N`
+//! included. The time limit is a truncation: the last transition bootstraps
+//! `γ V(x_{k+1})` (`τ_N(x_N)` for a finite horizon) as any other.
 
-use plant::QuadraticReward;
+use plant::Reward;
 
 use crate::Agent;
 use crate::approx::{Differentiable, scalar};
@@ -84,7 +90,7 @@ pub struct TaskInfo {
     /// Which state components are angles.
     pub angle_mask: Vec<bool>,
     /// The reward function, known to model-based learners (MLAC, VGBP).
-    pub reward: QuadraticReward,
+    pub reward: Reward,
     /// Infinite, or finite with time as an input (Chapter 4).
     pub horizon: Horizon,
 }
@@ -210,7 +216,9 @@ impl ActorCritic {
     }
 
     /// Lines 6–19 for one transition into `x_next` (a state; the time input is added
-    /// here). `terminal`: `x_next` left the operating range and has value zero (§6.4.2).
+    /// here). `terminal`: the trial terminated in `x_next` (it left the operating range,
+    /// §6.4.2, or reached the goal), whose value is zero — also with a finite horizon,
+    /// where neither `V` nor `τ_N` follows a termination.
     /// Writes the next action into `u` if given (and the trial goes on).
     fn transition(&mut self, r: f64, x_next: &[f64], terminal: bool, u: Option<&mut [f64]>) {
         let Learning { gamma, lambda } = self.learning;
@@ -317,8 +325,14 @@ impl crate::checkpoint::Persist for ActorCritic {
 
 #[cfg(test)]
 mod tests {
+    use super::{ActorCritic, Learning};
     use crate::Agent;
+    use crate::approx::rbf::{Rbf, RbfParams};
     use crate::approx::scalar;
+    use crate::critic::{Critic, TdLambda};
+    use crate::explore::Exploration;
+    use crate::horizon::Horizon;
+    use crate::lstd::Lstd;
     use crate::sac::Sac;
     use crate::testing::{self, close, dot, psi};
 
@@ -354,5 +368,50 @@ mod tests {
             0.0,
             "σ = 0: the actor is unchanged"
         );
+    }
+
+    /// A termination (the goal reached, the operating range left) targets the reward
+    /// alone, `δ = r − V(x)`; the time limit (truncation) bootstraps,
+    /// `δ = r + γ V(x') − V(x)` — for every actor-critic learner (they share this step),
+    /// with a TD(λ) critic and with LSTD. One basis function, `V ≡ θ`.
+    #[test]
+    fn a_termination_bootstraps_nothing_and_a_truncation_bootstraps() {
+        let (gamma, r) = (0.9, -2.0);
+        let one = |initial: f64| {
+            Rbf::new(&RbfParams {
+                centres: vec![1],
+                range: vec![(0.0, 1.0)],
+                periodic: vec![false],
+                intersection: 0.5,
+                outputs: 1,
+                initial,
+                bounds: None,
+            })
+        };
+        let mut info = testing::info(10.0);
+        info.horizon = Horizon::Infinite;
+        let value_after = |critic: Box<dyn Critic>, terminal: bool| {
+            let sac = Box::new(Sac::new(Box::new(one(0.0)), 1.0));
+            let learning = Learning { gamma, lambda: 0.0 };
+            let exploration = Exploration::new(0.0, 1, 7);
+            let mut ac = ActorCritic::new(info.clone(), learning, critic, sac, exploration);
+            let mut u = [0.0];
+            ac.start_trial(&[0.3], &mut u);
+            if terminal {
+                ac.learn_terminal(r, &[0.6]);
+            } else {
+                ac.learn(r, &[0.6], None);
+            }
+            ac.value(&[0.5], 0)
+        };
+        // TD(λ), α_c = 1 from θ = 5: θ becomes the target.
+        let td = || Box::new(TdLambda::new(Box::new(one(5.0)), 1.0));
+        close(value_after(td(), true), r);
+        close(value_after(td(), false), r + gamma * 5.0);
+        // LSTD from A_0 = a_0: θ = b / A, A = a_0 + 1 − γ φ(x') (φ(x') = 0 if terminal).
+        let a0 = 0.5;
+        let lstd = || Box::new(Lstd::new(one(0.0), a0, None));
+        close(value_after(lstd(), true), r / (a0 + 1.0));
+        close(value_after(lstd(), false), r / (a0 + 1.0 - gamma));
     }
 }

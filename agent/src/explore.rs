@@ -19,8 +19,10 @@ pub mod stream {
     pub const DELAYS: u64 = plant::delay::STREAM;
     /// SARSA's ε-greedy draws (its own stream, apart from the sensor noise's).
     pub const SARSA: u64 = 4;
+    /// The learning trials' start states drawn from a task's start distribution.
+    pub const STARTS: u64 = plant::start::STREAM;
     /// All of them.
-    pub const ALL: [u64; 4] = [EXPLORATION, SENSOR_NOISE, DELAYS, SARSA];
+    pub const ALL: [u64; 5] = [EXPLORATION, SENSOR_NOISE, DELAYS, SARSA, STARTS];
 }
 
 /// Gaussian exploration, every `every`-th step of a trial.

@@ -20,11 +20,11 @@
 //! the sole cause of a time-varying policy): [`crate::model::ProcessModel`] predicts the
 //! state part of `(x, k)` and advances time by one step, the known dynamics of time.
 //! The terminal reward is `τ_N(x) = −eᵀ Q_N e`: §4.4 takes the state part of the reward,
-//! `Q_N = Q`, as every built-in task does ([`plant::QuadraticReward::terminal_reward`]).
+//! `Q_N = Q`, as every built-in task does ([`plant::Reward::terminal_reward`]).
 
 use std::ops::Deref;
 
-use plant::QuadraticReward;
+use plant::Reward;
 
 use crate::approx::MAX_IN;
 
@@ -83,7 +83,7 @@ impl Horizon {
 
     /// What a trial's return adds after its last sample: `τ_N(x_N)` if finite (Eq. 4.1),
     /// nothing otherwise.
-    pub fn final_reward(self, reward: &QuadraticReward, x_n: &[f64]) -> f64 {
+    pub fn final_reward(self, reward: &Reward, x_n: &[f64]) -> f64 {
         match self {
             Horizon::Infinite => 0.0,
             Horizon::Finite { .. } => reward.terminal_reward(x_n),

@@ -46,8 +46,11 @@ pub use build::build;
 /// Per trial: [`Agent::start_trial`] with `x_0` gives `u_0`; then for every sample
 /// [`Agent::learn`] with `r_{k+1} = ρ(x_k, u_k)` and `x_{k+1}` learns from the transition
 /// and — unless it is the trial's last — gives `u_{k+1}`. A transition that leaves a
-/// task's operating range (§6.4.2) ends the trial through [`Agent::learn_terminal`]
-/// instead.
+/// task's operating range (§6.4.2), or reaches its goal — a *termination* — ends the
+/// trial through [`Agent::learn_terminal`] instead: nothing is bootstrapped past it. The
+/// time limit is no termination (a *truncation*): the trial's last transition is learned
+/// by [`Agent::learn`] without a next action, bootstrapping through it as through any
+/// other.
 pub trait Agent: Send + checkpoint::Persist {
     /// Starts a trial in `x0` (clears eligibility traces) and writes the first action.
     fn start_trial(&mut self, x0: &[f64], u: &mut [f64]);

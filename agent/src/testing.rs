@@ -12,7 +12,7 @@
 //! The process model is a known linear one, `x' = x + b u` ([`Linear`]), so that its
 //! predictions and `∂f̂/∂u = b` are exact from the first step.
 
-use plant::QuadraticReward;
+use plant::Reward;
 
 use crate::actor_critic::{ActorCritic, Improver, Learning, TaskInfo};
 use crate::approx::rbf::{Rbf, RbfParams};
@@ -50,12 +50,13 @@ pub fn info(bound: f64) -> TaskInfo {
         action_low: vec![-bound],
         action_high: vec![bound],
         angle_mask: vec![false],
-        reward: QuadraticReward {
+        reward: Reward {
             q: vec![1.0],
             p: vec![1.0],
             reference: vec![0.0],
             terminal: vec![1.0],
             angle_mask: vec![false],
+            terms: Vec::new(),
         },
         horizon: Horizon::Finite { steps: 2 },
     }

@@ -10,7 +10,11 @@
 //! u = ½ γ P⁻¹ β_uᵀ ∂V(x)/∂xᵀ                              Eq. 6.21 (lines 12–14)
 //! ```
 //!
-//! with `β_u = ∂f̂/∂u` the input matrix of the local affine process model (Eq. 6.12),
+//! with `β_u = ∂f̂/∂u` the input matrix of the local affine process model (Eq. 6.12).
+//! A reward with an action term beyond `uᵀPu` (an absolute action cost) keeps
+//! Eq. 6.10 and solves it for `u` from the terms' gradients
+//! ([`plant::Reward::best_action`]); the reward stays separable and strictly concave in
+//! `u`, so the solution is unique. `β_u` is
 //! fitted to the model samples nearest to the state: "obtain X and Y from M^P for
 //! x_{k+1}" (line 12) comes before the action is known, so an LLR model's neighbours
 //! are chosen by the state alone ([`ProcessModel::predict_near_state`]). They were
@@ -209,9 +213,15 @@ impl Vgbp {
         let at = if at_prediction { &p.x_next[..n] } else { x };
         let (mut v, mut dv) = ([0.0], [0.0; MAX_STATE]);
         critic.value_and_jacobian(at, &mut v, &mut dv[..n]);
+        // −∂ρ/∂u_j = γ (∂V/∂x β_u)_j, solved for u_j (Eq. 6.10; 6.21 for a quadratic ρ)
+        let (reward, low, high) = (
+            &self.info.reward,
+            &self.info.action_low,
+            &self.info.action_high,
+        );
         for j in 0..m {
             let g: f64 = (0..n).map(|i| dv[i] * p.du[i * m + j]).sum();
-            u[j] = 0.5 * self.gamma * g / self.info.reward.p[j];
+            u[j] = reward.best_action(j, self.gamma * g, low[j], high[j]);
         }
 
         self.info.saturate(u);

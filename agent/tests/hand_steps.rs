@@ -30,7 +30,7 @@ use agent::horizon::Horizon;
 use agent::mlac::Mlac;
 use agent::model::ProcessModel;
 use agent::rmac::Rmac;
-use plant::QuadraticReward;
+use plant::Reward;
 
 const GAMMA: f64 = 0.9;
 const LAMBDA: f64 = 0.6;
@@ -106,12 +106,13 @@ fn info() -> TaskInfo {
         action_low: vec![-BOUND],
         action_high: vec![BOUND],
         angle_mask: vec![false],
-        reward: QuadraticReward {
+        reward: Reward {
             q: vec![1.0],
             p: vec![0.5],
             reference: vec![0.0],
             terminal: vec![1.0],
             angle_mask: vec![false],
+            terms: Vec::new(),
         },
         horizon: Horizon::Infinite,
     }

@@ -221,7 +221,7 @@ pub fn pendulum_optimum(options: &OptimumOptions) -> Result<Optimum, String> {
     };
     let mut table = vec![empty; nodes * m];
     // ρ(x, u) = −xᵀQx − P u² as the state part of each node plus the cost of each level
-    // (what `QuadraticReward::reward` computes, in the same order: checked below).
+    // (what `Reward::reward` computes, in the same order: checked below).
     let node_reward: Vec<f64> = (0..nodes)
         .map(|s| task.reward.state_reward(&grid.node(s)))
         .collect();

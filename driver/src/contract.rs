@@ -17,7 +17,8 @@
 //! Trials, rewards and learning are the rig's: the driver never sees them.
 //!
 //! The rig's end of the contract ([`DriverLink`], [`DriverWatch`], [`wait_info`],
-//! [`running`]) is defined in the crate's `link` module and re-exported here.
+//! [`running`], [`how_to_serve`]) is defined in the crate's `link` and `serving` modules
+//! and re-exported here.
 
 use std::time::Duration;
 
@@ -26,6 +27,7 @@ use iceoryx2::prelude::*;
 use wire::{Bus, Error, MAX_U, MAX_X, Qos};
 
 pub use crate::link::{DriverLink, DriverWatch, running, wait_info};
+pub use crate::serving::how_to_serve;
 
 /// The protocol version in [`DriverInfo::version`].
 pub const VERSION: u64 = 2;

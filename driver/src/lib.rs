@@ -18,6 +18,7 @@ pub mod device;
 mod fits;
 mod link;
 mod serve;
+mod serving;
 mod simulated;
 
 pub use device::{Device, REST_SAMPLES};

@@ -31,15 +31,20 @@ pub fn running(bus: &Bus) -> Vec<(String, u32)> {
 }
 
 /// The newest [`DriverInfo`] published on `rx` within `timeout` (not validated: see
-/// [`DriverInfo::validate`]); waits in steps of 100 ms, so Ctrl-C ends the wait. The
-/// error names the service, the drivers that are running and how to start one.
+/// [`DriverInfo::validate`]); waits in steps of 100 ms, so Ctrl-C ends the wait. With
+/// `say`, a driver silent for a second is said to be awaited, on stderr. The error names
+/// the service, the drivers that are running and `serve`: how to start one
+/// ([`crate::contract::how_to_serve`]).
 pub fn wait_info(
     bus: &Bus,
     rx: &Rx<DriverInfo>,
     id: &str,
     timeout: Duration,
+    say: bool,
+    serve: &str,
 ) -> Result<DriverInfo, Error> {
     let t0 = std::time::Instant::now();
+    let mut said = !say;
     loop {
         let mut newest = rx.recv_timeout(Duration::from_millis(100))?;
         while let Some(i) = rx.try_recv()? {
@@ -50,6 +55,14 @@ pub fn wait_info(
         }
         if bus.interrupted() {
             return Err("interrupted".into());
+        }
+        if !said && t0.elapsed() >= Duration::from_secs(1) && t0.elapsed() < timeout {
+            said = true;
+            eprintln!(
+                "waiting up to {:.0} s for driver {id:?} (services {}) ...",
+                timeout.as_secs_f64(),
+                service(id, "*")
+            );
         }
         if t0.elapsed() >= timeout {
             let others: Vec<String> = running(bus)
@@ -62,7 +75,7 @@ pub fn wait_info(
                 format!("running drivers: {}", others.join(", "))
             };
             return Err(format!(
-                "no driver {id:?}: nothing published on {} within {:.0} s ({hint}); start one, e.g. `python3 examples/python_driver/driver.py --driver-id {id}` (docs/driver.md)",
+                "no driver {id:?}: nothing published on {} within {:.0} s ({hint}); {serve}",
                 service(id, topic::INFO),
                 timeout.as_secs_f64(),
             )
@@ -140,9 +153,15 @@ impl DriverLink {
     }
 
     /// The driver's info: the newest one published within `timeout` (not validated:
-    /// see [`DriverInfo::validate`]). Waits in steps of 100 ms, so Ctrl-C ends the wait.
-    pub fn wait_info(&self, bus: &Bus, timeout: Duration) -> Result<DriverInfo, Error> {
-        wait_info(bus, &self.info, &self.id, timeout)
+    /// see [`DriverInfo::validate`]), as [`wait_info`] waits for it.
+    pub fn wait_info(
+        &self,
+        bus: &Bus,
+        timeout: Duration,
+        say: bool,
+        serve: &str,
+    ) -> Result<DriverInfo, Error> {
+        wait_info(bus, &self.info, &self.id, timeout, say, serve)
     }
 
     fn send(&self, mut cmd: DriverCommand) -> Result<u64, Error> {

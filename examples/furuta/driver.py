@@ -18,7 +18,7 @@ sys.path.insert(0, str(HERE.parent / "python_driver"))  # the contract's modules
 
 from furuta import DAMPING, DEFAULT_DAMPING, Furuta  # noqa: E402
 from lockstep import Services, serve_until_signalled  # noqa: E402
-from task import Task  # noqa: E402
+from task import Task, TaskError  # noqa: E402
 
 
 def main():
@@ -44,7 +44,10 @@ def main():
     )
     p.add_argument("--verbose", action="store_true", help="log resets to stderr")
     args = p.parse_args()
-    task = Task.read(args.task)
+    try:
+        task = Task.read(args.task)
+    except TaskError as e:
+        p.error(f"--task: {e}")
     if (task.n, task.m) != (4, 1):
         p.error(f"--task {args.task}: {task.n} states and {task.m} actions, not 4 and 1")
     print(

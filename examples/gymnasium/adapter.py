@@ -33,7 +33,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "python_driver"))  # the contract's modules
 
 from lockstep import Services, serve_until_signalled  # noqa: E402
-from task import Task  # noqa: E402
+from task import Task, TaskError  # noqa: E402
 
 
 def load(path: str):
@@ -84,7 +84,10 @@ def main():
     args = p.parse_args()
     mapping = load(args.mapping)
     task_path = args.task or str(Path(args.mapping).resolve().parent / mapping.TASK)
-    task = Task.read(task_path)
+    try:
+        task = Task.read(task_path)
+    except TaskError as e:
+        p.error(f"--task: {e}")
     driver_id = args.driver_id or task.name.replace(".", "-")
     try:
         sim = Environment(mapping, task, args.seed)

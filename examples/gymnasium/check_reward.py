@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
-"""Checks that a task file's quadratic reward is the environment's: steps the environment
-from random states with random actions and compares each reward with the task's
-rho(x, u) = -(e'Qe) - u'Pu of the mapped state before the step (angle errors wrapped) and
-the action clipped to the bounds.
+"""Checks that a task file's reward is the environment's: steps the environment from
+random states with random actions and compares each reward with the task's rho(x, u)
+(task.py: the quadratic form and any further terms, as the rig computes it) of the
+mapped state before the step and the action clipped to the bounds.
 
     python3 examples/gymnasium/check_reward.py --mapping examples/gymnasium/pendulum_v1.py
 
@@ -10,7 +10,6 @@ Prints the largest difference and exits 1 if it exceeds 1e-9.
 """
 
 import argparse
-import math
 import random
 import sys
 from pathlib import Path
@@ -24,21 +23,6 @@ sys.path.insert(0, str(HERE))
 
 from adapter import load  # noqa: E402
 from task import Task  # noqa: E402
-
-
-def wrap(a):
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
-
-
-def rho(task, x, u):
-    r = 0.0
-    for i in range(task.n):
-        e = x[i] - task.reference[i]
-        e = wrap(e) if task.angles[i] else e
-        r -= task.q[i] * e * e
-    for j in range(task.m):
-        r -= task.p[j] * u[j] * u[j]
-    return r
 
 
 def main():
@@ -60,7 +44,7 @@ def main():
         u = [rng.uniform(2 * lo, 2 * hi) for lo, hi in zip(task.low, task.high)]
         _, reward, _, _, _ = env.step(np.asarray(u))
         clipped = [min(max(v, lo), hi) for v, lo, hi in zip(u, task.low, task.high)]
-        worst = max(worst, abs(float(reward) - rho(task, x, clipped)))
+        worst = max(worst, abs(float(reward) - task.reward(x, clipped)))
     print(f"{mapping.ENV_ID}: {args.steps} steps, largest |reward - rho(x, u)| = {worst:.3g}")
     return 0 if worst <= 1e-9 else 1
 

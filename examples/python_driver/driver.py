@@ -49,7 +49,7 @@ from messages import (  # the modules next to this file
     DriverSample,
 )
 from lockstep import Services, info, serve
-from task import Task
+from task import Task, TaskError
 
 # The rig's pendulum task, shipped with it.
 PENDULUM_TASK = Path(__file__).resolve().parents[2] / "plant" / "tasks" / "pendulum.toml"
@@ -421,8 +421,8 @@ def main():
         p.error("--speed applies to the realtime clock only")
     try:
         task = Task.read(args.task)
-    except (OSError, KeyError, ValueError) as e:
-        p.error(f"--task {args.task}: {e!r}")
+    except TaskError as e:
+        p.error(f"--task: {e}")
     if (task.n, task.m) != (2, 1):
         p.error(f"--task {args.task}: {task.n} states and {task.m} actions; this driver is a pendulum (2 and 1)")
     ok = all(ch.isascii() and (ch.isalnum() or ch in "-_") for ch in args.driver_id)

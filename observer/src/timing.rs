@@ -40,10 +40,10 @@
 //! * **Trial end.** The agent's last transition, `(x̂_{N−1|N−2}, u_{N−1}) → x̂_{N|N−1}`,
 //!   is learned at `t_{N−1}` without a next action ([`Call::Last`]); the plant's last
 //!   sample `N` only closes the trial ([`Call::Hold`]).
-//! * **Terminal transitions** (the state left the operating range at `t_j`, §6.4.2): the
-//!   pending transition `(x̂_{j|j−1}, u_j)` is learned as terminal with the plant's range
-//!   penalty and next state `x̂_{j+1|j}`, the model's continuation (the value beyond is zero
-//!   whatever it is).
+//! * **Terminal transitions** (the state left the operating range at `t_j`, §6.4.2, or
+//!   reached the goal): the pending transition `(x̂_{j|j−1}, u_j)` is learned as terminal
+//!   with the plant's reward of it (the range's penalty, the goal's reward) and next state
+//!   `x̂_{j+1|j}`, the model's continuation (the value beyond is zero whatever it is).
 //! * **Greedy evaluation** runs the same pipeline without exploration or learning: the
 //!   greedy action at `x̂_{k+1|k}` for sample `k + 1`.
 //!
@@ -67,14 +67,16 @@ pub struct Sample<'a> {
     /// Predictive timing, right after the start: `y` is `x_0` again and `u_next` the first
     /// interval's action, the answer to the start sample.
     pub primed: bool,
-    /// The trial's last sample (its `N`-th, or the one that left the operating range).
+    /// The trial's last sample (its `N`-th, or the one that left the operating range or
+    /// reached the goal).
     pub end: bool,
-    /// The state has left the operating range (with `end`).
+    /// The trial terminated here: the state left the operating range or reached the goal
+    /// (with `end`).
     pub terminal: bool,
     /// The measurement `y_k`.
     pub y: &'a [f64],
     /// The plant's reward of the interval before this sample (the range's penalty if it
-    /// was left).
+    /// was left, the goal's reward if it was reached).
     pub reward: f64,
     /// The action applied over the interval before this sample.
     pub u_applied: &'a [f64],

@@ -1,8 +1,9 @@
 //! One trial on the simulated plant, in the manner of a Gymnasium environment:
 //! [`Episode::reset`] puts the plant at a start state, [`Episode::step`] runs one sample
 //! interval and says what came of it ([`Step`]: the reward, whether the trial ended
-//! because the state left the operating range — *terminated*, §6.4.2 — or because its
-//! time is up — *truncated*).
+//! because the state left the operating range (§6.4.2) or reached the goal —
+//! *terminated*: nothing follows, the learners bootstrap nothing past it — or because
+//! its time is up — *truncated*: the state goes on, the learners bootstrap through it).
 //!
 //! The trial's start is sampled once, or, in predictive timing, twice
 //! ([`Episode::start`]): the agent's answer to the start state is the first interval's
@@ -20,9 +21,11 @@ use crate::{MAX_STATE, Plant};
 pub struct Step {
     /// The sample the interval led to: `k + 1` after interval `k`.
     pub sample: usize,
-    /// The interval's reward `ρ(x_k, u_k)` (Eq. 3.16), or the operating range's penalty.
+    /// The interval's reward `ρ(x_k, u_k)` (Eq. 3.16), or the operating range's penalty,
+    /// or the goal's reward.
     pub reward: f64,
-    /// The state left the operating range: the trial ends here, at a terminal state.
+    /// The state left the operating range or reached the goal: the trial ends here, at a
+    /// terminal state.
     pub terminated: bool,
     /// The trial's last sample: its time is up.
     pub truncated: bool,
@@ -56,7 +59,7 @@ impl TimeLimit {
     }
 
     /// The next interval has been run, with `reward`; `terminated`: the state left the
-    /// operating range.
+    /// operating range or reached the goal.
     pub fn step(&mut self, reward: f64, terminated: bool) -> Step {
         debug_assert!(self.run < self.steps, "the trial has ended");
         self.run += 1;
@@ -129,7 +132,7 @@ impl Episode {
 
     /// One sample interval integrated by `integrate` (in real time: piecewise, as actions
     /// arrive); its reward is `ρ(x_k, u)` with the action in effect at its end, or the
-    /// operating range's penalty. Allocates nothing.
+    /// terminal transition's reward. Allocates nothing.
     pub fn step_with(&mut self, integrate: impl FnOnce(&mut Plant)) -> Step {
         let n = self.plant.task().state_dim();
         let mut x_k = [0.0; MAX_STATE];
@@ -155,7 +158,7 @@ impl Episode {
         &self.actuator
     }
 
-    /// The samples of the trial not run (it left the operating range).
+    /// The samples of the trial not run (it ended early).
     pub fn skipped(&self) -> usize {
         self.limit.skipped()
     }
@@ -221,5 +224,30 @@ mod tests {
         assert!(s.terminated && s.reward < -1e4, "{s:?}");
         assert_eq!(e.skipped(), steps - s.sample);
         assert!(e.skipped() > 0);
+    }
+
+    /// Reaching the goal terminates the trial with the goal's reward, in place of ρ;
+    /// elsewhere the reward is ρ and the trial runs to its time limit (truncated).
+    #[test]
+    fn reaching_the_goal_terminates_the_trial_with_its_reward() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../examples/tasks/pendulum-reach.toml");
+        let task = Arc::new(Task::from_file(&path).unwrap());
+        let mut e = Episode::new(
+            Plant::new(task.clone()),
+            Actuator::new(1, false, Delays::fixed(0.0)),
+        );
+        e.reset(&[0.05, 0.0]);
+        let s = e.step(&[0.0]);
+        assert!(s.terminated && !s.truncated && s.reward == 10.0, "{s:?}");
+        assert_eq!(e.skipped(), task.steps_per_trial() - 1);
+        e.reset(&[std::f64::consts::PI, 0.0]);
+        let x0 = e.plant().state().to_vec();
+        let first = e.step(&[0.0]);
+        assert_eq!(first.reward, task.reward.reward(&x0, &[0.0]));
+        let last = std::iter::repeat_with(|| e.step(&[0.0]))
+            .find(Step::ended)
+            .unwrap();
+        assert!(last.truncated && !last.terminated, "{last:?}");
     }
 }

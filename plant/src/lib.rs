@@ -4,10 +4,13 @@
 //!   [`pendulum::Pendulum`] (Appendix A.1), [`two_link::TwoLink`] (Appendix A.2) and
 //!   [`double_integrator::DoubleIntegrator`] (a linear check system).
 //! * [`rk4`] — fixed-step fourth-order Runge–Kutta with a zero-order-hold input.
-//! * [`reward::QuadraticReward`] — Eq. 3.16 / 5.1 / 5.2 / 6.20 with ∂ρ/∂x and ∂ρ/∂u.
+//! * [`reward::Reward`] — Eq. 3.16 / 5.1 / 5.2 / 6.20, and the terms a task file adds
+//!   (periodic, goal bonus, absolute action cost), with ∂ρ/∂x and ∂ρ/∂u.
+//! * [`region::Region`] — a box or a ball in the state space: goals.
+//! * [`start::StartDistribution`] — start states drawn from the run seed.
 //! * [`sensor::Sensor`] — what is measured: the full state or encoder angles.
 //! * [`task::Task`] — everything an experiment needs to know about a system: dynamics,
-//!   sampling time, action bounds, reward, start states, trial length.
+//!   sampling time, action bounds, reward, start states, trial length, how trials end.
 //! * [`delay`] — sample-to-actuation delays (fixed or recorded) and when an action takes
 //!   effect (direct or one-sample pipeline).
 //! * [`Plant`] — the step function: saturate the action, integrate one sample period,
@@ -30,16 +33,18 @@ pub mod delay;
 pub mod double_integrator;
 pub mod episode;
 pub mod pendulum;
+pub mod region;
 pub mod reward;
 pub mod rk4;
 pub mod safety;
 pub mod schedule;
 pub mod sensor;
+pub mod start;
 pub mod task;
 pub mod two_link;
 
-pub use reward::QuadraticReward;
-pub use task::{OperatingRange, Simulation, SystemName, Task, TaskFile};
+pub use reward::Reward;
+pub use task::{Goal, OperatingRange, Simulation, SystemName, Task, TaskFile};
 
 /// Largest state dimension of any system in this crate (the two-link arm has 4; a
 /// finite-horizon learner appends time, which lives in the agent, not here).
@@ -62,13 +67,15 @@ pub trait Dynamics: Send + Sync {
 /// Every action passes the plant's [`safety::Supervisor`]: saturated to the task's bounds
 /// (Eq. 6.11's `sat`), or, with a non-finite component, replaced by zero, the safe action;
 /// both counted. A task with an [`OperatingRange`] ends its trial when the state leaves
-/// the range (§6.4.2): [`Plant::terminated`].
+/// the range (§6.4.2), a task with a [`Goal`] when the state reaches it:
+/// [`Plant::terminated`].
 pub struct Plant {
     task: std::sync::Arc<Task>,
     x: Vec<f64>,
     applied: Vec<f64>,
     safety: safety::Supervisor,
-    /// The operating range's penalty, once the state has left it this trial.
+    /// The reward of the terminal transition — the operating range's penalty, the goal's
+    /// reward — once the trial has ended there.
     terminated: Option<f64>,
 }
 
@@ -104,13 +111,14 @@ impl Plant {
         self.safety.start_trial();
     }
 
-    /// Whether the state has left the task's operating range: the trial is over, and
-    /// the last step's reward was the range's penalty.
+    /// Whether the state has left the task's operating range or reached its goal: the
+    /// trial is over (terminated), and the last step's reward was the range's penalty or
+    /// the goal's reward.
     pub fn terminated(&self) -> bool {
         self.terminated.is_some()
     }
 
-    /// Wraps the angles and checks the operating range after an integration.
+    /// Wraps the angles and checks the operating range and the goal after an integration.
     fn settle(&mut self) {
         self.task.wrap_state(&mut self.x);
         if self.terminated.is_none() {
@@ -135,7 +143,8 @@ impl Plant {
 
     /// Applies `u` (saturated) for one sample period `Ts` and returns the reward
     /// `ρ(x_k, u_k)` of the transition: the state before it and the action actually applied
-    /// (Eq. 3.16) — or the operating range's penalty if the transition leaves the range.
+    /// (Eq. 3.16) — or the operating range's penalty if the transition leaves the range,
+    /// the goal's reward if it reaches the goal.
     pub fn step(&mut self, u: &[f64]) -> f64 {
         self.safety.admit(u, &mut self.applied);
         let r = self.task.reward.reward(&self.x, &self.applied);
@@ -164,7 +173,8 @@ impl Plant {
         self.reward_of_transition(self.task.reward.reward(&x_k, &self.applied))
     }
 
-    /// `r`, or the operating range's penalty once the range has been left.
+    /// `r`, or the terminal transition's reward once the trial has ended (the range's
+    /// penalty, the goal's reward).
     pub fn reward_of_transition(&self, r: f64) -> f64 {
         self.terminated.unwrap_or(r)
     }

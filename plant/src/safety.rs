@@ -7,7 +7,9 @@
 //! * [`Supervisor::period`] at every sample instant runs the stale-action [`Watchdog`]:
 //!   no fresh action for a whole period ⇒ the safe action until actions resume;
 //! * [`Supervisor::check`] on every new state: leaving the task's operating range
-//!   (§6.4.2: the arm's ±1.2 rad) ends the trial with the thesis's penalty;
+//!   (§6.4.2: the arm's ±1.2 rad) ends the trial with the thesis's penalty — and, not a
+//!   safety matter but decided at the same place by every plant, reaching the task's
+//!   goal ends it with the goal's reward;
 //! * [`Supervisor::counts`] reports all of it.
 //!
 //! A Rust driver for a DC motor would, per sample instant `t_k`:
@@ -32,7 +34,7 @@
 //! assert_eq!((c.clamped, c.rejected, c.range_stops), (1, 1, 1));
 //! ```
 
-use crate::{OperatingRange, Task};
+use crate::{Goal, OperatingRange, Task};
 
 /// What [`Supervisor::admit`] did with an action.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -93,6 +95,8 @@ pub struct Supervisor {
     low: Vec<f64>,
     high: Vec<f64>,
     range: Option<OperatingRange>,
+    goal: Option<Goal>,
+    angles: Vec<bool>,
     watchdog: Watchdog,
     counts: SafetyCounts,
 }
@@ -105,6 +109,8 @@ impl Supervisor {
             low: task.action_low.clone(),
             high: task.action_high.clone(),
             range: task.operating_range.clone(),
+            goal: task.goal.clone(),
+            angles: task.angle_mask.clone(),
             watchdog: Watchdog::new(1),
             counts: SafetyCounts::default(),
         }
@@ -137,16 +143,18 @@ impl Supervisor {
         self.watchdog.reset();
     }
 
-    /// `Some(penalty)` if state `x` lies outside the operating range (a non-finite
-    /// component counts as outside): the trial must end, its last reward the penalty.
+    /// Whether the trial ends at state `x`, and with which reward: `Some(penalty)` if `x`
+    /// lies outside the operating range (a non-finite component counts as outside;
+    /// counted), else `Some(reward)` of the goal if `x` lies in it, else `None`.
     pub fn check(&mut self, x: &[f64]) -> Option<f64> {
-        let range = self.range.as_ref()?;
-        if range.excludes(x) {
+        if let Some(range) = &self.range
+            && range.excludes(x)
+        {
             self.counts.range_stops += 1;
-            Some(range.penalty)
-        } else {
-            None
+            return Some(range.penalty);
         }
+        let goal = self.goal.as_ref()?;
+        goal.region.contains(x, &self.angles).then_some(goal.reward)
     }
 
     /// How often each measure acted so far.

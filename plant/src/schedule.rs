@@ -3,13 +3,15 @@
 //! simulated time.
 //!
 //! A run is `trials` consecutive learning trials; learning trial `n` (from 1) starts from
-//! the task's start state `n − 1` modulo their number (§6.4.2 cycles through several).
-//! Every `eval_every` learning trials (0: never) an evaluation follows: one greedy trial
-//! from each of the task's start states — no exploration, no learning — whose returns'
-//! mean is the greedy return. Greedy trials carry the number of the learning trial they
+//! the task's start state `n − 1` modulo their number (§6.4.2 cycles through several), or,
+//! when the task has a start distribution, from its draw for trial `n` of the run seed
+//! ([`crate::start`]). Every `eval_every` learning trials (0: never) an evaluation
+//! follows: one greedy trial from each of the task's fixed start states — no exploration,
+//! no learning, the same states at every evaluation, so that evaluations compare — whose
+//! returns' mean is the greedy return. Greedy trials carry the number of the learning trial they
 //! evaluate, do not count as learning trials and add nothing to the simulated learning
-//! time. A learning trial that leaves the operating range ends early (§6.4.2): the
-//! samples it did not run do not count either.
+//! time. A learning trial that leaves the operating range ends early (§6.4.2), as does
+//! one that reaches the task's goal: the samples it did not run do not count either.
 //!
 //! The in-process runner and the plant process (simulated or with an external driver)
 //! iterate the same schedule:
@@ -50,20 +52,23 @@ pub struct Schedule {
     eval_every: u32,
     /// Learning trials ended so far.
     done: u32,
-    /// Samples the learning trials so far did not run (they left the operating range).
+    /// Samples the learning trials so far did not run (they ended early).
     skipped: u64,
+    /// The run's seed, which start distributions draw from.
+    run_seed: u64,
 }
 
 impl Schedule {
     /// A run of `trials` learning trials of `task`, evaluated every `eval_every` (0:
-    /// never).
-    pub fn new(task: Arc<Task>, trials: u32, eval_every: u32) -> Self {
+    /// never), its start distribution (if any) drawn from `run_seed`.
+    pub fn new(task: Arc<Task>, trials: u32, eval_every: u32, run_seed: u64) -> Self {
         Self {
             task,
             trials,
             eval_every,
             done: 0,
             skipped: 0,
+            run_seed,
         }
     }
 
@@ -79,17 +84,18 @@ impl Schedule {
     /// `None` when the run's learning trials are done.
     pub fn next_trial(&self) -> Option<Trial> {
         (self.done < self.trials).then(|| {
-            let starts = &self.task.initial_states;
-            self.trial(
-                self.done + 1,
-                false,
-                &starts[self.done as usize % starts.len()],
-            )
+            let number = self.done + 1;
+            let task = &self.task;
+            let x0 = match &task.start_distribution {
+                Some(d) => d.draw(self.run_seed, number, task.operating_range.as_ref()),
+                None => task.initial_states[self.done as usize % task.initial_states.len()].clone(),
+            };
+            self.trial(number, false, &x0)
         })
     }
 
     /// Ends the learning trial [`Schedule::next_trial`] gave, which did not run `skipped`
-    /// of its samples (it left the operating range). Returns the greedy trials of the
+    /// of its samples (it ended early). Returns the greedy trials of the
     /// evaluation that follows it, if one is due.
     pub fn end_trial(&mut self, skipped: usize) -> Option<Vec<Trial>> {
         debug_assert!(self.done < self.trials, "no learning trial is running");
@@ -137,6 +143,8 @@ impl Schedule {
 
 #[cfg(test)]
 mod tests {
+    use std::f64::consts::PI;
+
     use super::*;
     use crate::SystemName;
 
@@ -148,7 +156,7 @@ mod tests {
         let task = Arc::new(Task::new(SystemName::Arm64));
         let starts = task.initial_states.len();
         assert!(starts > 1);
-        let mut s = Schedule::new(task.clone(), 5, 2);
+        let mut s = Schedule::new(task.clone(), 5, 2, 1);
         let mut seen = Vec::new();
         while let Some(t) = s.next_trial() {
             assert!(!t.greedy);
@@ -178,13 +186,45 @@ mod tests {
     #[test]
     fn a_resumed_schedule_continues_the_run() {
         let task = Arc::new(Task::new(SystemName::Arm64));
-        let mut straight = Schedule::new(task.clone(), 6, 0);
+        let mut straight = Schedule::new(task.clone(), 6, 0, 1);
         for skipped in [0, 7, 2] {
             straight.end_trial(skipped);
         }
-        let mut resumed = Schedule::new(task, 6, 0);
+        let mut resumed = Schedule::new(task, 6, 0, 1);
         resumed.resume(3, straight.sim_time_s());
         assert_eq!(resumed.next_trial(), straight.next_trial());
         assert_eq!(resumed.skipped_samples(), 9);
+    }
+
+    /// With a start distribution, learning trials start from the run seed's draws — the
+    /// same for the same seed, also after a resume; others for another seed — and
+    /// evaluations from the fixed start states.
+    #[test]
+    fn learning_trials_draw_their_starts_and_evaluations_keep_the_fixed_ones() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../examples/tasks/pendulum-reach.toml");
+        let task = Arc::new(Task::from_file(&path).unwrap());
+        let starts = |seed: u64| -> Vec<Vec<f64>> {
+            let mut s = Schedule::new(task.clone(), 6, 2, seed);
+            let mut x0s = Vec::new();
+            while let Some(t) = s.next_trial() {
+                x0s.push(t.x0);
+                for g in s.end_trial(0).into_iter().flatten() {
+                    assert!(task.initial_states.contains(&g.x0), "{:?}", g.x0);
+                }
+            }
+            x0s
+        };
+        let a = starts(11);
+        assert_eq!(a, starts(11));
+        assert_ne!(a, starts(12));
+        assert!(
+            a.iter()
+                .all(|x| (0.9 * PI..=1.1 * PI).contains(&x[0]) && x[1].abs() <= 0.5)
+        );
+        assert!(a.windows(2).all(|w| w[0] != w[1]), "{a:?}");
+        let mut resumed = Schedule::new(task.clone(), 6, 2, 11);
+        resumed.resume(4, 0.0);
+        assert_eq!(resumed.next_trial().unwrap().x0, a[4]);
     }
 }

@@ -4,6 +4,8 @@
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
+mod common;
+
 use plant::task::builtin;
 use plant::{SystemName, Task, TaskFile};
 
@@ -54,13 +56,8 @@ high = [0.5, inf, inf, inf]
 penalty = -1000
 "#;
 
-/// `text` written to a file of its own.
 fn write(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rig-task-files-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
+    common::write("task-files", name, text)
 }
 
 #[test]
@@ -246,19 +243,7 @@ fn bad_task_files_are_one_line_errors_naming_file_key_and_what_is_allowed() {
             "not a valid task file: line ",
         ),
     ];
-    for (what, text, want) in cases {
-        let path = write("bad.toml", text);
-        let e = match Task::from_file(&path) {
-            Ok(_) => panic!("{what}: accepted"),
-            Err(e) => e.to_string(),
-        };
-        assert!(!e.contains('\n'), "{what}: one line: {e}");
-        assert!(
-            e.starts_with(&format!("{}: ", path.display())),
-            "{what}: names the file: {e}"
-        );
-        assert!(e.contains(want), "{what}: {e}\n  should contain: {want}");
-    }
+    common::assert_refused("task-files", cases);
     let e = Task::from_file(&write("missing", "").with_extension("absent"))
         .err()
         .unwrap();

@@ -50,6 +50,7 @@ pub fn main(args: &Args) -> ExitCode {
             .map_err(|e| e.to_string())?
             .as_secs_f64();
         Ok(CheckOptions {
+            serve: driver::contract::how_to_serve(&task, &d.id, args.task.named().as_deref()),
             driver: d.id,
             task: Arc::new(task),
             timeout: d.timeout,

@@ -29,6 +29,16 @@ impl TaskArgs {
             None => Ok(Task::new(self.system)),
         }
     }
+
+    /// The task as these flags name it (`--task FILE`, `--system NAME`), if given.
+    pub fn named(&self) -> Option<String> {
+        match &self.task {
+            Some(path) => Some(format!("--task {}", path.display())),
+            None => {
+                (self.system != SystemName::Pendulum).then(|| format!("--system {}", self.system))
+            }
+        }
+    }
 }
 
 /// Which external driver, and how long to wait for it (`rig run`: with `--plant

@@ -5,7 +5,7 @@
 //! The Python tests need `iceoryx2==0.10.0` importable by `$RIG_PYTHON` (default
 //! `python3`); without it they print why and pass — CI installs it, so they run there.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Output, Stdio};
 use std::time::{Duration, Instant};
 
@@ -598,6 +598,57 @@ fn no_driver_is_a_clear_error_after_the_timeout() {
         let out = rig().args(args).output().unwrap();
         assert_eq!(out.status.code(), Some(2), "{args:?}");
     }
+}
+
+/// Waiting for a driver that is not there, `rig check-driver` says that it waits, as
+/// `rig run` does; the error then names a command that serves the task checked — or none,
+/// for a task without a simulation; and a refused `rig run` leaves no output folder.
+#[test]
+fn waiting_for_no_driver_is_said_and_the_hint_fits_the_task() {
+    let id = format!("absent{}", std::process::id());
+    let dir = tmp("absent");
+    let check = |extra: &[&str]| {
+        let out = rig()
+            .args(["check-driver", "--driver", &id, "--driver-timeout", "2"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(1));
+        text(&out).1
+    };
+    let stderr = check(&[]);
+    assert!(
+        stderr.contains(&format!("waiting up to 2 s for driver {id:?}")),
+        "{stderr}"
+    );
+    let arm = check(&["--system", "arm-6.4"]);
+    assert!(
+        arm.contains(&format!(
+            "`rig sim-driver --system arm-6.4 --driver-id {id}`"
+        )) && !arm.contains("python_driver"),
+        "{arm}"
+    );
+    let balance = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/tasks/pendulum-balance.toml"),
+    )
+    .unwrap();
+    let driven = dir.join("driven.toml");
+    std::fs::write(&driven, balance.split("[simulation]").next().unwrap()).unwrap();
+    let none = check(&["--task", driven.to_str().unwrap()]);
+    assert!(
+        none.contains(
+            "the rig has no driver for task \"pendulum-balance\", which has no [simulation]"
+        ) && !none.contains("e.g."),
+        "{none}"
+    );
+    let out_dir = dir.join("refused");
+    let out = run_external(&id, &["--driver-timeout", "1", "--quiet"], &out_dir);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        !out_dir.exists(),
+        "a refused run left {}",
+        out_dir.display()
+    );
 }
 
 /// Per driver sample `seq`: field `key` of the recorded `/driver/sample` messages, and

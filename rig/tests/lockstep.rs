@@ -195,6 +195,129 @@ fn the_python_task_hash_is_the_rigs() {
     }
 }
 
+/// Runs examples/python_driver/task.py with `args` and `stdin`; `None` (the reason
+/// printed) when the Python cannot run it (tomllib needs Python 3.11).
+fn task_py(args: &[&str], stdin: &str) -> Option<Output> {
+    use std::io::Write;
+    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
+    let probe = std::process::Command::new(&python)
+        .args(["-c", "import tomllib"])
+        .output();
+    if !probe.is_ok_and(|o| o.status.success()) {
+        println!("skipped: {python} has no tomllib (Python 3.11 or later)");
+        return None;
+    }
+    let mut child = std::process::Command::new(&python)
+        .arg(root().join("examples/python_driver/task.py"))
+        .args(args)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(stdin.as_bytes())
+        .unwrap();
+    Some(child.wait_with_output().unwrap())
+}
+
+/// `task.py`'s ρ(x, u) is the rig's, bit for bit, for task files with and without the
+/// terms beyond the quadratic form, at states inside and outside their goals and
+/// actions of both signs.
+#[test]
+fn the_python_reward_is_the_rigs() {
+    let files = [
+        "examples/tasks/pendulum-reach.toml",
+        "examples/gymnasium/pendulum-v1.toml",
+        "plant/tasks/arm-6.4.toml",
+    ];
+    for file in files {
+        let path = root().join(file);
+        let task = plant::Task::from_file(&path).unwrap();
+        let (n, m) = (task.state_dim(), task.action_dim());
+        let mut points: Vec<(Vec<f64>, Vec<f64>)> = (0..40)
+            .map(|k| {
+                let v = |i: usize| ((k * 7 + i * 5) % 13) as f64 * 0.55 - 3.3;
+                (
+                    (0..n).map(v).collect(),
+                    (0..m).map(|j| v(n + j) * 0.3).collect(),
+                )
+            })
+            .collect();
+        points.push((vec![0.05; n], vec![0.0; m]));
+        points.push((vec![0.3; n], vec![-0.2; m]));
+        let stdin: String = points
+            .iter()
+            .map(|(x, u)| {
+                let words = |v: &[f64]| {
+                    v.iter()
+                        .map(|a| format!("{a:?}"))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                };
+                format!("{} | {}\n", words(x), words(u))
+            })
+            .collect();
+        let Some(out) = task_py(&["--rewards", path.to_str().unwrap()], &stdin) else {
+            return;
+        };
+        assert!(out.status.success(), "{}", stderr(&out));
+        let got: Vec<f64> = stdout(&out).lines().map(|l| l.parse().unwrap()).collect();
+        assert_eq!(got.len(), points.len());
+        for ((x, u), py) in points.iter().zip(got) {
+            let rig = task.reward.reward(x, u);
+            assert_eq!(
+                py.to_bits(),
+                rig.to_bits(),
+                "{file}: ρ({x:?}, {u:?}): {py} vs {rig}"
+            );
+        }
+    }
+}
+
+/// `task.py` refuses a task file the rig refuses for its keys, in one line naming the
+/// file and the key: an unknown key (a misspelt `angel`, which it used to hash as if
+/// absent) and a missing one (a KeyError traceback before).
+#[test]
+fn the_python_task_reader_refuses_unknown_and_missing_keys() {
+    let dir = tmp("keys");
+    let text =
+        std::fs::read_to_string(root().join("examples/tasks/pendulum-balance.toml")).unwrap();
+    let cases = [
+        (
+            "misspelt",
+            text.replacen("angle = true", "angel = true", 1),
+            "`state[0].angel`: unknown key, expected one of `name`, `unit`, `angle`, `range`",
+        ),
+        (
+            "missing",
+            text.replacen("sampling_time = 0.03", "", 1),
+            "`sampling_time`: missing",
+        ),
+    ];
+    for (what, text, want) in cases {
+        let path = dir.join(format!("{what}.toml"));
+        std::fs::write(&path, text).unwrap();
+        assert!(
+            plant::Task::from_file(&path).is_err(),
+            "the rig refuses {what}"
+        );
+        let Some(out) = task_py(&[path.to_str().unwrap()], "") else {
+            return;
+        };
+        let e = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{what}: {e}");
+        assert_eq!(e.trim().lines().count(), 1, "{what}: one line: {e}");
+        assert!(
+            e.contains(&format!("{}: {want}", path.display())),
+            "{what}: {e}"
+        );
+    }
+}
+
 /// The repository's root.
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")

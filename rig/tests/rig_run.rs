@@ -334,6 +334,56 @@ fn a_task_file_runs_the_same_in_both_drivers() {
     assert_ne!(learn_and_run(&dir, "-plain", &args), ran);
 }
 
+/// A task with reward terms beyond the quadratic form, a goal that ends trials and start
+/// states drawn from the run seed (examples/tasks/pendulum-reach.toml, its goal moved to
+/// where some drawn starts lie) runs the same in both drivers, for VGBP (whose action
+/// solves Eq. 6.10 with the absolute action cost) and MLAC; trials end early at the goal;
+/// another seed draws other starts.
+#[test]
+fn a_goal_task_with_drawn_starts_runs_the_same_in_both_drivers() {
+    let dir = tmp("reach");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/tasks/pendulum-reach.toml"),
+    )
+    .unwrap();
+    let near = "low = [-0.1, -0.5]\nhigh = [0.1, 0.5]";
+    assert!(text.contains(near));
+    let task = dir.join("reach.toml");
+    std::fs::write(
+        &task,
+        text.replace(near, "low = [-inf, 0.3]\nhigh = [inf, inf]"),
+    )
+    .unwrap();
+    let task = task.to_str().unwrap();
+    for (tag, learner) in [("vgbp", ["vgbp", "lstd"]), ("mlac", ["mlac", "llr"])] {
+        // MLAC_FH's 6 trials, 2 evaluations, quiet, `--out`.
+        let args = [
+            ["--task", task, "--algo", learner[0], "--approx", learner[1]].as_slice(),
+            &MLAC_FH[6..],
+        ]
+        .concat();
+        let ran = learn_and_run(&dir, tag, &args);
+        let t: Vec<f64> = ran
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(2).unwrap().parse().unwrap())
+            .collect();
+        assert_eq!(t.len(), 6);
+        let early = std::iter::once(0.0).chain(t.iter().copied()).zip(&t);
+        assert!(
+            early.filter(|(a, b)| *b - a < 4.0 - 1e-9).count() > 0,
+            "{tag}: {ran}"
+        );
+        let mut seeded = args.clone();
+        seeded.splice(0..0, ["--seed", "2"]);
+        assert_ne!(
+            learn_and_run(&dir, &format!("{tag}-seed2"), &seeded),
+            ran,
+            "{tag}"
+        );
+    }
+}
+
 #[test]
 fn angle_sensing_and_observers_over_the_wire_reproduce_rig_learn() {
     // The plant process measures with the encoder (noise from the run seed's stream 2, as

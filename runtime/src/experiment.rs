@@ -9,8 +9,9 @@
 //! `eval_every` trials one extra *greedy* trial is run from the same start state: no
 //! exploration, no learning, and it does not count as learning time. A task with several
 //! start states (§6.4.2) is evaluated from each of them, and the greedy return is their
-//! mean. A trial that leaves the task's operating range ends there (§6.4.2): the agent
-//! learns the transition as terminal, and the simulated time counts only the samples run.
+//! mean. A trial that leaves the task's operating range (§6.4.2) or reaches its goal ends
+//! there: the agent learns the transition as terminal, and the simulated time counts only
+//! the samples run.
 //!
 //! What the observer sees is the plant's *sensor* output (`[observer] sensor`: the full
 //! state, or encoder angles — [`plant::sensor`]); the true state stays with the plant and
@@ -137,7 +138,7 @@ impl Experiment {
             front: front(&task, cfg),
             horizon: cfg.agent.horizon.of(&task),
             origin: cfg.origin(run),
-            schedule: Schedule::new(task.clone(), cfg.run.trials, cfg.run.eval_every),
+            schedule: Schedule::new(task.clone(), cfg.run.trials, cfg.run.eval_every, run_seed),
             task,
             agent,
             run,
@@ -299,7 +300,8 @@ impl Experiment {
     }
 
     /// One greedy trial from `x0`: the time response of the current policy (until the
-    /// trial's end or until the system leaves its operating range).
+    /// trial's end or until it terminates: the system left its operating range or reached
+    /// its goal).
     pub fn greedy_trajectory(&mut self, x0: &[f64]) -> Vec<Sample> {
         let mut u = vec![0.0; self.task.action_dim()];
         self.start(x0, true, &mut u);

@@ -11,9 +11,14 @@
 //! 3. per state: angle flag, range low, range high; per action: low, high;
 //! 4. the reward: `Q` (n), `P` (m), the reference (n), `Q_N` (n);
 //! 5. the number of start states, then each (n);
-//! 6. the operating range flag, and if set: per state low, high; then the penalty.
+//! 6. the operating range flag, and if set: per state low, high; then the penalty;
+//! 7. only what the task has of these, each as a tag byte and its values: 1 the cosine
+//!    weights (n); 2 the absolute action weights (m); 3 the reward's goal: its region
+//!    ([`crate::region::Region::digest`]) and bonus; 4 the terminal goal: its region and
+//!    reward; 5 the start distribution ([`crate::start::StartDistribution::digest`]).
 //!
-//! Names of components, units, the description and the simulation are not part of it.
+//! A task without the keys of item 7 hashes as before they existed. Names of components,
+//! units, the description and the simulation are not part of it.
 
 use sha2::{Digest, Sha256};
 
@@ -57,6 +62,18 @@ pub fn canonical_bytes(task: &Task) -> Vec<u8> {
             num(&mut b, range.penalty);
         }
     }
+    for term in &r.terms {
+        term.digest(&mut b);
+    }
+    if let Some(goal) = &task.goal {
+        b.push(4);
+        goal.region.digest(&mut b);
+        num(&mut b, goal.reward);
+    }
+    if let Some(d) = &task.start_distribution {
+        b.push(5);
+        d.digest(&mut b);
+    }
     b
 }
 
@@ -65,4 +82,14 @@ pub fn canonical_bytes(task: &Task) -> Vec<u8> {
 pub fn hash(task: &Task) -> u64 {
     let d = Sha256::digest(canonical_bytes(task));
     u64::from_le_bytes(d[..8].try_into().expect("SHA-256 has 32 bytes"))
+}
+
+/// Appends `kind` and then `(first_i, second_i)` per component as little-endian `f64` to
+/// `b`: the canonical bytes of a region or a start distribution.
+pub(crate) fn kind_and_pairs(b: &mut Vec<u8>, kind: u8, first: &[f64], second: &[f64]) {
+    b.push(kind);
+    for (a, c) in first.iter().zip(second) {
+        b.extend_from_slice(&a.to_le_bytes());
+        b.extend_from_slice(&c.to_le_bytes());
+    }
 }

@@ -2,11 +2,13 @@
 //! `docs/tasks.md`).
 //!
 //! A task file names the states (which are angles, the range the approximators cover),
-//! the actions and their bounds, the sampling time, the trial and its start states, the
-//! quadratic reward (Eq. 3.16, 5.1, 5.2, 6.20; its gradients follow from the weights,
-//! [`crate::QuadraticReward`]), optionally an operating range whose exit ends the trial
-//! (§6.4.2), and optionally the built-in simulation that `rig learn` and `rig sim-driver`
-//! run it on. [`TaskFile::parse`] reads one; [`TaskFile::task`] checks every value and
+//! the actions and their bounds, the sampling time, the trial and its start states (a
+//! list, and optionally a distribution the learning trials draw from), the reward — the
+//! quadratic form of Eq. 3.16, 5.1, 5.2, 6.20 and optionally periodic terms, a goal
+//! bonus and an absolute action cost; its gradients follow from the terms,
+//! [`crate::Reward`] —, how a trial ends besides its time limit (an operating range
+//! whose exit ends it, §6.4.2; a goal whose reach ends it), and optionally the built-in
+//! simulation that `rig learn` and `rig sim-driver` run it on. [`TaskFile::parse`] reads one; [`TaskFile::task`] checks every value and
 //! builds the [`Task`]. Every error is one line naming the file, the key and what is
 //! allowed.
 
@@ -16,7 +18,7 @@ use serde::{Deserialize, Serialize};
 
 use super::number::Number;
 use super::{OperatingRange, Simulation, SystemName, Task};
-use crate::QuadraticReward;
+use crate::Reward;
 use crate::config::ConfigError;
 
 mod check;
@@ -40,7 +42,8 @@ pub struct TaskFile {
     pub sampling_time: Number,
     /// The length of a trial \[s\].
     pub trial_seconds: Number,
-    /// The start states: trial `i` starts in `start_states[i % len]`.
+    /// The start states: greedy evaluations start from each; learning trial `i` starts in
+    /// `start_states[i % len]` unless `start_distribution` is given.
     pub start_states: Vec<Vec<Number>>,
     /// The state components, in the order of the state vector.
     pub state: Vec<StateSpec>,
@@ -51,6 +54,12 @@ pub struct TaskFile {
     /// Where the system may go; leaving it ends the trial with a penalty (optional).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub operating_range: Option<RangeSpec>,
+    /// Where the trial ends in success, with a reward (optional).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub goal: Option<GoalSpec>,
+    /// The distribution learning trials draw their start states from (optional).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start_distribution: Option<StartSpec>,
     /// The built-in simulation of the system (optional: a task without one runs against
     /// a driver).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -90,8 +99,9 @@ pub struct ActionSpec {
     pub high: Number,
 }
 
-/// The quadratic reward `ρ(x, u) = −(x − x_r)ᵀ Q (x − x_r) − uᵀ P u` with diagonal `Q`,
-/// `P`, and the terminal reward `τ_N(x) = −(x − x_r)ᵀ Q_N (x − x_r)` of a finite horizon.
+/// The reward: the quadratic form `ρ(x, u) = −(x − x_r)ᵀ Q (x − x_r) − uᵀ P u` with
+/// diagonal `Q`, `P`, plus the optional terms; and the terminal reward
+/// `τ_N(x) = −(x − x_r)ᵀ Q_N (x − x_r)` of a finite horizon.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RewardSpec {
@@ -105,6 +115,71 @@ pub struct RewardSpec {
     /// `diag(Q_N)` of the terminal reward (default: `state_weights`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub terminal_weights: Option<Vec<Number>>,
+    /// `w_i` of `−Σ w_i (1 − cos(x_i − x_r,i))`, one per state (non-zero for angles only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cosine_weights: Option<Vec<Number>>,
+    /// `c_j` of `−Σ c_j |u_j|`, one per action.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub action_abs_weights: Option<Vec<Number>>,
+    /// A region with a bonus per sample inside (`[reward.goal]`: region and `bonus`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub goal: Option<GoalSpec>,
+}
+
+/// A goal region — a box (`low`, `high`) or a ball (`centre`, `radius`) — with, as the
+/// reward's `[reward.goal]`, a `bonus` per sample inside, or, as the task's `[goal]`, the
+/// `reward` of the transition that reaches it and ends the trial.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GoalSpec {
+    /// A box's lower bounds, one per state (`-inf`: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub low: Option<Vec<Number>>,
+    /// A box's upper bounds, one per state (`inf`: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub high: Option<Vec<Number>>,
+    /// A ball's centre, one number per state.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centre: Option<Vec<Number>>,
+    /// A ball's radius along each state (`inf`: that state does not count).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius: Option<Vec<Number>>,
+    /// `[reward.goal]`: the reward per sample inside.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bonus: Option<Number>,
+    /// `[goal]`: the reward of the transition that reaches the region.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reward: Option<Number>,
+}
+
+/// The distributions start states may be drawn from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum StartKind {
+    /// Uniform in a box: `low`, `high`.
+    Uniform,
+    /// Normal: `mean`, `std`.
+    Normal,
+}
+
+/// `[start_distribution]`: where learning trials start.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StartSpec {
+    /// `uniform` or `normal`.
+    pub kind: StartKind,
+    /// Uniform: the lower bounds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub low: Option<Vec<Number>>,
+    /// Uniform: the upper bounds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub high: Option<Vec<Number>>,
+    /// Normal: the means.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean: Option<Vec<Number>>,
+    /// Normal: the standard deviations.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub std: Option<Vec<Number>>,
 }
 
 /// The operating range: `[low[i], high[i]]` per state component (`inf`, `-inf` for no
@@ -116,7 +191,7 @@ pub struct RangeSpec {
     pub low: Vec<Number>,
     /// Upper bounds, one per state component.
     pub high: Vec<Number>,
-    /// The reward of the transition that leaves the range, which ends the trial.
+    /// The reward of the transition that leaves the range, which ends the trial (≤ 0).
     pub penalty: Number,
 }
 
@@ -188,21 +263,24 @@ impl TaskFile {
             ts: c.ts,
             action_low: c.action_low,
             action_high: c.action_high,
-            reward: QuadraticReward {
+            reward: Reward {
                 q: c.reward.state,
                 p: c.reward.action,
                 reference: c.reward.reference,
                 terminal: c.reward.terminal,
                 angle_mask: angle_mask.clone(),
+                terms: c.reward.terms,
             },
             angle_mask,
             initial_states: c.start_states,
+            start_distribution: c.start_distribution,
             trial_seconds: c.trial_seconds,
             state_range: c.state_range,
             state_names: self.state.iter().map(|s| s.name.clone()).collect(),
             operating_range: c
                 .operating_range
                 .map(|(limits, penalty)| OperatingRange { limits, penalty }),
+            goal: c.goal,
             file: self.clone(),
         })
     }

@@ -7,7 +7,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::angle::wrap;
 use crate::config::ConfigError;
-use crate::{Dynamics, QuadraticReward};
+use crate::region::Region;
+use crate::start::StartDistribution;
+use crate::{Dynamics, Reward};
 
 pub mod builtin;
 pub mod digest;
@@ -80,9 +82,12 @@ pub struct Task {
     /// Which state components are angles (wrapped to [-π, π)).
     pub angle_mask: Vec<bool>,
     /// The reward `ρ(x, u)`.
-    pub reward: QuadraticReward,
-    /// Start states; trial `i` starts in `initial_states[i % len]`.
+    pub reward: Reward,
+    /// The fixed start states: greedy evaluations start from each; learning trial `i`
+    /// starts in `initial_states[i % len]` unless there is a `start_distribution`.
     pub initial_states: Vec<Vec<f64>>,
+    /// Where learning trials start instead, drawn from the run seed ([`crate::start`]).
+    pub start_distribution: Option<StartDistribution>,
     /// Trial length \[s\].
     pub trial_seconds: f64,
     /// The region of the state space that parametric approximators cover (RBF grids,
@@ -90,8 +95,12 @@ pub struct Task {
     pub state_range: Vec<(f64, f64)>,
     /// Short names of the state components, for files and plots.
     pub state_names: Vec<String>,
-    /// Where the system may go; leaving it ends the trial (§6.4.2). `None`: anywhere.
+    /// Where the system may go; leaving it ends the trial (§6.4.2), a failure. `None`:
+    /// anywhere.
     pub operating_range: Option<OperatingRange>,
+    /// Where the trial ends in success; `None`: it ends at its time limit (or on
+    /// leaving the operating range).
+    pub goal: Option<Goal>,
     /// The task file this task was built from.
     pub file: TaskFile,
 }
@@ -116,13 +125,24 @@ pub struct Simulation {
     pub substeps: usize,
 }
 
-/// The operating range of a system with physical limits, and the penalty for leaving it.
+/// The operating range of a system with physical limits, and the penalty for leaving it:
+/// the failure region (its outside) of the trial's endings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OperatingRange {
     /// `(low, high)` per state component; infinite bounds for unlimited components.
     pub limits: Vec<(f64, f64)>,
     /// The reward of the transition that leaves the range, which is the trial's last.
     pub penalty: f64,
+}
+
+/// A terminal goal: the transition that reaches `region` ends the trial (termination,
+/// as leaving the operating range does) with `reward` as its reward, in place of `ρ`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Goal {
+    /// Where the trial ends.
+    pub region: Region,
+    /// The reward of the transition that reaches it.
+    pub reward: f64,
 }
 
 impl OperatingRange {
@@ -188,7 +208,7 @@ impl Task {
     }
 
     /// Simulated learning time after `trials` trials of which `skipped` samples were not
-    /// run (trials that left the operating range end early) \[s\].
+    /// run (trials that left the operating range or reached the goal end early) \[s\].
     pub fn sim_time(&self, trials: u64, skipped: u64) -> f64 {
         trials as f64 * self.trial_seconds - skipped as f64 * self.ts
     }

@@ -50,8 +50,11 @@ pub struct CheckOptions {
     pub driver: String,
     /// The task the driver must fit.
     pub task: std::sync::Arc<Task>,
-    /// How long to wait for the driver's info.
+    /// How long to wait for the driver's info (saying so after a second).
     pub timeout: Duration,
+    /// How to start a driver of the task, for the error when none answers
+    /// ([`driver::contract::how_to_serve`]).
+    pub serve: String,
     /// How long one reset may take.
     pub reset_timeout: Duration,
     /// How long to measure the sample rate \[s\].
@@ -92,7 +95,7 @@ pub fn check(opts: &CheckOptions, report: &mut dyn FnMut(&Outcome)) -> Result<Ve
         .map_err(|e| anyhow!("{e}"))?;
     let link = DriverLink::connect(&bus, &opts.driver).map_err(|e| anyhow!("{e}"))?;
     let info = link
-        .wait_info(&bus, opts.timeout)
+        .wait_info(&bus, opts.timeout, true, &opts.serve)
         .map_err(|e| anyhow!("{e}"))?;
     let task = opts.task.clone();
     let mut s = Probe {

@@ -19,7 +19,10 @@ use super::ExperimentConfig;
 // Messages about the whole file name the experiment, not this layout.
 #[serde(deny_unknown_fields, rename = "ExperimentConfig")]
 pub(super) struct Layout {
-    system: SystemName,
+    /// Absent for a task without a simulation (its presets are the pendulum's, by rules:
+    /// [`ExperimentConfig::to_toml`] says so in a comment); otherwise the system simulated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    system: Option<SystemName>,
     algo: Algo,
     approx: ApproxKind,
     /// Absent: infinite.
@@ -46,8 +49,15 @@ pub(super) struct Layout {
 
 impl From<Layout> for ExperimentConfig {
     fn from(l: Layout) -> Self {
+        let simulated = match &l.task {
+            Some(t) => t
+                .simulation
+                .as_ref()
+                .map_or(SystemName::Pendulum, |s| s.system),
+            None => SystemName::Pendulum,
+        };
         Self {
-            system: l.system,
+            system: l.system.unwrap_or(simulated),
             task: l.task,
             agent: AgentConfig {
                 algo: l.algo,
@@ -69,8 +79,9 @@ impl From<Layout> for ExperimentConfig {
 impl From<ExperimentConfig> for Layout {
     fn from(c: ExperimentConfig) -> Self {
         let a = c.agent;
+        let driven = c.task.as_ref().is_some_and(|t| t.simulation.is_none());
         Self {
-            system: c.system,
+            system: (!driven).then_some(c.system),
             algo: a.algo,
             approx: a.approx,
             horizon: a.horizon,

@@ -135,9 +135,17 @@ impl ExperimentConfig {
         }
     }
 
-    /// The configuration as TOML.
+    /// The configuration as TOML; for a task without a simulation, a first comment says
+    /// where its presets come from (it has no `system`).
     pub fn to_toml(&self) -> String {
-        toml::to_string(self).expect("a configuration always serialises")
+        let toml = toml::to_string(self).expect("a configuration always serialises");
+        match &self.task {
+            Some(t) if t.simulation.is_none() => format!(
+                "# Task \"{}\" has no [simulation]: its learner's presets are the pendulum's, carried over by rules (docs/tasks.md, \"Learner presets by rules\").\n{toml}",
+                t.name
+            ),
+            _ => toml,
+        }
     }
 
     /// What a checkpoint of run `run` of this experiment belongs to: its fingerprint is
@@ -155,7 +163,9 @@ impl ExperimentConfig {
             learner: format!("{}/{}/{}", a.algo, a.approx, a.horizon),
             seed: self.run.seed,
             run,
-            fingerprint: checkpoint::fingerprint(c.to_toml().as_bytes()),
+            fingerprint: checkpoint::fingerprint(
+                toml::to_string(&c).expect("serialises").as_bytes(),
+            ),
         }
     }
 }

@@ -20,6 +20,14 @@ fn heavy_pendulum(test: &str) -> PathBuf {
     dir
 }
 
+/// `heavy.toml` of `dir` without its `[simulation]`, written as `driven.toml`.
+fn without_simulation(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(dir.join("heavy.toml")).unwrap();
+    let driven = dir.join("driven.toml");
+    std::fs::write(&driven, text.split("[simulation]").next().unwrap()).unwrap();
+    driven
+}
+
 fn with_task(path: &Path) -> Overrides {
     Overrides {
         task: Some(path.to_path_buf()),
@@ -113,9 +121,7 @@ fn task_errors_name_the_task_file_or_the_key() {
 #[test]
 fn a_task_without_a_simulation_takes_the_pendulum_presets_by_rules() {
     let dir = heavy_pendulum("driven");
-    let text = std::fs::read_to_string(dir.join("heavy.toml")).unwrap();
-    let driven = dir.join("driven.toml");
-    std::fs::write(&driven, text.split("[simulation]").next().unwrap()).unwrap();
+    let driven = without_simulation(&dir);
     let cfg = resolve(None, &with_task(&driven)).unwrap();
     assert_eq!(cfg.system, SystemName::Pendulum, "the presets' basis");
     let task = cfg.task();
@@ -159,4 +165,25 @@ fn a_task_without_a_simulation_takes_the_pendulum_presets_by_rules() {
         e.contains("takes its presets from (by rules), \"pendulum\""),
         "{e}"
     );
+}
+
+/// The configuration of a task without a simulation does not claim a simulated system:
+/// `rig config --task` says where its presets come from instead of `system =
+/// "pendulum"`, and its TOML resolves to itself.
+#[test]
+fn a_driven_task_says_where_its_presets_come_from() {
+    let dir = heavy_pendulum("presets");
+    let driven = without_simulation(&dir);
+    let cfg = resolve(None, &with_task(&driven)).unwrap();
+    let toml = cfg.to_toml();
+    assert!(!toml.contains("system ="), "{toml}");
+    assert!(
+        toml.starts_with("# Task \"heavy\" has no [simulation]: its learner's presets are the pendulum's, carried over by rules"),
+        "{toml}"
+    );
+    let again = resolve(Some((Path::new("c.toml"), &toml)), &Overrides::default()).unwrap();
+    assert_eq!(again, cfg);
+    // A simulated task keeps its system.
+    let simulated = resolve(None, &with_task(&dir.join("heavy.toml"))).unwrap();
+    assert!(simulated.to_toml().starts_with("system = \"pendulum\""));
 }

@@ -132,6 +132,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let mut cfg = cfg.clone();
     cfg.run.runs = 1;
     let run_id = free_run_id(opts)?;
+    // A folder this run creates is removed again if the run is refused before it
+    // writes anything.
+    let created = !opts.resume && !opts.out.exists();
     if !opts.resume {
         std::fs::create_dir_all(&opts.out)
             .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
@@ -150,21 +153,27 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     for note in point.iter().flat_map(|p| &p.notes) {
         eprintln!("note: {note}");
     }
-    // A new run in an old directory: old checkpoints must not be taken for its own; a
-    // resumed run's after its resume point are of trials it redoes.
-    resume::discard_after(&checkpoints, point.as_ref().map_or(0, |p| p.trial));
-    let config_path = opts.out.join("config.toml");
-    write_atomic(&config_path, &cfg.to_toml())?;
-
     let bus = Bus::join(&run_id, "rig").map_err(wire_err)?;
     let task = Arc::new(cfg.task());
     let (watch, driver_info) = match &opts.driver {
-        Some(d) => {
-            let (watch, info) = wait_for_driver(&bus, d, &task, opts.progress)?;
-            (Some(watch), Some(info))
-        }
+        Some(d) => match wait_for_driver(&bus, d, &task, opts.progress) {
+            Ok((watch, info)) => (Some(watch), Some(info)),
+            Err(e) => {
+                if created {
+                    // Holds only the lock file: a refused run leaves no folder behind.
+                    let _ = std::fs::remove_dir_all(&opts.out);
+                }
+                return Err(e);
+            }
+        },
         None => (None, None),
     };
+    // Nothing is written before the driver is found and fits. A new run in an old
+    // directory: old checkpoints must not be taken for its own; a resumed run's after its
+    // resume point are of trials it redoes.
+    resume::discard_after(&checkpoints, point.as_ref().map_or(0, |p| p.trial));
+    let config_path = opts.out.join("config.toml");
+    write_atomic(&config_path, &cfg.to_toml())?;
     let about = About {
         cfg: &cfg,
         task: &task,
@@ -278,22 +287,9 @@ fn wait_for_driver(
     verbose: bool,
 ) -> Result<(DriverWatch, DriverInfo)> {
     let watch = DriverWatch::open(bus, &d.id).map_err(wire_err)?;
-    let first = Duration::from_secs(1).min(d.timeout);
-    let info = match driver::contract::wait_info(bus, &watch.info, &d.id, first) {
-        Ok(i) => i,
-        Err(_) => {
-            if verbose {
-                eprintln!(
-                    "waiting up to {:.0} s for driver {:?} (services {}) ...",
-                    d.timeout.as_secs_f64(),
-                    d.id,
-                    driver::contract::service(&d.id, "*")
-                );
-            }
-            driver::contract::wait_info(bus, &watch.info, &d.id, d.timeout.saturating_sub(first))
-                .map_err(wire_err)?
-        }
-    };
+    let serve = driver::contract::how_to_serve(task, &d.id, None);
+    let info = driver::contract::wait_info(bus, &watch.info, &d.id, d.timeout, verbose, &serve)
+        .map_err(wire_err)?;
     info.validate()
         .and_then(|()| driver::fits_task(&info, task))
         .map_err(|e| anyhow!("driver {:?} does not fit the task: {e}", d.id))?;

@@ -27,7 +27,7 @@ pub(super) struct Returns {
     pub(super) skipped_samples: u64,
     /// Adds `τ_N(x_N)` of a finite horizon's last measurement to the return (Eq. 4.1).
     pub(super) horizon: Horizon,
-    pub(super) reward: plant::QuadraticReward,
+    pub(super) reward: plant::Reward,
     pub(super) pending: Option<TrialRecord>,
     /// Whether the pending learning trial has ended.
     pub(super) pending_ended: bool,

@@ -5,7 +5,12 @@ use std::f64::consts::PI;
 
 use super::{MAX_NAME, MAX_STATES, Number, RangeSpec, RewardSpec, SimulationSpec, TaskFile};
 use crate::config::{ConfigError, check_float, check_int, check_len};
-use crate::task::Simulation;
+use crate::reward::Term;
+use crate::start::StartDistribution;
+use crate::task::{Goal, Simulation};
+
+mod goals;
+mod start;
 
 /// The checked values of a task file, as plain numbers.
 pub(super) struct Checked {
@@ -18,14 +23,17 @@ pub(super) struct Checked {
     pub start_states: Vec<Vec<f64>>,
     pub reward: Weights,
     pub operating_range: Option<(Vec<(f64, f64)>, f64)>,
+    pub goal: Option<Goal>,
+    pub start_distribution: Option<StartDistribution>,
 }
 
-/// The reward's weights and reference.
+/// The reward's weights, reference and further terms.
 pub(super) struct Weights {
     pub state: Vec<f64>,
     pub action: Vec<f64>,
     pub reference: Vec<f64>,
     pub terminal: Vec<f64>,
+    pub terms: Vec<Term>,
 }
 
 /// `(low, high)` per component.
@@ -44,14 +52,23 @@ impl Checked {
         let (angle_mask, state_range) = states(f)?;
         let (action_low, action_high) = actions(f)?;
         let n = angle_mask.len();
-        let reward = weights(&f.reward, n, action_low.len())?;
+        let mut reward = weights(&f.reward, n, action_low.len())?;
+        reward.terms = terms(&f.reward, &angle_mask, &reward.reference, action_low.len())?;
         let operating_range = f
             .operating_range
             .as_ref()
             .map(|r| range(r, n))
             .transpose()?;
         let start_states = start_states(f, n, operating_range.as_ref())?;
+        let goal = f.goal.as_ref().map(|g| goals::terminal(g, n)).transpose()?;
+        let start_distribution = f
+            .start_distribution
+            .as_ref()
+            .map(|s| start::distribution(s, n, operating_range.as_ref()))
+            .transpose()?;
         Ok(Self {
+            goal,
+            start_distribution,
             ts,
             trial_seconds,
             angle_mask,
@@ -157,7 +174,7 @@ fn actions(f: &TaskFile) -> Result<(Vec<f64>, Vec<f64>), ConfigError> {
 
 /// `lo < hi`, both finite (or, with `infinite`, possibly infinite); the error names
 /// `key`.
-fn check_bounds(key: &str, lo: f64, hi: f64, infinite: bool) -> Result<(), ConfigError> {
+pub(super) fn check_bounds(key: &str, lo: f64, hi: f64, infinite: bool) -> Result<(), ConfigError> {
     let ok = |v: f64| v.is_finite() || (infinite && v.is_infinite());
     if !(ok(lo) && ok(hi)) {
         let what = if infinite {
@@ -181,7 +198,7 @@ fn check_bounds(key: &str, lo: f64, hi: f64, infinite: bool) -> Result<(), Confi
 
 /// `values` as plain numbers: `n` of them (one per `what`), each finite and, with
 /// `non_negative`, at least 0.
-fn vector(
+pub(super) fn vector(
     key: &str,
     values: &[Number],
     n: usize,
@@ -196,7 +213,7 @@ fn vector(
 }
 
 /// `v` is finite (and, with `non_negative`, at least 0).
-fn finite(key: &str, v: f64, non_negative: bool) -> Result<(), ConfigError> {
+pub(super) fn finite(key: &str, v: f64, non_negative: bool) -> Result<(), ConfigError> {
     match (v.is_finite(), non_negative && v < 0.0) {
         (true, false) => Ok(()),
         (_, true) => Err(ConfigError::new(
@@ -233,7 +250,44 @@ fn weights(r: &RewardSpec, n: usize, m: usize) -> Result<Weights, ConfigError> {
         action,
         reference,
         terminal,
+        terms: Vec::new(),
     })
+}
+
+/// The reward's terms beyond the quadratic form, in the order the hash takes them:
+/// periodic, absolute action cost, goal bonus.
+fn terms(
+    r: &RewardSpec,
+    angles: &[bool],
+    reference: &[f64],
+    m: usize,
+) -> Result<Vec<Term>, ConfigError> {
+    let mut terms = Vec::new();
+    if let Some(w) = &r.cosine_weights {
+        let key = "reward.cosine_weights";
+        let weights = vector(key, w, angles.len(), "state", true)?;
+        if let Some(i) = (0..weights.len()).find(|&i| weights[i] != 0.0 && !angles[i]) {
+            return Err(ConfigError::new(
+                &format!("{key}[{i}]"),
+                format!(
+                    "{} weighs a state that is not an angle: 1 − cos applies to angles only; give 0",
+                    weights[i]
+                ),
+            ));
+        }
+        terms.push(Term::Cosine {
+            weights,
+            reference: reference.to_vec(),
+        });
+    }
+    if let Some(c) = &r.action_abs_weights {
+        let weights = vector("reward.action_abs_weights", c, m, "action", true)?;
+        terms.push(Term::AbsAction { weights });
+    }
+    if let Some(g) = &r.goal {
+        terms.push(goals::bonus(g, angles)?);
+    }
+    Ok(terms)
 }
 
 /// `[operating_range]`: bounds per state component and a finite penalty.
@@ -247,6 +301,14 @@ fn range(r: &RangeSpec, n: usize) -> Result<(Vec<(f64, f64)>, f64), ConfigError>
     }
     let penalty = r.penalty.0;
     finite("operating_range.penalty", penalty, false)?;
+    if penalty > 0.0 {
+        return Err(ConfigError::new(
+            "operating_range.penalty",
+            format!(
+                "{penalty} must be a finite number ≤ 0: it is the reward of leaving the range, a failure; reward a region with [goal]'s `reward` (reaching it ends the trial) or [reward.goal]'s `bonus` (per sample inside)"
+            ),
+        ));
+    }
     Ok((limits, penalty))
 }
 

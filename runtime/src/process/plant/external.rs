@@ -59,8 +59,10 @@ impl Bridge {
     /// against the task, then waits for the observer (and recorder) to listen.
     pub(super) fn connect(link: Link, driver_id: &str, args: &PlantArgs) -> Result<Self> {
         let driver = DriverLink::connect(&link.bus, driver_id).map_err(wire_err)?;
+        let timeout = seconds("--driver-timeout", args.driver_timeout)?;
+        let serve = driver::contract::how_to_serve(&link.task, driver_id, None);
         let info = driver
-            .wait_info(&link.bus, seconds("--driver-timeout", args.driver_timeout)?)
+            .wait_info(&link.bus, timeout, false, &serve)
             .map_err(wire_err)?;
         info.validate()
             .and_then(|()| driver::fits_task(&info, &link.task))

@@ -71,7 +71,7 @@ pub fn run(args: &PlantArgs) -> Result<()> {
     if !(args.sim_time.is_finite() && args.sim_time >= 0.0) {
         bail!("`--sim-time` {} is not a time", args.sim_time);
     }
-    let mut schedule = Schedule::new(task.clone(), cfg.run.trials, cfg.run.eval_every);
+    let mut schedule = Schedule::new(task.clone(), cfg.run.trials, cfg.run.eval_every, run_seed);
     schedule.resume(args.after_trial, args.sim_time);
     while let Some(trial) = schedule.next_trial() {
         let skipped = whole(runner.as_mut(), &trial)?;
