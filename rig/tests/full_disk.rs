@@ -143,7 +143,7 @@ fn a_run_into_a_full_disk_stops_with_the_cause_and_resumes_once_there_is_space()
     );
 }
 
-/// The disk full but for 16 kB when the run starts: the run's small files take most of
+/// The disk full but for 20 kB when the run starts: the run's small files take most of
 /// that, and the agent's checkpoint folder (its lock, its first checkpoint of 11 kB) does
 /// not fit, nor does the agent's log. The agent stops with one line naming the file, and
 /// the rig says so — in the agent's own words, which reach it without the disk.
@@ -154,7 +154,7 @@ fn an_agent_whose_checkpoint_does_not_fit_says_so_through_the_rig() {
         return;
     };
     let expected = whole("first-checkpoint", &args);
-    disk.fill_but(16 * 1024);
+    disk.fill_but(20 * 1024);
     let dir = disk.dir.join("run");
     let out = rig()
         .arg("run")
