@@ -103,18 +103,36 @@ fn stopped_by_the_full_disk(out: &Output, dir: &Path) {
 /// The uninterrupted run's `returns.csv` of `rig run` with `args`.
 fn whole(name: &str, args: &[&str]) -> String {
     let dir = common::tmp("full-disk", name).join("whole");
-    ok(rig()
-        .arg("run")
-        .args(args)
-        .arg("--out")
-        .arg(&dir)
-        .output()
-        .unwrap());
+    ok(run(args, &dir));
     std::fs::read_to_string(dir.join("returns.csv")).unwrap()
 }
 
 /// The whole run folder on 4 MB: whichever process meets the full disk first, the run
 /// stops with its cause; on 256 MB the run resumes to the uninterrupted run's bytes.
+/// `rig run ARGS --out DIR`.
+fn run(args: &[&str], dir: &Path) -> Output {
+    rig()
+        .arg("run")
+        .args(args)
+        .arg("--out")
+        .arg(dir)
+        .output()
+        .unwrap()
+}
+
+/// `rig run --resume DIR` succeeds, and `returns.csv` is then the uninterrupted run's.
+fn resumed_to(dir: &Path, expected: &str) {
+    ok(rig()
+        .args(["run", "--quiet", "--resume"])
+        .arg(dir)
+        .output()
+        .unwrap());
+    assert_eq!(
+        std::fs::read_to_string(dir.join("returns.csv")).unwrap(),
+        expected
+    );
+}
+
 #[test]
 fn a_run_into_a_full_disk_stops_with_the_cause_and_resumes_once_there_is_space() {
     let args = ["--trials", "200", "--quiet"];
@@ -123,24 +141,10 @@ fn a_run_into_a_full_disk_stops_with_the_cause_and_resumes_once_there_is_space()
     };
     let expected = whole("whole-run", &args);
     let dir = disk.dir.join("run");
-    let out = rig()
-        .arg("run")
-        .args(args)
-        .arg("--out")
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = run(&args, &dir);
     stopped_by_the_full_disk(&out, &dir);
     disk.grow("256m");
-    ok(rig()
-        .args(["run", "--quiet", "--resume"])
-        .arg(&dir)
-        .output()
-        .unwrap());
-    assert_eq!(
-        std::fs::read_to_string(dir.join("returns.csv")).unwrap(),
-        expected
-    );
+    resumed_to(&dir, &expected);
 }
 
 /// The disk full but for 20 kB when the run starts: the run's small files take most of
@@ -156,13 +160,7 @@ fn an_agent_whose_checkpoint_does_not_fit_says_so_through_the_rig() {
     let expected = whole("first-checkpoint", &args);
     disk.fill_but(20 * 1024);
     let dir = disk.dir.join("run");
-    let out = rig()
-        .arg("run")
-        .args(args)
-        .arg("--out")
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = run(&args, &dir);
     stopped_by_the_full_disk(&out, &dir);
     let err = stderr(&out);
     let agent = err
@@ -177,13 +175,5 @@ fn an_agent_whose_checkpoint_does_not_fit_says_so_through_the_rig() {
         "{err}"
     );
     std::fs::remove_file(disk.dir.join("filler")).unwrap();
-    ok(rig()
-        .args(["run", "--quiet", "--resume"])
-        .arg(&dir)
-        .output()
-        .unwrap());
-    assert_eq!(
-        std::fs::read_to_string(dir.join("returns.csv")).unwrap(),
-        expected
-    );
+    resumed_to(&dir, &expected);
 }
