@@ -394,7 +394,7 @@ def main():
     args = p.parse_args()
     args.rig = str(Path(args.rig).resolve())
     if not os.access(args.rig, os.X_OK):
-        sys.exit(f"error: --rig {args.rig}: no such executable (cargo build --release -p rig)")
+        sys.exit(f"error: --rig {args.rig}: no such executable (cargo build --release -p rig --features bridge)")
     seconds = args.seconds if args.seconds is not None else 60 * (args.minutes or 30)
     if args.trials is None:
         # A pendulum trial (3 s at speed 1) and its share of greedy evaluations.

@@ -235,6 +235,18 @@ impl DriverInfo {
         Duration::from_nanos(self.period_ns)
     }
 
+    /// How long the driver may stay silent before it counts as stopped. A driver on a
+    /// clock publishes every period, also while it resets: 20 periods, at least 1 s. A
+    /// driver in lockstep answers once its simulation has stepped, however long that takes
+    /// on a loaded machine or in a heavy simulator: `step_limit`.
+    pub fn silence_limit(&self, step_limit: Duration) -> Duration {
+        if self.lockstep() {
+            step_limit
+        } else {
+            (self.period() * 20).max(Duration::from_secs(1))
+        }
+    }
+
     /// Checks what holds for any driver: the version, dimensions within the message
     /// sizes, a positive period and time scale, finite and ordered limits, a watchdog of
     /// one period.

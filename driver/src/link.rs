@@ -203,8 +203,8 @@ impl DriverLink {
         self.send(cmd)
     }
 
-    /// The next sample, waiting at most `silence` (a driver publishes every period,
-    /// also while it resets: silence means it stopped).
+    /// The next sample, waiting at most `silence` ([`DriverInfo::silence_limit`]: longer
+    /// means the driver stopped).
     pub fn next_sample(&self, bus: &Bus, silence: Duration) -> Result<DriverSample, Error> {
         let t0 = std::time::Instant::now();
         loop {
@@ -245,7 +245,7 @@ impl DriverLink {
         timeout: Duration,
     ) -> Result<DriverSample, Error> {
         let t0 = std::time::Instant::now();
-        let silence = (info.period() * 20).max(Duration::from_secs(1));
+        let silence = info.silence_limit(timeout);
         loop {
             let s = self.next_sample(bus, silence)?;
             s.validate(info)

@@ -51,7 +51,8 @@ pub struct DriverArgs {
     /// plant.
     #[arg(long, value_name = "ID")]
     pub(crate) driver: Option<String>,
-    /// How long to wait for the driver to appear (its first info message) [s].
+    /// How long to wait for the driver to appear (its first info message), and for each
+    /// sample of a driver in lockstep (a simulator's step may take long) [s].
     #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
     pub(crate) driver_timeout: f64,
     /// How long the driver may take for one reset (to bring the system to rest at the

@@ -7,6 +7,10 @@ use clap::{Parser, Subcommand};
 use runtime::process::{AgentArgs, ObserverArgs, PlantArgs};
 
 mod bench_loop;
+#[cfg(feature = "bridge")]
+mod bridge;
+#[cfg(not(feature = "bridge"))]
+#[path = "bridge_absent.rs"]
 mod bridge;
 mod check_driver;
 mod config;
@@ -55,7 +59,8 @@ enum Command {
     /// Runs until Ctrl-C or SIGTERM.
     SimDriver(sim_driver::Args),
     /// Carry one driver's services between two hosts over Zenoh: `rig bridge driver` on
-    /// the driver's host, `rig bridge rig` on the rig's (docs/across-hosts.md).
+    /// the driver's host, `rig bridge rig` on the rig's (docs/across-hosts.md). In a rig
+    /// built with the `bridge` feature: `cargo run --release -p rig --features bridge`.
     Bridge(bridge::Args),
     /// Compute the optimal return of the pendulum swing-up from [π, 0] (one 3 s trial,
     /// Eq. 3.16) by dynamic programming on a grid, run the DP's policy on the plant, and

@@ -432,3 +432,32 @@ fn a_run_against_a_lockstep_driver_resumes_to_the_whole_runs_bytes() {
         .unwrap());
     assert_eq!(returns(&dir.join("part")), returns(&dir.join("whole")));
 }
+
+/// A lockstep driver answers once its simulation has stepped, however long that takes: a
+/// driver stopped for 3 s in the middle of a run (SIGSTOP, as a loaded machine or a heavy
+/// simulator may hold it) delays the run, which then ends with the uninterrupted run's
+/// returns. A driver on a clock that falls silent for 20 periods has stopped; a lockstep
+/// driver only after `--driver-timeout`.
+#[test]
+fn a_lockstep_driver_silent_for_seconds_delays_the_run_but_does_not_end_it() {
+    let dir = tmp("pause");
+    let d = Driver::launch(&Kind::Rust, "pause", &["--clock", "lockstep"]);
+    let args = ["--trials", "60"];
+    ok(run(&d.id, &args, &dir.join("whole")));
+    let paused = dir.join("paused");
+    let rig_run = rig()
+        .args(["run", "--plant", "external", "--driver", &d.id, "--quiet"])
+        .args(args)
+        .arg("--out")
+        .arg(&paused)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    common::wait_for_lines(&paused.join("returns.csv"), 5);
+    common::signal(d.child.id(), "-STOP");
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    common::signal(d.child.id(), "-CONT");
+    ok(rig_run.wait_with_output().unwrap());
+    assert_eq!(returns(&paused), returns(&dir.join("whole")));
+}

@@ -99,7 +99,7 @@ pub fn check(opts: &CheckOptions, report: &mut dyn FnMut(&Outcome)) -> Result<Ve
         .map_err(|e| anyhow!("{e}"))?;
     let task = opts.task.clone();
     let mut s = Probe {
-        silence: (info.period() * 20).max(Duration::from_secs(1)),
+        silence: info.silence_limit(opts.timeout),
         bus,
         link,
         info,

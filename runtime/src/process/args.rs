@@ -209,7 +209,8 @@ pub struct PlantArgs {
     /// `--speed` do not apply then.
     #[arg(long, value_name = "ID")]
     pub driver: Option<String>,
-    /// With `--driver`: how long to wait for the driver to appear (seconds).
+    /// With `--driver`: how long to wait for the driver to appear, and for each sample
+    /// of a driver in lockstep (a simulator's step may take long) (seconds).
     #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
     pub driver_timeout: f64,
     /// With `--driver`: how long the driver may take for one reset (bring the system to

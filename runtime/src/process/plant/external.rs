@@ -73,7 +73,7 @@ impl Bridge {
         Ok(Self {
             safety: Supervisor::new(&link.task),
             limit: TimeLimit::new(link.task.steps_per_trial()),
-            silence: (info.period() * 20).max(Duration::from_secs(1)),
+            silence: info.silence_limit(timeout),
             reset_timeout: seconds("--reset-timeout", args.reset_timeout)?,
             link,
             driver,

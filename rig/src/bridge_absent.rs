@@ -1,0 +1,23 @@
+//! `rig bridge` in a rig built without the Zenoh bridge (the `bridge` feature): says how
+//! to build one that has it.
+
+use std::process::ExitCode;
+
+use clap::Args as Flags;
+
+#[derive(Flags)]
+pub struct Args {
+    /// The bridge's arguments (docs/across-hosts.md); this build has no bridge to take them.
+    #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+    args: Vec<String>,
+}
+
+/// Refuses with the command that builds the bridge; exit code 2, as for a bad argument.
+pub fn main(_: &Args) -> ExitCode {
+    eprintln!(
+        "rig bridge: this rig was built without the Zenoh bridge; build it with the \
+         `bridge` feature: cargo run --release -p rig --features bridge -- bridge … \
+         (docs/across-hosts.md)"
+    );
+    ExitCode::from(2)
+}
