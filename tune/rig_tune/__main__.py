@@ -34,7 +34,7 @@ def main(argv: list[str]) -> int:
         if args.space_for:
             return space_for(args)
         return tune(args, argv)
-    except (RigError, SpaceError, RunFailed) as e:
+    except (RigError, SpaceError, RunFailed, study.FolderTaken) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
@@ -79,6 +79,7 @@ def tune(args: argparse.Namespace, argv: list[str]) -> int:
         study.work(args, name, objective, trials // eval_every)
         return 0
     args.out.mkdir(parents=True, exist_ok=True)
+    study.claim(args.out, name)
     searchable(base, space, args.space, args.out / "scratch")
     url = study.storage_url(args)
     s = optuna.create_study(study_name=name, storage=study.storage(args), direction="maximize", load_if_exists=True)

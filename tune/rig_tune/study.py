@@ -58,6 +58,24 @@ def name(args: argparse.Namespace, base_text: str, space_text: str) -> str:
     return f"rig-tune-{digest}"
 
 
+class FolderTaken(Exception):
+    """The output folder holds another study's trials."""
+
+
+def claim(out: Path, study_name: str) -> None:
+    """Makes `out` the folder of study `study_name`, or refuses: trial folders are numbered
+    per study, so a second study in the same folder would overwrite the first's."""
+    mark = out / "study"
+    held = mark.read_text().strip() if mark.exists() else None
+    if held is None:
+        mark.write_text(study_name + "\n")
+    elif held != study_name:
+        raise FolderTaken(
+            f"{out} holds the trials of study {held}, not of {study_name} (another task, learner, "
+            f"space or run length, or another rig version): give another --out, or --study {held} to go on with it"
+        )
+
+
 def sampler(args: argparse.Namespace, worker: int) -> optuna.samplers.BaseSampler:
     seed = None if args.sampler_seed is None else args.sampler_seed + worker
     if args.sampler == "random":
