@@ -20,8 +20,8 @@ DIR/figures.json:
 * cuts: how many were made, how many the run survived (it completed a trial after them);
 * runs stopped and resumed; trial attempts cut by gaps and redone (`gaps.csv`);
 * the longest time to zero action after a cut: from the driver's bridge's own log, the
-  time from the last command's arrival to the sample at which the driver's watchdog
-  applied the safe action;
+  time from the last action's arrival to the sample at which the driver's watchdog
+  applied the safe action (an engagement after a reset, with no action since, is none);
 * probes and second rigs told who holds the driver, and the commands of a second session that reached the
   driver while the run held it (must be 0): values of the driver's `last_command` in the
   recording that the run never sent;

@@ -54,6 +54,9 @@ pub(crate) struct Shared {
     /// `seq` of the last command passed to the driver, and when it arrived.
     pub(crate) command: AtomicU64,
     pub(crate) command_arrived: AtomicU64,
+    /// When the last ACTION passed to the driver arrived; 0 once a RESET or another
+    /// control command followed it.
+    pub(crate) action_arrived: AtomicU64,
     /// The newest sample's `seq`.
     pub(crate) newest: AtomicU64,
     /// The driver's period (0 until its info came) \[ns\].
@@ -174,7 +177,7 @@ fn samples_up(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -> R
             };
             put(&sample_pub, to_bytes(&s), Some(to_bytes(&stamps)))?;
             counts.samples += 1;
-            counts.watchdog += watch.sample(&s, &stamps) as u64;
+            counts.watchdog += watch.sample(&s, shared.action_arrived.load(Relaxed)) as u64;
         }
         watch.link(shared.pinged.load(Relaxed));
     }
@@ -211,22 +214,13 @@ impl<'a> Watch<'a> {
         }
     }
 
-    /// Whether the watchdog engaged at sample `s`.
-    fn sample(&mut self, s: &DriverSample, stamps: &Stamps) -> bool {
+    /// Whether the watchdog engaged at sample `s`, the last action having arrived at
+    /// `action_arrived`; says so.
+    fn sample(&mut self, s: &DriverSample, action_arrived: u64) -> bool {
         let engaged = s.has(status::WATCHDOG) && !self.watchdog;
         self.watchdog = s.has(status::WATCHDOG);
-        if engaged && stamps.command_arrived != 0 && self.period_ns != 0 {
-            // The safe action took over within the period this sample closes.
-            let after = s.t_sample_ns.saturating_sub(stamps.command_arrived) as f64;
-            let period = self.period_ns as f64;
-            eprintln!(
-                "bridge for driver {:?}: the driver applies the safe action (watchdog) from between {:.2} and {:.2} periods after the last command arrived (sample {}, {:.1} ms)",
-                self.id,
-                (after - period).max(0.0) / period,
-                after / period,
-                s.seq,
-                after * 1e-6
-            );
+        if engaged && self.period_ns != 0 {
+            eprintln!("{}", engagement(self.id, s, action_arrived, self.period_ns));
         }
         engaged
     }
@@ -257,5 +251,55 @@ impl<'a> Watch<'a> {
             }
             _ => {}
         }
+    }
+}
+
+/// What the driver's bridge says when the driver's watchdog engages at sample `s`: how
+/// long after the last action's arrival (`action_arrived`) the safe action took over —
+/// within the period the sample closes. After a RESET (`action_arrived` 0) the driver
+/// held the state it was reset to, and no time is claimed.
+fn engagement(id: &str, s: &DriverSample, action_arrived: u64, period_ns: u64) -> String {
+    if action_arrived == 0 {
+        return format!(
+            "bridge for driver {id:?}: the driver applies the safe action (watchdog) at sample {}, no action having come since its reset",
+            s.seq
+        );
+    }
+    let after = s.t_sample_ns.saturating_sub(action_arrived) as f64;
+    let period = period_ns as f64;
+    format!(
+        "bridge for driver {id:?}: the driver applies the safe action (watchdog) from between {:.2} and {:.2} periods after the last action arrived (sample {}, {:.1} ms)",
+        (after - period).max(0.0) / period,
+        after / period,
+        s.seq,
+        after * 1e-6
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(seq: u64, t_sample_ns: u64) -> DriverSample {
+        DriverSample {
+            seq,
+            t_sample_ns,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn the_time_to_the_safe_action_counts_from_the_last_action_not_from_a_reset() {
+        let after_action = engagement("pend", &sample(9, 70_000_000), 10_000_000, 30_000_000);
+        assert!(
+            after_action.contains("from between 1.00 and 2.00 periods after the last action arrived (sample 9, 60.0 ms)"),
+            "{after_action}"
+        );
+        let after_reset = engagement("pend", &sample(9, 70_000_000), 0, 30_000_000);
+        assert!(
+            after_reset.contains("no action having come since its reset"),
+            "{after_reset}"
+        );
+        assert!(!after_reset.contains("periods after"), "{after_reset}");
     }
 }

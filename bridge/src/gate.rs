@@ -171,6 +171,8 @@ impl<'a> Gate<'a> {
         self.tx.send(*c).map_err(wire_err)?;
         self.shared.command.store(c.seq, Relaxed);
         self.shared.command_arrived.store(arrived, Relaxed);
+        let action_arrived = if c.kind == kind::ACTION { arrived } else { 0 };
+        self.shared.action_arrived.store(action_arrived, Relaxed);
         self.counts.commands += 1;
         if let Some(f) = &mut self.timing
             && c.kind == kind::ACTION

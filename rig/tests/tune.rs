@@ -157,13 +157,23 @@ fn a_small_study_writes_the_best_configuration_and_the_same_command_continues_it
     // Another study (another space) into the same folder would number its trials from 0
     // again, over the first's: refused, naming the study the folder holds.
     let ran = folders(&study);
-    std::fs::write(dir.join("other.toml"), SPACE.replace("0.95, 0.97", "0.9, 0.99")).unwrap();
-    let other = [&["--space", "other.toml"], &SHORT[2..], &["--n-trials", "2"]].concat();
+    std::fs::write(
+        dir.join("other.toml"),
+        SPACE.replace("0.95, 0.97", "0.9, 0.99"),
+    )
+    .unwrap();
+    let other = [
+        &["--space", "other.toml"],
+        &SHORT[2..],
+        &["--n-trials", "2"],
+    ]
+    .concat();
     let out = tune(&py, &dir, &other).output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(
-        stderr.contains("holds the trials of study rig-tune-") && stderr.contains("--study rig-tune-"),
+        stderr.contains("holds the trials of study rig-tune-")
+            && stderr.contains("--study rig-tune-"),
         "{stderr}"
     );
     assert_eq!(folders(&study), ran, "no trial of the other study ran");
