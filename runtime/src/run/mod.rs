@@ -32,7 +32,7 @@ use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
 use crate::learn::{progress_bar, write_atomic};
 use crate::lock::FolderLock;
-use crate::process::{Scheduling, Spin, wire_err};
+use crate::process::{Scheduling, Spin};
 use crate::resume;
 
 mod gaps;
@@ -153,7 +153,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     for note in point.iter().flat_map(|p| &p.notes) {
         eprintln!("note: {note}");
     }
-    let bus = Bus::join(&run_id, "rig").map_err(wire_err)?;
+    let bus = Bus::join(&run_id, "rig")?;
     let task = Arc::new(cfg.task());
     let (watch, driver_info) = match &opts.driver {
         Some(d) => match wait_for_driver(&bus, d, &task, opts.progress) {
@@ -286,12 +286,9 @@ fn wait_for_driver(
     task: &plant::Task,
     verbose: bool,
 ) -> Result<(DriverWatch, DriverInfo)> {
-    let watch = DriverWatch::open(bus, &d.id).map_err(wire_err)?;
+    let watch = DriverWatch::open(bus, &d.id)?;
     let serve = driver::contract::how_to_serve(task, &d.id, None);
-    let info = driver::contract::wait_info(bus, &watch.info, &d.id, d.timeout, verbose, &serve)
-        .map_err(wire_err)?;
-    info.validate()
-        .and_then(|()| driver::fits_task(&info, task))
-        .map_err(|e| anyhow!("driver {:?} does not fit the task: {e}", d.id))?;
+    let info = driver::contract::wait_info(bus, &watch.info, &d.id, d.timeout, verbose, &serve)?;
+    driver::check_info(&d.id, &info, task)?;
     Ok((watch, info))
 }
