@@ -63,7 +63,7 @@ pub fn main(args: &Args) -> ExitCode {
             if lockstep && args.speed != 1.0 {
                 anyhow::bail!("`--speed` applies to the realtime clock only: in lockstep the driver runs as fast as the rig answers");
             }
-            args.task.task().map_err(|e| anyhow::anyhow!(e))
+            args.task.task()
         })
         .and_then(|task| Ok(Simulated::of(task, args.speed)?))
         .map(|d| if lockstep { d.in_lockstep() } else { d })

@@ -114,21 +114,27 @@ pub struct RunSummary {
 /// Refuses waiting that would leave a process unwoken: polling without end
 /// ([`Waiting::needs_wake_up`]) outside lockstep, where the plant sleeps until its next
 /// sample and must be woken.
-pub fn check_waiting(lockstep: bool, waiting: Waiting) -> Result<(), String> {
+pub fn check_waiting(lockstep: bool, waiting: Waiting) -> Result<(), UnwokenWaiting> {
     if lockstep || waiting.needs_wake_up() {
         Ok(())
     } else {
-        Err("`--wait spin|yield` without `--wait-us` applies in lockstep only: in real time and with an external driver the plant sleeps until its next sample and must be woken".into())
+        Err(UnwokenWaiting)
     }
 }
+
+/// Polling without end outside lockstep ([`check_waiting`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "`--wait spin|yield` without `--wait-us` applies in lockstep only: in real time and with an external driver the plant sleeps until its next sample and must be woken"
+)]
+pub struct UnwokenWaiting;
 
 /// Runs experiment `cfg` (one run) as three processes and writes the outputs.
 pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     check_waiting(
         opts.realtime.is_none() && opts.driver.is_none(),
         opts.waiting,
-    )
-    .map_err(|e| anyhow!(e))?;
+    )?;
     let mut cfg = cfg.clone();
     cfg.run.runs = 1;
     let run_id = free_run_id(opts)?;
