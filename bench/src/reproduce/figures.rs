@@ -262,7 +262,7 @@ pub(super) fn figures() -> Vec<Figure> {
                             best.label, best.final_greedy
                         );
                         both(
-                            Verdict::new(!(best.label == "RMAC/LLR"), text),
+                            Verdict::new(best.label != "RMAC/LLR", text),
                             better(m, "RMAC/RBF", "RMAC/LLR"),
                         )
                     },
