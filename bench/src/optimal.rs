@@ -66,35 +66,50 @@ impl Default for OptimumOptions {
     }
 }
 
+/// Sizes of the dynamic programme out of range ([`OptimumOptions::validate`]); each names
+/// the `rig optimal` flag and the allowed range.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum OptimumError {
+    /// A grid outside [`GRID_RANGE`].
+    #[error(
+        "`--grid` {0} is out of range: must be an integer in [{lo}, {hi}]",
+        lo = GRID_RANGE.start(), hi = GRID_RANGE.end()
+    )]
+    Grid(usize),
+    /// Action levels outside [`ACTIONS_RANGE`].
+    #[error(
+        "`--actions` {0} is out of range: must be an integer in [{lo}, {hi}]",
+        lo = ACTIONS_RANGE.start(), hi = ACTIONS_RANGE.end()
+    )]
+    Actions(usize),
+    /// More than [`MAX_TRANSITIONS`] transitions.
+    #[error(
+        "`--grid` {grid} with `--actions` {actions} needs {} transitions ({:.1} GB): grid² × actions must be at most {MAX_TRANSITIONS}",
+        .grid * .grid * .actions, (.grid * .grid * .actions) as f64 * 12e-9
+    )]
+    Transitions {
+        /// Grid points per dimension.
+        grid: usize,
+        /// Action levels.
+        actions: usize,
+    },
+}
+
 impl OptimumOptions {
     /// Checks the sizes against [`GRID_RANGE`], [`ACTIONS_RANGE`] and [`MAX_TRANSITIONS`];
     /// the error names the `rig optimal` flag and the allowed range.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), OptimumError> {
         if !GRID_RANGE.contains(&self.grid) {
-            return Err(format!(
-                "`--grid` {} is out of range: must be an integer in [{}, {}]",
-                self.grid,
-                GRID_RANGE.start(),
-                GRID_RANGE.end()
-            ));
+            return Err(OptimumError::Grid(self.grid));
         }
         if !ACTIONS_RANGE.contains(&self.actions) {
-            return Err(format!(
-                "`--actions` {} is out of range: must be an integer in [{}, {}]",
-                self.actions,
-                ACTIONS_RANGE.start(),
-                ACTIONS_RANGE.end()
-            ));
+            return Err(OptimumError::Actions(self.actions));
         }
-        let n = self.grid * self.grid * self.actions;
-        if n > MAX_TRANSITIONS {
-            return Err(format!(
-                "`--grid` {} with `--actions` {} needs {n} transitions ({:.1} GB): \
-                 grid² × actions must be at most {MAX_TRANSITIONS}",
-                self.grid,
-                self.actions,
-                n as f64 * 12e-9
-            ));
+        if self.grid * self.grid * self.actions > MAX_TRANSITIONS {
+            return Err(OptimumError::Transitions {
+                grid: self.grid,
+                actions: self.actions,
+            });
         }
         Ok(())
     }
@@ -196,7 +211,7 @@ impl Grid {
 /// The optimal return of the pendulum swing-up from `[π, 0]` over one trial
 /// ([`Task::pendulum`]), by finite-horizon dynamic programming on a grid, and the return
 /// of the DP's greedy policy on the true plant (see the module documentation).
-pub fn pendulum_optimum(options: &OptimumOptions) -> Result<Optimum, String> {
+pub fn pendulum_optimum(options: &OptimumOptions) -> Result<Optimum, OptimumError> {
     options.validate()?;
     let start = Instant::now();
     let task = Arc::new(Task::pendulum());
@@ -364,13 +379,16 @@ mod tests {
         }
         .validate()
         .unwrap_err();
+        assert_eq!(e, OptimumError::Grid(5));
+        let e = e.to_string();
         assert!(e.contains("`--grid` 5") && e.contains("[21, 4001]"), "{e}");
         let e = OptimumOptions {
             grid: 101,
             actions: 1,
         }
         .validate()
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
         assert!(
             e.contains("`--actions` 1") && e.contains("[2, 1001]"),
             "{e}"
@@ -381,6 +399,12 @@ mod tests {
         }
         .validate()
         .unwrap_err();
+        assert!(matches!(e, OptimumError::Transitions { .. }), "{e:?}");
+        let e = e.to_string();
         assert!(e.contains("grid² × actions"), "{e}");
+        assert!(
+            e.contains("needs 16024009001 transitions (192.3 GB)"),
+            "{e}"
+        );
     }
 }

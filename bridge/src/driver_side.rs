@@ -25,7 +25,7 @@ use crate::claim::Lease;
 use crate::gate::Gate;
 use crate::message::{Ping, Stamps, Topic, from_bytes, to_bytes};
 use crate::session::{Network, driver_side};
-use crate::{Counts, publisher, wire_err};
+use crate::{Counts, publisher};
 
 /// What `rig bridge driver` serves.
 #[derive(Clone, Debug)]
@@ -72,7 +72,7 @@ const RECENT: usize = 1024;
 
 /// Serves until Ctrl-C or a termination request; returns what was forwarded.
 pub fn serve_driver(opts: &DriverSide) -> Result<Counts> {
-    driver::contract::check_id(&opts.id).map_err(wire_err)?;
+    driver::contract::check_id(&opts.id)?;
     let _refusals = crate::refusal::listen(Some(format!("bridge for driver {:?}", opts.id)));
     let session = driver_side(&opts.id, &opts.net)?;
     eprintln!(
@@ -132,7 +132,7 @@ fn answer_pings(
 
 /// The rig's commands, from the network to the driver, until stopped.
 fn commands_down(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -> Result<Counts> {
-    let bus = Bus::with_node(&format!("rig-bridge-{}", opts.id), "driver").map_err(wire_err)?;
+    let bus = Bus::with_node(&format!("rig-bridge-{}", opts.id), "driver")?;
     Gate::open(opts, session, shared, &bus)?.serve(&bus)
 }
 
@@ -140,28 +140,21 @@ fn commands_down(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -
 /// watchdog did, and the link's state, said on the way.
 fn samples_up(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -> Result<Counts> {
     let id = &opts.id;
-    let bus = Bus::with_node(&format!("rig-bridge-{id}-samples"), "driver").map_err(wire_err)?;
-    let info_rx = bus
-        .rx_on::<DriverInfo>(&service(id, topic::INFO), DRIVER_QOS)
-        .map_err(wire_err)?;
-    let samples = bus
-        .rx_on::<DriverSample>(&service(id, topic::SAMPLE), DRIVER_QOS)
-        .map_err(wire_err)?;
+    let bus = Bus::with_node(&format!("rig-bridge-{id}-samples"), "driver")?;
+    let info_rx = bus.rx_on::<DriverInfo>(&service(id, topic::INFO), DRIVER_QOS)?;
+    let samples = bus.rx_on::<DriverSample>(&service(id, topic::SAMPLE), DRIVER_QOS)?;
     let info_pub = publisher(session, &Topic::Info.key(id))?;
     let sample_pub = publisher(session, &Topic::Sample.key(id))?;
     let mut watch = Watch::new(id, opts.link_timeout);
     let mut counts = Counts::default();
     while !shared.stop.load(Relaxed) {
-        while let Some(i) = info_rx.try_recv().map_err(wire_err)? {
+        while let Some(i) = info_rx.try_recv()? {
             watch.period_ns = i.period_ns;
             shared.period_ns.store(i.period_ns, Relaxed);
             put(&info_pub, to_bytes(&i), None)?;
             counts.infos += 1;
         }
-        if let Some(s) = samples
-            .recv_timeout(Duration::from_millis(20))
-            .map_err(wire_err)?
-        {
+        if let Some(s) = samples.recv_timeout(Duration::from_millis(20))? {
             shared.newest.store(s.seq, Relaxed);
             {
                 let mut q = shared.sampled.lock().expect("no panics while holding it");

@@ -16,7 +16,7 @@ use zenoh::sample::Sample;
 use crate::claim::{Claim, Peer, Tenure, Verdict};
 use crate::driver_side::{DriverSide, Shared};
 use crate::message::{Topic, from_bytes, to_bytes, user_of};
-use crate::{Counts, publisher, wire_err};
+use crate::{Counts, publisher};
 
 /// The door, and what went through it.
 pub(crate) struct Gate<'a> {
@@ -168,7 +168,7 @@ impl<'a> Gate<'a> {
             self.counts.stale += 1;
             return Ok(());
         }
-        self.tx.send(*c).map_err(wire_err)?;
+        self.tx.send(*c)?;
         self.shared.command.store(c.seq, Relaxed);
         self.shared.command_arrived.store(arrived, Relaxed);
         let action_arrived = if c.kind == kind::ACTION { arrived } else { 0 };

@@ -115,7 +115,3 @@ fn declare(
         .wait()
         .map_err(|e| anyhow!("publisher on {key}: {e}"))
 }
-
-fn wire_err(e: wire::Error) -> anyhow::Error {
-    anyhow!("{e}")
-}

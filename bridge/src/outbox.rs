@@ -23,7 +23,7 @@ use zenoh::pubsub::Publisher;
 use crate::claim::{Claim, Claimant};
 use crate::message::{Topic, to_bytes};
 use crate::rig_side::Shared;
-use crate::{publisher, reliable_publisher, wire_err};
+use crate::{publisher, reliable_publisher};
 
 /// How long the commands' thread waits for a command at most, and how often a hold
 /// goes out while the rig is there and silent (a lease lasts at least 250 ms).
@@ -165,17 +165,15 @@ pub(crate) fn commands_up(
     user: &str,
     shared: &Shared,
 ) -> Result<(u64, u64)> {
-    let bus = Bus::with_node(&format!("rig-bridge-{id}"), "driver").map_err(wire_err)?;
-    let rx = bus
-        .rx_on::<DriverCommand>(&service(id, topic::COMMAND), DRIVER_QOS)
-        .map_err(wire_err)?;
+    let bus = Bus::with_node(&format!("rig-bridge-{id}"), "driver")?;
+    let rx = bus.rx_on::<DriverCommand>(&service(id, topic::COMMAND), DRIVER_QOS)?;
     let mut out = Outbox::new(session, id, user)?;
     while !shared.stop.load(Relaxed) {
         out.repeat_reset(
             shared.reset_id.load(Relaxed),
             shared.period_ns.load(Relaxed),
         )?;
-        let Some(mut c) = rx.recv_timeout(HOLD_EVERY).map_err(wire_err)? else {
+        let Some(mut c) = rx.recv_timeout(HOLD_EVERY)? else {
             // The rig on this host is there while it holds the command service.
             out.idle(rx.senders() > 0)?;
             continue;

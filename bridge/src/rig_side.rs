@@ -28,7 +28,7 @@ use crate::outbox::commands_up;
 use crate::refusal::{Heard, Refusal};
 use crate::session::{Network, own_user, rig_side};
 use crate::timing::{Durations, LinkTiming};
-use crate::{Counts, publisher, wire_err};
+use crate::{Counts, publisher};
 
 /// What `rig bridge rig` serves.
 #[derive(Clone, Debug)]
@@ -76,7 +76,7 @@ pub(crate) struct Shared {
 /// Serves until Ctrl-C or a termination request; returns what was forwarded and the
 /// link's timing.
 pub fn serve_rig(opts: &RigSide) -> Result<(Counts, LinkTiming)> {
-    driver::contract::check_id(&opts.id).map_err(wire_err)?;
+    driver::contract::check_id(&opts.id)?;
     let user = own_user(&opts.net)?;
     let refusals = crate::refusal::listen(None);
     let session = rig_side(&opts.net)?;
@@ -183,7 +183,7 @@ struct Stand<'a> {
 
 impl<'a> Stand<'a> {
     fn new(opts: &'a RigSide, session: &zenoh::Session, shared: Arc<Shared>) -> Result<Self> {
-        let bus = driver::contract::bus(&opts.id).map_err(wire_err)?;
+        let bus = driver::contract::bus(&opts.id)?;
         let taken = |e: wire::Error| {
             anyhow!(
                 "standing in for driver {:?} on this host: {e} (is that driver running here too?)",
@@ -278,7 +278,7 @@ impl<'a> Stand<'a> {
                 self.shared.period_ns.store(i.period_ns, Relaxed);
                 i.t_start_ns = self.timing.clock.to_rig(i.t_start_ns);
                 i.t_publish_ns = self.timing.clock.to_rig(i.t_publish_ns);
-                self.info.send(i).map_err(wire_err)?;
+                self.info.send(i)?;
                 self.counts.infos += 1;
             }
             Topic::Sample => {
@@ -290,10 +290,10 @@ impl<'a> Stand<'a> {
                 };
                 s.t_sample_ns = self.timing.clock.to_rig(s.t_sample_ns);
                 s.t_publish_ns = self.timing.clock.to_rig(s.t_publish_ns);
-                self.samples.send(s).map_err(wire_err)?;
+                self.samples.send(s)?;
                 self.counts.samples += 1;
                 let l = self.time_sample(s.seq, &stamps, a.at)?;
-                self.link.send(l).map_err(wire_err)?;
+                self.link.send(l)?;
             }
             Topic::Command | Topic::Claim | Topic::Ping => {}
         }

@@ -24,7 +24,9 @@ use std::time::Duration;
 
 use iceoryx2::prelude::*;
 
-use wire::{Bus, Error, MAX_U, MAX_X, Qos};
+use wire::{Bus, MAX_U, MAX_X, Qos};
+
+use crate::error::{Error, InfoError, SampleError};
 
 pub use crate::link::{DriverLink, DriverWatch, running, wait_info};
 pub use crate::serving::how_to_serve;
@@ -250,46 +252,45 @@ impl DriverInfo {
     /// Checks what holds for any driver: the version, dimensions within the message
     /// sizes, a positive period and time scale, finite and ordered limits, a watchdog of
     /// one period.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InfoError> {
         if self.version != VERSION {
-            return Err(format!(
-                "protocol version {} (this rig speaks {VERSION})",
-                self.version
-            ));
+            return Err(InfoError::Version {
+                found: self.version,
+                speaks: VERSION,
+            });
         }
         if !(1..=MAX_X as u64).contains(&self.n_x) || !(1..=MAX_U as u64).contains(&self.n_u) {
-            return Err(format!(
-                "n_x = {}, n_u = {}: must be 1..={MAX_X} and 1..={MAX_U}",
-                self.n_x, self.n_u
-            ));
+            return Err(InfoError::Dimensions {
+                n_x: self.n_x,
+                n_u: self.n_u,
+                max_x: MAX_X,
+                max_u: MAX_U,
+            });
         }
         if self.period_ns == 0 || !(self.time_scale.is_finite() && self.time_scale > 0.0) {
-            return Err(format!(
-                "period_ns = {}, time_scale = {}: both must be positive (and finite)",
-                self.period_ns, self.time_scale
-            ));
+            return Err(InfoError::Period {
+                period_ns: self.period_ns,
+                time_scale: self.time_scale,
+            });
         }
         for i in 0..self.n_u as usize {
             let (lo, hi) = (self.u_min[i], self.u_max[i]);
             if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-                return Err(format!(
-                    "limits of u[{i}]: [{lo}, {hi}]: must be finite with u_min < u_max"
-                ));
+                return Err(InfoError::Limits { i, lo, hi });
             }
         }
         if self.clock > clock::LOCKSTEP {
-            return Err(format!(
-                "clock = {}: must be {} (realtime) or {} (lockstep)",
-                self.clock,
-                clock::REALTIME,
-                clock::LOCKSTEP
-            ));
+            return Err(InfoError::Clock {
+                found: self.clock,
+                realtime: clock::REALTIME,
+                lockstep: clock::LOCKSTEP,
+            });
         }
         if self.watchdog_periods != 1 {
-            return Err(format!(
-                "watchdog_periods = {}: protocol version {VERSION} requires 1 (the safe action within two periods of the last action)",
-                self.watchdog_periods
-            ));
+            return Err(InfoError::Watchdog {
+                found: self.watchdog_periods,
+                version: VERSION,
+            });
         }
         Ok(())
     }
@@ -332,12 +333,15 @@ impl DriverSample {
 
     /// Checks that the sample fits the driver's info: the dimensions, finite values —
     /// except velocities that are all NaN ([`Self::positions_only`]).
-    pub fn validate(&self, info: &DriverInfo) -> Result<(), String> {
+    pub fn validate(&self, info: &DriverInfo) -> Result<(), SampleError> {
         if self.n_x != info.n_x || self.n_u != info.n_u {
-            return Err(format!(
-                "sample {}: n_x = {}, n_u = {}, but the driver's info says {} and {}",
-                self.seq, self.n_x, self.n_u, info.n_x, info.n_u
-            ));
+            return Err(SampleError::Dimensions {
+                seq: self.seq,
+                n_x: self.n_x,
+                n_u: self.n_u,
+                info_n_x: info.n_x,
+                info_n_u: info.n_u,
+            });
         }
         let x = self.state();
         for (name, v) in [("x", self.measured()), ("u_applied", self.applied())] {
@@ -347,7 +351,13 @@ impl DriverSample {
                 } else {
                     ""
                 };
-                return Err(format!("sample {}: {name}[{i}] = {}{hint}", self.seq, v[i]));
+                return Err(SampleError::NotFinite {
+                    seq: self.seq,
+                    name,
+                    i,
+                    value: v[i],
+                    hint,
+                });
             }
         }
         Ok(())
@@ -370,7 +380,7 @@ pub fn node_name(driver_id: &str) -> String {
 /// are opened with [`Bus::tx_on`] and [`Bus::rx_on`] on [`service`] names.
 pub fn bus(driver_id: &str) -> Result<Bus, Error> {
     check_id(driver_id)?;
-    Bus::with_node(&node_name(driver_id), "driver")
+    Ok(Bus::with_node(&node_name(driver_id), "driver")?)
 }
 
 /// Checks a driver id: letters, digits, '-' and '_'.
@@ -380,9 +390,7 @@ pub fn check_id(driver_id: &str) -> Result<(), Error> {
             .chars()
             .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
     {
-        return Err(
-            format!("driver id {driver_id:?}: use letters, digits, '-' and '_' only").into(),
-        );
+        return Err(Error::Id(driver_id.to_string()));
     }
     Ok(())
 }
@@ -422,16 +430,25 @@ mod tests {
         assert!((i.ts() - 0.03).abs() < 1e-12);
         let mut bad = i;
         bad.u_max[0] = f64::NAN;
-        assert!(bad.validate().unwrap_err().contains("u[0]"));
+        assert!(bad.validate().unwrap_err().to_string().contains("u[0]"));
+        assert!(matches!(
+            bad.validate(),
+            Err(InfoError::Limits { i: 0, .. })
+        ));
         let mut bad = i;
         bad.watchdog_periods = 3;
-        assert!(bad.validate().unwrap_err().contains("watchdog_periods"));
+        assert!(
+            bad.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("watchdog_periods")
+        );
         let mut bad = i;
         bad.version = 1;
-        assert!(bad.validate().unwrap_err().contains("version"));
+        assert!(bad.validate().unwrap_err().to_string().contains("version"));
         let mut bad = i;
         bad.clock = 2;
-        assert!(bad.validate().unwrap_err().contains("clock"));
+        assert!(bad.validate().unwrap_err().to_string().contains("clock"));
     }
 
     /// Velocities may be unmeasured (all NaN); positions, a single NaN velocity and
@@ -460,15 +477,30 @@ mod tests {
         let encoder = sample([0.1, -0.2, nan, nan]);
         assert_eq!(encoder.validate(&info), Ok(()));
         assert!(encoder.positions_only());
-        let one = sample([0.1, -0.2, 0.3, nan]).validate(&info).unwrap_err();
+        let one = sample([0.1, -0.2, 0.3, nan])
+            .validate(&info)
+            .unwrap_err()
+            .to_string();
         assert!(
             one.contains("x[3] = NaN") && one.contains("NaN for all of them"),
             "{one}"
         );
-        let position = sample([nan, -0.2, nan, nan]).validate(&info).unwrap_err();
+        let position = sample([nan, -0.2, nan, nan])
+            .validate(&info)
+            .unwrap_err()
+            .to_string();
         assert!(position.starts_with("sample 7: x[0] = NaN"), "{position}");
         assert!(!position.contains("all of them"), "{position}");
         let inf = sample([0.1, -0.2, f64::INFINITY, 0.0]).validate(&info);
-        assert!(inf.unwrap_err().contains("x[2] = inf"));
+        assert!(inf.unwrap_err().to_string().contains("x[2] = inf"));
+        let wrong = DriverSample { n_u: 1, ..full };
+        assert!(matches!(
+            wrong.validate(&info),
+            Err(SampleError::Dimensions {
+                n_u: 1,
+                info_n_u: 2,
+                ..
+            })
+        ));
     }
 }

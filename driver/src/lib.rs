@@ -9,12 +9,17 @@
 //!   device (`rig sim-driver`).
 //! - [`safety`]: the supervisor every action passes (clamps, rejection, watchdog, range
 //!   stop), the same one the simulated plant uses.
-//! - [`fits_task`]: whether a driver's limits fit a task.
+//! - [`fits_task`]: whether a driver's limits fit a task; [`check_info`] checks an info
+//!   on its own and against a task.
+//! - [`Error`]: what can go wrong on either end, keeping the transport's typed errors;
+//!   [`InfoError`], [`SampleError`], [`TaskMismatch`] and [`Unfit`] say what breaks the
+//!   contract.
 //!
 //! `examples/motor_driver.rs` is the template for a hardware driver.
 
 pub mod contract;
 pub mod device;
+mod error;
 mod fits;
 mod link;
 mod serve;
@@ -22,7 +27,8 @@ mod serving;
 mod simulated;
 
 pub use device::{Device, REST_SAMPLES};
-pub use fits::fits_task;
+pub use error::{Error, InfoError, SampleError, TaskMismatch, Unfit};
+pub use fits::{check_info, fits_task};
 pub use plant::safety;
 pub use serve::{Lockstep, Served, Serving, serve, serve_lockstep};
 pub use simulated::Simulated;

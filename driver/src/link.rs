@@ -6,12 +6,13 @@ use std::time::Duration;
 
 use iceoryx2::prelude::*;
 
-use wire::{Bus, Error, Rx, Tx, now_ns};
+use wire::{Bus, Rx, Tx, now_ns};
 
 use crate::contract::{
     DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, LinkSample, check_id, kind, service,
     status, topic,
 };
+use crate::error::Error;
 
 /// Drivers whose nodes are alive on this host: `(id, process id)`, by node name.
 pub fn running(bus: &Bus) -> Vec<(String, u32)> {
@@ -54,7 +55,7 @@ pub fn wait_info(
             return Ok(i);
         }
         if bus.interrupted() {
-            return Err("interrupted".into());
+            return Err(wire::Error::Interrupted.into());
         }
         if !said && t0.elapsed() >= Duration::from_secs(1) && t0.elapsed() < timeout {
             said = true;
@@ -74,12 +75,13 @@ pub fn wait_info(
             } else {
                 format!("running drivers: {}", others.join(", "))
             };
-            return Err(format!(
-                "no driver {id:?}: nothing published on {} within {:.0} s ({hint}); {serve}",
-                service(id, topic::INFO),
-                timeout.as_secs_f64(),
-            )
-            .into());
+            return Err(Error::NoInfo {
+                id: id.to_string(),
+                service: service(id, topic::INFO),
+                timeout,
+                hint,
+                serve: serve.to_string(),
+            });
         }
     }
 }
@@ -133,14 +135,13 @@ impl DriverLink {
         let commands = bus
             .tx_on::<DriverCommand>(&service(id, topic::COMMAND), DRIVER_QOS)
             .map_err(|e| {
-                if e.to_string().contains("ExceedsMaxSupportedPublishers") {
-                    format!(
-                        "driver {id:?} is in use: another rig process is commanding it ({})",
-                        service(id, topic::COMMAND)
-                    )
-                    .into()
+                if e.publisher_taken() {
+                    Error::InUse {
+                        id: id.to_string(),
+                        service: service(id, topic::COMMAND),
+                    }
                 } else {
-                    e
+                    e.into()
                 }
             })?;
         Ok(Self {
@@ -212,16 +213,14 @@ impl DriverLink {
                 return Ok(s);
             }
             if bus.interrupted() {
-                return Err("interrupted".into());
+                return Err(wire::Error::Interrupted.into());
             }
             if t0.elapsed() > silence {
-                return Err(format!(
-                    "driver {:?} stopped: no sample on {} for {:.1} s",
-                    self.id,
-                    service(&self.id, topic::SAMPLE),
-                    silence.as_secs_f64()
-                )
-                .into());
+                return Err(Error::Stopped {
+                    id: self.id.clone(),
+                    service: service(&self.id, topic::SAMPLE),
+                    silence,
+                });
             }
         }
     }
@@ -248,23 +247,43 @@ impl DriverLink {
         let silence = info.silence_limit(timeout);
         loop {
             let s = self.next_sample(bus, silence)?;
-            s.validate(info)
-                .map_err(|e| format!("driver {:?}: {e}", self.id))?;
+            s.validate(info).map_err(|error| Error::Sample {
+                id: self.id.clone(),
+                error,
+            })?;
             if s.reset_id == reset_id && s.has(status::READY) {
                 return Ok(s);
             }
             if t0.elapsed() > timeout {
-                return Err(format!(
-                    "driver {:?} did not finish the reset within {:.0} s (last sample {}: status {:#x}, reset_id {}, x = {:?})",
-                    self.id,
-                    timeout.as_secs_f64(),
-                    s.seq,
-                    s.status,
-                    s.reset_id,
-                    s.state()
-                )
-                .into());
+                return Err(Error::ResetTimeout {
+                    id: self.id.clone(),
+                    timeout,
+                    last: Box::new(s),
+                });
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_second_rig_commanding_one_driver_finds_it_in_use() {
+        let id = format!("inuse{}", std::process::id());
+        let bus = Bus::join(&format!("linktest{}", std::process::id()), "rig").unwrap();
+        let _first = DriverLink::connect(&bus, &id).unwrap();
+        let Err(e) = DriverLink::connect(&bus, &id) else {
+            panic!("a second link commands driver {id:?}");
+        };
+        assert!(
+            matches!(&e, Error::InUse { id: i, service: s } if *i == id && *s == service(&id, topic::COMMAND)),
+            "{e:?}"
+        );
+        assert!(matches!(
+            DriverLink::connect(&bus, "a/b"),
+            Err(Error::Id(i)) if i == "a/b"
+        ));
     }
 }

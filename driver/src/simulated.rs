@@ -6,11 +6,12 @@
 
 use std::sync::Arc;
 
-use anyhow::{Result, anyhow};
 use plant::angle::wrap;
 use plant::sensor::Sensor;
 use plant::{Plant, SystemName, Task};
 use wire::{MAX_U, now_ns};
+
+use crate::Error;
 
 use crate::device::Device;
 use crate::serve::Lockstep;
@@ -46,7 +47,7 @@ impl Simulated {
     /// unit, and per velocity unit), or why it cannot be reset by one: the vertical arm's
     /// start state `[−1.1, 1, 0, 0]` needs 5.5 N m against gravity at joint 1, beyond the
     /// ±1 N m limit — a state it cannot rest in.
-    pub fn brake_gains(system: SystemName) -> Result<(f64, f64)> {
+    pub fn brake_gains(system: SystemName) -> Result<(f64, f64), Error> {
         match system {
             // The Python example driver's gains: V/rad, V s/rad.
             SystemName::Pendulum => Ok((1.0, 0.7)),
@@ -57,29 +58,24 @@ impl Simulated {
             SystemName::Arm64 => Ok((0.1, 0.05)),
             // N/m, N s/m on the unit mass.
             SystemName::DoubleIntegrator => Ok((5.0, 3.0)),
-            SystemName::ArmVertical => Err(anyhow!(
-                "the simulated arm-vertical cannot rest at its start state [-1.1, 1, 0, 0]: gravity needs 5.5 N m at joint 1, beyond the ±1 N m limit"
-            )),
+            SystemName::ArmVertical => Err(Error::CannotRest),
         }
     }
 
     /// `system` at its first start state, running `speed` times faster than real time.
-    pub fn new(system: SystemName, speed: f64) -> Result<Self> {
+    pub fn new(system: SystemName, speed: f64) -> Result<Self, Error> {
         Self::of(Task::new(system), speed)
     }
 
     /// `task` (one with a built-in simulation: a task file's `[simulation]`) at its first
     /// start state, running `speed` times faster than real time.
-    pub fn of(task: Task, speed: f64) -> Result<Self> {
+    pub fn of(task: Task, speed: f64) -> Result<Self, Error> {
         let Some(sim) = &task.simulation else {
-            return Err(anyhow!(
-                "task {:?} has no [simulation]: there is nothing to simulate",
-                task.name
-            ));
+            return Err(Error::NoSimulation(task.name.clone()));
         };
         let gains = Self::brake_gains(sim.system)?;
         if !(speed.is_finite() && speed > 0.0 && speed <= 1000.0) {
-            return Err(anyhow!("--speed {speed}: must be in (0, 1000]"));
+            return Err(Error::Speed(speed));
         }
         Ok(Self {
             plant: Plant::new(Arc::new(task)),
@@ -101,9 +97,9 @@ impl Simulated {
 
     /// Samples report the positions only, quantised to `counts_per_rev` counts per
     /// revolution (no noise), and NaN velocities.
-    pub fn measuring_positions_only(mut self, counts_per_rev: u32) -> Result<Self> {
+    pub fn measuring_positions_only(mut self, counts_per_rev: u32) -> Result<Self, Error> {
         if counts_per_rev == 0 {
-            return Err(anyhow!("--counts-per-rev 0: must be at least 1"));
+            return Err(Error::NoCounts);
         }
         let mask = &self.plant.task().angle_mask;
         self.sensor = Sensor::angle(mask, counts_per_rev, 0.0, 0);

@@ -15,7 +15,7 @@
 //! [`Actuator`] per run and call it once per simulated interval, learning and greedy
 //! trials alike, so they draw the same delays in the same order.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use rand::{RngExt, SeedableRng};
@@ -92,13 +92,16 @@ fn unit_of(column: &str) -> Option<f64> {
 /// as `latency.csv`'s deadline misses) are skipped. Every value must be finite and in
 /// `[0, ts)`; the error names the file, column, row (1-based, the header is row 1) and
 /// the allowed range.
-pub fn read_csv(path: &Path, column: Option<&str>, ts: f64) -> Result<Vec<f64>, String> {
-    let file = path.display();
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{file}: cannot read: {e}"))?;
+pub fn read_csv(path: &Path, column: Option<&str>, ts: f64) -> Result<Vec<f64>, DelayFileError> {
+    let file = || path.to_path_buf();
+    let text = std::fs::read_to_string(path).map_err(|error| DelayFileError::Read {
+        file: file(),
+        error,
+    })?;
     let mut lines = text.lines();
     let header: Vec<&str> = lines
         .next()
-        .ok_or_else(|| format!("{file}: is empty; wants a header row and one delay per row"))?
+        .ok_or_else(|| DelayFileError::Empty(file()))?
         .split(',')
         .map(str::trim)
         .collect();
@@ -109,17 +112,22 @@ pub fn read_csv(path: &Path, column: Option<&str>, ts: f64) -> Result<Vec<f64>, 
     let (index, name) = want
         .iter()
         .find_map(|w| header.iter().position(|h| h == w).map(|i| (i, *w)))
-        .ok_or_else(|| {
-            format!(
-                "{file}: has no column {} (its columns: {})",
-                want.join(" or "),
-                header.join(", ")
-            )
+        .ok_or_else(|| DelayFileError::NoColumn {
+            file: file(),
+            want: want.join(" or "),
+            columns: header.join(", "),
         })?;
-    let unit = unit_of(name).ok_or_else(|| {
-        format!("{file}: cannot tell the unit of column {name}: name it with a suffix _s, _ms, _us or _ns")
+    let unit = unit_of(name).ok_or_else(|| DelayFileError::NoUnit {
+        file: file(),
+        column: name.to_string(),
     })?;
-    let range = format!("[0, {}) ms (less than one sample period Ts)", ts * 1e3);
+    let at = |row: usize, cell: &str| Cell {
+        file: file(),
+        column: name.to_string(),
+        row,
+        cell: cell.to_string(),
+        ts_ms: ts * 1e3,
+    };
     let mut out = Vec::new();
     for (i, line) in lines.enumerate() {
         let row = i + 2;
@@ -127,23 +135,94 @@ pub fn read_csv(path: &Path, column: Option<&str>, ts: f64) -> Result<Vec<f64>, 
         if cell.is_empty() {
             continue;
         }
-        let v: f64 = cell.parse().map_err(|_| {
-            format!(
-                "{file}: column {name}, row {row}: {cell:?} is not a number; must be in {range}"
-            )
-        })?;
+        let v: f64 = cell
+            .parse()
+            .map_err(|_| DelayFileError::NotANumber(at(row, cell)))?;
         let d = v * unit;
         if !(d.is_finite() && d >= 0.0 && d < ts) {
-            return Err(format!(
-                "{file}: column {name}, row {row}: {cell} is out of range: must be in {range}"
-            ));
+            return Err(DelayFileError::OutOfRange(at(row, cell)));
         }
         out.push(d);
     }
     if out.is_empty() {
-        return Err(format!("{file}: column {name} holds no delays"));
+        return Err(DelayFileError::NoDelays {
+            file: file(),
+            column: name.to_string(),
+        });
     }
     Ok(out)
+}
+
+/// What is wrong with a delay file ([`read_csv`]); each names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum DelayFileError {
+    /// The file cannot be read.
+    #[error("{}: cannot read: {error}", .file.display())]
+    Read {
+        /// The file.
+        file: PathBuf,
+        /// Why.
+        error: std::io::Error,
+    },
+    /// The file has no header row.
+    #[error("{}: is empty; wants a header row and one delay per row", .0.display())]
+    Empty(PathBuf),
+    /// The file has none of the columns wanted.
+    #[error("{}: has no column {want} (its columns: {columns})", .file.display())]
+    NoColumn {
+        /// The file.
+        file: PathBuf,
+        /// The columns wanted, "a or b".
+        want: String,
+        /// The file's columns, comma-separated.
+        columns: String,
+    },
+    /// A column whose name has no unit suffix.
+    #[error(
+        "{}: cannot tell the unit of column {column}: name it with a suffix _s, _ms, _us or _ns",
+        .file.display()
+    )]
+    NoUnit {
+        /// The file.
+        file: PathBuf,
+        /// The column.
+        column: String,
+    },
+    /// A cell that is not a number.
+    #[error(
+        "{}: column {}, row {}: {:?} is not a number; must be in [0, {}) ms (less than one sample period Ts)",
+        .0.file.display(), .0.column, .0.row, .0.cell, .0.ts_ms
+    )]
+    NotANumber(Cell),
+    /// A delay outside `[0, Ts)`.
+    #[error(
+        "{}: column {}, row {}: {} is out of range: must be in [0, {}) ms (less than one sample period Ts)",
+        .0.file.display(), .0.column, .0.row, .0.cell, .0.ts_ms
+    )]
+    OutOfRange(Cell),
+    /// A column without a single delay.
+    #[error("{}: column {column} holds no delays", .file.display())]
+    NoDelays {
+        /// The file.
+        file: PathBuf,
+        /// The column.
+        column: String,
+    },
+}
+
+/// Where a bad cell of a delay file is ([`DelayFileError`]).
+#[derive(Debug)]
+pub struct Cell {
+    /// The file.
+    pub file: PathBuf,
+    /// The column.
+    pub column: String,
+    /// The row, 1-based (the header is row 1).
+    pub row: usize,
+    /// The cell's text.
+    pub cell: String,
+    /// The sample period Ts \[ms\], which a delay must be less than.
+    pub ts_ms: f64,
 }
 
 /// When the agent's answer to a sample takes effect ([module documentation](self)).
@@ -236,21 +315,39 @@ mod tests {
         assert_eq!(read_csv(&p, None, 0.03).unwrap(), vec![0.001]);
         let p = write("c.csv", "delay_ms\n5\n30\n");
         let e = read_csv(&p, None, 0.03).unwrap_err();
+        assert!(
+            matches!(&e, DelayFileError::OutOfRange(c) if c.row == 3 && c.column == "delay_ms"),
+            "{e:?}"
+        );
+        let e = e.to_string();
         assert!(e.contains("row 3") && e.contains("[0, 30) ms"), "{e}");
-        let e = read_csv(&p, Some("lag"), 0.03).unwrap_err();
+        let e = read_csv(&p, Some("lag"), 0.03).unwrap_err().to_string();
         assert!(e.contains("no column lag") && e.contains("delay_ms"), "{e}");
         let p = write("d.csv", "delay_ms\n-1\n");
-        assert!(read_csv(&p, None, 0.03).unwrap_err().contains("row 2"));
+        assert!(
+            read_csv(&p, None, 0.03)
+                .unwrap_err()
+                .to_string()
+                .contains("row 2")
+        );
+        let p = write("n.csv", "delay_ms\nfive\n");
+        let e = read_csv(&p, None, 0.03).unwrap_err();
+        assert!(matches!(e, DelayFileError::NotANumber(_)), "{e:?}");
+        assert!(e.to_string().ends_with(
+            "row 2: \"five\" is not a number; must be in [0, 30) ms (less than one sample period Ts)"
+        ));
         let p = write("e.csv", "delay_ms\nNaN\n");
         assert!(
             read_csv(&p, None, 0.03)
                 .unwrap_err()
+                .to_string()
                 .contains("out of range")
         );
         let missing = std::env::temp_dir().join("plant-delay-missing.csv");
         assert!(
             read_csv(&missing, None, 0.03)
                 .unwrap_err()
+                .to_string()
                 .contains("cannot read")
         );
     }

@@ -38,17 +38,16 @@ pub fn main(args: &Args) -> ExitCode {
         if v.is_finite() && (0.0..=1.0).contains(&v) {
             Ok(v)
         } else {
-            Err(format!(
+            Err(anyhow::anyhow!(
                 "`{flag}` {v} is out of range: must be a fraction in [0, 1]"
             ))
         }
     };
-    let opts = (|| -> Result<CheckOptions, String> {
+    let opts = (|| -> anyhow::Result<CheckOptions> {
         let task = args.task.task()?;
         let d = args.driver.resolve(&task.name)?;
-        let rate_seconds = runtime::process::seconds("--rate-seconds", args.rate_seconds)
-            .map_err(|e| e.to_string())?
-            .as_secs_f64();
+        let rate_seconds =
+            runtime::process::seconds("--rate-seconds", args.rate_seconds)?.as_secs_f64();
         Ok(CheckOptions {
             serve: driver::contract::how_to_serve(&task, &d.id, args.task.named().as_deref()),
             driver: d.id,

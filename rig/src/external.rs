@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use anyhow::Result;
 use clap::Args;
 use plant::config::Choice;
 use plant::{SystemName, Task};
@@ -23,9 +24,9 @@ pub struct TaskArgs {
 
 impl TaskArgs {
     /// The task: `--task`'s file, checked, else `--system`'s.
-    pub fn task(&self) -> Result<Task, String> {
+    pub fn task(&self) -> Result<Task> {
         match &self.task {
-            Some(path) => Task::from_file(path).map_err(|e| e.to_string()),
+            Some(path) => Ok(Task::from_file(path)?),
             None => Ok(Task::new(self.system)),
         }
     }
@@ -64,15 +65,13 @@ pub struct DriverArgs {
 impl DriverArgs {
     /// The driver to run against the task named `task`: its id (default: the task's
     /// name; one a driver id cannot be, with '.', needs `--driver`) and timeouts, checked.
-    pub fn resolve(&self, task: &str) -> Result<ExternalDriver, String> {
+    pub fn resolve(&self, task: &str) -> Result<ExternalDriver> {
         let id = self.driver.clone().unwrap_or_else(|| task.to_string());
-        driver::contract::check_id(&id).map_err(|e| format!("`--driver`: {e}"))?;
+        driver::contract::check_id(&id).map_err(|e| anyhow::anyhow!("`--driver`: {e}"))?;
         Ok(ExternalDriver {
             id,
-            timeout: runtime::process::seconds("--driver-timeout", self.driver_timeout)
-                .map_err(|e| e.to_string())?,
-            reset_timeout: runtime::process::seconds("--reset-timeout", self.reset_timeout)
-                .map_err(|e| e.to_string())?,
+            timeout: runtime::process::seconds("--driver-timeout", self.driver_timeout)?,
+            reset_timeout: runtime::process::seconds("--reset-timeout", self.reset_timeout)?,
         })
     }
 }

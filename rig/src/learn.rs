@@ -29,7 +29,7 @@ pub struct Args {
 pub fn main(args: &Args) -> ExitCode {
     let simulated = |cfg: ExperimentConfig| match cfg.check_simulated() {
         Ok(()) => Ok(cfg),
-        Err(e) => Err(e.to_string()),
+        Err(e) => Err(anyhow::anyhow!(e)),
     };
     let cfg = match resolve_selection(&args.selection).and_then(simulated) {
         Ok(c) => c,

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use anyhow::{Result, anyhow};
 use clap::Args as Flags;
 use runtime::config::ExperimentConfig;
 use runtime::process::{Layout, WaitKind};
@@ -113,15 +114,14 @@ pub const LOCKSTEP_WAIT: WaitKind = WaitKind::Yield;
 
 /// The experiment and how to run it, from the flags (and, resuming, the run's
 /// directory); an error is a usage error.
-fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
+fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
     let mut cfg = match &args.resume {
         Some(dir) => resume_selection(dir, &args.selection),
         None => resolve_selection(&args.selection),
-    }
-    .map_err(|e| e.to_string())?;
+    }?;
     cfg.run.runs = 1;
     if !(args.speed.is_finite() && args.speed > 0.0 && args.speed <= 1000.0) {
-        return Err(format!(
+        return Err(anyhow!(
             "`--speed` {} is out of range: must be a number in (0, 1000]",
             args.speed
         ));
@@ -129,20 +129,21 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
     let realtime = (args.timing == "realtime").then_some(args.speed);
     let delayed = cfg.run.delay_ms != 0.0 || !cfg.run.delay_from.is_empty();
     if delayed && (realtime.is_some() || args.plant == "external") {
-        return Err("`--delay-ms`/`--delay-from` (run.delay_ms, run.delay_from) apply in lockstep with the simulated plant only: in real time the delays are real".into());
+        return Err(anyhow!(
+            "`--delay-ms`/`--delay-from` (run.delay_ms, run.delay_from) apply in lockstep with the simulated plant only: in real time the delays are real"
+        ));
     }
     let driver = if args.plant == "external" {
         if realtime.is_some() || args.speed != 1.0 {
-            return Err(
+            return Err(anyhow!(
                 "`--timing`/`--speed` do not apply with `--plant external`: the driver is the clock"
-                    .into(),
-            );
+            ));
         }
         Some(args.driver.resolve(&cfg.task_name())?)
     } else if args.driver.driver.is_some() {
-        return Err("`--driver` needs `--plant external`".into());
+        return Err(anyhow!("`--driver` needs `--plant external`"));
     } else {
-        cfg.check_simulated().map_err(|e| e.to_string())?;
+        cfg.check_simulated()?;
         None
     };
     let lockstep = realtime.is_none() && driver.is_none();
@@ -154,7 +155,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
     runtime::run::check_waiting(lockstep, waiting)?;
     let mut scheduling = args.scheduling;
     match scheduling.layout() {
-        Some(layout) => layout.check().map_err(|e| e.to_string())?,
+        Some(layout) => layout.check()?,
         None if lockstep => scheduling.cpus = Some(Layout::lockstep(waiting)),
         None => {}
     }

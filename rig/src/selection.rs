@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use agent::config::{Algo, ApproxKind, HorizonKind};
+use anyhow::{Result, anyhow};
 use clap::Args;
 use observer::config::{ObserverKind, ObserverMode, SensorKind};
 use plant::SystemName;
@@ -102,10 +103,10 @@ pub struct Selection {
 
 /// The experiment `s` selects: preset ← `--config` file ← flags, validated; the error
 /// names the file or says it came from the command line or the preset.
-pub fn resolve_selection(s: &Selection) -> Result<ExperimentConfig, String> {
+pub fn resolve_selection(s: &Selection) -> Result<ExperimentConfig> {
     let text = match &s.config {
         Some(p) => Some(
-            std::fs::read_to_string(p).map_err(|e| format!("{}: cannot read: {e}", p.display()))?,
+            std::fs::read_to_string(p).map_err(|e| anyhow!("{}: cannot read: {e}", p.display()))?,
         ),
         None => None,
     };
@@ -133,8 +134,8 @@ pub fn resolve_selection(s: &Selection) -> Result<ExperimentConfig, String> {
         observer_mode: s.observer_mode,
     };
     resolve(s.config.as_deref().zip(text.as_deref()), &o).map_err(|e| match &e.file {
-        Some(_) => e.to_string(),
-        None => format!("{e} (from the command line or the preset)"),
+        Some(_) => anyhow!(e),
+        None => anyhow!("{e} (from the command line or the preset)"),
     })
 }
 
@@ -163,10 +164,10 @@ fn experiment_flags(s: &Selection) -> Vec<&'static str> {
 }
 
 /// The configuration of a run to resume: `DIR/config.toml`, with `--trials` if given.
-pub fn resume_selection(dir: &std::path::Path, s: &Selection) -> Result<ExperimentConfig, String> {
+pub fn resume_selection(dir: &std::path::Path, s: &Selection) -> Result<ExperimentConfig> {
     let flags = experiment_flags(s);
     if !flags.is_empty() {
-        return Err(format!(
+        return Err(anyhow!(
             "`--resume` continues the run with its own configuration ({}); {} cannot change it (only `--trials` can)",
             dir.join("config.toml").display(),
             flags.join(", ")
@@ -174,7 +175,7 @@ pub fn resume_selection(dir: &std::path::Path, s: &Selection) -> Result<Experime
     }
     let path = dir.join("config.toml");
     let text = std::fs::read_to_string(&path).map_err(|e| {
-        format!(
+        anyhow!(
             "{}: cannot read ({e}); is {} a `rig run` directory?",
             path.display(),
             dir.display()
@@ -184,5 +185,5 @@ pub fn resume_selection(dir: &std::path::Path, s: &Selection) -> Result<Experime
         trials: s.trials,
         ..Overrides::default()
     };
-    resolve(Some((&path, &text)), &o).map_err(|e| e.to_string())
+    Ok(resolve(Some((&path, &text)), &o)?)
 }

@@ -63,12 +63,12 @@ pub fn main(args: &Args) -> ExitCode {
             if lockstep && args.speed != 1.0 {
                 anyhow::bail!("`--speed` applies to the realtime clock only: in lockstep the driver runs as fast as the rig answers");
             }
-            args.task.task().map_err(|e| anyhow::anyhow!(e))
+            args.task.task()
         })
-        .and_then(|task| Simulated::of(task, args.speed))
+        .and_then(|task| Ok(Simulated::of(task, args.speed)?))
         .map(|d| if lockstep { d.in_lockstep() } else { d })
         .and_then(|d| match args.sensor.as_str() {
-            "angle" => d.measuring_positions_only(args.counts_per_rev),
+            "angle" => Ok(d.measuring_positions_only(args.counts_per_rev)?),
             _ => Ok(d),
         });
     let mut device = match device {
@@ -106,9 +106,9 @@ pub fn main(args: &Args) -> ExitCode {
             verbose: args.verbose,
         };
         if lockstep {
-            serve_lockstep(&mut device, &args.driver_id, &how)
+            Ok(serve_lockstep(&mut device, &args.driver_id, &how)?)
         } else {
-            serve(&mut device, &args.driver_id, &how)
+            Ok(serve(&mut device, &args.driver_id, &how)?)
         }
     });
     match served {

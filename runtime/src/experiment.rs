@@ -161,17 +161,11 @@ impl Experiment {
     /// Run `run` of experiment `cfg`, continued after the trial checkpoint `c` was taken
     /// at. The checkpoint holds the agent's state only: the observer must be stateless
     /// across trials (the default sensor and observer).
-    pub fn resume(
-        cfg: &ExperimentConfig,
-        run: u32,
-        c: &Checkpoint,
-    ) -> Result<Self, CheckpointError> {
+    pub fn resume(cfg: &ExperimentConfig, run: u32, c: &Checkpoint) -> Result<Self, ResumeError> {
         if !cfg.observer.is_default() {
-            return Err(CheckpointError(
-                "a checkpoint holds the agent's state only; resuming needs the default sensor and observer".into(),
-            ));
+            return Err(ResumeError::Observer);
         }
-        resumable_delays(cfg).map_err(CheckpointError)?;
+        resumable_delays(cfg)?;
         let mut e = Self::new(cfg, run);
         c.restore(&cfg.origin(run), e.agent.as_mut())?;
         e.schedule.resume(c.trial, c.sim_time_s);
@@ -379,15 +373,31 @@ pub fn actuator(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Actuator 
 
 /// A run with delays drawn from `run.delay_from` cannot be resumed: a checkpoint does not
 /// hold where the delay stream stands.
-pub fn resumable_delays(cfg: &ExperimentConfig) -> Result<(), String> {
+pub fn resumable_delays(cfg: &ExperimentConfig) -> Result<(), ResumeError> {
     if cfg.run.delay_from.is_empty() {
         Ok(())
     } else {
-        Err(format!(
-            "cannot resume a run with run.delay_from = {:?}: checkpoints do not hold where its delay stream stands; start a new run",
-            cfg.run.delay_from
-        ))
+        Err(ResumeError::DelayStream(cfg.run.delay_from.clone()))
     }
+}
+
+/// Why a run cannot continue from a checkpoint ([`Experiment::resume`]).
+#[derive(Debug, thiserror::Error)]
+pub enum ResumeError {
+    /// A run with a sensor or observer other than the default, whose state a checkpoint
+    /// does not hold.
+    #[error(
+        "a checkpoint holds the agent's state only; resuming needs the default sensor and observer"
+    )]
+    Observer,
+    /// A run with delays drawn from the file `run.delay_from` names.
+    #[error(
+        "cannot resume a run with run.delay_from = {0:?}: checkpoints do not hold where its delay stream stands; start a new run"
+    )]
+    DelayStream(String),
+    /// A checkpoint that cannot be read or does not fit the run.
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
 }
 
 /// One sample of a time response.

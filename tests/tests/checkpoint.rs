@@ -11,7 +11,7 @@ use agent::checkpoint::{Checkpoint, Snapshot};
 use agent::config::{Algo, ApproxKind, HorizonKind};
 use plant::SystemName;
 use runtime::config::ExperimentConfig;
-use runtime::experiment::Experiment;
+use runtime::experiment::{Experiment, ResumeError};
 
 fn presets() -> Vec<ExperimentConfig> {
     let mut out = Vec::new();
@@ -110,7 +110,8 @@ fn a_checkpoint_does_not_restore_into_another_learner() {
     for other in &all[1..] {
         let e = Experiment::resume(other, 0, &c).err().expect("refused");
         assert!(
-            e.0.contains("checkpoint is from") || e.0.contains("different learning parameters"),
+            e.to_string().contains("checkpoint is from")
+                || e.to_string().contains("different learning parameters"),
             "{}: {e}",
             name(other)
         );
@@ -150,7 +151,7 @@ fn a_checkpoint_does_not_restore_into_another_learner() {
             );
         };
         assert!(
-            e.0.contains("differently configured"),
+            matches!(&e, ResumeError::Checkpoint(c) if c.0.contains("differently configured")),
             "{}: {e}",
             name(other)
         );

@@ -30,12 +30,10 @@ impl Bus {
                 .chars()
                 .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
         {
-            return Err(format!("run id {run_id:?}: use letters, digits, '-' and '_' only").into());
+            return Err(Error::RunId(run_id.to_string()));
         }
         if run_id == "driver" {
-            return Err(
-                "run id \"driver\" is reserved for driver services (rig/driver/...)".into(),
-            );
+            return Err(Error::ReservedRunId);
         }
         Self::with_node(&format!("rig-{run_id}-{name}"), run_id)
     }
@@ -116,19 +114,19 @@ impl Bus {
             .subscriber_max_buffer_size(qos.buffer)
             .enable_safe_overflow(qos.safe_overflow)
             .open_or_create()
-            .map_err(|e| {
-                let found = describe_service(&name, self.node.config());
-                format!(
-                    "service {service}: {e:?}: this process needs payload {} ({} bytes, alignment {}), \
-                     max {} publisher(s), {} subscribers, buffer {}; {found}",
+            .map_err(|error| Error::Service {
+                service: service.to_string(),
+                error,
+                needs: format!(
+                    "payload {} ({} bytes, alignment {}), max {} publisher(s), {} subscribers, buffer {}",
                     type_name_of::<T>(),
                     std::mem::size_of::<T>(),
                     std::mem::align_of::<T>(),
                     qos.max_publishers,
                     qos.max_subscribers,
                     qos.buffer,
-                )
-                .into()
+                ),
+                found: describe_service(&name, self.node.config()),
             })
     }
 
@@ -136,21 +134,27 @@ impl Bus {
         &self,
         service: &str,
     ) -> Result<iceoryx2::service::port_factory::event::PortFactory<ipc::Service>, Error> {
-        Ok(self
-            .node
+        self.node
             .service_builder(&ServiceName::new(service)?)
             .event()
             .open_or_create()
-            .map_err(|e| format!("event service {service}: {e:?}"))?)
+            .map_err(|error| Error::Event {
+                service: service.to_string(),
+                error,
+            })
     }
 
     /// The run's [`Recorded`] signal (both ends; a process of a recorded run opens it
     /// when it starts, so that the announcement, made once, reaches it).
     pub fn recorded(&self) -> Result<Recorded, Error> {
-        let event = self.event(&self.run_service("recorded"))?;
+        let service = self.run_service("recorded");
+        let event = self.event(&service)?;
         Ok(Recorded {
             notifier: event.notifier_builder().create()?,
-            listener: event.listener_builder().create()?,
+            listener: event
+                .listener_builder()
+                .create()
+                .map_err(|error| Error::Listener { service, error })?,
         })
     }
 
@@ -189,10 +193,9 @@ impl Bus {
                 }
             })
             .create()
-            .map_err(|e| {
-                format!(
-                    "publisher on {service}: {e:?} (is another process publishing there already?)"
-                )
+            .map_err(|error| Error::Publisher {
+                service: service.to_string(),
+                error,
             })?;
         let notifier = self.event(service)?.notifier_builder().create()?;
         Ok(Tx {
@@ -210,15 +213,22 @@ impl Bus {
         qos: Qos,
     ) -> Result<Rx<T>, Error> {
         let factory = self.pubsub::<T>(service, qos)?;
-        let subscriber = factory
-            .subscriber_builder()
-            .create()
-            .map_err(|e| format!("subscriber on {service}: {e:?}"))?;
+        let subscriber =
+            factory
+                .subscriber_builder()
+                .create()
+                .map_err(|error| Error::Subscriber {
+                    service: service.to_string(),
+                    error,
+                })?;
         let listener = self
             .event(service)?
             .listener_builder()
             .create()
-            .map_err(|e| format!("listener on {service}: {e:?}"))?;
+            .map_err(|error| Error::Listener {
+                service: service.to_string(),
+                error,
+            })?;
         Ok(Rx {
             subscriber,
             listener,

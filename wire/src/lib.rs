@@ -20,6 +20,7 @@
 
 mod bus;
 mod clock;
+mod error;
 mod messages;
 mod ports;
 mod service;
@@ -27,10 +28,8 @@ mod waiting;
 
 pub use bus::Bus;
 pub use clock::now_ns;
+pub use error::Error;
 pub use messages::{Action, Estimate, Header, MAX_U, MAX_X, Measurement, Truth, flags, topic};
 pub use ports::{Recorded, Rx, Tx};
 pub use service::{BUFFER, PATIENCE, Qos, RUN_QOS, describe_service, type_name_of};
 pub use waiting::{FOREVER, Waiting};
-
-/// Errors of the transport.
-pub type Error = Box<dyn std::error::Error + Send + Sync>;

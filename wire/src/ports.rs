@@ -51,14 +51,14 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Tx<T> {
         let t0 = std::time::Instant::now();
         while self.receivers() < n {
             if bus.interrupted() {
-                return Err("interrupted".into());
+                return Err(Error::Interrupted);
             }
             if t0.elapsed() > timeout {
-                return Err(format!(
-                    "only {} of {n} receivers connected after {timeout:?}",
-                    self.receivers()
-                )
-                .into());
+                return Err(Error::TooFewReceivers {
+                    connected: self.receivers(),
+                    wanted: n,
+                    timeout,
+                });
             }
             std::thread::sleep(Duration::from_millis(1));
         }
@@ -242,7 +242,7 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
         silence: Duration,
     ) -> Result<Option<T>, Error> {
         if bus.interrupted() {
-            return Err("interrupted".into());
+            return Err(Error::Interrupted);
         }
         let lost = bus.lost_peers();
         if !lost.is_empty() {
@@ -257,10 +257,10 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
                 [init @ .., last] => format!("the {} and {last} processes", init.join(", ")),
                 [] => unreachable!(),
             };
-            return Err(format!("{who} of this run stopped").into());
+            return Err(Error::PeersStopped { who });
         }
         if t0.elapsed() > silence {
-            return Err(format!("no message for {silence:?}: a peer process stopped").into());
+            return Err(Error::Silence(silence));
         }
         Ok(None)
     }

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
-use runtime::process::{CpuSet, Wait, wire_err};
+use runtime::process::{CpuSet, Wait};
 use wire::{Bus, Measurement, Waiting, now_ns};
 
 use super::{Kill, spawn};
@@ -32,22 +32,19 @@ pub fn pong(
         })?;
     }
     let role = if ping.is_some() { "ping" } else { "pong" };
-    let bus = Bus::join(run_id, role)
-        .map_err(wire_err)?
-        .with_waiting(waiting);
+    let bus = Bus::join(run_id, role)?.with_waiting(waiting);
     let (inbox, outbox) = if ping.is_some() {
         ("pong", "ping")
     } else {
         ("ping", "pong")
     };
-    let rx = bus.rx::<Measurement>(inbox).map_err(wire_err)?;
-    let tx = bus.tx::<Measurement>(outbox).map_err(wire_err)?;
-    tx.wait_for_receivers(1, Duration::from_secs(30), &bus)
-        .map_err(wire_err)?;
+    let rx = bus.rx::<Measurement>(inbox)?;
+    let tx = bus.tx::<Measurement>(outbox)?;
+    tx.wait_for_receivers(1, Duration::from_secs(30), &bus)?;
     let Some((samples, file)) = ping else {
         loop {
-            let m = rx.recv(&bus, Duration::from_secs(30)).map_err(wire_err)?;
-            tx.send(m).map_err(wire_err)?;
+            let m = rx.recv(&bus, Duration::from_secs(30))?;
+            tx.send(m)?;
             if m.header.seq == u64::MAX {
                 return Ok(());
             }
@@ -58,8 +55,8 @@ pub fn pong(
     for i in 0..samples + WARM_UP {
         m.header.seq = i as u64;
         let t0 = now_ns();
-        tx.send(m).map_err(wire_err)?;
-        let back = rx.recv(&bus, Duration::from_secs(10)).map_err(wire_err)?;
+        tx.send(m)?;
+        let back = rx.recv(&bus, Duration::from_secs(10))?;
         let dt = now_ns() - t0;
         if back.header.seq != i as u64 {
             bail!("ping-pong out of step: sent {i}, got {}", back.header.seq);
@@ -69,7 +66,7 @@ pub fn pong(
         }
     }
     m.header.seq = u64::MAX;
-    tx.send(m).map_err(wire_err)?;
+    tx.send(m)?;
     let _ = rx.recv(&bus, Duration::from_secs(10));
     std::fs::write(file, rtt.join("\n")).with_context(|| format!("cannot write {}", file.display()))
 }

@@ -9,7 +9,7 @@ use plant::SystemName;
 use runtime::config::{ExperimentConfig, Overrides, resolve};
 
 use super::claims::{
-    better, clearly_better, faster, fastest, fastest_of, find, llr_share, not, rbf_dip,
+    Verdict, better, clearly_better, faster, fastest, fastest_of, find, llr_share, not, rbf_dip,
     swing_counts,
 };
 use super::measures::Measured;
@@ -24,8 +24,8 @@ pub(super) struct Curve {
 pub(super) struct Claim {
     /// What the thesis says.
     pub(super) says: &'static str,
-    /// The check: `Ok(explanation)` if confirmed, `Err(explanation)` if not.
-    pub(super) check: fn(&[Measured]) -> std::result::Result<String, String>,
+    /// The check: whether the curves confirm the claim, and why.
+    pub(super) check: fn(&[Measured]) -> Verdict,
 }
 
 /// A figure of the thesis.
@@ -87,14 +87,8 @@ pub(super) fn saturation_ignored(mut cfg: ExperimentConfig) -> ExperimentConfig 
     cfg
 }
 
-pub(super) fn both(
-    a: std::result::Result<String, String>,
-    b: std::result::Result<String, String>,
-) -> std::result::Result<String, String> {
-    match (a, b) {
-        (Ok(x), Ok(y)) => Ok(format!("{x}; {y}")),
-        (Ok(x) | Err(x), Ok(y) | Err(y)) => Err(format!("{x}; {y}")),
-    }
+pub(super) fn both(a: Verdict, b: Verdict) -> Verdict {
+    a.and(b)
 }
 
 pub(super) fn figures() -> Vec<Figure> {
@@ -268,11 +262,7 @@ pub(super) fn figures() -> Vec<Figure> {
                             best.label, best.final_greedy
                         );
                         both(
-                            if best.label == "RMAC/LLR" {
-                                Err(text)
-                            } else {
-                                Ok(text)
-                            },
+                            Verdict::new(best.label != "RMAC/LLR", text),
                             better(m, "RMAC/RBF", "RMAC/LLR"),
                         )
                     },
@@ -454,11 +444,7 @@ pub(super) fn figures() -> Vec<Figure> {
                         let (mlac, m_text) = distinct("MLAC/LLR");
                         let (sarsa, s_text) = distinct("SARSA");
                         let text = format!("{v_text}; {m_text}; {s_text}");
-                        if vgbp.len() > mlac.len().max(sarsa.len()) {
-                            Ok(text)
-                        } else {
-                            Err(text)
-                        }
+                        Verdict::new(vgbp.len() > mlac.len().max(sarsa.len()), text)
                     },
                 },
                 Claim {
@@ -485,11 +471,7 @@ pub(super) fn figures() -> Vec<Figure> {
                             v.ended_early,
                             v.runs * v.trials
                         );
-                        if v.ended_early > 0 {
-                            Ok(text)
-                        } else {
-                            Err(text)
-                        }
+                        Verdict::new(v.ended_early > 0, text)
                     },
                 },
                 Claim {
@@ -500,11 +482,7 @@ pub(super) fn figures() -> Vec<Figure> {
                             "{:.0} % of the final greedy policies' samples at an action bound",
                             100.0 * v.at_bound
                         );
-                        if v.at_bound >= 0.5 {
-                            Ok(text)
-                        } else {
-                            Err(text)
-                        }
+                        Verdict::new(v.at_bound >= 0.5, text)
                     },
                 },
                 Claim {
@@ -515,11 +493,7 @@ pub(super) fn figures() -> Vec<Figure> {
                             "final greedy return {:.0} ± {:.0}; rise time t₉₀ {:.1} min",
                             v.final_greedy, v.final_greedy_sd, v.reaches_min
                         );
-                        if v.reaches_min < 10.0 {
-                            Ok(text)
-                        } else {
-                            Err(text)
-                        }
+                        Verdict::new(v.reaches_min < 10.0, text)
                     },
                 },
             ],

@@ -194,9 +194,9 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
         let claims: Vec<(String, bool, String)> = fig
             .claims
             .iter()
-            .map(|c| match (c.check)(&measured) {
-                Ok(t) => (c.says.to_string(), true, t),
-                Err(t) => (c.says.to_string(), false, t),
+            .map(|c| {
+                let v = (c.check)(&measured);
+                (c.says.to_string(), v.confirmed, v.why)
             })
             .collect();
         write_summary(

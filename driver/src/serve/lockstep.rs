@@ -11,13 +11,13 @@
 
 use std::time::Duration;
 
-use anyhow::Result;
 use wire::{MAX_U, MAX_X, now_ns};
 
 use super::state::Driver;
 use super::{Served, Serving, Start};
 use crate::contract::{DriverCommand, clock, kind, status};
 use crate::device::Device;
+use crate::error::Error;
 
 /// A simulation that can run in lockstep: its state can be set, and it integrates exactly
 /// one sample period at a time (hardware cannot: it keeps the real-time clock).
@@ -38,7 +38,7 @@ pub fn serve_lockstep(
     device: &mut impl Lockstep,
     driver_id: &str,
     how: &Serving,
-) -> Result<Served> {
+) -> Result<Served, Error> {
     let (n_x, n_u) = (device.task().state_dim(), device.task().action_dim());
     let Start {
         io,

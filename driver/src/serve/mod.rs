@@ -5,7 +5,6 @@
 //! motor is one `impl Device` for its amplifier and encoder. [`serve_lockstep`] serves a
 //! simulation ([`Lockstep`]) without a clock: one period per action.
 
-use anyhow::{Result, anyhow};
 use plant::Task;
 use wire::{Bus, Rx, Tx, now_ns};
 
@@ -13,6 +12,7 @@ use crate::contract::{
     DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, VERSION, service, topic,
 };
 use crate::device::Device;
+use crate::error::Error;
 
 mod lockstep;
 mod realtime;
@@ -77,17 +77,18 @@ struct Services {
 impl Services {
     /// Opens the services of driver `driver_id`; a second driver of the same id is a
     /// one-line error.
-    fn open(driver_id: &str) -> Result<Self> {
-        let bus =
-            crate::contract::bus(driver_id).map_err(|e| anyhow!("driver {driver_id:?}: {e}"))?;
+    fn open(driver_id: &str) -> Result<Self, Error> {
+        crate::contract::check_id(driver_id)?;
+        let bus = Bus::with_node(&crate::contract::node_name(driver_id), "driver")
+            .map_err(Error::transport(driver_id))?;
         let open = |t: &str, e: wire::Error| {
-            if e.to_string().contains("ExceedsMaxSupportedPublishers") {
-                anyhow!(
-                    "another driver {driver_id:?} is running: {} has its one publisher already",
-                    service(driver_id, t)
-                )
+            if e.publisher_taken() {
+                Error::AlreadyServed {
+                    id: driver_id.to_string(),
+                    service: service(driver_id, t),
+                }
             } else {
-                anyhow!("driver {driver_id:?}: {e}")
+                Error::transport(driver_id)(e)
             }
         };
         Ok(Self {
@@ -106,23 +107,23 @@ impl Services {
     }
 
     /// Publishes `advertised`, stamped now.
-    fn publish_info(&self, advertised: DriverInfo) -> Result<()> {
+    fn publish_info(&self, advertised: DriverInfo) -> Result<(), Error> {
         let mut i = advertised;
         i.t_publish_ns = now_ns();
         self.infos.send(i).map_err(|e| self.err(e))
     }
 
     /// A transport error, naming the driver.
-    fn err(&self, e: wire::Error) -> anyhow::Error {
-        anyhow!("driver {:?}: {e}", self.id)
+    fn err(&self, e: wire::Error) -> Error {
+        Error::transport(&self.id)(e)
     }
 }
 
 /// The sample period of `device` on the monotonic clock \[ns\]: `Ts` over its time scale.
-fn period_ns(device: &impl Device) -> Result<u64> {
+fn period_ns(device: &impl Device) -> Result<u64, Error> {
     let scale = device.time_scale();
     if !(scale.is_finite() && scale > 0.0) {
-        return Err(anyhow!("time scale {scale}: must be positive and finite"));
+        return Err(Error::TimeScale(scale));
     }
     Ok((device.task().ts / scale * 1e9).round() as u64)
 }
@@ -139,7 +140,12 @@ struct Start {
 
 impl Start {
     /// Starts serving `device` as driver `driver_id`, keeping time by `clock`.
-    fn of(device: &mut impl Device, driver_id: &str, clock: u64, verbose: bool) -> Result<Self> {
+    fn of(
+        device: &mut impl Device,
+        driver_id: &str,
+        clock: u64,
+        verbose: bool,
+    ) -> Result<Self, Error> {
         let period_ns = period_ns(device)?;
         let io = Services::open(driver_id)?;
         let d = state::Driver::new(device.task(), verbose);
@@ -160,5 +166,30 @@ impl Start {
             t_start,
             period_ns,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_second_driver_of_one_id_is_already_served() {
+        let id = format!("served{}", std::process::id());
+        let _first = Services::open(&id).unwrap();
+        let Err(e) = Services::open(&id) else {
+            panic!("a second driver {id:?} opened its services");
+        };
+        assert!(
+            matches!(&e, Error::AlreadyServed { id: i, service: s } if *i == id && *s == service(&id, topic::INFO)),
+            "{e:?}"
+        );
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "another driver {id:?} is running: rig/driver/{id}/info has its one publisher already"
+            )
+        );
+        assert!(matches!(Services::open("a b"), Err(Error::Id(i)) if i == "a b"));
     }
 }

@@ -1,19 +1,19 @@
 //! The real-time clock of [`serve`]: a sample every period on `CLOCK_MONOTONIC`,
 //! whether or not actions arrive; commands applied as they arrive in between.
 
-use anyhow::Result;
 use wire::{MAX_U, MAX_X, now_ns};
 
 use super::{Served, Serving, Start};
 use crate::contract::clock;
 use crate::device::Device;
+use crate::error::Error;
 
 /// Serves `device` as driver `driver_id` until Ctrl-C or SIGTERM (or
 /// [`Serving::stop_after`] samples): opens the three services of `docs/driver.md`,
 /// publishes the info at start and every second, and at each sample instant
 /// `t_start + k · period` samples the device, decides (reset progress, watchdog) and
 /// publishes the sample; between sample instants it applies each command as it arrives.
-pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result<Served> {
+pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result<Served, Error> {
     let (n_x, n_u) = (device.task().state_dim(), device.task().action_dim());
     let Start {
         io,
@@ -23,7 +23,6 @@ pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result
         period_ns,
     } = Start::of(device, driver_id, clock::REALTIME, how.verbose)?;
     let (bus, samples, commands) = (&io.bus, &io.samples, &io.commands);
-    let wire_err = |e: wire::Error| io.err(e);
     let mut next_info = t_start + 1_000_000_000;
     let mut served = Served::default();
     let mut x = [0.0; MAX_X];
@@ -32,7 +31,7 @@ pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result
         let t_k = t_start + seq * period_ns;
         // Until the sample instant: each command at its arrival.
         loop {
-            while let Some(c) = commands.try_recv().map_err(wire_err)? {
+            while let Some(c) = commands.try_recv().map_err(|e| io.err(e))? {
                 d.command(device, now_ns(), &c);
             }
             let now = now_ns();
@@ -40,7 +39,9 @@ pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result
                 break;
             }
             if t_k - now > how.spin_ns {
-                commands.wait_until(t_k - how.spin_ns).map_err(wire_err)?;
+                commands
+                    .wait_until(t_k - how.spin_ns)
+                    .map_err(|e| io.err(e))?;
             } else {
                 std::hint::spin_loop();
             }
@@ -58,7 +59,7 @@ pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result
         d.decide(device, t_sample, &x[..n_x]);
         s.status = d.status;
         s.t_publish_ns = now_ns();
-        samples.send(s).map_err(wire_err)?;
+        samples.send(s).map_err(|e| io.err(e))?;
         served.samples += 1;
         if t_sample >= next_info {
             io.publish_info(advertised)?;

@@ -14,13 +14,23 @@ pub trait Choice: Copy + 'static {
         names.join(", ")
     }
     /// The value spelled `s`; the error lists the spellings.
-    fn parse(s: &str) -> Result<Self, String> {
+    fn parse(s: &str) -> Result<Self, UnknownChoice> {
         Self::all()
             .iter()
             .copied()
             .find(|v| v.spelling() == s)
-            .ok_or_else(|| format!("one of: {}", Self::spellings()))
+            .ok_or_else(|| UnknownChoice {
+                allowed: Self::spellings(),
+            })
     }
+}
+
+/// A spelling that names no value of a [`Choice`]; says which do.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("one of: {allowed}")]
+pub struct UnknownChoice {
+    /// The spellings, comma-separated.
+    pub allowed: String,
 }
 
 impl Choice for SystemName {
@@ -69,7 +79,7 @@ mod tests {
     fn parse_lists_the_spellings() {
         assert_eq!(SystemName::parse("arm-6.4"), Ok(SystemName::Arm64));
         assert_eq!(
-            SystemName::parse("cartpole").unwrap_err(),
+            SystemName::parse("cartpole").unwrap_err().to_string(),
             "one of: pendulum, arm-vertical, arm-horizontal, arm-6.4, double-integrator"
         );
     }

@@ -18,6 +18,6 @@ mod choice;
 mod error;
 mod run;
 
-pub use choice::Choice;
+pub use choice::{Choice, UnknownChoice};
 pub use error::{ConfigError, check_float, check_int, check_len};
 pub use run::RunConfig;

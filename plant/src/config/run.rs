@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{ConfigError, check_float, check_int};
 use crate::Task;
-use crate::delay::{self, Delays};
+use crate::delay::{self, DelayFileError, Delays};
 
 /// How many experiments, of how many trials, from which seed.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -45,7 +45,7 @@ impl RunConfig {
     /// The sample-to-actuation delays of a run with seed `run_seed` on `task`:
     /// `delay_from`'s recorded distribution, else the fixed `delay_ms` ([`Delays`]). The
     /// error names the file, column, row and allowed range.
-    pub fn delays_for_run(&self, task: &Task, run_seed: u64) -> Result<Delays, String> {
+    pub fn delays_for_run(&self, task: &Task, run_seed: u64) -> Result<Delays, DelayFileError> {
         if self.delay_from.is_empty() {
             return Ok(Delays::fixed(self.delay_ms * 1e-3));
         }
@@ -53,7 +53,7 @@ impl RunConfig {
     }
 
     /// `delay_from`'s delays \[s\].
-    fn delays(&self, task: &Task) -> Result<Arc<Vec<f64>>, String> {
+    fn delays(&self, task: &Task) -> Result<Arc<Vec<f64>>, DelayFileError> {
         let column = (!self.delay_column.is_empty()).then_some(self.delay_column.as_str());
         delay::read_csv(Path::new(&self.delay_from), column, task.ts).map(Arc::new)
     }
@@ -76,7 +76,7 @@ impl RunConfig {
                 ));
             }
             self.delays(task)
-                .map_err(|e| ConfigError::new("run.delay_from", e))?;
+                .map_err(|e| ConfigError::new("run.delay_from", e.to_string()))?;
         } else if !self.delay_column.is_empty() {
             return Err(ConfigError::new(
                 "run.delay_column",

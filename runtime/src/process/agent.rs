@@ -7,7 +7,7 @@ use ::observer::timing::{Call, ToAgent, act};
 use anyhow::{Result, anyhow, bail};
 use wire::{Action, Estimate, flags, now_ns, topic};
 
-use super::{AgentArgs, SILENCE, STARTUP, pack, wire_err};
+use super::{AgentArgs, SILENCE, STARTUP, pack};
 use crate::config::ExperimentConfig;
 use crate::resume::CheckpointWriter;
 
@@ -19,15 +19,12 @@ pub fn run(args: &AgentArgs) -> Result<()> {
     let cfg = node.config()?;
     let mut learner = Learner::new(args, &cfg)?;
     let bus = node.join("agent")?;
-    let estimates = bus.rx::<Estimate>(topic::ESTIMATE).map_err(wire_err)?;
-    let out = bus.tx::<Action>(topic::ACTION).map_err(wire_err)?;
+    let estimates = bus.rx::<Estimate>(topic::ESTIMATE)?;
+    let out = bus.tx::<Action>(topic::ACTION)?;
     let linger = super::Linger::open(&bus, node.receivers)?;
-    out.wait_for_receivers(node.receivers, STARTUP, &bus)
-        .map_err(wire_err)?;
+    out.wait_for_receivers(node.receivers, STARTUP, &bus)?;
     loop {
-        let e = estimates
-            .recv(&bus, STARTUP.max(SILENCE))
-            .map_err(wire_err)?;
+        let e = estimates.recv(&bus, STARTUP.max(SILENCE))?;
         let t_received_ns = now_ns();
         let f = e.header.flags;
         let mut u = vec![0.0; learner.m];
@@ -42,7 +39,7 @@ pub fn run(args: &AgentArgs) -> Result<()> {
             t_received_ns,
             t_publish_ns: now_ns(),
         };
-        out.send(a).map_err(wire_err)?;
+        out.send(a)?;
         if f & flags::SHUTDOWN != 0 {
             if let Some(w) = &mut learner.checkpoints {
                 w.finish()?;

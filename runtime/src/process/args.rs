@@ -169,9 +169,7 @@ pub struct NodeArgs {
 impl NodeArgs {
     /// Joins the run as process `role`, waiting as `--wait` says.
     pub fn join(&self, role: &str) -> Result<Bus> {
-        Ok(Bus::join(&self.run_id, role)
-            .map_err(super::wire_err)?
-            .with_waiting(self.wait.waiting(WaitKind::Block)))
+        Ok(Bus::join(&self.run_id, role)?.with_waiting(self.wait.waiting(WaitKind::Block)))
     }
 
     /// Reads and validates the configuration.

@@ -101,11 +101,6 @@ pub fn exit_code(done: Result<()>) -> std::process::ExitCode {
     }
 }
 
-/// Converts a transport error.
-pub fn wire_err(e: wire::Error) -> anyhow::Error {
-    anyhow::anyhow!("{e}")
-}
-
 /// Marks the calling thread as batch work (SCHED_BATCH: a fair share of the CPU, but
 /// no preemption of the running process when it wakes up), for work beside the lockstep
 /// loop — the recorder, the checkpoint writer — so that on a machine with fewer cores
@@ -134,7 +129,7 @@ impl Linger {
     /// Opens the run's signal on `bus` if a recorder listens (`receivers` ≥ 2).
     pub fn open(bus: &wire::Bus, receivers: usize) -> Result<Self> {
         Ok(Self(if receivers >= 2 {
-            Some(bus.recorded().map_err(wire_err)?)
+            Some(bus.recorded()?)
         } else {
             None
         }))
@@ -144,7 +139,7 @@ impl Linger {
     /// recorder's process is gone).
     pub fn wait(&self, bus: &wire::Bus) -> Result<()> {
         if let Some(r) = &self.0 {
-            r.wait(bus, LINGER).map_err(wire_err)?;
+            r.wait(bus, LINGER)?;
         }
         Ok(())
     }

@@ -10,7 +10,7 @@ use ::observer::timing::{Call, Sample};
 use anyhow::Result;
 use wire::{Estimate, Measurement, flags, now_ns, topic};
 
-use super::{ObserverArgs, SILENCE, STARTUP, pack, wire_err};
+use super::{ObserverArgs, SILENCE, STARTUP, pack};
 
 /// The [`flags`] an estimate carries for agent call `call`: the measurement's, plus
 /// [`flags::LAST`] / [`flags::HOLD`] where predictive timing makes the agent's trial end
@@ -49,17 +49,12 @@ pub fn run(args: &ObserverArgs) -> Result<()> {
     let task = Arc::new(cfg.task());
     let mut front = crate::experiment::front(&task, &cfg);
     let bus = args.join("observer")?;
-    let measurements = bus
-        .rx::<Measurement>(topic::MEASUREMENT)
-        .map_err(wire_err)?;
-    let out = bus.tx::<Estimate>(topic::ESTIMATE).map_err(wire_err)?;
+    let measurements = bus.rx::<Measurement>(topic::MEASUREMENT)?;
+    let out = bus.tx::<Estimate>(topic::ESTIMATE)?;
     let linger = super::Linger::open(&bus, args.receivers)?;
-    out.wait_for_receivers(args.receivers, STARTUP, &bus)
-        .map_err(wire_err)?;
+    out.wait_for_receivers(args.receivers, STARTUP, &bus)?;
     loop {
-        let m = measurements
-            .recv(&bus, STARTUP.max(SILENCE))
-            .map_err(wire_err)?;
+        let m = measurements.recv(&bus, STARTUP.max(SILENCE))?;
         let t_received_ns = now_ns();
         let (n, nu) = (m.n_x as usize, m.n_u as usize);
         let f = m.header.flags;
@@ -92,7 +87,7 @@ pub fn run(args: &ObserverArgs) -> Result<()> {
             e.u_applied = pack(t.u_prev);
         }
         e.t_publish_ns = now_ns();
-        out.send(e).map_err(wire_err)?;
+        out.send(e)?;
         if f & flags::SHUTDOWN != 0 {
             return linger.wait(&bus);
         }

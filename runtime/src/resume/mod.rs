@@ -122,7 +122,7 @@ fn resumable(out: &Path, cfg: &ExperimentConfig) -> Result<()> {
         );
     }
     crate::experiment::resumable_delays(cfg)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", out.join("config.toml").display()))
+        .map_err(|e| anyhow!("{}: {e}", out.join("config.toml").display()))
 }
 
 /// The last trial, at most `done`, that has a checkpoint (`available`; trial 0 needs

@@ -32,7 +32,7 @@ use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
 use crate::learn::{progress_bar, write_atomic};
 use crate::lock::FolderLock;
-use crate::process::{Scheduling, Spin, wire_err};
+use crate::process::{Scheduling, Spin};
 use crate::resume;
 
 mod gaps;
@@ -114,21 +114,27 @@ pub struct RunSummary {
 /// Refuses waiting that would leave a process unwoken: polling without end
 /// ([`Waiting::needs_wake_up`]) outside lockstep, where the plant sleeps until its next
 /// sample and must be woken.
-pub fn check_waiting(lockstep: bool, waiting: Waiting) -> Result<(), String> {
+pub fn check_waiting(lockstep: bool, waiting: Waiting) -> Result<(), UnwokenWaiting> {
     if lockstep || waiting.needs_wake_up() {
         Ok(())
     } else {
-        Err("`--wait spin|yield` without `--wait-us` applies in lockstep only: in real time and with an external driver the plant sleeps until its next sample and must be woken".into())
+        Err(UnwokenWaiting)
     }
 }
+
+/// Polling without end outside lockstep ([`check_waiting`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "`--wait spin|yield` without `--wait-us` applies in lockstep only: in real time and with an external driver the plant sleeps until its next sample and must be woken"
+)]
+pub struct UnwokenWaiting;
 
 /// Runs experiment `cfg` (one run) as three processes and writes the outputs.
 pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     check_waiting(
         opts.realtime.is_none() && opts.driver.is_none(),
         opts.waiting,
-    )
-    .map_err(|e| anyhow!(e))?;
+    )?;
     let mut cfg = cfg.clone();
     cfg.run.runs = 1;
     let run_id = free_run_id(opts)?;
@@ -153,7 +159,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     for note in point.iter().flat_map(|p| &p.notes) {
         eprintln!("note: {note}");
     }
-    let bus = Bus::join(&run_id, "rig").map_err(wire_err)?;
+    let bus = Bus::join(&run_id, "rig")?;
     let task = Arc::new(cfg.task());
     let (watch, driver_info) = match &opts.driver {
         Some(d) => match wait_for_driver(&bus, d, &task, opts.progress) {
@@ -286,12 +292,9 @@ fn wait_for_driver(
     task: &plant::Task,
     verbose: bool,
 ) -> Result<(DriverWatch, DriverInfo)> {
-    let watch = DriverWatch::open(bus, &d.id).map_err(wire_err)?;
+    let watch = DriverWatch::open(bus, &d.id)?;
     let serve = driver::contract::how_to_serve(task, &d.id, None);
-    let info = driver::contract::wait_info(bus, &watch.info, &d.id, d.timeout, verbose, &serve)
-        .map_err(wire_err)?;
-    info.validate()
-        .and_then(|()| driver::fits_task(&info, task))
-        .map_err(|e| anyhow!("driver {:?} does not fit the task: {e}", d.id))?;
+    let info = driver::contract::wait_info(bus, &watch.info, &d.id, d.timeout, verbose, &serve)?;
+    driver::check_info(&d.id, &info, task)?;
     Ok((watch, info))
 }

@@ -12,7 +12,6 @@ use indicatif::ProgressBar;
 use wire::{Action, Bus, Estimate, Measurement, Truth, flags, topic};
 
 use crate::experiment::TrialRecord;
-use crate::process::wire_err;
 
 use super::gaps::Gaps;
 use super::logs::Logs;
@@ -118,17 +117,15 @@ impl Supervisor {
         grace: Option<Duration>,
     ) -> Result<Self> {
         let truths = if recording.truth.is_some() {
-            Some(bus.rx::<Truth>(topic::TRUTH).map_err(wire_err)?)
+            Some(bus.rx::<Truth>(topic::TRUTH)?)
         } else {
             None
         };
         Ok(Self {
-            recorded: bus.recorded().map_err(wire_err)?,
-            measurements: bus
-                .rx::<Measurement>(topic::MEASUREMENT)
-                .map_err(wire_err)?,
-            estimates: bus.rx::<Estimate>(topic::ESTIMATE).map_err(wire_err)?,
-            actions: bus.rx::<Action>(topic::ACTION).map_err(wire_err)?,
+            recorded: bus.recorded()?,
+            measurements: bus.rx::<Measurement>(topic::MEASUREMENT)?,
+            estimates: bus.rx::<Estimate>(topic::ESTIMATE)?,
+            actions: bus.rx::<Action>(topic::ACTION)?,
             truths,
             bus,
             batch: Vec::new(),
@@ -165,24 +162,20 @@ impl Supervisor {
     /// Records everything waiting; returns whether the run's end came by.
     fn record_waiting(&mut self, bar: &ProgressBar) -> Result<bool> {
         let mut done = false;
-        if let Some(a) = self
-            .actions
-            .recv_timeout(Duration::from_millis(2))
-            .map_err(wire_err)?
-        {
+        if let Some(a) = self.actions.recv_timeout(Duration::from_millis(2))? {
             done |= self.action(a)?;
         }
-        while let Some(a) = self.actions.try_recv().map_err(wire_err)? {
+        while let Some(a) = self.actions.try_recv()? {
             done |= self.action(a)?;
         }
         // The plant publishes a sample's ground truth before its measurement: drained
         // after the measurements, the truth of each of them is in.
         self.batch.clear();
-        while let Some(m) = self.measurements.try_recv().map_err(wire_err)? {
+        while let Some(m) = self.measurements.try_recv()? {
             self.batch.push(m);
         }
         if let Some(t) = &self.truths {
-            while let Some(x) = t.try_recv().map_err(wire_err)? {
+            while let Some(x) = t.try_recv()? {
                 self.truth_queue.push_back(x);
             }
         }
@@ -220,7 +213,7 @@ impl Supervisor {
             }
         }
         self.batch = batch;
-        while let Some(e) = self.estimates.try_recv().map_err(wire_err)? {
+        while let Some(e) = self.estimates.try_recv()? {
             self.continuity[1].check(topic::ESTIMATE, e.header.seq)?;
             self.recording.estimate(&e)?;
             self.messages += 1;
@@ -230,14 +223,14 @@ impl Supervisor {
             }
         }
         if let Some(d) = &self.driver {
-            while d.info.try_recv().map_err(wire_err)?.is_some() {}
-            while let Some(s) = d.samples.try_recv().map_err(wire_err)? {
+            while d.info.try_recv()?.is_some() {}
+            while let Some(s) = d.samples.try_recv()? {
                 self.recording.driver_sample(&s)?;
             }
-            while let Some(c) = d.commands.try_recv().map_err(wire_err)? {
+            while let Some(c) = d.commands.try_recv()? {
                 self.recording.driver_command(&c)?;
             }
-            while let Some(l) = d.link.try_recv().map_err(wire_err)? {
+            while let Some(l) = d.link.try_recv()? {
                 self.recording.driver_link(&l)?;
             }
         }
@@ -393,7 +386,7 @@ impl Supervisor {
             }
         }
         // Everything is read: the processes, waiting for this, may exit.
-        self.recorded.announce().map_err(wire_err)?;
+        self.recorded.announce()?;
         self.reap()?;
         self.returns.flush()
     }

@@ -4,8 +4,6 @@
 use anyhow::Result;
 use wire::{Action, MAX_U, now_ns};
 
-use super::super::wire_err;
-
 /// The last stretch before a sampling instant in which the realtime plant only reads the
 /// clock: no transport call, whose duration varies, runs into the instant. An action
 /// that arrives within it is found after the instant — for the answer, a deadline miss
@@ -84,10 +82,10 @@ impl Arrivals {
             if now + APPROACH_NS >= deadline {
                 break;
             }
-            let Some(a) = actions.try_recv().map_err(wire_err)? else {
+            let Some(a) = actions.try_recv()? else {
                 let left = deadline - now;
                 if left > spin_ns {
-                    actions.wait_until(deadline - spin_ns).map_err(wire_err)?;
+                    actions.wait_until(deadline - spin_ns)?;
                 } else {
                     std::hint::spin_loop();
                 }

@@ -29,7 +29,7 @@ use anyhow::{Result, anyhow, bail};
 use driver::contract::{DriverInfo, DriverLink, DriverSample, status};
 use wire::{flags, now_ns};
 
-use super::super::{PlantArgs, SILENCE, STARTUP, seconds, wire_err};
+use super::super::{PlantArgs, SILENCE, STARTUP, seconds};
 use super::link::{Link, TrialHeader, end_flags};
 use super::{Ended, Gap, Trials};
 
@@ -58,18 +58,13 @@ impl Bridge {
     /// Connects to driver `driver_id`: waits for its info (`--driver-timeout`), checks it
     /// against the task, then waits for the observer (and recorder) to listen.
     pub(super) fn connect(link: Link, driver_id: &str, args: &PlantArgs) -> Result<Self> {
-        let driver = DriverLink::connect(&link.bus, driver_id).map_err(wire_err)?;
+        let driver = DriverLink::connect(&link.bus, driver_id)?;
         let timeout = seconds("--driver-timeout", args.driver_timeout)?;
         let serve = driver::contract::how_to_serve(&link.task, driver_id, None);
-        let info = driver
-            .wait_info(&link.bus, timeout, false, &serve)
-            .map_err(wire_err)?;
-        info.validate()
-            .and_then(|()| driver::fits_task(&info, &link.task))
-            .map_err(|e| anyhow!("driver {driver_id:?} does not fit the task: {e}"))?;
+        let info = driver.wait_info(&link.bus, timeout, false, &serve)?;
+        driver::check_info(driver_id, &info, &link.task)?;
         link.out
-            .wait_for_receivers(args.node.receivers, STARTUP, &link.bus)
-            .map_err(wire_err)?;
+            .wait_for_receivers(args.node.receivers, STARTUP, &link.bus)?;
         Ok(Self {
             safety: Supervisor::new(&link.task),
             limit: TimeLimit::new(link.task.steps_per_trial()),
@@ -107,11 +102,8 @@ impl Bridge {
     /// still READY from reset `reset_id`.
     fn next_sample(&mut self, after: u64, reset_id: u64) -> Result<DriverSample> {
         loop {
-            let mut s = self
-                .driver
-                .next_sample(&self.link.bus, self.silence)
-                .map_err(wire_err)?;
-            if let Some(newer) = self.driver.latest_sample().map_err(wire_err)? {
+            let mut s = self.driver.next_sample(&self.link.bus, self.silence)?;
+            if let Some(newer) = self.driver.latest_sample()? {
                 s = newer;
             }
             s.validate(&self.info)
@@ -136,7 +128,7 @@ impl Bridge {
     /// `seq`, published at `t_publish_ns`).
     fn action(&mut self, seq: u64, t_publish_ns: u64) -> Result<Vec<f64>> {
         let l = &mut self.link;
-        let a = l.actions.recv(&l.bus, SILENCE).map_err(wire_err)?;
+        let a = l.actions.recv(&l.bus, SILENCE)?;
         l.t_action_ns = now_ns();
         l.latencies.push(l.t_action_ns - t_publish_ns);
         Link::check_answer(&a, seq)?;
@@ -149,11 +141,10 @@ impl Bridge {
     /// READY there. Returns the READY sample, the reset's id and when the start sample
     /// was published.
     fn start(&mut self, x0: &[f64], header: &TrialHeader) -> Result<(DriverSample, u64, u64)> {
-        let reset_id = self.driver.reset(x0).map_err(wire_err)?;
+        let reset_id = self.driver.reset(x0)?;
         let s = self
             .driver
-            .wait_ready(&self.link.bus, &self.info, reset_id, self.reset_timeout)
-            .map_err(wire_err)?;
+            .wait_ready(&self.link.bus, &self.info, reset_id, self.reset_timeout)?;
         // READY means at rest at x0: a driver that does not measure the velocities has
         // brought them to x0's.
         let mut start = s.state().to_vec();
@@ -200,7 +191,7 @@ impl Bridge {
     ) -> Result<(DriverSample, Step, Option<Gap>)> {
         let requested = self.action(self.link.seq - 1, t_publish)?;
         self.safety.admit(&requested, u);
-        let command = self.driver.act(u, s.seq).map_err(wire_err)?;
+        let command = self.driver.act(u, s.seq)?;
         let next = self.next_sample(s.seq, reset_id)?;
         let gap = self.gap(s, &next, now_ns());
         // Periods that passed without a measurement, and an action the driver had not

@@ -10,7 +10,7 @@ use ::plant::sensor::Sensor;
 use anyhow::{Result, bail};
 use wire::{Action, Bus, Header, Measurement, Truth, flags, now_ns, topic};
 
-use super::super::{pack, wire_err};
+use super::super::pack;
 
 /// The plant process's end of the run topics: measurements out, actions in.
 pub(super) struct Link {
@@ -50,13 +50,11 @@ impl Link {
     /// does not measure the full state, ground truth on [`topic::TRUTH`]. The first
     /// sample's sequence number is `first_seq`.
     pub(super) fn join(bus: Bus, task: Arc<Task>, sensor: Sensor, first_seq: u64) -> Result<Self> {
-        let actions = bus.rx::<Action>(topic::ACTION).map_err(wire_err)?;
-        let out = bus
-            .tx::<Measurement>(topic::MEASUREMENT)
-            .map_err(wire_err)?;
+        let actions = bus.rx::<Action>(topic::ACTION)?;
+        let out = bus.tx::<Measurement>(topic::MEASUREMENT)?;
         let truth = match sensor {
             Sensor::Full => None,
-            Sensor::Angle(_) => Some(bus.tx::<Truth>(topic::TRUTH).map_err(wire_err)?),
+            Sensor::Angle(_) => Some(bus.tx::<Truth>(topic::TRUTH)?),
         };
         Ok(Self {
             y: vec![0.0; task.state_dim()],
@@ -101,14 +99,12 @@ impl Link {
             self.sensor.measure(&x[..n], &mut self.y);
         }
         if let Some(truth) = &self.truth {
-            truth
-                .send(Truth {
-                    header,
-                    n_x: n as u64,
-                    x: pack(&x[..n]),
-                    t_sample_ns,
-                })
-                .map_err(wire_err)?;
+            truth.send(Truth {
+                header,
+                n_x: n as u64,
+                x: pack(&x[..n]),
+                t_sample_ns,
+            })?;
         }
         let m = Measurement {
             header,
@@ -127,7 +123,7 @@ impl Link {
             },
             deadline_misses: self.misses,
         };
-        self.out.send(m).map_err(wire_err)?;
+        self.out.send(m)?;
         self.seq += 1;
         Ok(m.t_publish_ns)
     }
@@ -166,15 +162,14 @@ impl Link {
             ..Header::default()
         };
         let now = now_ns();
-        self.out
-            .send(Measurement {
-                header,
-                t_sample_ns: now,
-                t_publish_ns: now,
-                deadline_misses: self.misses,
-                ..Measurement::default()
-            })
-            .map_err(wire_err)
+        self.out.send(Measurement {
+            header,
+            t_sample_ns: now,
+            t_publish_ns: now,
+            deadline_misses: self.misses,
+            ..Measurement::default()
+        })?;
+        Ok(())
     }
 }
 

@@ -7,7 +7,7 @@ use ::plant::schedule::Trial;
 use anyhow::Result;
 use wire::{Header, flags, now_ns};
 
-use super::super::{SILENCE, wire_err};
+use super::super::SILENCE;
 use super::link::{Link, TrialHeader, end_flags};
 use super::{Ended, Trials};
 
@@ -78,7 +78,7 @@ fn exchange(
         plant.applied_action(),
         now_ns(),
     )?;
-    let a = link.actions.recv(&link.bus, SILENCE).map_err(wire_err)?;
+    let a = link.actions.recv(&link.bus, SILENCE)?;
     link.t_action_ns = now_ns();
     link.latencies.push(link.t_action_ns - t_publish_ns);
     Link::check_answer(&a, header.seq)?;

@@ -28,7 +28,7 @@ use ::plant::safety::SafetyCounts;
 use ::plant::schedule::{Schedule, Trial};
 use anyhow::{Result, bail};
 
-use super::{PlantArgs, STARTUP, Scheduling, wire_err};
+use super::{PlantArgs, STARTUP, Scheduling};
 use crate::config::ExperimentConfig;
 use link::Link;
 
@@ -193,8 +193,7 @@ fn runner(
         return Ok(Box::new(external::Bridge::connect(link, id, args)?));
     }
     link.out
-        .wait_for_receivers(args.node.receivers, STARTUP, &link.bus)
-        .map_err(wire_err)?;
+        .wait_for_receivers(args.node.receivers, STARTUP, &link.bus)?;
     let realtime = args.timing == "realtime";
     if realtime
         && !args

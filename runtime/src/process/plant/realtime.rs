@@ -24,7 +24,7 @@ use ::plant::{Plant, Task};
 use anyhow::Result;
 use wire::{Header, MAX_U, flags, now_ns};
 
-use super::super::{SILENCE, wire_err};
+use super::super::SILENCE;
 use super::arrivals::Arrivals;
 use super::link::{Link, TrialHeader, end_flags};
 use super::{Ended, Gap, Trials};
@@ -163,11 +163,7 @@ impl Realtime {
     /// time; the clock moves on to now.
     fn caught_up(&mut self, seq: u64) -> Result<()> {
         loop {
-            let a = self
-                .link
-                .actions
-                .recv(&self.link.bus, SILENCE)
-                .map_err(wire_err)?;
+            let a = self.link.actions.recv(&self.link.bus, SILENCE)?;
             if a.header.seq >= seq {
                 self.clock.next_ns = now_ns();
                 return Ok(());
@@ -193,11 +189,7 @@ impl Realtime {
     fn prime(&mut self, h: Header, held: &mut Held) -> Result<()> {
         self.publish(h, 0.0, now_ns())?;
         let a = loop {
-            let a = self
-                .link
-                .actions
-                .recv(&self.link.bus, SILENCE)
-                .map_err(wire_err)?;
+            let a = self.link.actions.recv(&self.link.bus, SILENCE)?;
             // A late answer to the last trial's final sample is stale here: skip it.
             if a.header.seq >= h.seq {
                 break a;
