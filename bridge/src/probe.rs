@@ -52,7 +52,7 @@ pub fn probe(
     zero_actions: bool,
     seconds: f64,
 ) -> Result<Probed> {
-    driver::contract::check_id(id).map_err(|e| anyhow!("{e}"))?;
+    driver::contract::check_id(id)?;
     let user = match anonymous {
         true => "anonymous".to_string(),
         false => own_user(net)?,

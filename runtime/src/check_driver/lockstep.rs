@@ -4,7 +4,7 @@
 
 use std::time::Duration;
 
-use anyhow::{Result, anyhow};
+use anyhow::Result;
 use driver::contract::DriverSample;
 
 use super::{Probe, STEP_PERIODS, vector};
@@ -33,7 +33,7 @@ impl Probe<'_> {
         // The last action's answer, then nothing until the next command.
         let pending = self.sample()?;
         std::thread::sleep(SILENCE_PROBE);
-        if let Some(s) = self.link.latest_sample().map_err(|e| anyhow!("{e}"))? {
+        if let Some(s) = self.link.latest_sample()? {
             wrong.push(format!(
                 "sample {} published {:.0} ms after sample {} without a command",
                 s.seq,
@@ -118,11 +118,10 @@ impl Probe<'_> {
         // The reset answers the pending sample.
         self.pending = None;
         let x0 = self.task.initial_states[0].clone();
-        let id = self.link.reset(&x0).map_err(|e| anyhow!("{e}"))?;
+        let id = self.link.reset(&x0)?;
         let ready = self
             .link
-            .wait_ready(&self.bus, &self.info, id, self.opts.reset_timeout)
-            .map_err(|e| anyhow!("{e}"))?;
+            .wait_ready(&self.bus, &self.info, id, self.opts.reset_timeout)?;
         self.reset_id = id;
         let mut samples = vec![ready];
         for _ in 0..STEP_PERIODS {

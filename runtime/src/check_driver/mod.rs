@@ -30,7 +30,7 @@
 
 use std::time::Duration;
 
-use anyhow::{Result, anyhow};
+use anyhow::Result;
 use driver::contract::{DriverCommand, DriverInfo, DriverLink, DriverSample, service};
 use plant::Task;
 use plant::angle::wrap;
@@ -91,12 +91,9 @@ impl std::fmt::Display for Outcome {
 /// known. An error means the check could not start: no driver, incompatible payloads, the
 /// driver in use by another rig process.
 pub fn check(opts: &CheckOptions, report: &mut dyn FnMut(&Outcome)) -> Result<Vec<Outcome>> {
-    let bus = Bus::join(&format!("check-{}", std::process::id()), "check-driver")
-        .map_err(|e| anyhow!("{e}"))?;
-    let link = DriverLink::connect(&bus, &opts.driver).map_err(|e| anyhow!("{e}"))?;
-    let info = link
-        .wait_info(&bus, opts.timeout, true, &opts.serve)
-        .map_err(|e| anyhow!("{e}"))?;
+    let bus = Bus::join(&format!("check-{}", std::process::id()), "check-driver")?;
+    let link = DriverLink::connect(&bus, &opts.driver)?;
+    let info = link.wait_info(&bus, opts.timeout, true, &opts.serve)?;
     let task = opts.task.clone();
     let mut s = Probe {
         silence: info.silence_limit(opts.timeout),
@@ -202,16 +199,13 @@ impl Probe<'_> {
         if let Some(s) = self.pending.take() {
             return Ok(s);
         }
-        let s = self
-            .link
-            .next_sample(&self.bus, self.silence)
-            .map_err(|e| anyhow!("{e}"))?;
-        s.validate(&self.info).map_err(|e| anyhow!("{e}"))?;
+        let s = self.link.next_sample(&self.bus, self.silence)?;
+        s.validate(&self.info)?;
         Ok(s)
     }
 
     fn act(&self, u: &[f64], answering: &DriverSample) -> Result<u64> {
-        self.link.act(u, answering.seq).map_err(|e| anyhow!("{e}"))
+        Ok(self.link.act(u, answering.seq)?)
     }
 
     /// The task's action `fraction` of the way from the middle of the range to the upper

@@ -3,7 +3,7 @@
 
 use std::time::{Duration, Instant};
 
-use anyhow::{Result, anyhow};
+use anyhow::Result;
 use driver::contract::{DriverCommand, DriverSample, kind, status};
 use wire::now_ns;
 
@@ -46,11 +46,10 @@ impl Probe<'_> {
     fn reset(&mut self) -> Result<()> {
         let x0 = self.task.initial_states[0].clone();
         let t0 = Instant::now();
-        let id = self.link.reset(&x0).map_err(|e| anyhow!("{e}"))?;
+        let id = self.link.reset(&x0)?;
         let s = self
             .link
-            .wait_ready(&self.bus, &self.info, id, self.opts.reset_timeout)
-            .map_err(|e| anyhow!("{e}"))?;
+            .wait_ready(&self.bus, &self.info, id, self.opts.reset_timeout)?;
         self.reset_id = id;
         if self.info.lockstep() {
             // It publishes nothing more until this sample is answered.
@@ -293,12 +292,10 @@ impl Probe<'_> {
     /// (which a lockstep driver's next probe answers).
     fn probe(&mut self, cmd: DriverCommand) -> Result<(DriverSample, DriverSample)> {
         let before = self.sample()?;
-        self.link
-            .send_raw(DriverCommand {
-                sample_seq: before.seq,
-                ..cmd
-            })
-            .map_err(|e| anyhow!("{e}"))?;
+        self.link.send_raw(DriverCommand {
+            sample_seq: before.seq,
+            ..cmd
+        })?;
         let after = self.sample()?;
         if self.info.lockstep() {
             // The next probe answers it.
