@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 use plant::config::Choice;
 use plant::{SystemName, Task};
-use runtime::run::ExternalDriver;
+use runtime::clock::ExternalDriver;
 
 /// Which task a driver serves: a built-in system, or a task file (`rig sim-driver`, `rig
 /// check-driver`).

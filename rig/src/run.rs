@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args as Flags;
+use runtime::clock::{Clock, Timing};
 use runtime::config::ExperimentConfig;
 use runtime::process::{Layout, WaitKind};
 use runtime::run::{RunOptions, RunSummary, run};
@@ -27,8 +28,8 @@ pub struct Args {
     /// arrived (deterministic). `realtime`: the plant samples at absolute deadlines of
     /// Ts / speed; a late action is applied from the moment it arrives, the previous one
     /// held until then, and the miss is counted.
-    #[arg(long, default_value = "lockstep", value_parser = ["lockstep", "realtime"])]
-    timing: String,
+    #[arg(long, value_enum, default_value_t = Timing::Lockstep)]
+    timing: Timing,
     /// Realtime only: how many times faster than real time to run (e.g. 10: a 30 ms
     /// sample period takes 3 ms).
     #[arg(long, default_value_t = 1.0)]
@@ -120,38 +121,21 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
     }
     .map_err(|e| e.to_string())?;
     cfg.run.runs = 1;
-    if !(args.speed.is_finite() && args.speed > 0.0 && args.speed <= 1000.0) {
-        return Err(format!(
-            "`--speed` {} is out of range: must be a number in (0, 1000]",
-            args.speed
-        ));
-    }
-    let realtime = (args.timing == "realtime").then_some(args.speed);
-    let delayed = cfg.run.delay_ms != 0.0 || !cfg.run.delay_from.is_empty();
-    if delayed && (realtime.is_some() || args.plant == "external") {
-        return Err("`--delay-ms`/`--delay-from` (run.delay_ms, run.delay_from) apply in lockstep with the simulated plant only: in real time the delays are real".into());
-    }
-    let driver = if args.plant == "external" {
-        if realtime.is_some() || args.speed != 1.0 {
-            return Err(
-                "`--timing`/`--speed` do not apply with `--plant external`: the driver is the clock"
-                    .into(),
-            );
+    let driver = match args.plant.as_str() {
+        "external" => Some(args.driver.resolve(&cfg.task_name())?),
+        _ if args.driver.driver.is_some() => {
+            return Err("`--driver` needs `--plant external`".into());
         }
-        Some(args.driver.resolve(&cfg.task_name())?)
-    } else if args.driver.driver.is_some() {
-        return Err("`--driver` needs `--plant external`".into());
-    } else {
-        cfg.check_simulated().map_err(|e| e.to_string())?;
-        None
+        _ => None,
     };
-    let lockstep = realtime.is_none() && driver.is_none();
+    let clock = Clock::of_flags(args.timing, args.speed, cfg.task().ts, driver)?;
+    let lockstep = clock.is_lockstep();
     let waiting = args.wait.waiting(if lockstep {
         LOCKSTEP_WAIT
     } else {
         WaitKind::Block
     });
-    runtime::run::check_waiting(lockstep, waiting)?;
+    clock.check(&cfg, waiting)?;
     let mut scheduling = args.scheduling;
     match scheduling.layout() {
         Some(layout) => layout.check().map_err(|e| e.to_string())?,
@@ -163,8 +147,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
         resume: args.resume.is_some(),
         run_id: args.run_id.clone(),
         progress: !args.quiet,
-        realtime,
-        driver,
+        clock,
         cycles_out: None,
         scheduling,
         spin: args.spin,
@@ -193,7 +176,7 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
         s.wall.as_secs_f64(),
         s.wall.as_secs_f64() * 1e6 / steps
     );
-    if let (Some(i), Some(d)) = (&s.driver, &opts.driver) {
+    if let (Some(i), Some(d)) = (&s.driver, opts.clock.driver()) {
         println!(
             "  driver {:?} (task {}, {} clock): period {:.3} ms × time scale {}; deadline misses: {} of {} samples",
             d.id,
@@ -204,14 +187,14 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
             s.deadline_misses,
             s.messages / 3
         );
-    } else if opts.realtime.is_some() {
+    } else if opts.clock.period().is_some() {
         println!(
             "  deadline misses: {} of {} samples",
             s.deadline_misses,
             s.messages / 3
         );
     }
-    if opts.driver.is_some() || opts.realtime.is_some() {
+    if !opts.clock.is_lockstep() {
         println!("  trials cut by gaps and redone: {} (gaps.csv)", s.gaps);
     }
     if let Some(g) = s.records.iter().rev().find_map(|r| r.greedy) {

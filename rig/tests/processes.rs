@@ -238,11 +238,18 @@ fn processes_notice_a_dead_peer_and_say_which() {
     let preset = ok(rig().args(["config", "--trials", "400"]).output().unwrap());
     std::fs::write(&config, &preset.stdout).unwrap();
     let run_id = format!("deadpeer{}", std::process::id());
+    // Each node by hand: its settings name the run and its configuration.
+    let settings = dir.join("node.toml");
+    std::fs::write(
+        &settings,
+        format!("[node]\nrun_id = {run_id:?}\nconfig = {config:?}\n"),
+    )
+    .unwrap();
     let start = |exe: &str| {
         let log = std::fs::File::create(dir.join(format!("{exe}.log"))).unwrap();
         Command::new(env!("CARGO_BIN_EXE_rig").replace("/rig", &format!("/{exe}")))
-            .args(["--run-id", &run_id, "--config"])
-            .arg(&config)
+            .arg("--node")
+            .arg(&settings)
             .stderr(log)
             .spawn()
             .unwrap()

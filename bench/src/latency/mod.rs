@@ -47,6 +47,7 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow, bail};
 use observer::config::{ObserverKind, ObserverMode, SensorKind};
@@ -61,11 +62,12 @@ mod sweep;
 pub use external::{DRIVER_STAGES, DRIVER_STAMPS, Reach};
 use machine::Counters;
 pub use machine::MachineLoad;
+use runtime::clock::{Clock, ExternalDriver};
 use runtime::config::Overrides;
 use runtime::learn::write_atomic;
 use runtime::process::{CpuSet, Layout, Scheduling, Spin, Wakeup};
 use runtime::report::plot::{Histogram, plot_histograms};
-use runtime::run::{ExternalDriver, RunOptions, run};
+use runtime::run::{RunOptions, run};
 pub use sweep::{SweepPoint, sweep};
 
 /// What `rig latency` runs.
@@ -369,8 +371,13 @@ fn run_realtime(
     let task = cfg.task();
     let per_trial = task.steps_per_trial() + 1;
     cfg.run.trials = opts.cycles.div_ceil(per_trial) as u32;
-    let speed = task.ts / (opts.period_ms * 1e-3);
-    let simulated = opts.driver.is_none();
+    let clock = match &opts.driver {
+        Some(d) => Clock::External(d.clone()),
+        None => Clock::Realtime {
+            period: Duration::from_secs_f64(opts.period_ms * 1e-3),
+        },
+    };
+    let period = clock.period();
     let before = Counters::read();
     let summary = run(
         &cfg,
@@ -378,10 +385,9 @@ fn run_realtime(
             out: run_dir.to_owned(),
             run_id: None,
             progress: false,
-            realtime: simulated.then_some(speed),
-            driver: opts.driver.clone(),
+            clock,
             resume: false,
-            cycles_out: simulated.then(|| cycles_path.to_owned()),
+            cycles_out: period.map(|_| cycles_path.to_owned()),
             scheduling: opts.scheduling,
             spin: opts.spin,
             waiting: opts.waiting,
@@ -396,9 +402,9 @@ fn run_realtime(
                 .then(runtime::process::cpus::last_cpu),
         )
     });
-    let period_ns = match summary.driver {
-        Some(info) => info.period_ns,
-        None => (task.ts * 1e9 / speed).round() as u64,
+    let period_ns = match (summary.driver, period) {
+        (Some(info), _) => info.period_ns,
+        (None, period) => period.map_or(0, |p| p.as_nanos() as u64),
     };
     Ok((period_ns, machine))
 }

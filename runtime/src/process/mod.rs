@@ -22,6 +22,7 @@
 pub mod agent;
 mod args;
 pub mod cpus;
+pub mod node;
 pub mod observer;
 pub mod plant;
 pub mod wakeup;
@@ -33,9 +34,8 @@ use anyhow::Result;
 pub use cpus::{CpuSet, Layout, Part};
 pub use wakeup::{Wakeup, WakeupLimit};
 
-pub use args::{
-    AgentArgs, NodeArgs, ObserverArgs, PlantArgs, SPIN_US, Scheduling, Spin, Wait, WaitKind,
-};
+pub use args::{SPIN_US, Scheduling, Spin, Wait, WaitKind};
+pub use node::{AgentConfig, NodeConfig, ObserverConfig, PlantConfig, Settings};
 
 /// How long a process waits for a message before deciding a peer has died.
 pub const SILENCE: Duration = Duration::from_secs(10);

@@ -1,0 +1,174 @@
+//! The run's clock: what moves a run of three processes from one sample to the next —
+//! the plant in lockstep with the agent, the plant on the monotonic clock, or an
+//! external driver. Its rules (which configurations it refuses) are here, and nowhere
+//! else: `rig run` checks them before it starts anything, the plant node again when it
+//! is started by hand.
+
+use std::time::Duration;
+
+use driver::contract::DriverInfo;
+use serde::{Deserialize, Serialize};
+use wire::Waiting;
+
+use crate::config::ExperimentConfig;
+
+/// How the simulated plant keeps time (`rig run --timing`, `rig sim-driver --clock`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Timing {
+    /// Simulated time advances only when the action for a sample has arrived
+    /// (deterministic).
+    Lockstep,
+    /// Samples at absolute deadlines of the monotonic clock; a late action is applied
+    /// from the moment it arrives.
+    Realtime,
+}
+
+/// An external driver in place of the simulated plant (`rig run --plant external`).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ExternalDriver {
+    /// The driver's id (services `rig/driver/<id>/...`).
+    pub id: String,
+    /// How long to wait for the driver to appear.
+    pub timeout: Duration,
+    /// How long one reset may take.
+    pub reset_timeout: Duration,
+}
+
+/// The run's clock.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Clock {
+    /// The simulated plant; simulated time advances when the action has arrived.
+    Lockstep,
+    /// The simulated plant, sampled every `period` of the monotonic clock.
+    Realtime {
+        /// The sampling period on the monotonic clock (the task's `Ts` divided by the
+        /// speed, [`Clock::realtime`]).
+        period: Duration,
+    },
+    /// An external driver's system, which is the clock.
+    External(ExternalDriver),
+}
+
+/// The fastest a simulated plant may run in real time, × its sampling time.
+pub const MAX_SPEED: f64 = 1000.0;
+
+impl Clock {
+    /// The simulated plant in real time, `speed` times faster than its sampling time `ts`
+    /// \[s\] (`--speed`): the one conversion from a speed to a period.
+    pub fn realtime(ts: f64, speed: f64) -> Result<Self, String> {
+        if !(speed.is_finite() && speed > 0.0 && speed <= MAX_SPEED) {
+            return Err(format!(
+                "`--speed` {speed} is out of range: must be a number in (0, {MAX_SPEED}]"
+            ));
+        }
+        Ok(Self::Realtime {
+            period: Duration::from_nanos((ts * 1e9 / speed).round() as u64),
+        })
+    }
+
+    /// The clock `--timing` and `--speed` ask for, against the simulated plant of
+    /// sampling time `ts` \[s\]; `driver`: an external driver instead (`--plant
+    /// external`), which keeps its own time.
+    pub fn of_flags(
+        timing: Timing,
+        speed: f64,
+        ts: f64,
+        driver: Option<ExternalDriver>,
+    ) -> Result<Self, String> {
+        // The speed is checked whatever the timing.
+        let realtime = Self::realtime(ts, speed)?;
+        match (timing, driver) {
+            (_, Some(_)) if timing == Timing::Realtime || speed != 1.0 => Err(
+                "`--timing`/`--speed` do not apply with `--plant external`: the driver is the clock"
+                    .into(),
+            ),
+            (_, Some(d)) => Ok(Self::External(d)),
+            (Timing::Lockstep, None) => Ok(Self::Lockstep),
+            (Timing::Realtime, None) => Ok(realtime),
+        }
+    }
+
+    /// Whether simulated time waits for the agent (deterministic).
+    pub fn is_lockstep(&self) -> bool {
+        matches!(self, Self::Lockstep)
+    }
+
+    /// The external driver, if the plant is one.
+    pub fn driver(&self) -> Option<&ExternalDriver> {
+        match self {
+            Self::External(d) => Some(d),
+            _ => None,
+        }
+    }
+
+    /// The simulated plant's period on the monotonic clock, in real time.
+    pub fn period(&self) -> Option<Duration> {
+        match self {
+            Self::Realtime { period } => Some(*period),
+            _ => None,
+        }
+    }
+
+    /// How many times faster than real time a simulation of sampling time `ts` \[s\]
+    /// runs at `period` (for display, and for the simulated seconds of a monotonic
+    /// interval).
+    pub fn speed(ts: f64, period: Duration) -> f64 {
+        ts / period.as_secs_f64()
+    }
+
+    /// Checks the clock against experiment `cfg` and the processes' `waiting`: an
+    /// injected delay is lockstep's (in real time the delays are real); predictive
+    /// timing and the built-in simulations' checks need the simulated plant; polling
+    /// without end needs lockstep.
+    pub fn check(&self, cfg: &ExperimentConfig, waiting: Waiting) -> Result<(), String> {
+        if self.period() == Some(Duration::ZERO) {
+            return Err(
+                "the real-time period is zero: `--speed` is too high for the task's sampling time"
+                    .into(),
+            );
+        }
+        let delayed = cfg.run.delay_ms != 0.0 || !cfg.run.delay_from.is_empty();
+        if delayed && !self.is_lockstep() {
+            return Err("`--delay-ms`/`--delay-from` (run.delay_ms, run.delay_from) apply in lockstep with the simulated plant only: in real time the delays are real".into());
+        }
+        match self {
+            Self::External(d) => {
+                driver::contract::check_id(&d.id).map_err(|e| format!("`--driver`: {e}"))?;
+                if d.timeout.is_zero() || d.reset_timeout.is_zero() {
+                    return Err(
+                        "the driver's `timeout` and `reset_timeout` must be longer than zero"
+                            .into(),
+                    );
+                }
+                if cfg.observer.mode == ::observer::config::ObserverMode::Predictive {
+                    return Err("predictive timing (`observer.mode = \"predictive\"`) needs the simulated plant: an external driver applies each action as it arrives (use `--observer-mode direct`)".into());
+                }
+            }
+            _ => cfg.check_simulated().map_err(|e| e.to_string())?,
+        }
+        if self.is_lockstep() || waiting.needs_wake_up() {
+            Ok(())
+        } else {
+            Err("`--wait spin|yield` without `--wait-us` applies in lockstep only: in real time and with an external driver the plant sleeps until its next sample and must be woken".into())
+        }
+    }
+
+    /// The clock in words, for the recording's metadata: `ts` is the task's sampling
+    /// time \[s\], `info` the external driver's.
+    pub fn describe(&self, ts: f64, info: Option<&DriverInfo>) -> String {
+        match (self, info) {
+            (Self::Lockstep, _) => "lockstep".to_string(),
+            (Self::Realtime { period }, _) => {
+                let speed = (Self::speed(ts, *period) * 1e9).round() / 1e9;
+                format!("realtime, speed {speed}")
+            }
+            (Self::External(d), Some(i)) => format!(
+                "external driver {:?}: period {} ns, time scale {}",
+                d.id, i.period_ns, i.time_scale
+            ),
+            (Self::External(d), None) => format!("external driver {:?}", d.id),
+        }
+    }
+}

@@ -1,0 +1,253 @@
+//! What a node is given: one settings file per process (`rig plant|observer|agent
+//! --node FILE`), written by `rig run` into the run folder (`DIR/nodes/<role>.toml`) or
+//! by hand. Every node takes a [`NodeConfig`] (`[node]`); the plant and the agent add
+//! their own keys ([`PlantConfig`], [`AgentConfig`]). A node validates its settings
+//! itself: a node started by hand is checked as one `rig run` starts.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow};
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use wire::{Bus, Waiting};
+
+use super::{Scheduling, Spin, Wait, WaitKind};
+use crate::clock::Clock;
+use crate::config::{ExperimentConfig, Overrides, resolve};
+
+/// What every node takes (`[node]`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NodeConfig {
+    /// Run id: the processes of one run share it; runs with different ids never see
+    /// each other (letters, digits, '-', '_').
+    pub run_id: String,
+    /// The run's configuration (a `config.toml` written by `rig run`/`rig learn`, or any
+    /// file `rig config` describes).
+    pub config: PathBuf,
+    /// Receivers to wait for before publishing: the next process, plus the recorder of
+    /// `rig run` if one is listening.
+    #[serde(default = "one")]
+    pub receivers: usize,
+    /// Which run of the experiment this is (seeds the random streams as run `N` of
+    /// `rig learn` would be).
+    #[serde(default)]
+    pub run_index: u32,
+    /// How the process is scheduled by the operating system.
+    #[serde(default)]
+    pub scheduling: Scheduling,
+    /// How the process waits for its next message [default: block].
+    #[serde(default)]
+    pub wait: Wait,
+}
+
+fn one() -> usize {
+    1
+}
+
+impl NodeConfig {
+    /// The settings of a node of run `run_id` on configuration `config`, scheduled
+    /// and waiting as given.
+    pub fn new(run_id: &str, config: &Path, scheduling: Scheduling, waiting: Waiting) -> Self {
+        Self {
+            run_id: run_id.to_string(),
+            config: config.to_owned(),
+            receivers: 1,
+            run_index: 0,
+            scheduling,
+            wait: Wait::of(waiting),
+        }
+    }
+
+    /// How the process waits for its next message.
+    pub fn waiting(&self) -> Waiting {
+        self.wait.waiting(WaitKind::Block)
+    }
+
+    /// Joins the run as process `role`, waiting as `wait` says.
+    pub fn join(&self, role: &str) -> Result<Bus> {
+        Ok(Bus::join(&self.run_id, role)
+            .map_err(super::wire_err)?
+            .with_waiting(self.waiting()))
+    }
+
+    /// Reads and validates the run's configuration.
+    pub fn experiment(&self) -> Result<ExperimentConfig> {
+        let text = std::fs::read_to_string(&self.config)
+            .with_context(|| format!("{}: cannot read", self.config.display()))?;
+        resolve(Some((&self.config, &text)), &Overrides::default())
+            .map_err(|e| anyhow::anyhow!("{e}"))
+    }
+
+    /// Checks what a settings file can get wrong beyond its types.
+    fn check(&self) -> Result<(), String> {
+        self.scheduling.check()
+    }
+}
+
+/// Where a resumed run's plant continues.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Continuation {
+    /// The run continues after this trial (its greedy evaluations done).
+    pub after_trial: u32,
+    /// The simulated learning time at that trial's end \[s\].
+    pub sim_time: f64,
+    /// The sequence number of the first sample.
+    pub first_seq: u64,
+}
+
+/// The plant node's settings ([`super::plant::run`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlantConfig {
+    /// What every node takes.
+    pub node: NodeConfig,
+    /// What moves the run from one sample to the next [default: lockstep].
+    #[serde(default = "lockstep")]
+    pub clock: Clock,
+    /// Real time: how the plant waits for a sampling instant.
+    #[serde(default)]
+    pub spin: Spin,
+    /// Real time and an external driver: learn across a gap in the loop's timing instead
+    /// of cutting the trial's attempt short and running it again.
+    #[serde(default)]
+    pub learn_across_gaps: bool,
+    /// Write the time from publishing each measurement to receiving its action (ns, one
+    /// per line) to this file.
+    #[serde(default)]
+    pub latency_out: Option<PathBuf>,
+    /// Real time: write every sample's timing to this CSV file
+    /// ([`super::plant::CYCLES_HEADER`]).
+    #[serde(default)]
+    pub cycles_out: Option<PathBuf>,
+    /// Continue a run ([`crate::resume`]).
+    #[serde(default)]
+    pub resume: Option<Continuation>,
+}
+
+fn lockstep() -> Clock {
+    Clock::Lockstep
+}
+
+impl PlantConfig {
+    /// The plant of `node` in lockstep, from the start of the run.
+    pub fn new(node: NodeConfig) -> Self {
+        Self {
+            node,
+            clock: Clock::Lockstep,
+            spin: Spin::default(),
+            learn_across_gaps: false,
+            latency_out: None,
+            cycles_out: None,
+            resume: None,
+        }
+    }
+}
+
+/// The agent node's settings ([`super::agent::run`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AgentConfig {
+    /// What every node takes.
+    pub node: NodeConfig,
+    /// Answer every estimate with a zero action, without learning (for loop benchmarks).
+    #[serde(default)]
+    pub trivial: bool,
+    /// Write a checkpoint of the learned state at the end of every learning trial into
+    /// this directory (`trial-NNNNNN.ckpt`, atomically).
+    #[serde(default)]
+    pub checkpoints: Option<PathBuf>,
+    /// With `checkpoints`: keep only the N newest (0: keep all; `rig run` keeps all and
+    /// removes those a resume can no longer need itself).
+    #[serde(default = "two")]
+    pub keep_checkpoints: usize,
+    /// Start from this checkpoint's learned state (the run's trials continue after the
+    /// checkpoint's trial; the plant continues after it too).
+    #[serde(default)]
+    pub resume: Option<PathBuf>,
+}
+
+fn two() -> usize {
+    2
+}
+
+impl AgentConfig {
+    /// The agent of `node`, learning, two checkpoints kept if any are written.
+    pub fn new(node: NodeConfig) -> Self {
+        Self {
+            node,
+            trivial: false,
+            checkpoints: None,
+            keep_checkpoints: 2,
+            resume: None,
+        }
+    }
+}
+
+/// The observer node's settings ([`super::observer::run`]): what every node takes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObserverConfig {
+    /// What every node takes.
+    pub node: NodeConfig,
+}
+
+/// A node's settings file.
+pub trait Settings: Serialize + DeserializeOwned {
+    /// What every node takes.
+    fn node(&self) -> &NodeConfig;
+
+    /// Checks the role's own settings (the node's are checked by [`Settings::read`]).
+    fn check(&self) -> Result<(), String> {
+        Ok(())
+    }
+
+    /// Reads and checks the settings file `path`; an error names it.
+    fn read(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("{}: cannot read", path.display()))?;
+        let s: Self = toml::from_str(&text).map_err(|e| {
+            let line = e.span().map_or(0, |r| text[..r.start].lines().count().max(1));
+            anyhow!("{}: line {line}: {}", path.display(), e.message())
+        })?;
+        s.node()
+            .check()
+            .and_then(|()| s.check())
+            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        Ok(s)
+    }
+
+    /// Writes the settings to `path`.
+    fn write(&self, path: &Path) -> Result<()> {
+        let text = toml::to_string(self).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))
+    }
+}
+
+impl Settings for PlantConfig {
+    fn node(&self) -> &NodeConfig {
+        &self.node
+    }
+
+    fn check(&self) -> Result<(), String> {
+        match self.resume {
+            Some(c) if !(c.sim_time.is_finite() && c.sim_time >= 0.0) => {
+                Err(format!("`resume.sim_time` {} is not a time", c.sim_time))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+impl Settings for AgentConfig {
+    fn node(&self) -> &NodeConfig {
+        &self.node
+    }
+}
+
+impl Settings for ObserverConfig {
+    fn node(&self) -> &NodeConfig {
+        &self.node
+    }
+}
