@@ -208,7 +208,9 @@ pub trait Settings: Serialize + DeserializeOwned {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("{}: cannot read", path.display()))?;
         let s: Self = toml::from_str(&text).map_err(|e| {
-            let line = e.span().map_or(0, |r| text[..r.start].lines().count().max(1));
+            let line = e
+                .span()
+                .map_or(0, |r| text[..r.start].matches('\n').count() + 1);
             anyhow!("{}: line {line}: {}", path.display(), e.message())
         })?;
         s.node()
