@@ -29,9 +29,11 @@ pub enum Timing {
 pub struct ExternalDriver {
     /// The driver's id (services `rig/driver/<id>/...`).
     pub id: String,
-    /// How long to wait for the driver to appear.
+    /// How long to wait for the driver to appear (in a settings file: seconds).
+    #[serde(with = "seconds")]
     pub timeout: Duration,
-    /// How long one reset may take.
+    /// How long one reset may take (in a settings file: seconds).
+    #[serde(with = "seconds")]
     pub reset_timeout: Duration,
 }
 
@@ -44,7 +46,8 @@ pub enum Clock {
     /// The simulated plant, sampled every `period` of the monotonic clock.
     Realtime {
         /// The sampling period on the monotonic clock (the task's `Ts` divided by the
-        /// speed, [`Clock::realtime`]).
+        /// speed, [`Clock::realtime`]; in a settings file: seconds).
+        #[serde(with = "seconds")]
         period: Duration,
     },
     /// An external driver's system, which is the clock.
@@ -172,3 +175,29 @@ impl Clock {
         }
     }
 }
+
+/// A duration in a settings file: a number of seconds in (0, 1e6] (exact to the
+/// nanosecond both ways).
+mod seconds {
+    use std::time::Duration;
+
+    use serde::de::Error;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_f64(d.as_secs_f64())
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Duration, D::Error> {
+        let s = f64::deserialize(d)?;
+        if !(s.is_finite() && s > 0.0 && s <= 1e6) {
+            return Err(D::Error::custom(format!(
+                "{s} is not a number of seconds in (0, 1e6]"
+            )));
+        }
+        Ok(Duration::from_secs_f64(s))
+    }
+}
+
+#[cfg(test)]
+mod tests;
