@@ -122,13 +122,17 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions), String> {
     .map_err(|e| e.to_string())?;
     cfg.run.runs = 1;
     let driver = match args.plant.as_str() {
-        "external" => Some(args.driver.resolve(&cfg.task_name())?),
+        "external" => Some(args.driver.flags()),
         _ if args.driver.driver.is_some() => {
             return Err("`--driver` needs `--plant external`".into());
         }
         _ => None,
     };
-    let clock = Clock::of_flags(args.timing, args.speed, cfg.task().ts, driver)?;
+    let clock = Clock::of_flags(
+        (args.timing, args.speed),
+        (cfg.task().ts, &cfg.task_name()),
+        driver,
+    )?;
     let lockstep = clock.is_lockstep();
     let waiting = args.wait.waiting(if lockstep {
         LOCKSTEP_WAIT

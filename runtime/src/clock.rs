@@ -37,6 +37,35 @@ pub struct ExternalDriver {
     pub reset_timeout: Duration,
 }
 
+/// How the command line names an external driver.
+#[derive(Clone, Copy, Debug)]
+pub struct DriverFlags<'a> {
+    /// `--driver` (default: the task's name).
+    pub id: Option<&'a str>,
+    /// `--driver-timeout` and `--reset-timeout` \[s\].
+    pub timeouts: (f64, f64),
+}
+
+impl ExternalDriver {
+    /// The driver `id` — by default the task's name `task` (one a driver id cannot be,
+    /// with '.', needs `--driver`) — waited for `timeout` seconds, given `reset_timeout`
+    /// seconds per reset (`--driver`, `--driver-timeout`, `--reset-timeout`), checked.
+    pub fn named(
+        id: Option<&str>,
+        task: &str,
+        (timeout, reset_timeout): (f64, f64),
+    ) -> Result<Self, String> {
+        let id = id.unwrap_or(task).to_string();
+        driver::contract::check_id(&id).map_err(|e| format!("`--driver`: {e}"))?;
+        let secs = |flag, s| crate::process::seconds(flag, s).map_err(|e| e.to_string());
+        Ok(Self {
+            id,
+            timeout: secs("--driver-timeout", timeout)?,
+            reset_timeout: secs("--reset-timeout", reset_timeout)?,
+        })
+    }
+}
+
 /// The run's clock.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -72,13 +101,12 @@ impl Clock {
     }
 
     /// The clock `--timing` and `--speed` ask for, against the simulated plant of
-    /// sampling time `ts` \[s\]; `driver`: an external driver instead (`--plant
-    /// external`), which keeps its own time.
+    /// sampling time `ts` \[s\] and name `task`; `driver`: an external driver instead
+    /// (`--plant external`), which keeps its own time.
     pub fn of_flags(
-        timing: Timing,
-        speed: f64,
-        ts: f64,
-        driver: Option<ExternalDriver>,
+        (timing, speed): (Timing, f64),
+        (ts, task): (f64, &str),
+        driver: Option<DriverFlags<'_>>,
     ) -> Result<Self, String> {
         // The speed is checked whatever the timing.
         let realtime = Self::realtime(ts, speed)?;
@@ -87,7 +115,7 @@ impl Clock {
                 "`--timing`/`--speed` do not apply with `--plant external`: the driver is the clock"
                     .into(),
             ),
-            (_, Some(d)) => Ok(Self::External(d)),
+            (_, Some(d)) => ExternalDriver::named(d.id, task, d.timeouts).map(Self::External),
             (Timing::Lockstep, None) => Ok(Self::Lockstep),
             (Timing::Realtime, None) => Ok(realtime),
         }

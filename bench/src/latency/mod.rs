@@ -10,7 +10,7 @@
 //!   every run is. Every message carries its stamps (`t_sample_ns`, `t_received_ns`,
 //!   `t_publish_ns`, the `/timing/...` channels of the recording); the plant adds, per
 //!   sample, when it woke for the sampling instant and when it found the answering action
-//!   (`rig plant --cycles-out`).
+//!   (the plant node's `cycles_out`).
 //!
 //! Stages of a cycle (sample `k`, all on `CLOCK_MONOTONIC`):
 //!

@@ -2,7 +2,7 @@ use std::time::Duration;
 
 use wire::{FOREVER, Waiting};
 
-use super::{Clock, ExternalDriver, Timing};
+use super::{Clock, DriverFlags, ExternalDriver, Timing};
 use crate::config::{ExperimentConfig, Overrides, resolve};
 
 fn driver() -> ExternalDriver {
@@ -34,7 +34,11 @@ fn a_speed_is_turned_into_the_period_once() {
 
 #[test]
 fn the_flags_choose_one_clock_and_refuse_what_does_not_combine() {
-    let of = |t, speed, d| Clock::of_flags(t, speed, 0.03, d);
+    let flags = DriverFlags {
+        id: None,
+        timeouts: (60.0, 2.5),
+    };
+    let of = |t, speed, d: Option<DriverFlags>| Clock::of_flags((t, speed), (0.03, "pendulum"), d);
     assert_eq!(of(Timing::Lockstep, 1.0, None), Ok(Clock::Lockstep));
     // The speed is checked in lockstep too, and otherwise ignored there.
     assert!(of(Timing::Lockstep, 0.0, None).is_err());
@@ -46,19 +50,13 @@ fn the_flags_choose_one_clock_and_refuse_what_does_not_combine() {
         })
     );
     assert_eq!(
-        of(Timing::Lockstep, 1.0, Some(driver())),
+        of(Timing::Lockstep, 1.0, Some(flags)),
         Ok(Clock::External(driver()))
     );
     let refused =
         "`--timing`/`--speed` do not apply with `--plant external`: the driver is the clock";
-    assert_eq!(
-        of(Timing::Realtime, 1.0, Some(driver())),
-        Err(refused.into())
-    );
-    assert_eq!(
-        of(Timing::Lockstep, 2.0, Some(driver())),
-        Err(refused.into())
-    );
+    assert_eq!(of(Timing::Realtime, 1.0, Some(flags)), Err(refused.into()));
+    assert_eq!(of(Timing::Lockstep, 2.0, Some(flags)), Err(refused.into()));
 }
 
 #[test]

@@ -124,7 +124,7 @@ pub fn batch_thread() {
 /// to have read everything ([`Linger`]).
 const LINGER: Duration = Duration::from_secs(10);
 
-/// A process's last duty in a recorded run (`--receivers 2`): after its last message it
+/// A process's last duty in a recorded run (`receivers = 2`): after its last message it
 /// waits until the recorder announces that it has read everything ([`wire::Recorded`]),
 /// since what the process sent may be gone from the recorder's queue once the process
 /// is.

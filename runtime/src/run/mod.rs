@@ -2,7 +2,7 @@
 //! launched, supervised and recorded by this process.
 //!
 //! * The supervisor joins the run and subscribes to every topic *before* starting the
-//!   processes, which wait for it (`--receivers 2`), so it sees every message.
+//!   processes, which wait for it (`receivers = 2`), so it sees every message.
 //! * It records every message to `run.mcap` ([`crate::record`]), streams `returns.csv`
 //!   (the format of `rig learn`'s `runs.csv`, one run), shows progress, and checks that no
 //!   message was lost (sequence numbers).
@@ -12,7 +12,7 @@
 //!   `DIR/<process>.log`.
 //! * With an external driver (`--plant external`, `docs/driver.md`), the supervisor
 //!   first waits for the driver's info and checks it against the task, then starts the
-//!   plant process as the episode master for that driver (`rig plant --driver ID`), and
+//!   plant process as the episode master for that driver (its clock `Clock::External`), and
 //!   records the driver's samples and commands too (`/driver/...`).
 //! * With a sensor that does not measure the full state (`[observer] sensor = "angle"`)
 //!   it also subscribes to the plant's ground truth ([`wire::Truth`], `rig/<id>/truth`,
@@ -63,7 +63,7 @@ pub struct RunOptions {
     /// Continue the run in `out` from its last complete trial ([`crate::resume`]).
     pub resume: bool,
     /// Realtime, simulated plant: the plant writes every sample's timing to this file
-    /// (`rig plant --cycles-out`, for `rig latency`).
+    /// (the plant node's `cycles_out`, for `rig latency`).
     pub cycles_out: Option<PathBuf>,
     /// How the three processes are scheduled; the layout (`--cpus`) places this
     /// process, the recorder, too.

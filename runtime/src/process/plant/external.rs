@@ -1,5 +1,5 @@
-//! The plant process with an external driver (`rig plant --driver ID`, started by
-//! `rig run --plant external`; the contract is `docs/driver.md`).
+//! The plant process with an external driver (`[clock.external]` in its settings,
+//! written by `rig run --plant external`; the contract is `docs/driver.md`).
 //!
 //! The driver samples, applies actions and resets; it knows nothing of trials. This
 //! process is the episode master between it and the observer and agent: before each
