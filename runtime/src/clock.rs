@@ -26,6 +26,7 @@ pub enum Timing {
 
 /// An external driver in place of the simulated plant (`rig run --plant external`).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ExternalDriver {
     /// The driver's id (services `rig/driver/<id>/...`).
     pub id: String,
@@ -68,7 +69,7 @@ impl ExternalDriver {
 
 /// The run's clock.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
 pub enum Clock {
     /// The simulated plant; simulated time advances when the action has arrived.
     Lockstep,

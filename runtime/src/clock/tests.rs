@@ -130,6 +130,15 @@ fn a_clock_is_written_and_read_back_with_its_durations_in_seconds() {
         by_hand.clock.driver().map(|d| (d.timeout, d.reset_timeout)),
         Some((Duration::from_secs(60), Duration::from_millis(2500)))
     );
+    for typo in [
+        "[clock.realtime]\nperiod = 0.003\nspeed = 10\n",
+        "[clock.external]\nid = \"arm\"\ntimeout = 60\nreset_timeout = 2.5\nspeed = 1\n",
+    ] {
+        let e = toml::from_str::<File>(typo).err().unwrap().to_string();
+        let named =
+            e.contains("unknown field `speed`") || e.contains("unexpected keys in table: speed");
+        assert!(named, "{e}");
+    }
     for bad in ["0", "-1", "nan", "inf"] {
         let text = format!("[clock.realtime]\nperiod = {bad}\n");
         let e = toml::from_str::<File>(&text).err().unwrap().to_string();

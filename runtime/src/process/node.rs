@@ -253,3 +253,71 @@ impl Settings for ObserverConfig {
         &self.node
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_settings_file_by_hand_needs_the_run_and_its_configuration_only() {
+        let dir = std::env::temp_dir().join(format!("node-settings-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("plant.toml");
+        std::fs::write(&file, "[node]\nrun_id = \"lab1\"\nconfig = \"c.toml\"\n").unwrap();
+        let plant = PlantConfig::read(&file).unwrap();
+        let node = NodeConfig::new(
+            "lab1",
+            Path::new("c.toml"),
+            Scheduling::default(),
+            Waiting::Block,
+        );
+        // No `wait` in the file: the node blocks.
+        let unsaid = NodeConfig {
+            wait: Wait::default(),
+            ..node.clone()
+        };
+        assert_eq!(plant, PlantConfig::new(unsaid));
+        assert_eq!(plant.node.waiting(), Waiting::Block);
+        assert_eq!(plant.node.receivers, 1);
+        // What `rig run` writes is read back as it was.
+        let resumed = PlantConfig {
+            clock: Clock::Realtime {
+                period: std::time::Duration::from_micros(2500),
+            },
+            resume: Some(Continuation {
+                after_trial: 12,
+                sim_time: 36.0,
+                first_seq: 4321,
+            }),
+            ..PlantConfig::new(NodeConfig {
+                receivers: 2,
+                ..node
+            })
+        };
+        resumed.write(&file).unwrap();
+        assert_eq!(PlantConfig::read(&file).unwrap(), resumed);
+        // A key the file may not have, a priority out of range: one line naming the file.
+        for (text, says) in [
+            (
+                "[node]\nrun_id = \"a\"\nconfig = \"c\"\nrt_priority = 5\n",
+                "unknown field `rt_priority`",
+            ),
+            (
+                "[node]\nrun_id = \"a\"\nconfig = \"c\"\nscheduling = { rt_priority = 0 }\n",
+                "`rt_priority` 0 is out of range",
+            ),
+            (
+                "resume = { after_trial = 1, sim_time = -1.0, first_seq = 0 }\n[node]\nrun_id = \"a\"\nconfig = \"c\"\n",
+                "is not a time",
+            ),
+        ] {
+            std::fs::write(&file, text).unwrap();
+            let e = format!("{:#}", PlantConfig::read(&file).unwrap_err());
+            assert!(
+                e.contains("plant.toml") && e.contains(says) && e.lines().count() == 1,
+                "{e}"
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
