@@ -47,7 +47,7 @@ pub fn main(args: &Args) -> ExitCode {
         let task = args.task.task()?;
         let d = args.driver.resolve(&task.name)?;
         let rate_seconds =
-            runtime::process::seconds("--rate-seconds", args.rate_seconds)?.as_secs_f64();
+            runtime::clock::seconds("--rate-seconds", args.rate_seconds)?.as_secs_f64();
         Ok(CheckOptions {
             serve: driver::contract::how_to_serve(&task, &d.id, args.task.named().as_deref()),
             driver: d.id,

@@ -7,7 +7,7 @@ use anyhow::Result;
 use clap::Args;
 use plant::config::Choice;
 use plant::{SystemName, Task};
-use runtime::run::ExternalDriver;
+use runtime::clock::{ClockError, DriverFlags, ExternalDriver};
 
 /// Which task a driver serves: a built-in system, or a task file (`rig sim-driver`, `rig
 /// check-driver`).
@@ -65,13 +65,16 @@ pub struct DriverArgs {
 impl DriverArgs {
     /// The driver to run against the task named `task`: its id (default: the task's
     /// name; one a driver id cannot be, with '.', needs `--driver`) and timeouts, checked.
-    pub fn resolve(&self, task: &str) -> Result<ExternalDriver> {
-        let id = self.driver.clone().unwrap_or_else(|| task.to_string());
-        driver::contract::check_id(&id).map_err(|e| anyhow::anyhow!("`--driver`: {e}"))?;
-        Ok(ExternalDriver {
-            id,
-            timeout: runtime::process::seconds("--driver-timeout", self.driver_timeout)?,
-            reset_timeout: runtime::process::seconds("--reset-timeout", self.reset_timeout)?,
-        })
+    pub fn resolve(&self, task: &str) -> Result<ExternalDriver, ClockError> {
+        let d = self.flags();
+        ExternalDriver::named(d.id, task, d.timeouts)
+    }
+
+    /// The flags as given, to resolve against the task (`--driver` defaults to its name).
+    pub fn flags(&self) -> DriverFlags<'_> {
+        DriverFlags {
+            id: self.driver.as_deref(),
+            timeouts: (self.driver_timeout, self.reset_timeout),
+        }
     }
 }

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use clap::Args as Flags;
 use observer::config::{ObserverKind, ObserverMode};
 use plant::config::Choice;
+use runtime::clock::Clock;
 
 use crate::external::DriverArgs;
 
@@ -63,23 +64,29 @@ pub struct Args {
 /// Runs the command.
 pub fn main(args: &Args) -> ExitCode {
     // `--driver` has no default here: without it, the simulated plant.
-    let driver = match args.driver.driver.as_ref().map(|_| args.driver.resolve("")) {
-        None => None,
-        Some(Ok(d)) => Some(d),
-        Some(Err(e)) => {
+    let clock = match args.driver.driver.as_ref() {
+        Some(_) => args
+            .driver
+            .resolve("")
+            .map(Clock::External)
+            .map_err(anyhow::Error::from),
+        None => bench::latency::period(args.period_ms.unwrap_or(30.0))
+            .map(|period| Clock::Realtime { period }),
+    };
+    let clock = match clock {
+        Ok(c) => c,
+        Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::FAILURE;
         }
     };
-    let mode = args.observer_mode.unwrap_or(if driver.is_some() {
-        ObserverMode::Direct
-    } else {
-        ObserverMode::Predictive
+    let mode = args.observer_mode.unwrap_or(match clock {
+        Clock::External(_) => ObserverMode::Direct,
+        _ => ObserverMode::Predictive,
     });
     let opts = bench::latency::LatencyOptions {
         cycles: args.cycles,
-        period_ms: args.period_ms.unwrap_or(30.0),
-        driver,
+        clock,
         task: args.task.clone(),
         out: args.out.clone(),
         observer: args.observer,

@@ -4,7 +4,6 @@
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use runtime::process::{AgentArgs, ObserverArgs, PlantArgs};
 
 mod bench_loop;
 #[cfg(feature = "bridge")]
@@ -18,6 +17,7 @@ mod delay_study;
 mod external;
 mod latency;
 mod learn;
+mod node;
 mod optimal;
 mod reproduce;
 mod run;
@@ -102,11 +102,11 @@ enum Command {
     /// `rig tune --help` lists its arguments.
     Tune(tune::Args),
     /// The plant process of a run (started by `rig run`, or by hand).
-    Plant(PlantArgs),
+    Plant(node::NodeFile),
     /// The observer process of a run (started by `rig run`, or by hand).
-    Observer(ObserverArgs),
+    Observer(node::NodeFile),
     /// The agent process of a run (started by `rig run`, or by hand).
-    Agent(AgentArgs),
+    Agent(node::NodeFile),
 }
 
 fn main() -> ExitCode {
@@ -124,13 +124,8 @@ fn main() -> ExitCode {
         Command::DelayStudy(args) => delay_study::main(&args),
         Command::Reproduce(args) => reproduce::main(&args),
         Command::Tune(args) => tune::main(&args),
-        Command::Plant(args) => process(runtime::process::plant::run, &args),
-        Command::Observer(args) => process(runtime::process::observer::run, &args),
-        Command::Agent(args) => process(runtime::process::agent::run, &args),
+        Command::Plant(node) => node.run(runtime::process::plant::run),
+        Command::Observer(node) => node.run(runtime::process::observer::run),
+        Command::Agent(node) => node.run(runtime::process::agent::run),
     }
-}
-
-/// One process of a run (`rig plant|observer|agent`).
-fn process<A>(node: fn(&A) -> anyhow::Result<()>, args: &A) -> ExitCode {
-    runtime::process::exit_code(node(args))
 }

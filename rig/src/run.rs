@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 use anyhow::{Result, anyhow};
 use clap::Args as Flags;
+use runtime::clock::{Clock, Timing};
 use runtime::config::ExperimentConfig;
 use runtime::process::{Layout, WaitKind};
 use runtime::run::{RunOptions, RunSummary, run};
@@ -28,8 +29,8 @@ pub struct Args {
     /// arrived (deterministic). `realtime`: the plant samples at absolute deadlines of
     /// Ts / speed; a late action is applied from the moment it arrives, the previous one
     /// held until then, and the miss is counted.
-    #[arg(long, default_value = "lockstep", value_parser = ["lockstep", "realtime"])]
-    timing: String,
+    #[arg(long, value_enum, default_value_t = Timing::Lockstep)]
+    timing: Timing,
     /// Realtime only: how many times faster than real time to run (e.g. 10: a 30 ms
     /// sample period takes 3 ms).
     #[arg(long, default_value_t = 1.0)]
@@ -120,39 +121,25 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         None => resolve_selection(&args.selection),
     }?;
     cfg.run.runs = 1;
-    if !(args.speed.is_finite() && args.speed > 0.0 && args.speed <= 1000.0) {
-        return Err(anyhow!(
-            "`--speed` {} is out of range: must be a number in (0, 1000]",
-            args.speed
-        ));
-    }
-    let realtime = (args.timing == "realtime").then_some(args.speed);
-    let delayed = cfg.run.delay_ms != 0.0 || !cfg.run.delay_from.is_empty();
-    if delayed && (realtime.is_some() || args.plant == "external") {
-        return Err(anyhow!(
-            "`--delay-ms`/`--delay-from` (run.delay_ms, run.delay_from) apply in lockstep with the simulated plant only: in real time the delays are real"
-        ));
-    }
-    let driver = if args.plant == "external" {
-        if realtime.is_some() || args.speed != 1.0 {
-            return Err(anyhow!(
-                "`--timing`/`--speed` do not apply with `--plant external`: the driver is the clock"
-            ));
+    let driver = match args.plant.as_str() {
+        "external" => Some(args.driver.flags()),
+        _ if args.driver.driver.is_some() => {
+            return Err(anyhow!("`--driver` needs `--plant external`"));
         }
-        Some(args.driver.resolve(&cfg.task_name())?)
-    } else if args.driver.driver.is_some() {
-        return Err(anyhow!("`--driver` needs `--plant external`"));
-    } else {
-        cfg.check_simulated()?;
-        None
+        _ => None,
     };
-    let lockstep = realtime.is_none() && driver.is_none();
+    let clock = Clock::of_flags(
+        (args.timing, args.speed),
+        (cfg.task().ts, &cfg.task_name()),
+        driver,
+    )?;
+    let lockstep = clock.is_lockstep();
     let waiting = args.wait.waiting(if lockstep {
         LOCKSTEP_WAIT
     } else {
         WaitKind::Block
     });
-    runtime::run::check_waiting(lockstep, waiting)?;
+    clock.check(&cfg, waiting)?;
     let mut scheduling = args.scheduling;
     match scheduling.layout() {
         Some(layout) => layout.check()?,
@@ -164,8 +151,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         resume: args.resume.is_some(),
         run_id: args.run_id.clone(),
         progress: !args.quiet,
-        realtime,
-        driver,
+        clock,
         cycles_out: None,
         scheduling,
         spin: args.spin,
@@ -194,7 +180,7 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
         s.wall.as_secs_f64(),
         s.wall.as_secs_f64() * 1e6 / steps
     );
-    if let (Some(i), Some(d)) = (&s.driver, &opts.driver) {
+    if let (Some(i), Some(d)) = (&s.driver, opts.clock.driver()) {
         println!(
             "  driver {:?} (task {}, {} clock): period {:.3} ms × time scale {}; deadline misses: {} of {} samples",
             d.id,
@@ -205,14 +191,14 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
             s.deadline_misses,
             s.messages / 3
         );
-    } else if opts.realtime.is_some() {
+    } else if opts.clock.period().is_some() {
         println!(
             "  deadline misses: {} of {} samples",
             s.deadline_misses,
             s.messages / 3
         );
     }
-    if opts.driver.is_some() || opts.realtime.is_some() {
+    if !opts.clock.is_lockstep() {
         println!("  trials cut by gaps and redone: {} (gaps.csv)", s.gaps);
     }
     if let Some(g) = s.records.iter().rev().find_map(|r| r.greedy) {

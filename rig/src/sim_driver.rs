@@ -3,6 +3,7 @@
 use std::process::ExitCode;
 
 use clap::Args as Flags;
+use runtime::clock::Timing;
 
 use crate::external::TaskArgs;
 
@@ -21,8 +22,8 @@ pub struct Args {
     /// `--speed`), as hardware; `lockstep` — sample k+1 only after the action for sample
     /// k arrived, as fast as the rig answers, the same bytes every run; resets place the
     /// system at the start state at once.
-    #[arg(long, value_name = "CLOCK", value_parser = ["realtime", "lockstep"], default_value = "realtime")]
-    clock: String,
+    #[arg(long, value_name = "CLOCK", value_enum, default_value_t = Timing::Realtime)]
+    clock: Timing,
     /// Run SPEED times faster than real time (a sample every Ts / SPEED of wall time,
     /// advertised as time_scale SPEED); in (0, 1000]; realtime only.
     #[arg(long, value_name = "SPEED", default_value_t = 1.0)]
@@ -56,7 +57,7 @@ pub struct Args {
 /// Runs the command.
 pub fn main(args: &Args) -> ExitCode {
     use driver::{Serving, Simulated, serve, serve_lockstep};
-    let lockstep = args.clock == "lockstep";
+    let lockstep = args.clock == Timing::Lockstep;
     let device = driver::contract::check_id(&args.driver_id)
         .map_err(|e| anyhow::anyhow!("`--driver-id`: {e}"))
         .and_then(|()| {

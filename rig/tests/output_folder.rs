@@ -90,11 +90,18 @@ fn learn_and_a_hand_started_agent_are_refused_a_folder_in_use() {
     );
     let agent = common::child_running(run.id(), "agent");
     let checkpoints = out.join("checkpoints");
+    let settings = out.with_extension("agent.toml");
+    std::fs::write(
+        &settings,
+        format!(
+            "checkpoints = {checkpoints:?}\n[node]\nrun_id = \"by-hand\"\nconfig = {:?}\n",
+            out.join("config.toml")
+        ),
+    )
+    .unwrap();
     let by_hand = rig()
-        .args(["agent", "--run-id", "by-hand", "--config"])
-        .arg(out.join("config.toml"))
-        .arg("--checkpoints")
-        .arg(&checkpoints)
+        .args(["agent", "--node"])
+        .arg(&settings)
         .output()
         .unwrap();
     refused_naming(&by_hand, agent, &checkpoints);

@@ -238,11 +238,18 @@ fn processes_notice_a_dead_peer_and_say_which() {
     let preset = ok(rig().args(["config", "--trials", "400"]).output().unwrap());
     std::fs::write(&config, &preset.stdout).unwrap();
     let run_id = format!("deadpeer{}", std::process::id());
+    // Each node by hand: its settings name the run and its configuration.
+    let settings = dir.join("node.toml");
+    std::fs::write(
+        &settings,
+        format!("[node]\nrun_id = {run_id:?}\nconfig = {config:?}\n"),
+    )
+    .unwrap();
     let start = |exe: &str| {
         let log = std::fs::File::create(dir.join(format!("{exe}.log"))).unwrap();
         Command::new(env!("CARGO_BIN_EXE_rig").replace("/rig", &format!("/{exe}")))
-            .args(["--run-id", &run_id, "--config"])
-            .arg(&config)
+            .arg("--node")
+            .arg(&settings)
             .stderr(log)
             .spawn()
             .unwrap()
@@ -272,6 +279,51 @@ fn processes_notice_a_dead_peer_and_say_which() {
         t0.elapsed() < Duration::from_secs(5),
         "noticed in {:?}",
         t0.elapsed()
+    );
+}
+
+/// A node started by hand reads its settings file and holds the run's clock to the same
+/// rules as `rig run`: an injected delay with an external driver is refused at once,
+/// not after waiting for the driver; a key the file may not have is named.
+#[test]
+fn a_node_started_by_hand_checks_its_settings_as_rig_run_does() {
+    let dir = tmp("by-hand");
+    let config = dir.join("config.toml");
+    let delayed = ok(rig().args(["config", "--delay-ms", "5"]).output().unwrap());
+    std::fs::write(&config, &delayed.stdout).unwrap();
+    let node = format!(
+        "[node]\nrun_id = \"byhand{}\"\nconfig = {config:?}\n",
+        std::process::id()
+    );
+    let plant = |settings: &str| {
+        let file = dir.join("plant.toml");
+        std::fs::write(&file, settings).unwrap();
+        let t0 = Instant::now();
+        let out = rig()
+            .arg("plant")
+            .arg("--node")
+            .arg(&file)
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{settings}");
+        (
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+            t0.elapsed(),
+        )
+    };
+    let external = "[clock.external]\nid = \"pendulum\"\ntimeout = 20\nreset_timeout = 30\n";
+    let (err, took) = plant(&format!("{node}{external}"));
+    assert!(
+        err.contains("apply in lockstep with the simulated plant only") && err.lines().count() == 1,
+        "{err}"
+    );
+    assert!(took < Duration::from_secs(10), "refused after {took:?}");
+    let (err, _) = plant(&format!("speed = 10\n{node}"));
+    assert!(
+        err.contains("plant.toml")
+            && err.contains("unknown field `speed`")
+            && err.lines().count() == 1,
+        "{err}"
     );
 }
 

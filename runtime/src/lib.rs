@@ -8,9 +8,11 @@
 //!   supervisor that starts, watches and records them ([`run`]), the MCAP writer
 //!   ([`record`]) and [`resume`] after a crash; [`lock`]: an output folder belongs to one
 //!   command.
+//! - The run's [`clock`]: lockstep, real time or an external driver, and its rules.
 //! - Against an external driver: [`check_driver`] (`rig check-driver`).
 
 pub mod check_driver;
+pub mod clock;
 pub mod config;
 pub mod experiment;
 pub mod learn;

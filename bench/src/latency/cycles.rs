@@ -1,5 +1,5 @@
 //! The cycles of a realtime run: each sample's stamps, from the plant's cycle file
-//! (`rig plant --cycles-out`) and the recording's `/timing/...` channels, and the
+//! (the plant node's `cycles_out`) and the recording's `/timing/...` channels, and the
 //! stages between them ([`super::STAGES`]).
 
 use std::collections::BTreeMap;

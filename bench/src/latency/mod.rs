@@ -10,7 +10,7 @@
 //!   every run is. Every message carries its stamps (`t_sample_ns`, `t_received_ns`,
 //!   `t_publish_ns`, the `/timing/...` channels of the recording); the plant adds, per
 //!   sample, when it woke for the sampling instant and when it found the answering action
-//!   (`rig plant --cycles-out`).
+//!   (the plant node's `cycles_out`).
 //!
 //! Stages of a cycle (sample `k`, all on `CLOCK_MONOTONIC`):
 //!
@@ -47,6 +47,7 @@
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow, bail};
 use observer::config::{ObserverKind, ObserverMode, SensorKind};
@@ -61,11 +62,12 @@ mod sweep;
 pub use external::{DRIVER_STAGES, DRIVER_STAMPS, Reach};
 use machine::Counters;
 pub use machine::MachineLoad;
+use runtime::clock::Clock;
 use runtime::config::Overrides;
 use runtime::learn::write_atomic;
 use runtime::process::{CpuSet, Layout, Scheduling, Spin, Wakeup};
 use runtime::report::plot::{Histogram, plot_histograms};
-use runtime::run::{ExternalDriver, RunOptions, run};
+use runtime::run::{RunOptions, run};
 pub use sweep::{SweepPoint, sweep};
 
 /// What `rig latency` runs.
@@ -73,11 +75,10 @@ pub use sweep::{SweepPoint, sweep};
 pub struct LatencyOptions {
     /// Samples (cycles) to time, at least; whole trials are run.
     pub cycles: usize,
-    /// Sampling period \[ms\] of the simulated plant (a driver keeps its own).
-    pub period_ms: f64,
-    /// An external driver in place of the simulated plant: its period, its stamps and,
-    /// across hosts, the link's ([`DRIVER_STAGES`]).
-    pub driver: Option<ExternalDriver>,
+    /// The clock: the simulated plant in real time at its period (checked by
+    /// [`period`]), or an external driver at its own, with its stamps and, across hosts,
+    /// the link's ([`DRIVER_STAGES`]).
+    pub clock: Clock,
     /// A task file in place of the pendulum (the driver's task).
     pub task: Option<PathBuf>,
     /// Output directory.
@@ -276,7 +277,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     let run_dir = opts.out.join("run");
     let cycles_path = run_dir.join("plant_cycles.csv");
     let (period_ns, machine) = run_realtime(opts, &run_dir, &cycles_path)?;
-    let (mut c, reach) = match &opts.driver {
+    let (mut c, reach) = match opts.clock.driver() {
         None => (cycles::read(&run_dir, &cycles_path, period_ns)?, None),
         Some(_) => {
             let (c, reach) = external::read(&cycles::messages(&run_dir)?, period_ns)?;
@@ -299,8 +300,8 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
         spin: opts.spin,
         wakeup_us: opts.wakeup.cpu_wakeup_us,
         driver: opts
-            .driver
-            .as_ref()
+            .clock
+            .driver()
             .zip(reach)
             .map(|(d, r)| (d.id.clone(), r)),
         raw_rtt,
@@ -316,24 +317,34 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
     Ok(report)
 }
 
+/// The simulated plant's period of `--period-ms`, refused out of [0.1, 1000] ms in one
+/// line.
+pub fn period(period_ms: f64) -> Result<Duration> {
+    if !(period_ms.is_finite() && (0.1..=1000.0).contains(&period_ms)) {
+        bail!("`--period-ms` {period_ms} is out of range: must be a number in [0.1, 1000]");
+    }
+    Ok(Duration::from_secs_f64(period_ms * 1e-3))
+}
+
 /// Refuses options out of range, in one line naming the flag.
 fn validate(opts: &LatencyOptions) -> Result<()> {
-    if !(opts.period_ms.is_finite() && opts.period_ms >= 0.1 && opts.period_ms <= 1000.0) {
-        bail!(
-            "`--period-ms` {} is out of range: must be a number in [0.1, 1000]",
-            opts.period_ms
-        );
+    match &opts.clock {
+        Clock::Lockstep => {
+            bail!("`rig latency` measures real time: a lockstep clock has no period")
+        }
+        Clock::Realtime { period: p } => {
+            period(p.as_nanos() as f64 * 1e-6)?;
+        }
+        Clock::External(_) if opts.mode == ObserverMode::Predictive => bail!(
+            "`--observer-mode predictive` needs the simulated plant: an external driver applies each action as it arrives (`--observer-mode direct`, the default with `--driver`)"
+        ),
+        Clock::External(_) => {}
     }
     if opts.cycles == 0 {
         bail!("`--cycles` must be at least 1");
     }
     if let Some(layout) = opts.scheduling.layout() {
         layout.check()?;
-    }
-    if opts.driver.is_some() && opts.mode == ObserverMode::Predictive {
-        bail!(
-            "`--observer-mode predictive` needs the simulated plant: an external driver applies each action as it arrives (`--observer-mode direct`, the default with `--driver`)"
-        );
     }
     if opts.mode == ObserverMode::Predictive && opts.observer != ObserverKind::Predictive {
         bail!(
@@ -369,8 +380,7 @@ fn run_realtime(
     let task = cfg.task();
     let per_trial = task.steps_per_trial() + 1;
     cfg.run.trials = opts.cycles.div_ceil(per_trial) as u32;
-    let speed = task.ts / (opts.period_ms * 1e-3);
-    let simulated = opts.driver.is_none();
+    let period = opts.clock.period();
     let before = Counters::read();
     let summary = run(
         &cfg,
@@ -378,10 +388,9 @@ fn run_realtime(
             out: run_dir.to_owned(),
             run_id: None,
             progress: false,
-            realtime: simulated.then_some(speed),
-            driver: opts.driver.clone(),
+            clock: opts.clock.clone(),
             resume: false,
-            cycles_out: simulated.then(|| cycles_path.to_owned()),
+            cycles_out: period.map(|_| cycles_path.to_owned()),
             scheduling: opts.scheduling,
             spin: opts.spin,
             waiting: opts.waiting,
@@ -396,9 +405,9 @@ fn run_realtime(
                 .then(runtime::process::cpus::last_cpu),
         )
     });
-    let period_ns = match summary.driver {
-        Some(info) => info.period_ns,
-        None => (task.ts * 1e9 / speed).round() as u64,
+    let period_ns = match (summary.driver, period) {
+        (Some(info), _) => info.period_ns,
+        (None, period) => period.map_or(0, |p| p.as_nanos() as u64),
     };
     Ok((period_ns, machine))
 }

@@ -5,6 +5,8 @@ use std::fmt::Write as _;
 use anyhow::{Context, Result, bail};
 use runtime::learn::write_atomic;
 
+use runtime::clock::Clock;
+
 use super::{LatencyOptions, LatencyReport, latency};
 use crate::loop_bench::Stats;
 
@@ -25,19 +27,21 @@ pub fn sweep(opts: &LatencyOptions, factor: f64) -> Result<Vec<SweepPoint>> {
     if !(factor.is_finite() && factor > 1.0) {
         bail!("sweep factor {factor} must be > 1");
     }
-    if opts.driver.is_some() {
+    let Some(first) = opts.clock.period() else {
         bail!("`--sweep` needs the simulated plant: an external driver keeps its own period");
-    }
+    };
     std::fs::create_dir_all(&opts.out)
         .with_context(|| format!("cannot create {}", opts.out.display()))?;
     let mut points = Vec::new();
     let mut csv = String::from(
         "period_ms,cycles,deadline_misses,jitter_p999_us,sample_to_actuation_p50_us,sample_to_actuation_p99_us,sample_to_actuation_p999_us,sample_to_actuation_max_us,raw_hop_p50_us\n",
     );
-    let mut period = opts.period_ms;
+    let mut period = first.as_nanos() as f64 * 1e-6;
     while period >= 0.1 {
         let sub = LatencyOptions {
-            period_ms: period,
+            clock: Clock::Realtime {
+                period: super::period(period)?,
+            },
             out: opts.out.join(format!("period-{period:.3}")),
             ..opts.clone()
         };

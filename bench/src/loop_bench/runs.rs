@@ -2,12 +2,14 @@
 //! processes with the recorder (`rig run`), and as the three processes alone.
 
 use std::path::Path;
-use std::process::Child;
+
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow, bail};
 use runtime::learn::write_atomic;
-use runtime::process::{Layout, Wait};
+use runtime::process::{
+    AgentConfig, Layout, NodeConfig, ObserverConfig, PlantConfig, Scheduling, Settings, Wait,
+};
 use wire::Waiting;
 
 use super::{Kill, spawn};
@@ -120,21 +122,26 @@ pub fn unrecorded(
     write_atomic(&config, &cfg.to_toml())?;
     let steps = dir.join("steps_ns.txt");
     let run_id = format!("loop{}-{}", std::process::id(), wire::now_ns() % 1_000_000);
-    let (config_s, steps_s) = (config.to_string_lossy(), steps.to_string_lossy());
-    let mut common = vec!["--run-id", run_id.as_str(), "--config", &config_s];
-    let wait = Wait::process_args(waiting);
-    common.extend(wait.iter().map(String::as_str));
-    common.extend(["--cpus", layout.name()]);
+    let scheduling = Scheduling {
+        cpus: Some(layout),
+        ..Scheduling::default()
+    };
+    let node = NodeConfig::new(&run_id, &config, scheduling, waiting);
+    let plant = PlantConfig {
+        latency_out: Some(steps.clone()),
+        ..PlantConfig::new(node.clone())
+    };
+    let settings = |role: &str| dir.join(format!("{role}.toml"));
+    AgentConfig::new(node.clone()).write(&settings("agent"))?;
+    ObserverConfig { node }.write(&settings("observer"))?;
+    plant.write(&settings("plant"))?;
     let (cpu0, t0) = (children_cpu(), Instant::now());
     let mut kids = Kill(Vec::new());
-    let start = |role: &[&str], kids: &mut Vec<Child>| -> Result<()> {
-        let log = dir.join(format!("{}.log", role[0]));
-        kids.push(spawn(exe, &[role, &common].concat(), &log)?);
-        Ok(())
-    };
-    start(&["agent"], &mut kids.0)?;
-    start(&["observer"], &mut kids.0)?;
-    start(&["plant", "--latency-out", &steps_s], &mut kids.0)?;
+    for role in ["agent", "observer", "plant"] {
+        let file = settings(role).to_string_lossy().into_owned();
+        let log = dir.join(format!("{role}.log"));
+        kids.0.push(spawn(exe, &[role, "--node", &file], &log)?);
+    }
     let timed = wait_all(kids, &["agent", "observer", "plant"], t0, cpu0, dir)?;
     let text = std::fs::read_to_string(&steps)
         .with_context(|| format!("cannot read {}", steps.display()))?;

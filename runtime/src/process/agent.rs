@@ -7,16 +7,16 @@ use ::observer::timing::{Call, ToAgent, act};
 use anyhow::{Result, anyhow, bail};
 use wire::{Action, Estimate, flags, now_ns, topic};
 
-use super::{AgentArgs, SILENCE, STARTUP, pack};
+use super::{AgentConfig, SILENCE, STARTUP, pack};
 use crate::config::ExperimentConfig;
 use crate::resume::CheckpointWriter;
 
 /// Runs the agent side of a run until the plant announces its end.
-pub fn run(args: &AgentArgs) -> Result<()> {
+pub fn run(args: &AgentConfig) -> Result<()> {
     let node = &args.node;
     super::set_rt_priority(node.scheduling.rt_priority)?;
     node.scheduling.place(super::Part::Node)?;
-    let cfg = node.config()?;
+    let cfg = node.experiment()?;
     let mut learner = Learner::new(args, &cfg)?;
     let bus = node.join("agent")?;
     let estimates = bus.rx::<Estimate>(topic::ESTIMATE)?;
@@ -54,7 +54,7 @@ struct Learner {
     agent: Box<dyn Agent>,
     /// Which experiment and run this is (for checkpoints).
     origin: Origin,
-    /// Where a checkpoint of every learning trial goes (`--checkpoints`).
+    /// Where a checkpoint of every learning trial goes (`checkpoints`).
     checkpoints: Option<CheckpointWriter>,
     /// The next learning trial.
     expect_trial: u64,
@@ -67,8 +67,8 @@ struct Learner {
 }
 
 impl Learner {
-    /// The agent of run `--run-index` of `cfg`, from the checkpoint `--resume` if given.
-    fn new(args: &AgentArgs, cfg: &ExperimentConfig) -> Result<Self> {
+    /// The agent of run `run_index` of `cfg`, from the checkpoint `resume` if given.
+    fn new(args: &AgentConfig, cfg: &ExperimentConfig) -> Result<Self> {
         let run = args.node.run_index;
         let task = cfg.task();
         let mut agent = ::agent::build(

@@ -1,23 +1,23 @@
-//! The command lines of the nodes: what every node takes ([`NodeArgs`]: run id,
-//! configuration, operating-system scheduling) and what each adds ([`PlantArgs`], [`ObserverArgs`],
-//! [`AgentArgs`]).
+//! How the processes of a run are scheduled and wait: flags of `rig run` and `rig
+//! latency`, and settings of each node ([`super::node`]).
 
-use std::path::PathBuf;
 use std::time::Duration;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use wire::{Bus, FOREVER, Waiting};
+use serde::{Deserialize, Serialize};
+use wire::{FOREVER, Waiting};
 
+use super::node::Invalid;
 use super::{Layout, Part};
-use crate::config::{ExperimentConfig, Overrides, resolve};
 
 /// The realtime plant's default spin before each sampling instant \[µs\] (`--spin-us`).
 pub const SPIN_US: u64 = 100;
 
-/// How a node is scheduled by the operating system: flags of `rig run`, `rig latency`
-/// and of each node (which `rig run` passes on, [`Scheduling::process_args`]).
-#[derive(Args, Debug, Clone, Copy, PartialEq, Eq)]
+/// How a node is scheduled by the operating system: flags of `rig run` and `rig
+/// latency`, and a setting of each node (`scheduling`, [`super::node`]).
+#[derive(Args, Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Scheduling {
     /// Run the processes under the real-time scheduling policy SCHED_FIFO at this
     /// priority (1–99; the plant, the clock, one above the observer and the agent), ahead
@@ -55,22 +55,19 @@ impl Scheduling {
         self.layout().unwrap_or(Layout::Shared).place(part)
     }
 
-    /// The flags that give a node this scheduling.
-    pub fn process_args(&self) -> Vec<String> {
-        let mut args = Vec::new();
-        if let Some(l) = self.layout() {
-            args.extend(["--cpus".to_string(), l.name().to_string()]);
+    /// Refuses a priority outside 1–99 (a node's settings are not checked by a flag).
+    pub fn check(&self) -> Result<(), Invalid> {
+        match self.rt_priority {
+            Some(p) if !(1..=99).contains(&p) => Err(Invalid::Priority(p)),
+            _ => Ok(()),
         }
-        if let Some(p) = self.rt_priority {
-            args.extend(["--rt-priority".to_string(), p.to_string()]);
-        }
-        args
     }
 }
 
-/// How the realtime plant waits for a sampling instant: a flag of `rig run`,
-/// `rig latency` and the plant node.
-#[derive(Args, Debug, Clone, Copy, PartialEq, Eq)]
+/// How the realtime plant waits for a sampling instant: a flag of `rig run` and
+/// `rig latency`, and a setting of the plant node.
+#[derive(Args, Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Spin {
     /// Realtime: the plant spins (a busy core) instead of sleeping for the last this many
     /// µs before each sampling instant, so that the instant does not depend on the
@@ -86,7 +83,8 @@ impl Default for Spin {
 }
 
 /// How the loop's processes wait for their next message (`--wait`, [`Waiting`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum WaitKind {
     /// Sleep until woken: no CPU while waiting, an operating-system wake-up per message.
     Block,
@@ -96,8 +94,10 @@ pub enum WaitKind {
     Yield,
 }
 
-/// How a process waits for its next message: a flag of `rig run` and of each node.
-#[derive(Args, Debug, Clone, Copy, PartialEq, Eq)]
+/// How a process waits for its next message: a flag of `rig run` and a setting of
+/// each node.
+#[derive(Args, Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct Wait {
     /// How each process waits for its next message: `block` sleeps until woken (no CPU
     /// while waiting, an operating-system wake-up per message); `spin` polls with the
@@ -124,148 +124,33 @@ impl Wait {
         }
     }
 
-    /// The flags that give a node `waiting`.
+    /// The flags that give a process `waiting` (`rig pong`).
     pub fn process_args(waiting: Waiting) -> Vec<String> {
-        let (how, bound) = match waiting {
-            Waiting::Block => ("block", None),
-            Waiting::Spin(d) => ("spin", Some(d)),
-            Waiting::Yield(d) => ("yield", Some(d)),
-        };
+        let w = Self::of(waiting);
+        let how = w.wait.map_or("block", |k| match k {
+            WaitKind::Block => "block",
+            WaitKind::Spin => "spin",
+            WaitKind::Yield => "yield",
+        });
         let mut args = vec!["--wait".to_string(), how.to_string()];
-        if let Some(d) = bound.filter(|&d| d != FOREVER) {
-            args.extend(["--wait-us".to_string(), d.as_micros().to_string()]);
+        if let Some(us) = w.wait_us {
+            args.extend(["--wait-us".to_string(), us.to_string()]);
         }
         args
     }
-}
 
-/// Command-line arguments every node takes.
-#[derive(Args, Debug, Clone)]
-pub struct NodeArgs {
-    /// Run id: the processes of one run share it; runs with different ids never see
-    /// each other (letters, digits, '-', '_').
-    #[arg(long)]
-    pub run_id: String,
-    /// The run's configuration (a `config.toml` written by `rig run`/`rig learn`, or any
-    /// file `rig config` describes).
-    #[arg(long, value_name = "FILE")]
-    pub config: PathBuf,
-    /// Receivers to wait for before publishing: the next process, plus the recorder of
-    /// `rig run` if one is listening.
-    #[arg(long, default_value_t = 1)]
-    pub receivers: usize,
-    /// Which run of the experiment this is (seeds the random streams as run `N` of
-    /// `rig learn` would be).
-    #[arg(long, default_value_t = 0)]
-    pub run_index: u32,
-    /// How the realtime loop is scheduled.
-    #[command(flatten)]
-    pub scheduling: Scheduling,
-    /// How the process waits for its next message.
-    #[command(flatten)]
-    pub wait: Wait,
-}
-
-impl NodeArgs {
-    /// Joins the run as process `role`, waiting as `--wait` says.
-    pub fn join(&self, role: &str) -> Result<Bus> {
-        Ok(Bus::join(&self.run_id, role)?.with_waiting(self.wait.waiting(WaitKind::Block)))
+    /// The setting that gives a node `waiting`.
+    pub fn of(waiting: Waiting) -> Self {
+        let (how, bound) = match waiting {
+            Waiting::Block => (WaitKind::Block, None),
+            Waiting::Spin(d) => (WaitKind::Spin, Some(d)),
+            Waiting::Yield(d) => (WaitKind::Yield, Some(d)),
+        };
+        Self {
+            wait: Some(how),
+            wait_us: bound
+                .filter(|&d| d != FOREVER)
+                .map(|d| d.as_micros() as u64),
+        }
     }
-
-    /// Reads and validates the configuration.
-    pub fn config(&self) -> Result<ExperimentConfig> {
-        let text = std::fs::read_to_string(&self.config)
-            .with_context(|| format!("{}: cannot read", self.config.display()))?;
-        resolve(Some((&self.config, &text)), &Overrides::default())
-            .map_err(|e| anyhow::anyhow!("{e}"))
-    }
-}
-
-/// Command-line arguments of the plant node ([`super::plant::run`]).
-#[derive(Args, Debug, Clone)]
-pub struct PlantArgs {
-    /// What every node takes.
-    #[command(flatten)]
-    pub node: NodeArgs,
-    /// `lockstep` (simulated time advances when the action has arrived) or `realtime`
-    /// (the plant samples at absolute deadlines of Ts / speed; a late action is applied
-    /// from the moment it arrives, the previous one held until then).
-    #[arg(long, default_value = "lockstep", value_parser = ["lockstep", "realtime"])]
-    pub timing: String,
-    /// Realtime: how many times faster than real time (Ts / speed per sample).
-    #[arg(long, default_value_t = 1.0)]
-    pub speed: f64,
-    /// Realtime: how the plant waits for a sampling instant.
-    #[command(flatten)]
-    pub spin: Spin,
-    /// Write the time from publishing each measurement to receiving its action (ns, one
-    /// per line) to this file.
-    #[arg(long, value_name = "FILE")]
-    pub latency_out: Option<PathBuf>,
-    /// Do not simulate; be the episode master for the external driver with this id
-    /// (services rig/driver/ID/..., docs/driver.md), which is the clock. `--timing` and
-    /// `--speed` do not apply then.
-    #[arg(long, value_name = "ID")]
-    pub driver: Option<String>,
-    /// With `--driver`: how long to wait for the driver to appear, and for each sample
-    /// of a driver in lockstep (a simulator's step may take long) (seconds).
-    #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
-    pub driver_timeout: f64,
-    /// With `--driver`: how long the driver may take for one reset (bring the system to
-    /// rest at the start state), in seconds.
-    #[arg(long, value_name = "SECONDS", default_value_t = 30.0)]
-    pub reset_timeout: f64,
-    /// Realtime: write every sample's timing to this CSV file (columns
-    /// `seq,t_sample_ns,t_woke_ns,t_action_ns`: sequence number, nominal sampling
-    /// instant, wake-up, arrival of the answering action; monotonic ns) — for
-    /// `rig latency`.
-    #[arg(long, value_name = "FILE")]
-    pub cycles_out: Option<PathBuf>,
-    /// Continue a run after this trial (its greedy evaluations done).
-    #[arg(long, value_name = "TRIAL", default_value_t = 0)]
-    pub after_trial: u32,
-    /// With `--after-trial`: the simulated learning time at that trial's end (seconds).
-    #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
-    pub sim_time: f64,
-    /// With `--after-trial`: the sequence number of the first sample.
-    #[arg(long, value_name = "SEQ", default_value_t = 0)]
-    pub first_seq: u64,
-    /// Realtime and `--driver`: what a gap in the loop's timing does — samples missing,
-    /// or one a period late (docs/run.md). `cut`: the attempt ends there, unlearned, and
-    /// the trial is run again. `learn`: the trial goes on and learns across it, the gap
-    /// counted only as deadline misses (a simulation run faster than this machine can
-    /// keep up with).
-    #[arg(long, default_value = "cut", value_parser = ["cut", "learn"])]
-    pub gaps: String,
-}
-
-/// Command-line arguments of the observer node ([`super::observer::run`]).
-#[derive(Args, Debug, Clone)]
-pub struct ObserverArgs {
-    /// What every node takes.
-    #[command(flatten)]
-    pub node: NodeArgs,
-}
-
-/// Command-line arguments of the agent node ([`super::agent::run`]).
-#[derive(Args, Debug, Clone)]
-pub struct AgentArgs {
-    /// What every node takes.
-    #[command(flatten)]
-    pub node: NodeArgs,
-    /// Answer every estimate with a zero action, without learning (for loop benchmarks).
-    #[arg(long)]
-    pub trivial: bool,
-    /// Write a checkpoint of the learned state at the end of every learning trial into
-    /// this directory (`trial-NNNNNN.ckpt`, atomically).
-    #[arg(long, value_name = "DIR")]
-    pub checkpoints: Option<PathBuf>,
-    /// With `--checkpoints`: keep only the N newest checkpoints (0: keep all; `rig run`
-    /// passes 0 and removes those a resume can no longer need itself).
-    #[arg(long, value_name = "N", default_value_t = 2)]
-    pub keep_checkpoints: usize,
-    /// Start from this checkpoint's learned state (the run's trials continue after the
-    /// checkpoint's trial; the plant is started with `--after-trial`).
-    #[arg(long, value_name = "FILE")]
-    pub resume: Option<PathBuf>,
 }

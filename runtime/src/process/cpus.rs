@@ -15,7 +15,10 @@ use anyhow::{Result, bail};
 use wire::{FOREVER, Waiting};
 
 /// Where the processes of a run are placed (`--cpus`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
 pub enum Layout {
     /// Wherever the operating system puts them.
     Shared,

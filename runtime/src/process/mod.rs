@@ -22,6 +22,7 @@
 pub mod agent;
 mod args;
 pub mod cpus;
+pub mod node;
 pub mod observer;
 pub mod plant;
 pub mod wakeup;
@@ -33,9 +34,8 @@ use anyhow::Result;
 pub use cpus::{CpuSet, Layout, Part};
 pub use wakeup::{Wakeup, WakeupLimit};
 
-pub use args::{
-    AgentArgs, NodeArgs, ObserverArgs, PlantArgs, SPIN_US, Scheduling, Spin, Wait, WaitKind,
-};
+pub use args::{SPIN_US, Scheduling, Spin, Wait, WaitKind};
+pub use node::{AgentConfig, NodeConfig, ObserverConfig, PlantConfig, Settings};
 
 /// How long a process waits for a message before deciding a peer has died.
 pub const SILENCE: Duration = Duration::from_secs(10);
@@ -70,14 +70,6 @@ pub fn set_rt_priority(priority: Option<u8>) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// A positive, finite number of seconds as a duration, or an error naming `flag`.
-pub fn seconds(flag: &str, s: f64) -> Result<Duration> {
-    if !(s.is_finite() && s > 0.0 && s <= 1e6) {
-        anyhow::bail!("`{flag}` {s} is out of range: must be a number of seconds in (0, 1e6]");
-    }
-    Ok(Duration::from_secs_f64(s))
 }
 
 /// Copies `v` into a fixed-size wire array (the rest zero).
@@ -119,7 +111,7 @@ pub fn batch_thread() {
 /// to have read everything ([`Linger`]).
 const LINGER: Duration = Duration::from_secs(10);
 
-/// A process's last duty in a recorded run (`--receivers 2`): after its last message it
+/// A process's last duty in a recorded run (`receivers = 2`): after its last message it
 /// waits until the recorder announces that it has read everything ([`wire::Recorded`]),
 /// since what the process sent may be gone from the recorder's queue once the process
 /// is.

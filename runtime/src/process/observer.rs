@@ -10,7 +10,7 @@ use ::observer::timing::{Call, Sample};
 use anyhow::Result;
 use wire::{Estimate, Measurement, flags, now_ns, topic};
 
-use super::{ObserverArgs, SILENCE, STARTUP, pack};
+use super::{ObserverConfig, SILENCE, STARTUP, pack};
 
 /// The [`flags`] an estimate carries for agent call `call`: the measurement's, plus
 /// [`flags::LAST`] / [`flags::HOLD`] where predictive timing makes the agent's trial end
@@ -41,11 +41,11 @@ pub fn call_of(f: u64) -> Call {
 }
 
 /// Runs the observer side of a run until the plant announces its end.
-pub fn run(args: &ObserverArgs) -> Result<()> {
-    let args = &args.node;
+pub fn run(settings: &ObserverConfig) -> Result<()> {
+    let args = &settings.node;
     super::set_rt_priority(args.scheduling.rt_priority)?;
     args.scheduling.place(super::Part::Node)?;
-    let cfg = args.config()?;
+    let cfg = args.experiment()?;
     let task = Arc::new(cfg.task());
     let mut front = crate::experiment::front(&task, &cfg);
     let bus = args.join("observer")?;

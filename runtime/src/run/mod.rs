@@ -2,7 +2,7 @@
 //! launched, supervised and recorded by this process.
 //!
 //! * The supervisor joins the run and subscribes to every topic *before* starting the
-//!   processes, which wait for it (`--receivers 2`), so it sees every message.
+//!   processes, which wait for it (`receivers = 2`), so it sees every message.
 //! * It records every message to `run.mcap` ([`crate::record`]), streams `returns.csv`
 //!   (the format of `rig learn`'s `runs.csv`, one run), shows progress, and checks that no
 //!   message was lost (sequence numbers).
@@ -12,7 +12,7 @@
 //!   `DIR/<process>.log`.
 //! * With an external driver (`--plant external`, `docs/driver.md`), the supervisor
 //!   first waits for the driver's info and checks it against the task, then starts the
-//!   plant process as the episode master for that driver (`rig plant --driver ID`), and
+//!   plant process as the episode master for that driver (its clock `Clock::External`), and
 //!   records the driver's samples and commands too (`/driver/...`).
 //! * With a sensor that does not measure the full state (`[observer] sensor = "angle"`)
 //!   it also subscribes to the plant's ground truth ([`wire::Truth`], `rig/<id>/truth`,
@@ -28,6 +28,7 @@ use anyhow::{Context, Result, anyhow};
 use driver::contract::{DriverInfo, DriverWatch};
 use wire::{Bus, Waiting};
 
+use crate::clock::{Clock, ExternalDriver};
 use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
 use crate::learn::{progress_bar, write_atomic};
@@ -57,15 +58,12 @@ pub struct RunOptions {
     pub run_id: Option<String>,
     /// Show a progress bar.
     pub progress: bool,
-    /// `None`: lockstep; `Some(speed)`: realtime at `speed` × real time (simulated
-    /// plant only).
-    pub realtime: Option<f64>,
-    /// An external driver in place of the simulated plant.
-    pub driver: Option<ExternalDriver>,
+    /// What moves the run from one sample to the next.
+    pub clock: Clock,
     /// Continue the run in `out` from its last complete trial ([`crate::resume`]).
     pub resume: bool,
     /// Realtime, simulated plant: the plant writes every sample's timing to this file
-    /// (`rig plant --cycles-out`, for `rig latency`).
+    /// (the plant node's `cycles_out`, for `rig latency`).
     pub cycles_out: Option<PathBuf>,
     /// How the three processes are scheduled; the layout (`--cpus`) places this
     /// process, the recorder, too.
@@ -77,17 +75,6 @@ pub struct RunOptions {
     /// Realtime and external driver: learn across gaps in the loop's timing instead of
     /// cutting the attempt short and running the trial again (`--gaps learn`).
     pub learn_across_gaps: bool,
-}
-
-/// An external driver in place of the simulated plant (`rig run --plant external`).
-#[derive(Clone, Debug)]
-pub struct ExternalDriver {
-    /// The driver's id (services `rig/driver/<id>/...`).
-    pub id: String,
-    /// How long to wait for the driver to appear.
-    pub timeout: Duration,
-    /// How long one reset may take.
-    pub reset_timeout: Duration,
 }
 
 /// What a run produced.
@@ -111,30 +98,9 @@ pub struct RunSummary {
     pub resumed_after: Option<u32>,
 }
 
-/// Refuses waiting that would leave a process unwoken: polling without end
-/// ([`Waiting::needs_wake_up`]) outside lockstep, where the plant sleeps until its next
-/// sample and must be woken.
-pub fn check_waiting(lockstep: bool, waiting: Waiting) -> Result<(), UnwokenWaiting> {
-    if lockstep || waiting.needs_wake_up() {
-        Ok(())
-    } else {
-        Err(UnwokenWaiting)
-    }
-}
-
-/// Polling without end outside lockstep ([`check_waiting`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
-#[error(
-    "`--wait spin|yield` without `--wait-us` applies in lockstep only: in real time and with an external driver the plant sleeps until its next sample and must be woken"
-)]
-pub struct UnwokenWaiting;
-
 /// Runs experiment `cfg` (one run) as three processes and writes the outputs.
 pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
-    check_waiting(
-        opts.realtime.is_none() && opts.driver.is_none(),
-        opts.waiting,
-    )?;
+    opts.clock.check(cfg, opts.waiting)?;
     let mut cfg = cfg.clone();
     cfg.run.runs = 1;
     let run_id = free_run_id(opts)?;
@@ -153,7 +119,11 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     }
     // Where a resumed run continues; checked before anything is written.
     let point = match opts.resume {
-        true => Some(resume::prepare(&opts.out, &cfg, opts.driver.is_some())?),
+        true => Some(resume::prepare(
+            &opts.out,
+            &cfg,
+            opts.clock.driver().is_some(),
+        )?),
         false => None,
     };
     for note in point.iter().flat_map(|p| &p.notes) {
@@ -161,7 +131,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     }
     let bus = Bus::join(&run_id, "rig")?;
     let task = Arc::new(cfg.task());
-    let (watch, driver_info) = match &opts.driver {
+    let (watch, driver_info) = match opts.clock.driver() {
         Some(d) => match wait_for_driver(&bus, d, &task, opts.progress) {
             Ok((watch, info)) => (Some(watch), Some(info)),
             Err(e) => {
@@ -184,9 +154,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         cfg: &cfg,
         task: &task,
         run_id: &run_id,
-        timing: timing(opts, driver_info.as_ref()),
-        realtime: opts.realtime.is_some() || opts.driver.is_some(),
-        driver: opts.driver.is_some(),
+        timing: opts.clock.describe(task.ts, driver_info.as_ref()),
+        realtime: !opts.clock.is_lockstep(),
+        driver: opts.clock.driver().is_some(),
         point: point.as_ref(),
     };
     let recording = Recording::open(&opts.out, &about)?;
@@ -196,10 +166,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         task.clone(),
         point.as_ref(),
     )?;
-    let grace = match (&driver_info, opts.realtime) {
+    let grace = match (&driver_info, opts.clock.period()) {
         (Some(i), _) => Some(Duration::from_nanos(i.period_ns.saturating_mul(4))),
-        (None, Some(speed)) => Some(Duration::from_secs_f64(4.0 * task.ts / speed)),
-        (None, None) => None,
+        (None, period) => period.map(|p| 4 * p),
     };
     let gaps = gaps::Gaps::create(&opts.out.join("gaps.csv"), point.as_ref())?;
     let first_seq = point.as_ref().map_or(0, |p| p.first_seq);
@@ -212,15 +181,15 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         watch,
         grace,
     )?;
-    if let Some(d) = &opts.driver {
+    if let Some(d) = opts.clock.driver() {
         sup.resume_flags = format!(" --plant external --driver {}", d.id);
     }
 
-    let args = spawn::role_args(opts, point.as_ref(), &checkpoints);
-    (sup.children, sup.logs) = spawn::processes(&run_id, &config_path, &opts.out, &args)?;
+    let nodes = spawn::Nodes::new((&run_id, &config_path), opts, point.as_ref(), &checkpoints);
+    (sup.children, sup.logs) = spawn::processes(&opts.out, &nodes)?;
     // Placed after the processes started: they place themselves, from anywhere.
     opts.scheduling.place(crate::process::Part::Recorder)?;
-    if opts.realtime.is_none() && opts.driver.is_none() {
+    if opts.clock.is_lockstep() {
         crate::process::batch_thread();
     }
 
@@ -269,18 +238,6 @@ fn free_run_id(opts: &RunOptions) -> Result<String> {
         ));
     }
     Ok(run_id)
-}
-
-/// The run's timing in words, for the recording's metadata.
-fn timing(opts: &RunOptions, driver: Option<&DriverInfo>) -> String {
-    match (&opts.driver, driver, opts.realtime) {
-        (Some(d), Some(i), _) => format!(
-            "external driver {:?}: period {} ns, time scale {}",
-            d.id, i.period_ns, i.time_scale
-        ),
-        (_, _, None) => "lockstep".to_string(),
-        (_, _, Some(speed)) => format!("realtime, speed {speed}"),
-    }
 }
 
 /// Waits for driver `d`'s info (saying so after a second of silence when `verbose`)

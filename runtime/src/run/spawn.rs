@@ -1,13 +1,14 @@
-//! Starting the three processes: each one's command line (`rig plant|observer|agent`),
+//! Starting the three processes: each one's settings (`DIR/nodes/<role>.toml`,
+//! [`crate::process::node`]), its command line (`rig plant|observer|agent --node FILE`),
 //! its output to `DIR/<process>.log`.
 
-use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
 use anyhow::{Context, Result};
 
-use crate::process::Wait;
+use crate::process::node::Continuation;
+use crate::process::{AgentConfig, NodeConfig, ObserverConfig, PlantConfig, Settings};
 use crate::resume::ResumePoint;
 
 use super::RunOptions;
@@ -17,88 +18,82 @@ use super::supervisor::Children;
 /// The processes in the order they start: the plant last, once its receivers are up.
 const ROLES: [&str; 3] = ["agent", "observer", "plant"];
 
-/// What each process adds to the flags every node takes.
-pub(super) fn role_args(
-    opts: &RunOptions,
-    point: Option<&ResumePoint>,
-    checkpoints: &Path,
-) -> BTreeMap<&'static str, Vec<String>> {
-    let mut plant: Vec<String> = match (&opts.driver, opts.realtime) {
-        (Some(d), _) => vec![
-            "--driver".into(),
-            d.id.clone(),
-            "--driver-timeout".into(),
-            d.timeout.as_secs_f64().to_string(),
-            "--reset-timeout".into(),
-            d.reset_timeout.as_secs_f64().to_string(),
-        ],
-        (None, None) => Vec::new(),
-        (None, Some(speed)) => vec![
-            "--timing".into(),
-            "realtime".into(),
-            "--speed".into(),
-            speed.to_string(),
-            "--spin-us".into(),
-            opts.spin.spin_us.to_string(),
-        ],
-    };
-    if opts.learn_across_gaps {
-        plant.extend(["--gaps".to_string(), "learn".to_string()]);
-    }
-    if let (Some(path), Some(_), None) = (&opts.cycles_out, opts.realtime, &opts.driver) {
-        plant.extend(["--cycles-out".to_string(), path.display().to_string()]);
-    }
-    // All kept: the supervisor removes those a resume can no longer need.
-    let mut agent = vec![
-        "--checkpoints".to_string(),
-        checkpoints.display().to_string(),
-        "--keep-checkpoints".to_string(),
-        "0".to_string(),
-    ];
-    if let Some(p) = point {
-        if let Some(c) = &p.checkpoint {
-            agent.extend(["--resume".to_string(), c.display().to_string()]);
-        }
-        plant.extend([
-            "--after-trial".to_string(),
-            p.trial.to_string(),
-            "--sim-time".to_string(),
-            p.sim_time_s.to_string(),
-            "--first-seq".to_string(),
-            p.first_seq.to_string(),
-        ]);
-    }
-    let mut args = BTreeMap::from([("plant", plant), ("agent", agent), ("observer", Vec::new())]);
-    for role in ROLES {
-        let a = args.entry(role).or_default();
-        a.extend(opts.scheduling.process_args());
-        a.extend(Wait::process_args(opts.waiting));
-    }
-    args
+/// The three processes' settings, of run `run_id` on configuration `config`; each waits
+/// for two receivers (the next process and the recorder).
+pub(super) struct Nodes {
+    plant: PlantConfig,
+    observer: ObserverConfig,
+    agent: AgentConfig,
 }
 
-/// Starts the three processes of run `run_id` with configuration `config`, each with
-/// its `args`, their output to `out/<process>.log` ([`Logs`]); they wait for two
-/// receivers each (the next process and the recorder).
-pub(super) fn processes(
-    run_id: &str,
-    config: &Path,
-    out: &Path,
-    args: &BTreeMap<&'static str, Vec<String>>,
-) -> Result<(Children, Logs)> {
+impl Nodes {
+    /// The settings `opts` and, resuming, `point` give the processes; the agent's
+    /// checkpoints go to `checkpoints`.
+    pub(super) fn new(
+        (run_id, config): (&str, &Path),
+        opts: &RunOptions,
+        point: Option<&ResumePoint>,
+        checkpoints: &Path,
+    ) -> Self {
+        let node = NodeConfig {
+            receivers: 2,
+            ..NodeConfig::new(run_id, config, opts.scheduling, opts.waiting)
+        };
+        let plant = PlantConfig {
+            clock: opts.clock.clone(),
+            spin: opts.spin,
+            learn_across_gaps: opts.learn_across_gaps,
+            cycles_out: opts.clock.period().and(opts.cycles_out.clone()),
+            resume: point.map(|p| Continuation {
+                after_trial: p.trial,
+                sim_time: p.sim_time_s,
+                first_seq: p.first_seq,
+            }),
+            ..PlantConfig::new(node.clone())
+        };
+        // All kept: the supervisor removes those a resume can no longer need.
+        let agent = AgentConfig {
+            checkpoints: Some(checkpoints.to_owned()),
+            keep_checkpoints: 0,
+            resume: point.and_then(|p| p.checkpoint.clone()),
+            ..AgentConfig::new(node.clone())
+        };
+        let observer = ObserverConfig { node };
+        Self {
+            plant,
+            observer,
+            agent,
+        }
+    }
+
+    /// Writes each process's settings into `out/nodes/`; returns the files by role.
+    fn write(&self, out: &Path) -> Result<[(&'static str, PathBuf); 3]> {
+        let dir = out.join("nodes");
+        std::fs::create_dir_all(&dir)
+            .with_context(|| format!("cannot create {}", dir.display()))?;
+        let file = |role: &str| dir.join(format!("{role}.toml"));
+        self.agent.write(&file("agent"))?;
+        self.observer.write(&file("observer"))?;
+        self.plant.write(&file("plant"))?;
+        Ok(ROLES.map(|role| (role, file(role))))
+    }
+}
+
+/// Starts the three processes with settings `nodes` (written to `out/nodes/`), their
+/// output to `out/<process>.log` ([`Logs`]).
+pub(super) fn processes(out: &Path, nodes: &Nodes) -> Result<(Children, Logs)> {
     let exe = std::env::current_exe().context("cannot find the rig executable")?;
     let mut children = Children(Vec::new());
     let mut logs = Logs::default();
-    for role in ROLES {
+    for (role, settings) in nodes.write(out)? {
         let (log, pipe) = Log::open(&out.join(format!("{role}.log")))?;
         logs.0.push((role, log));
         let mut command = Command::new(&exe);
         in_own_group(&mut command);
         let child = command
             .arg(role)
-            .args(["--run-id", run_id, "--receivers", "2", "--config"])
-            .arg(config)
-            .args(args.get(role).map_or(&[][..], |a| &a[..]))
+            .arg("--node")
+            .arg(&settings)
             .stdin(Stdio::null())
             .stdout(pipe.try_clone()?)
             .stderr(pipe)

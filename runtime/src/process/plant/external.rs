@@ -1,5 +1,5 @@
-//! The plant process with an external driver (`rig plant --driver ID`, started by
-//! `rig run --plant external`; the contract is `docs/driver.md`).
+//! The plant process with an external driver (`[clock.external]` in its settings,
+//! written by `rig run --plant external`; the contract is `docs/driver.md`).
 //!
 //! The driver samples, applies actions and resets; it knows nothing of trials. This
 //! process is the episode master between it and the observer and agent: before each
@@ -29,9 +29,10 @@ use anyhow::{Result, anyhow, bail};
 use driver::contract::{DriverInfo, DriverLink, DriverSample, status};
 use wire::{flags, now_ns};
 
-use super::super::{PlantArgs, SILENCE, STARTUP, seconds};
+use super::super::{PlantConfig, SILENCE, STARTUP};
 use super::link::{Link, TrialHeader, end_flags};
 use super::{Ended, Gap, Trials};
+use crate::clock::ExternalDriver;
 
 /// The episode master for an external driver.
 pub struct Bridge {
@@ -50,16 +51,17 @@ pub struct Bridge {
     positions_only: Option<bool>,
     /// The samples of the trial.
     limit: TimeLimit,
-    /// Whether a gap cuts the attempt short (`--gaps`).
+    /// Whether a gap cuts the attempt short (`learn_across_gaps` not set).
     cut_gaps: bool,
 }
 
 impl Bridge {
-    /// Connects to driver `driver_id`: waits for its info (`--driver-timeout`), checks it
-    /// against the task, then waits for the observer (and recorder) to listen.
-    pub(super) fn connect(link: Link, driver_id: &str, args: &PlantArgs) -> Result<Self> {
+    /// Connects to driver `d`: waits for its info (its `timeout`), checks it against the
+    /// task, then waits for the observer (and recorder) to listen.
+    pub(super) fn connect(link: Link, d: &ExternalDriver, args: &PlantConfig) -> Result<Self> {
+        let driver_id = d.id.as_str();
         let driver = DriverLink::connect(&link.bus, driver_id)?;
-        let timeout = seconds("--driver-timeout", args.driver_timeout)?;
+        let timeout = d.timeout;
         let serve = driver::contract::how_to_serve(&link.task, driver_id, None);
         let info = driver.wait_info(&link.bus, timeout, false, &serve)?;
         driver::check_info(driver_id, &info, &link.task)?;
@@ -68,14 +70,20 @@ impl Bridge {
         Ok(Self {
             safety: Supervisor::new(&link.task),
             limit: TimeLimit::new(link.task.steps_per_trial()),
-            silence: info.silence_limit(timeout),
-            reset_timeout: seconds("--reset-timeout", args.reset_timeout)?,
+            silence: info.silence_limit(d.timeout),
+            reset_timeout: d.reset_timeout,
             link,
             driver,
             info,
             positions_only: None,
-            cut_gaps: args.gaps == "cut",
+            cut_gaps: true,
         })
+    }
+
+    /// Whether a gap cuts the attempt short (the default) or the trial learns across it.
+    pub(super) fn cutting_gaps(mut self, cut: bool) -> Self {
+        self.cut_gaps = cut;
+        self
     }
 
     /// Whether sample `s` has the positions only. The first sample of the run decides

@@ -3,11 +3,11 @@
 //! It runs the trials of the run's schedule ([`::plant::schedule`]) and announces the end
 //! of the run; what runs a trial depends on the timing:
 //!
-//! * `lockstep` — the simulated system ([`::plant::episode::Episode`]); simulated time
-//!   advances when the action has arrived (`--timing lockstep`, the default);
-//! * `realtime` — the simulated system sampled at absolute deadlines
-//!   (`--timing realtime`);
-//! * [`external`] — an external driver's system, which is the clock (`--driver ID`).
+//! * [`Clock::Lockstep`] — the simulated system ([`::plant::episode::Episode`]);
+//!   simulated time advances when the action has arrived (the default);
+//! * [`Clock::Realtime`] — the simulated system sampled at absolute deadlines;
+//! * [`Clock::External`] — an external driver's system, which is the clock
+//!   ([`external`]).
 //!
 //! All three publish on the same `link`: measurements (and ground truth) out, actions
 //! in.
@@ -21,18 +21,19 @@ mod realtime;
 use std::path::Path;
 use std::sync::Arc;
 
-use ::observer::config::ObserverMode;
 use ::plant::Plant;
 use ::plant::episode::Episode;
 use ::plant::safety::SafetyCounts;
 use ::plant::schedule::{Schedule, Trial};
 use anyhow::{Result, bail};
 
-use super::{PlantArgs, STARTUP, Scheduling};
+use super::node::Continuation;
+use super::{PlantConfig, STARTUP, Scheduling};
+use crate::clock::Clock;
 use crate::config::ExperimentConfig;
 use link::Link;
 
-/// Columns of the plant's per-sample timing file (`--cycles-out`, realtime): the sample's
+/// Columns of the plant's per-sample timing file (`cycles_out`, realtime): the sample's
 /// sequence number, its nominal sampling instant, when the plant actually woke for it,
 /// and when the plant found the action answering it (0: not within the period — a
 /// deadline miss). Monotonic ns.
@@ -40,8 +41,9 @@ pub const CYCLES_HEADER: &str = "seq,t_sample_ns,t_woke_ns,t_action_ns";
 
 /// Runs the plant side of a run: every trial of the configuration, greedy evaluation
 /// trials where due (one from each of the task's start states), then announces the end
-/// of the run. The system is simulated here, or, with `--driver ID`, is an external
-/// driver's ([`external`]). A trial that leaves the task's operating range ends early
+/// of the run. The system is simulated here, or, with [`Clock::External`], is an
+/// external driver's ([`external`]). The clock's rules are checked first
+/// ([`Clock::check`]). A trial that leaves the task's operating range ends early
 /// with [`wire::flags::END`] | [`wire::flags::TERMINAL`]; the simulated time counts only
 /// samples run.
 ///
@@ -49,30 +51,32 @@ pub const CYCLES_HEADER: &str = "seq,t_sample_ns,t_woke_ns,t_action_ns";
 /// [`crate::experiment::sensor`], its noise from the run seed exactly as in process); the
 /// true state stays here and, when the sensor does not measure all of it, goes out on
 /// the evaluation topic [`wire::topic::TRUTH`], for the supervisor alone.
-pub fn run(args: &PlantArgs) -> Result<()> {
+pub fn run(args: &PlantConfig) -> Result<()> {
     schedule_clock(&args.node.scheduling)?;
-    let cfg = args.node.config()?;
-    if args.driver.is_none() {
-        cfg.check_simulated()?;
-    }
+    let cfg = args.node.experiment()?;
+    args.clock
+        .check(&cfg, args.node.waiting())
+        .map_err(|e| anyhow::anyhow!(e))?;
     let task = Arc::new(cfg.task());
     let run_seed = ::agent::seed::run_seed(cfg.run.seed, args.node.run_index);
     let sensor = crate::experiment::sensor(&task, &cfg.observer, run_seed);
+    let resume = args.resume.unwrap_or(Continuation {
+        after_trial: 0,
+        sim_time: 0.0,
+        first_seq: 0,
+    });
     let link = Link::join(
         args.node.join("plant")?,
         task.clone(),
         sensor,
-        args.first_seq,
+        resume.first_seq,
     )?;
     let linger = super::Linger::open(&link.bus, args.node.receivers)?;
     let mut runner = runner(link, args, &cfg, run_seed)?;
-    // A resumed run continues after trial `--after-trial`, whose simulated time tells how
-    // many samples the trials before it skipped.
-    if !(args.sim_time.is_finite() && args.sim_time >= 0.0) {
-        bail!("`--sim-time` {} is not a time", args.sim_time);
-    }
     let mut schedule = Schedule::new(task.clone(), cfg.run.trials, cfg.run.eval_every, run_seed);
-    schedule.resume(args.after_trial, args.sim_time);
+    // A resumed run continues after trial `after_trial`, whose simulated time tells how
+    // many samples the trials before it skipped.
+    schedule.resume(resume.after_trial, resume.sim_time);
     while let Some(trial) = schedule.next_trial() {
         let skipped = whole(runner.as_mut(), &trial)?;
         for greedy in schedule.end_trial(skipped).into_iter().flatten() {
@@ -88,8 +92,8 @@ pub fn run(args: &PlantArgs) -> Result<()> {
 }
 
 /// Puts the plant, the clock, one level above the observer and the agent
-/// (`--rt-priority`), so that its sampling instant is not held up by their compute on
-/// the same core, and where the layout puts it (`--cpus`, `--pin-cpus`).
+/// (`rt_priority`), so that its sampling instant is not held up by their compute on
+/// the same core, and where the layout puts it (`cpus`).
 fn schedule_clock(s: &Scheduling) -> Result<()> {
     super::set_rt_priority(s.rt_priority.map(|p| p.saturating_add(1).min(99)))?;
     s.place(super::Part::Plant)
@@ -180,60 +184,41 @@ trait Trials {
 /// What runs the trials that `args` and `cfg` ask for, once the peers listen on `link`.
 fn runner(
     link: Link,
-    args: &PlantArgs,
+    args: &PlantConfig,
     cfg: &ExperimentConfig,
     run_seed: u64,
 ) -> Result<Box<dyn Trials>> {
-    if let Some(id) = &args.driver {
-        if cfg.observer.mode == ObserverMode::Predictive {
-            bail!(
-                "predictive timing (`observer.mode = \"predictive\"`) needs the simulated plant: an external driver applies each action as it arrives (use `--observer-mode direct`)"
-            );
+    let period = match &args.clock {
+        Clock::External(d) => {
+            let bridge = external::Bridge::connect(link, d, args)?;
+            return Ok(Box::new(bridge.cutting_gaps(!args.learn_across_gaps)));
         }
-        return Ok(Box::new(external::Bridge::connect(link, id, args)?));
-    }
+        Clock::Lockstep => None,
+        Clock::Realtime { period } => Some(*period),
+    };
     link.out
         .wait_for_receivers(args.node.receivers, STARTUP, &link.bus)?;
-    let realtime = args.timing == "realtime";
-    if realtime
-        && !args
-            .node
-            .wait
-            .waiting(super::WaitKind::Block)
-            .needs_wake_up()
-    {
-        bail!(
-            "`--wait` without `--wait-us` applies in lockstep only: in real time the plant sleeps until its next sampling instant and must be woken by the action"
-        );
-    }
-    if realtime && (cfg.run.delay_ms != 0.0 || !cfg.run.delay_from.is_empty()) {
-        bail!(
-            "`run.delay_ms`/`run.delay_from` apply in lockstep only: in real time the delays are real"
-        );
-    }
     let task = link.task.clone();
     let actuator = crate::experiment::actuator(&task, cfg, run_seed);
     let episode = Episode::new(Plant::new(task.clone()), actuator);
-    Ok(if realtime {
-        Box::new(
+    Ok(match period {
+        Some(period) => Box::new(
             realtime::Realtime::new(
                 link,
                 episode,
-                &task,
-                args.speed,
+                (task.ts, period),
                 args.spin.spin_us,
                 args.cycles_out.is_some(),
             )
-            .cutting_gaps(args.gaps == "cut"),
-        )
-    } else {
-        Box::new(lockstep::Lockstep::new(link, episode))
+            .cutting_gaps(!args.learn_across_gaps),
+        ),
+        None => Box::new(lockstep::Lockstep::new(link, episode)),
     })
 }
 
 /// Writes the run's timing files: every sample's publish-to-action time
-/// (`--latency-out`) and, in real time, every sample's timing (`--cycles-out`).
-fn write_timing(link: &Link, args: &PlantArgs) -> Result<()> {
+/// (`latency_out`) and, in real time, every sample's timing (`cycles_out`).
+fn write_timing(link: &Link, args: &PlantConfig) -> Result<()> {
     if let Some(path) = &args.latency_out {
         let text: String = link.latencies.iter().map(|ns| format!("{ns}\n")).collect();
         write(path, &text)?;

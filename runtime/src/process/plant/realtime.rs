@@ -17,10 +17,12 @@
 //! what a driver's watchdog allows), is a gap ([`flags::GAP`]): the attempt ends there,
 //! cut short, and the trial is run again, from a fresh instant.
 
+use std::time::Duration;
+
+use ::plant::Plant;
 use ::plant::episode::{Episode, Step};
 use ::plant::safety::SafetyCounts;
 use ::plant::schedule::Trial;
-use ::plant::{Plant, Task};
 use anyhow::Result;
 use wire::{Header, MAX_U, flags, now_ns};
 
@@ -124,21 +126,21 @@ pub(super) struct Realtime {
 }
 
 impl Realtime {
-    /// Trials of `episode` in real time, `speed` times faster than `task`'s sample time,
-    /// published on `link`; the clock starts a period from now.
+    /// Trials of `episode` in real time, a sample every `period` of the monotonic clock
+    /// for a task of sampling time `ts` \[s\], published on `link`; the clock starts a
+    /// period from now.
     pub(super) fn new(
         link: Link,
         episode: Episode,
-        task: &Task,
-        speed: f64,
+        (ts, period): (f64, Duration),
         spin_us: u64,
         record_cycles: bool,
     ) -> Self {
-        let period_ns = (task.ts * 1e9 / speed).round() as u64;
+        let period_ns = period.as_nanos() as u64;
         let clock = Clock {
             period_ns,
             next_ns: now_ns() + period_ns,
-            speed,
+            speed: crate::clock::Clock::speed(ts, period),
             spin_ns: spin_us * 1000,
         };
         Self {
