@@ -147,9 +147,10 @@ fn a_run_into_a_full_disk_stops_with_the_cause_and_resumes_once_there_is_space()
     resumed_to(&dir, &expected);
 }
 
-/// The disk full but for 20 kB when the run starts: the run's small files take most of
-/// that, and the agent's checkpoint folder (its lock, its first checkpoint of 11 kB) does
-/// not fit, nor does the agent's log. The agent stops with one line naming the file, and
+/// The disk full but for 36 kB when the run starts: the run's small files (its
+/// configuration, the nodes' settings, logs, the recording's start) take most of that,
+/// and the agent's checkpoint folder (its lock, its first checkpoint of 11 kB) does not
+/// fit, nor does the agent's log. The agent stops with one line naming the file, and
 /// the rig says so — in the agent's own words, which reach it without the disk.
 #[test]
 fn an_agent_whose_checkpoint_does_not_fit_says_so_through_the_rig() {
@@ -158,7 +159,7 @@ fn an_agent_whose_checkpoint_does_not_fit_says_so_through_the_rig() {
         return;
     };
     let expected = whole("first-checkpoint", &args);
-    disk.fill_but(20 * 1024);
+    disk.fill_but(36 * 1024);
     let dir = disk.dir.join("run");
     let out = run(&args, &dir);
     stopped_by_the_full_disk(&out, &dir);
