@@ -17,7 +17,9 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow};
-use driver::contract::{DRIVER_QOS, DriverInfo, DriverSample, LinkSample, service, topic};
+use driver::contract::{
+    DRIVER_QOS, DriverInfo, DriverNotice, DriverSample, LinkSample, service, topic,
+};
 use wire::{Bus, Tx, now_ns};
 use zenoh::Wait;
 
@@ -172,6 +174,8 @@ struct Stand<'a> {
     /// The latest ping's round trip.
     last_ping: u64,
     link: Tx<LinkSample>,
+    /// What the driver's side says of this side's commands, for the rig.
+    notices: Tx<DriverNotice>,
     /// This side's Zenoh id (whether a refusal is about this side's session).
     zid: [u8; 16],
     /// When the driver's side last said that it refused this side's commands.
@@ -199,6 +203,9 @@ impl<'a> Stand<'a> {
         let link = bus
             .tx_on(&service(&opts.id, topic::LINK), DRIVER_QOS)
             .map_err(taken)?;
+        let notices = bus
+            .tx_on(&service(&opts.id, topic::NOTICE), DRIVER_QOS)
+            .map_err(taken)?;
         Ok(Self {
             opts,
             info,
@@ -225,6 +232,7 @@ impl<'a> Stand<'a> {
             acknowledged: 0,
             last_ping: 0,
             link,
+            notices,
             zid: session.zid().to_le_bytes(),
             refused_at: 0,
             refusals: None,
@@ -271,7 +279,7 @@ impl<'a> Stand<'a> {
                 self.last_ping = e.round_trip;
                 self.row("ping_round_trip", 0, e.round_trip)?;
             }
-            Topic::Refused => self.refused(&a),
+            Topic::Refused => self.refused(&a)?,
             _ if !self.timing.clock.ready() => {}
             Topic::Info => {
                 let mut i: DriverInfo = from_bytes(&a.payload)?;
@@ -300,26 +308,29 @@ impl<'a> Stand<'a> {
         Ok(())
     }
 
-    /// The driver's side refused a session's commands: said when it is this side's (at
-    /// most every 5 s: the driver's side repeats it every second).
-    fn refused(&mut self, a: &Arrival) {
+    /// The driver's side refused a session's commands: when it is this side's, passed on
+    /// to the rig ([`DriverNotice`], each time) and logged (at most every 5 s: the
+    /// driver's side repeats it every second).
+    fn refused(&mut self, a: &Arrival) -> Result<()> {
         let Some(claim) = a
             .attachment
             .as_ref()
             .and_then(|b| from_bytes::<Claim>(b).ok())
         else {
-            return;
+            return Ok(());
         };
-        if claim.peer != self.zid || a.at.saturating_sub(self.refused_at) < 5_000_000_000 {
-            return;
+        if claim.peer != self.zid {
+            return Ok(());
+        }
+        let said = String::from_utf8_lossy(&a.payload);
+        self.notices.send(DriverNotice::new(&said, a.at))?;
+        if a.at.saturating_sub(self.refused_at) < 5_000_000_000 {
+            return Ok(());
         }
         self.refused_at = a.at;
         self.counts.refused += 1;
-        eprintln!(
-            "bridge for driver {:?}: refused: {}",
-            self.opts.id,
-            String::from_utf8_lossy(&a.payload)
-        );
+        eprintln!("bridge for driver {:?}: refused: {said}", self.opts.id);
+        Ok(())
     }
 
     /// What the link did with sample `seq`, arrived at `at`: the one-way hops on one

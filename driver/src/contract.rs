@@ -56,6 +56,9 @@ pub mod topic {
     /// The rig's bridge → rig, across hosts only: what the network did with each sample
     /// ([`super::LinkSample`], docs/across-hosts.md).
     pub const LINK: &str = "link";
+    /// The rig's bridge → rig, across hosts only: what the driver's side said of this
+    /// rig's commands ([`super::DriverNotice`], docs/across-hosts.md).
+    pub const NOTICE: &str = "notice";
 }
 
 /// Bits of [`DriverSample::status`].
@@ -213,6 +216,48 @@ pub struct LinkSample {
     pub clock_offset_ns: i64,
     /// How far that offset may be off: half the round trip it was taken from.
     pub clock_uncertainty_ns: u64,
+}
+
+/// The most bytes of text a [`DriverNotice`] carries.
+pub const NOTICE_BYTES: usize = 240;
+
+/// The rig's bridge → rig, when the driver is on another host (docs/across-hosts.md):
+/// one line the driver's side said of this rig's commands — that another rig's session
+/// holds the driver, naming it — for the rig to name in its own error.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("rig.DriverNotice.v1")]
+pub struct DriverNotice {
+    /// When the rig's bridge received it (its monotonic clock).
+    pub t_received_ns: u64,
+    /// The used bytes of `text`.
+    pub len: u64,
+    /// The line, UTF-8, `len` bytes.
+    pub text: [u8; NOTICE_BYTES],
+}
+
+impl DriverNotice {
+    /// The notice `line` (cut at a character boundary to [`NOTICE_BYTES`]), received at
+    /// `t_received_ns`.
+    pub fn new(line: &str, t_received_ns: u64) -> Self {
+        let mut end = line.len().min(NOTICE_BYTES);
+        while !line.is_char_boundary(end) {
+            end -= 1;
+        }
+        let mut text = [0; NOTICE_BYTES];
+        text[..end].copy_from_slice(&line.as_bytes()[..end]);
+        Self {
+            t_received_ns,
+            len: end as u64,
+            text,
+        }
+    }
+
+    /// The line.
+    pub fn line(&self) -> String {
+        let n = (self.len as usize).min(NOTICE_BYTES);
+        String::from_utf8_lossy(&self.text[..n]).into_owned()
+    }
 }
 
 impl DriverInfo {
@@ -406,9 +451,22 @@ mod tests {
         assert_eq!(size_of::<DriverSample>(), 184);
         assert_eq!(size_of::<DriverCommand>(), 144);
         assert_eq!(size_of::<LinkSample>(), 64);
+        assert_eq!(size_of::<DriverNotice>(), 256);
         assert_eq!(align_of::<DriverInfo>(), 8);
         assert_eq!(align_of::<DriverSample>(), 8);
         assert_eq!(align_of::<DriverCommand>(), 8);
+    }
+
+    #[test]
+    fn a_notice_keeps_its_line_cut_at_a_character() {
+        let n = DriverNotice::new("held by user rig at tcp/10.0.0.2:4711", 7);
+        assert_eq!(n.line(), "held by user rig at tcp/10.0.0.2:4711");
+        // 239 ASCII bytes and a two-byte character: the character does not fit.
+        let long = format!("{}é", "a".repeat(NOTICE_BYTES - 1));
+        assert_eq!(
+            DriverNotice::new(&long, 0).line(),
+            "a".repeat(NOTICE_BYTES - 1)
+        );
     }
 
     #[test]

@@ -80,8 +80,9 @@ pub enum Error {
     },
     /// A reset not done in time; `last` is the last sample.
     #[error(
-        "driver {id:?} did not finish the reset within {:.0} s (last sample {}: status {:#x}, reset_id {}, x = {:?})",
-        .timeout.as_secs_f64(), .last.seq, .last.status, .last.reset_id, .last.state()
+        "driver {id:?} did not finish the reset within {:.0} s (last sample {}: status {:#x}, reset_id {}, x = {:?}){}",
+        .timeout.as_secs_f64(), .last.seq, .last.status, .last.reset_id, .last.state(),
+        .said.as_deref().map(|s| format!("; the driver's side says: {s}")).unwrap_or_default()
     )]
     ResetTimeout {
         /// The driver id.
@@ -90,6 +91,9 @@ pub enum Error {
         timeout: Duration,
         /// The last sample.
         last: Box<DriverSample>,
+        /// What the driver's side last said of this rig's commands (across hosts: who
+        /// holds the driver), if anything.
+        said: Option<String>,
     },
     /// A driver whose info breaks the contract or does not fit the rig's task.
     #[error("driver {id:?} does not fit the task: {error}")]

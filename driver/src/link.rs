@@ -9,8 +9,8 @@ use iceoryx2::prelude::*;
 use wire::{Bus, Rx, Tx, now_ns};
 
 use crate::contract::{
-    DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, LinkSample, check_id, kind, service,
-    status, topic,
+    DRIVER_QOS, DriverCommand, DriverInfo, DriverNotice, DriverSample, LinkSample, check_id, kind,
+    service, status, topic,
 };
 use crate::error::Error;
 
@@ -121,6 +121,7 @@ pub struct DriverLink {
     /// The driver's samples.
     pub samples: Rx<DriverSample>,
     commands: Tx<DriverCommand>,
+    notices: Rx<DriverNotice>,
     next_seq: Cell<u64>,
 }
 
@@ -149,6 +150,7 @@ impl DriverLink {
             info,
             samples,
             commands,
+            notices: bus.rx_on(&service(id, topic::NOTICE), DRIVER_QOS)?,
             next_seq: Cell::new(now_ns().max(1)),
         })
     }
@@ -225,6 +227,16 @@ impl DriverLink {
         }
     }
 
+    /// The newest line the driver's side said of this rig's commands (across hosts,
+    /// through the rig's bridge, [`DriverNotice`]), if one is waiting.
+    pub fn latest_notice(&self) -> Result<Option<String>, Error> {
+        let mut newest = None;
+        while let Some(n) = self.notices.try_recv()? {
+            newest = Some(n);
+        }
+        Ok(newest.map(|n| n.line()))
+    }
+
     /// Drops every sample waiting; returns the newest, if any.
     pub fn latest_sample(&self) -> Result<Option<DriverSample>, Error> {
         let mut newest = None;
@@ -259,6 +271,7 @@ impl DriverLink {
                     id: self.id.clone(),
                     timeout,
                     last: Box::new(s),
+                    said: self.latest_notice()?,
                 });
             }
         }

@@ -912,6 +912,46 @@ fn a_probe_during_a_run_is_refused_and_the_run_completes() {
     drop(x.driver);
 }
 
+#[test]
+fn a_second_rig_is_told_who_holds_the_driver() {
+    let Some(x) = Across::start(15, "second", &["--speed", "5"], &[]) else {
+        return;
+    };
+    // A second workstation behind B's address, with a rig's bridge of its own.
+    let c = x.hosts.beside_b();
+    let mut bridge = c.command(RIG);
+    bridge.args(&x.rig_args);
+    let c_bridge = Proc::spawn(bridge, x.dir.join("rig-bridge-second.log"));
+    std::thread::sleep(Duration::from_millis(500));
+    let run = x.dir.join("run");
+    let (first, second) = std::thread::scope(|s| {
+        let second = s.spawn(|| {
+            common::wait_for_lines(&run.join("returns.csv"), 2);
+            c.command(RIG)
+                .args(["run", "--plant", "external", "--driver", "pend"])
+                .args(["--trials", "3", "--reset-timeout", "3", "--quiet", "--out"])
+                .arg(x.dir.join("second"))
+                .output()
+                .unwrap()
+        });
+        let first = x.run(&run, &["--trials", "30", "--reset-timeout", "5"]);
+        (first, second.join().unwrap())
+    });
+    assert!(first.status.success(), "{}", text(&first));
+    // The second rig's run fails naming the session that holds the driver.
+    let said = text(&second);
+    let holder = format!("held by user rig at tcp/{}:", x.hosts.b.addr);
+    assert!(
+        !second.status.success()
+            && said.contains("did not finish the reset within 3 s")
+            && said.contains(&holder),
+        "{said}"
+    );
+    drop(c_bridge);
+    drop(x.rig_bridge);
+    drop(x.driver);
+}
+
 /// Whether this machine makes time namespaces (`unshare --time`); says why not.
 fn time_namespaces() -> bool {
     let ok = Command::new("unshare")

@@ -125,6 +125,28 @@ impl Hosts {
     }
 }
 
+impl Hosts {
+    /// A third host on B's network (its address, its link) with shared memory of its
+    /// own: a second rig workstation behind B's address.
+    pub fn beside_b(&self) -> Host {
+        let h = Host {
+            anchor: anchor(&self.b.netns),
+            netns: self.b.netns.clone(),
+            addr: self.b.addr.clone(),
+            dev: self.b.dev.clone(),
+        };
+        h.wait_until_anchored();
+        h
+    }
+}
+
+impl Drop for Host {
+    fn drop(&mut self) {
+        let _ = self.anchor.kill();
+        let _ = self.anchor.wait();
+    }
+}
+
 impl Drop for Hosts {
     fn drop(&mut self) {
         for h in [&mut self.a, &mut self.b] {
