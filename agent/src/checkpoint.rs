@@ -16,7 +16,6 @@
 //! A restored agent continues bit for bit as the agent that wrote the checkpoint would
 //! have (tests: `tests/tests/checkpoint.rs`).
 
-use std::fmt;
 use std::io::Write;
 use std::path::Path;
 
@@ -29,20 +28,119 @@ pub const VERSION: u32 = 1;
 
 const MAGIC: &[u8; 8] = b"RIGCKPT\0";
 
+/// What a differently configured agent's checkpoint says in each error about it.
+const OTHER_AGENT: &str = "it was written by a differently configured agent";
+
 /// Why a checkpoint cannot be read or does not fit.
-#[derive(Clone, Debug, PartialEq)]
-pub struct CheckpointError(pub String);
-
-impl fmt::Display for CheckpointError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for CheckpointError {}
-
-fn err<T>(msg: impl Into<String>) -> Result<T, CheckpointError> {
-    Err(CheckpointError(msg.into()))
+#[derive(Debug, thiserror::Error)]
+pub enum CheckpointError {
+    /// The file cannot be read.
+    #[error("{}: cannot read ({error})", path.display())]
+    Read {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why.
+        error: std::io::Error,
+    },
+    /// The file's contents are not a checkpoint that fits.
+    #[error("{}: {error}", path.display())]
+    File {
+        /// The file.
+        path: std::path::PathBuf,
+        /// What is wrong with its contents.
+        error: Box<CheckpointError>,
+    },
+    /// No `RIGCKPT` header.
+    #[error("not a rig checkpoint (no RIGCKPT header)")]
+    NoHeader,
+    /// Another format version.
+    #[error("checkpoint format version {0}; this rig reads version {VERSION}")]
+    Version(u32),
+    /// The checksum does not match.
+    #[error("the checkpoint is corrupt (checksum mismatch)")]
+    Checksum,
+    /// The payload does not decode.
+    #[error("the checkpoint is corrupt ({0})")]
+    Corrupt(postcard::Error),
+    /// The sections end where the agent expects section `0`.
+    #[error("the checkpoint ends where the agent expects `{0}`: {OTHER_AGENT}")]
+    Ends(String),
+    /// Another section where the agent expects one.
+    #[error("the checkpoint has `{found}` where the agent expects `{want}`: {OTHER_AGENT}")]
+    Misplaced {
+        /// The section there.
+        found: String,
+        /// The section expected.
+        want: String,
+    },
+    /// Integers where numbers are expected, or the other way round.
+    #[error("checkpoint section `{section}` holds {found}, not {want}")]
+    Kind {
+        /// The section.
+        section: String,
+        /// What it holds (`integers`, `numbers`).
+        found: &'static str,
+        /// What the agent expects.
+        want: &'static str,
+    },
+    /// A section of another length than the agent's.
+    #[error(
+        "checkpoint section `{section}` has {found} values where the configured agent has {want}: {OTHER_AGENT}"
+    )]
+    Length {
+        /// The section.
+        section: String,
+        /// Its length.
+        found: usize,
+        /// The agent's.
+        want: usize,
+    },
+    /// A section read as a random stream that is not one.
+    #[error("checkpoint section `{0}` is not a random stream")]
+    NotRng(String),
+    /// Sections beyond what the agent reads.
+    #[error("the checkpoint has `{0}` beyond what the agent expects: {OTHER_AGENT}")]
+    Beyond(String),
+    /// A component's section that does not fit the component, as it says.
+    #[error("checkpoint section `{section}` {why}")]
+    Unfit {
+        /// The section.
+        section: &'static str,
+        /// How it does not fit.
+        why: String,
+    },
+    /// A checkpoint of another system.
+    #[error("the checkpoint is from system {have}, but the run's configuration is for {want}")]
+    System {
+        /// The checkpoint's.
+        have: String,
+        /// The run's.
+        want: String,
+    },
+    /// A checkpoint of another learner.
+    #[error("the checkpoint is from learner {have}, but the run's configuration uses {want}")]
+    Learner {
+        /// The checkpoint's.
+        have: String,
+        /// The run's.
+        want: String,
+    },
+    /// A checkpoint of another seed or run.
+    #[error(
+        "the checkpoint is from seed {} run {}, but the run's configuration has seed {} run {}",
+        .have.0, .have.1, .want.0, .want.1
+    )]
+    Run {
+        /// The checkpoint's seed and run.
+        have: (u64, u32),
+        /// The run's.
+        want: (u64, u32),
+    },
+    /// A checkpoint written under other learning parameters.
+    #[error(
+        "the checkpoint was written under different learning parameters than the run's configuration"
+    )]
+    Parameters,
 }
 
 /// The values of one section.
@@ -152,15 +250,13 @@ impl<'a> Reader<'a> {
         }
         want.push_str(name);
         let Some(s) = self.sections.get(self.next) else {
-            return err(format!(
-                "the checkpoint ends where the agent expects `{want}`: it was written by a differently configured agent"
-            ));
+            return Err(CheckpointError::Ends(want));
         };
         if s.name != want {
-            return err(format!(
-                "the checkpoint has `{}` where the agent expects `{want}`: it was written by a differently configured agent",
-                s.name
-            ));
+            return Err(CheckpointError::Misplaced {
+                found: s.name.clone(),
+                want,
+            });
         }
         self.next += 1;
         Ok(&s.data)
@@ -182,9 +278,11 @@ impl<'a> Reader<'a> {
     pub fn f64s(&mut self, name: &str) -> Result<&'a [f64], CheckpointError> {
         match self.take(name)? {
             Data::F64(v) => Ok(v),
-            Data::U64(_) => err(format!(
-                "checkpoint section `{name}` holds integers, not numbers"
-            )),
+            Data::U64(_) => Err(CheckpointError::Kind {
+                section: name.to_string(),
+                found: "integers",
+                want: "numbers",
+            }),
         }
     }
 
@@ -192,9 +290,11 @@ impl<'a> Reader<'a> {
     pub fn u64s(&mut self, name: &str) -> Result<&'a [u64], CheckpointError> {
         match self.take(name)? {
             Data::U64(v) => Ok(v),
-            Data::F64(_) => err(format!(
-                "checkpoint section `{name}` holds numbers, not integers"
-            )),
+            Data::F64(_) => Err(CheckpointError::Kind {
+                section: name.to_string(),
+                found: "numbers",
+                want: "integers",
+            }),
         }
     }
 
@@ -202,11 +302,11 @@ impl<'a> Reader<'a> {
     pub fn f64s_into(&mut self, name: &str, out: &mut [f64]) -> Result<(), CheckpointError> {
         let v = self.f64s(name)?;
         if v.len() != out.len() {
-            return err(format!(
-                "checkpoint section `{name}` has {} values where the configured agent has {}: it was written by a differently configured agent",
-                v.len(),
-                out.len()
-            ));
+            return Err(CheckpointError::Length {
+                section: name.to_string(),
+                found: v.len(),
+                want: out.len(),
+            });
         }
         out.copy_from_slice(v);
         Ok(())
@@ -216,9 +316,7 @@ impl<'a> Reader<'a> {
     pub fn rng(&mut self, name: &str) -> Result<ChaCha8Rng, CheckpointError> {
         let v = self.u64s(name)?;
         if v.len() != 7 {
-            return err(format!(
-                "checkpoint section `{name}` is not a random stream"
-            ));
+            return Err(CheckpointError::NotRng(name.to_string()));
         }
         let mut seed = [0u8; 32];
         for (c, w) in seed.chunks_mut(8).zip(&v[..4]) {
@@ -234,10 +332,7 @@ impl<'a> Reader<'a> {
     pub fn finish(&self) -> Result<(), CheckpointError> {
         match self.sections.get(self.next) {
             None => Ok(()),
-            Some(s) => err(format!(
-                "the checkpoint has `{}` beyond what the agent expects: it was written by a differently configured agent",
-                s.name
-            )),
+            Some(s) => Err(CheckpointError::Beyond(s.name.clone())),
         }
     }
 }
@@ -304,21 +399,18 @@ impl Checkpoint {
     /// Decodes file contents written by [`Checkpoint::to_bytes`].
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, CheckpointError> {
         if bytes.len() < 16 || &bytes[..8] != MAGIC {
-            return err("not a rig checkpoint (no RIGCKPT header)");
+            return Err(CheckpointError::NoHeader);
         }
         let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
         if version != VERSION {
-            return err(format!(
-                "checkpoint format version {version}; this rig reads version {VERSION}"
-            ));
+            return Err(CheckpointError::Version(version));
         }
         let crc = u32::from_le_bytes(bytes[12..16].try_into().expect("4 bytes"));
         let payload = &bytes[16..];
         if crc32fast::hash(payload) != crc {
-            return err("the checkpoint is corrupt (checksum mismatch)");
+            return Err(CheckpointError::Checksum);
         }
-        postcard::from_bytes(payload)
-            .map_err(|e| CheckpointError(format!("the checkpoint is corrupt ({e})")))
+        postcard::from_bytes(payload).map_err(CheckpointError::Corrupt)
     }
 
     /// Writes the checkpoint to `path` atomically: a temporary file beside it, renamed
@@ -340,9 +432,14 @@ impl Checkpoint {
 
     /// Reads a checkpoint file; the error names the file.
     pub fn read(path: &Path) -> Result<Self, CheckpointError> {
-        let bytes = std::fs::read(path)
-            .map_err(|e| CheckpointError(format!("{}: cannot read ({e})", path.display())))?;
-        Self::from_bytes(&bytes).map_err(|e| CheckpointError(format!("{}: {e}", path.display())))
+        let bytes = std::fs::read(path).map_err(|error| CheckpointError::Read {
+            path: path.to_owned(),
+            error,
+        })?;
+        Self::from_bytes(&bytes).map_err(|e| CheckpointError::File {
+            path: path.to_owned(),
+            error: Box::new(e),
+        })
     }
 
     /// Restores `agent`, built for the run `want` describes, to the learned state of this
@@ -362,27 +459,25 @@ impl Checkpoint {
     pub fn check_origin(&self, want: &Origin) -> Result<(), CheckpointError> {
         let have = &self.origin;
         if have.system != want.system {
-            return err(format!(
-                "the checkpoint is from system {}, but the run's configuration is for {}",
-                have.system, want.system
-            ));
+            return Err(CheckpointError::System {
+                have: have.system.clone(),
+                want: want.system.clone(),
+            });
         }
         if have.learner != want.learner {
-            return err(format!(
-                "the checkpoint is from learner {}, but the run's configuration uses {}",
-                have.learner, want.learner
-            ));
+            return Err(CheckpointError::Learner {
+                have: have.learner.clone(),
+                want: want.learner.clone(),
+            });
         }
         if (have.seed, have.run) != (want.seed, want.run) {
-            return err(format!(
-                "the checkpoint is from seed {} run {}, but the run's configuration has seed {} run {}",
-                have.seed, have.run, want.seed, want.run
-            ));
+            return Err(CheckpointError::Run {
+                have: (have.seed, have.run),
+                want: (want.seed, want.run),
+            });
         }
         if have.fingerprint != want.fingerprint {
-            return err(
-                "the checkpoint was written under different learning parameters than the run's configuration",
-            );
+            return Err(CheckpointError::Parameters);
         }
         Ok(())
     }
@@ -449,17 +544,17 @@ mod tests {
         let mut flipped = bytes.clone();
         let last = flipped.len() - 1;
         flipped[last] ^= 1;
-        let e = Checkpoint::from_bytes(&flipped).unwrap_err().0;
+        let e = Checkpoint::from_bytes(&flipped).unwrap_err().to_string();
         assert!(e.contains("corrupt"), "{e}");
         let e = Checkpoint::from_bytes(&bytes[..bytes.len() / 2])
             .unwrap_err()
-            .0;
+            .to_string();
         assert!(e.contains("corrupt"), "{e}");
         let mut newer = bytes.clone();
         newer[8] = 2;
-        let e = Checkpoint::from_bytes(&newer).unwrap_err().0;
+        let e = Checkpoint::from_bytes(&newer).unwrap_err().to_string();
         assert!(e.contains("version 2"), "{e}");
-        let e = Checkpoint::from_bytes(b"hello").unwrap_err().0;
+        let e = Checkpoint::from_bytes(b"hello").unwrap_err().to_string();
         assert!(e.contains("not a rig checkpoint"), "{e}");
 
         let c = sample();
@@ -467,13 +562,13 @@ mod tests {
         let e = r
             .scope("critic", |r| r.f64s_into("theta", &mut [0.0; 4]))
             .unwrap_err()
-            .0;
+            .to_string();
         assert!(
             e.contains("`theta` has 3 values") || e.contains("critic.theta"),
             "{e}"
         );
         let mut r = c.state.reader();
-        let e = r.f64s("actor").unwrap_err().0;
+        let e = r.f64s("actor").unwrap_err().to_string();
         assert!(
             e.contains("`critic.theta` where the agent expects `actor`"),
             "{e}"
@@ -484,25 +579,25 @@ mod tests {
     fn origin_mismatches_are_named() {
         let c = sample();
         c.check_origin(&pendulum(0)).unwrap();
-        let e = c.check_origin(&pendulum(1)).unwrap_err().0;
+        let e = c.check_origin(&pendulum(1)).unwrap_err().to_string();
         assert!(e.contains("run 1"), "{e}");
         let arm = Origin {
             system: "arm-vertical".into(),
             ..pendulum(0)
         };
-        let e = c.check_origin(&arm).unwrap_err().0;
+        let e = c.check_origin(&arm).unwrap_err().to_string();
         assert!(e.contains("from system pendulum"), "{e}");
         let sac = Origin {
             learner: "sac/llr/infinite".into(),
             ..pendulum(0)
         };
-        let e = c.check_origin(&sac).unwrap_err().0;
+        let e = c.check_origin(&sac).unwrap_err().to_string();
         assert!(e.contains("from learner mlac/llr/infinite"), "{e}");
         let tuned = Origin {
             fingerprint: fingerprint(b"[learning]\ngamma = 0.5\n"),
             ..pendulum(0)
         };
-        let e = c.check_origin(&tuned).unwrap_err().0;
+        let e = c.check_origin(&tuned).unwrap_err().to_string();
         assert!(e.contains("different learning parameters"), "{e}");
     }
 

@@ -232,9 +232,10 @@ impl crate::checkpoint::Persist for Sarsa {
             self.rng = r.rng("rng")?;
             let t = r.u64s("trial")?;
             if t.len() != 2 || t[1] as usize >= self.actions.len() {
-                return Err(crate::checkpoint::CheckpointError(
-                    "checkpoint section `sarsa.trial` does not fit the action set".into(),
-                ));
+                return Err(crate::checkpoint::CheckpointError::Unfit {
+                    section: "sarsa.trial",
+                    why: "does not fit the action set".into(),
+                });
             }
             (self.trial, self.a) = (t[0] as u32, t[1] as usize);
             r.f64s_into("trace", &mut self.trace)?;

@@ -151,7 +151,7 @@ fn a_checkpoint_does_not_restore_into_another_learner() {
             );
         };
         assert!(
-            matches!(&e, ResumeError::Checkpoint(c) if c.0.contains("differently configured")),
+            matches!(&e, ResumeError::Checkpoint(c) if c.to_string().contains("differently configured")),
             "{}: {e}",
             name(other)
         );

@@ -36,14 +36,17 @@ impl crate::checkpoint::Persist for Llr {
                 || trace.len() != len
                 || seq.iter().any(|&q| q >= next_seq)
             {
-                return Err(CheckpointError(format!(
-                    "checkpoint section `llr` holds {len} samples of {} inputs and {} outputs, which does not fit a memory of {} samples of {} inputs and {} outputs: it was written by a differently configured agent",
-                    inputs.len().checked_div(len).unwrap_or(0),
-                    outputs.len().checked_div(len).unwrap_or(0),
-                    self.cap,
-                    self.n,
-                    self.m
-                )));
+                return Err(CheckpointError::Unfit {
+                    section: "llr",
+                    why: format!(
+                        "holds {len} samples of {} inputs and {} outputs, which does not fit a memory of {} samples of {} inputs and {} outputs: it was written by a differently configured agent",
+                        inputs.len().checked_div(len).unwrap_or(0),
+                        outputs.len().checked_div(len).unwrap_or(0),
+                        self.cap,
+                        self.n,
+                        self.m
+                    ),
+                });
             }
             self.inputs.clear();
             self.inputs.extend_from_slice(inputs);
