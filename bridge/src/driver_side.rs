@@ -15,7 +15,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use anyhow::{Result, anyhow};
+use crate::error::{Error, Result, zenoh};
 use driver::contract::{DRIVER_QOS, DriverInfo, DriverSample, service, status, topic};
 use wire::{Bus, now_ns};
 use zenoh::Wait;
@@ -96,9 +96,7 @@ pub fn serve_driver(opts: &DriverSide) -> Result<Counts> {
     };
     let down = commands_down(&session, opts, &shared);
     shared.stop.store(true, Relaxed);
-    let up = up
-        .join()
-        .map_err(|_| anyhow!("the samples' thread panicked"))?;
+    let up = up.join().map_err(|_| Error::Panicked("samples'"))?;
     let (mut counts, up) = (down?, up?);
     counts.samples = up.samples;
     counts.infos = up.infos;
@@ -127,7 +125,7 @@ fn answer_pings(
             }
         })
         .wait()
-        .map_err(|e| anyhow!("subscribing to pings: {e}"))
+        .map_err(zenoh(|| "subscribing to pings".to_string()))
 }
 
 /// The rig's commands, from the network to the driver, until stopped.
@@ -183,7 +181,7 @@ fn put(p: &Publisher<'_>, bytes: Vec<u8>, attachment: Option<Vec<u8>>) -> Result
         put = put.attachment(a);
     }
     put.wait()
-        .map_err(|e| anyhow!("publishing on {}: {e}", p.key_expr()))
+        .map_err(zenoh(|| format!("publishing on {}", p.key_expr())))
 }
 
 /// Says, once each time, when the driver's watchdog engages and when the link goes and

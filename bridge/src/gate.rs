@@ -6,7 +6,7 @@ use std::io::Write as _;
 use std::sync::atomic::Ordering::Relaxed;
 use std::time::Duration;
 
-use anyhow::{Result, anyhow};
+use crate::error::{Error, Result, zenoh};
 use driver::contract::{DRIVER_QOS, DriverCommand, kind, service, topic};
 use wire::{Bus, Tx, now_ns};
 use zenoh::Wait;
@@ -43,11 +43,10 @@ impl<'a> Gate<'a> {
     ) -> Result<Self> {
         let tx = bus
             .tx_on::<DriverCommand>(&service(&opts.id, topic::COMMAND), DRIVER_QOS)
-            .map_err(|e| {
-                anyhow!(
-                    "commanding driver {:?} on this host: {e} (is a rig commanding it here?)",
-                    opts.id
-                )
+            .map_err(|error| Error::Taken {
+                doing: format!("commanding driver {:?}", opts.id),
+                error,
+                hint: "is a rig commanding it here?",
             })?;
         Ok(Self {
             opts,
@@ -71,7 +70,7 @@ impl<'a> Gate<'a> {
             self.session
                 .declare_subscriber(t.key(id))
                 .wait()
-                .map_err(|e| anyhow!("subscribing to {}: {e}", t.key(id)))
+                .map_err(zenoh(|| format!("subscribing to {}", t.key(id))))
         };
         let (commands, claims) = (subscribe(Topic::Command)?, subscribe(Topic::Claim)?);
         while !bus.interrupted() && !self.shared.stop.load(Relaxed) {
@@ -124,10 +123,7 @@ impl<'a> Gate<'a> {
         let arrived = now_ns();
         let parsed = from_bytes::<DriverCommand>(&s.payload().to_bytes()).and_then(|c| {
             let claim = s.attachment().map(|a| from_bytes::<Claim>(&a.to_bytes()));
-            Ok((
-                c,
-                claim.ok_or_else(|| anyhow!("a command without its claim"))??,
-            ))
+            Ok((c, claim.ok_or(Error::Unclaimed)??))
         });
         let (c, claim) = match parsed {
             Ok(p) => p,
@@ -220,8 +216,11 @@ fn peer_of(session: &zenoh::Session, claim: &Claim, user: String) -> Peer {
 
 /// `--timing-out`'s file, with its header.
 fn timing_file(path: &std::path::Path) -> Result<std::io::BufWriter<std::fs::File>> {
-    let f =
-        std::fs::File::create(path).map_err(|e| anyhow!("--timing-out {}: {e}", path.display()))?;
+    let f = std::fs::File::create(path).map_err(|error| Error::File {
+        what: "--timing-out".into(),
+        path: path.to_owned(),
+        error,
+    })?;
     let mut f = std::io::BufWriter::new(f);
     writeln!(f, "seq,t_sample_ns,t_arrived_ns,sample_to_actuation")?;
     Ok(f)

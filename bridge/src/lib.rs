@@ -24,6 +24,7 @@
 pub mod claim;
 pub mod clock;
 mod driver_side;
+pub mod error;
 mod gate;
 pub mod message;
 mod outbox;
@@ -34,12 +35,12 @@ pub mod session;
 pub mod timing;
 
 pub use driver_side::{DriverSide, serve_driver};
+pub use error::{Error, Result};
 pub use probe::{Probed, probe};
 pub use rig_side::{RigSide, serve_rig};
 pub use session::Network;
 pub use timing::LinkTiming;
 
-use anyhow::{Result, anyhow};
 use zenoh::Wait;
 use zenoh::pubsub::Publisher;
 use zenoh::qos::{CongestionControl, Priority};
@@ -113,5 +114,5 @@ fn declare(
         .express(true)
         .congestion_control(congestion)
         .wait()
-        .map_err(|e| anyhow!("publisher on {key}: {e}"))
+        .map_err(error::zenoh(|| format!("publisher on {key}")))
 }

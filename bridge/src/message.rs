@@ -18,7 +18,7 @@
 //! platform iceoryx2 supports); the receiver checks the length, so a bridge of another
 //! contract version is refused by name, not misread.
 
-use anyhow::{Result, bail};
+use crate::error::{Credentials, Error, Result};
 use driver::contract::{DriverCommand, DriverInfo, DriverSample, service};
 
 use crate::claim::Claim;
@@ -69,12 +69,11 @@ pub fn to_bytes<T: Message>(m: &T) -> Vec<u8> {
 /// The message whose bytes are `b`; an error naming the type if the length differs.
 pub fn from_bytes<T: Message>(b: &[u8]) -> Result<T> {
     if b.len() != size_of::<T>() {
-        bail!(
-            "a {} of {} bytes arrived, {} expected: is the other bridge of another version?",
-            T::NAME,
-            b.len(),
-            size_of::<T>()
-        );
+        return Err(Error::Length {
+            name: T::NAME,
+            found: b.len(),
+            want: size_of::<T>(),
+        });
     }
     // SAFETY: the length is the type's, and every bit pattern is a value (`Message`).
     Ok(unsafe { std::ptr::read_unaligned(b.as_ptr().cast::<T>()) })
@@ -183,12 +182,10 @@ pub fn user_of(key: &str) -> &str {
 }
 
 /// Checks that `user` can name a key: letters, digits, `.`, `-` and `_`.
-pub fn check_user(user: &str) -> Result<()> {
+pub fn check_user(user: &str) -> Result<(), Credentials> {
     let fits = |c: char| c.is_ascii_alphanumeric() || matches!(c, '.' | '-' | '_');
     if user.is_empty() || !user.chars().all(fits) {
-        bail!(
-            "user {user:?}: a user's name may hold letters, digits, '.', '-' and '_' only (it names the keys it commands on)"
-        );
+        return Err(Credentials::User(user.to_string()));
     }
     Ok(())
 }

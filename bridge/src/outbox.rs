@@ -14,7 +14,7 @@
 use std::sync::atomic::Ordering::Relaxed;
 use std::time::Duration;
 
-use anyhow::{Result, anyhow};
+use crate::error::{Result, zenoh};
 use driver::contract::{DRIVER_QOS, DriverCommand, kind, service, topic};
 use wire::{Bus, now_ns};
 use zenoh::Wait;
@@ -85,7 +85,7 @@ impl Outbox {
         out.put(to_bytes(c))
             .attachment(to_bytes(&claim))
             .wait()
-            .map_err(|e| anyhow!("publishing a command: {e}"))?;
+            .map_err(zenoh(|| "publishing a command".to_string()))?;
         self.last_put = now_ns();
         self.sent += 1;
         Ok(())
@@ -151,7 +151,7 @@ impl Outbox {
         self.claims
             .put(to_bytes(claim))
             .wait()
-            .map_err(|e| anyhow!("publishing a claim: {e}"))?;
+            .map_err(zenoh(|| "publishing a claim".to_string()))?;
         self.last_put = now_ns();
         Ok(())
     }

@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use anyhow::{Result, anyhow};
+use crate::error::{Result, zenoh};
 use driver::contract::{DriverCommand, DriverSample, kind};
 use wire::now_ns;
 use zenoh::Wait;
@@ -75,7 +75,7 @@ pub fn probe(
                     }
                 })
                 .wait()
-                .map_err(|e| anyhow!("subscribing to {}: {e}", t.key(id)))
+                .map_err(zenoh(|| format!("subscribing to {}", t.key(id))))
         })
         .collect::<Result<_>>()?;
     let mut claimant = Claimant::new(session.zid().to_le_bytes());
@@ -95,7 +95,9 @@ pub fn probe(
                 }
             })
             .wait()
-            .map_err(|e| anyhow!("subscribing to {}: {e}", Topic::Refused.key(id)))?
+            .map_err(zenoh(|| {
+                format!("subscribing to {}", Topic::Refused.key(id))
+            }))?
     };
     let out = publisher(&session, &Topic::Command.key_of(id, &user))?;
     let mut commands = 0;

@@ -16,7 +16,7 @@ use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use anyhow::{Context, Result, anyhow};
+use crate::error::{Error, Result, zenoh};
 use driver::contract::{
     DRIVER_QOS, DriverInfo, DriverNotice, DriverSample, LinkSample, service, topic,
 };
@@ -109,9 +109,7 @@ pub fn serve_rig(opts: &RigSide) -> Result<(Counts, LinkTiming)> {
     side.refusals = Some(refusals);
     let result = side.run(&rx);
     shared.stop.store(true, Relaxed);
-    let (commands, resent) = up
-        .join()
-        .map_err(|_| anyhow!("the commands' thread panicked"))??;
+    let (commands, resent) = up.join().map_err(|_| Error::Panicked("commands'"))??;
     let _ = session.close().wait();
     result?;
     side.counts.commands = commands;
@@ -124,9 +122,12 @@ pub fn serve_rig(opts: &RigSide) -> Result<(Counts, LinkTiming)> {
 
 /// `--timing-out`'s file, with its header.
 fn timing_file(path: &PathBuf) -> Result<std::io::BufWriter<std::fs::File>> {
-    let mut f = std::io::BufWriter::new(
-        std::fs::File::create(path).with_context(|| format!("--timing-out {}", path.display()))?,
-    );
+    let mut f =
+        std::io::BufWriter::new(std::fs::File::create(path).map_err(|error| Error::File {
+            what: "--timing-out".into(),
+            path: path.clone(),
+            error,
+        })?);
     writeln!(f, "what,seq,ns")?;
     Ok(f)
 }
@@ -149,7 +150,7 @@ fn listen(
             });
         })
         .wait()
-        .map_err(|e| anyhow!("subscribing to {}: {e}", t.key(id)))
+        .map_err(zenoh(|| format!("subscribing to {}", t.key(id))))
 }
 
 /// The stand-in driver on this host.
@@ -188,11 +189,10 @@ struct Stand<'a> {
 impl<'a> Stand<'a> {
     fn new(opts: &'a RigSide, session: &zenoh::Session, shared: Arc<Shared>) -> Result<Self> {
         let bus = driver::contract::bus(&opts.id)?;
-        let taken = |e: wire::Error| {
-            anyhow!(
-                "standing in for driver {:?} on this host: {e} (is that driver running here too?)",
-                opts.id
-            )
+        let taken = |error| Error::Taken {
+            doing: format!("standing in for driver {:?}", opts.id),
+            error,
+            hint: "is that driver running here too?",
         };
         let info = bus
             .tx_on(&service(&opts.id, topic::INFO), DRIVER_QOS)
@@ -253,7 +253,7 @@ impl<'a> Stand<'a> {
                 self.ping
                     .put(to_bytes(&p))
                     .wait()
-                    .map_err(|e| anyhow!("pinging: {e}"))?;
+                    .map_err(zenoh(|| "pinging".to_string()))?;
                 next_ping = now + self.opts.ping_period.as_nanos() as u64;
                 self.watch_link(now);
             }

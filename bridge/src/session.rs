@@ -10,8 +10,9 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow, bail};
 use zenoh::{Config, Session, Wait};
+
+use crate::error::{Credentials, Error, Result, zenoh};
 
 use crate::message::{Topic, check_user};
 
@@ -37,9 +38,12 @@ pub struct Network {
 /// line, neither empty, each trimmed; blank lines skipped. No comments: Zenoh reads the
 /// driver's side's file itself, by these same rules.
 pub fn read_credentials(path: &Path) -> Result<Vec<(String, String)>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("credentials file {}", path.display()))?;
+    let text = std::fs::read_to_string(path).map_err(file("credentials file", path))?;
     owner_only(path, "credentials file")?;
+    let refused = |problem| Error::Credentials {
+        path: path.to_owned(),
+        problem,
+    };
     let mut found = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();
@@ -50,18 +54,11 @@ pub fn read_credentials(path: &Path) -> Result<Vec<(String, String)>> {
             Some((u, p)) if !u.is_empty() && !p.is_empty() && !u.contains(char::is_whitespace) => {
                 found.push((u.to_string(), p.to_string()))
             }
-            _ => bail!(
-                "credentials file {} line {}: expected `user:password` (a user without spaces, neither empty; no comments)",
-                path.display(),
-                i + 1
-            ),
+            _ => return Err(refused(Credentials::Line(i + 1))),
         }
     }
     if found.is_empty() {
-        bail!(
-            "credentials file {}: no `user:password` line",
-            path.display()
-        );
+        return Err(refused(Credentials::Empty));
     }
     Ok(found)
 }
@@ -83,18 +80,27 @@ const INLINE_PRIVATE_KEYS: [&str; 2] = ["private_key_base64", "private_key_pem"]
 fn owner_only(path: &Path, what: &str) -> Result<()> {
     use std::os::unix::fs::PermissionsExt;
     let mode = std::fs::metadata(path)
-        .with_context(|| format!("{what} {}", path.display()))?
+        .map_err(file(what, path))?
         .permissions()
         .mode()
         & 0o777;
     if mode & 0o077 != 0 {
-        bail!(
-            "{what} {} is open to others than its owner (mode {mode:04o}); refused: `chmod 600 {}`",
-            path.display(),
-            path.display()
-        );
+        return Err(Error::OpenSecret {
+            what: what.to_string(),
+            path: path.to_owned(),
+            mode,
+        });
     }
     Ok(())
+}
+
+/// An error reading `path`, the `what` of the bridge.
+fn file<'a>(what: &'a str, path: &'a Path) -> impl FnOnce(std::io::Error) -> Error + 'a {
+    move |error| Error::File {
+        what: what.to_string(),
+        path: path.to_owned(),
+        error,
+    }
 }
 
 /// Refuses the private keys configuration `c` names (TLS, public-key authentication), and
@@ -102,17 +108,19 @@ fn owner_only(path: &Path, what: &str) -> Result<()> {
 /// their owner may read them.
 fn private_keys_owner_only(c: &Config, file: &Path) -> Result<()> {
     for key in PRIVATE_KEY_FILES {
-        let value = c
-            .get_json(key)
-            .map_err(|e| anyhow!("Zenoh configuration {key}: {e}"))?;
-        let path: Option<String> = serde_json::from_str(&value)
-            .map_err(|e| anyhow!("Zenoh configuration {key} = {value}: {e}"))?;
+        let value = c.get_json(key).map_err(|e| Error::Config {
+            key: key.to_string(),
+            error: e.to_string(),
+        })?;
+        let path: Option<String> = serde_json::from_str(&value).map_err(|e| Error::Config {
+            key: format!("{key} = {value}"),
+            error: e.to_string(),
+        })?;
         if let Some(path) = path {
             owner_only(Path::new(&path), "private key")?;
         }
     }
-    let text = std::fs::read_to_string(file)
-        .with_context(|| format!("Zenoh configuration {}", file.display()))?;
+    let text = std::fs::read_to_string(file).map_err(self::file("Zenoh configuration", file))?;
     if INLINE_PRIVATE_KEYS.iter().any(|k| text.contains(k)) {
         owner_only(file, "Zenoh configuration (it holds a private key)")?;
     }
@@ -123,7 +131,10 @@ fn private_keys_owner_only(c: &Config, file: &Path) -> Result<()> {
 fn users(net: &Network) -> Result<Vec<(String, String)>> {
     let users = read_credentials(&net.credentials)?;
     for (u, _) in &users {
-        check_user(u).with_context(|| format!("credentials file {}", net.credentials.display()))?;
+        check_user(u).map_err(|problem| Error::Credentials {
+            path: net.credentials.clone(),
+            problem,
+        })?;
     }
     Ok(users)
 }
@@ -141,7 +152,10 @@ pub fn driver_side(id: &str, net: &Network) -> Result<Session> {
     let mut c = base(net)?;
     set(&mut c, "listen/endpoints", &json(&[net.endpoint.as_str()]))?;
     set(&mut c, "connect/endpoints", "[]")?;
-    let dictionary = net.credentials.canonicalize()?;
+    let dictionary = net
+        .credentials
+        .canonicalize()
+        .map_err(file("credentials file", &net.credentials))?;
     set(
         &mut c,
         "transport/auth/usrpwd",
@@ -194,8 +208,10 @@ fn connecting(net: &Network, user: Option<(String, String)>) -> Result<Session> 
 fn base(net: &Network) -> Result<Config> {
     let mut c = match &net.zenoh_config {
         Some(p) => {
-            let c = Config::from_file(p)
-                .map_err(|e| anyhow!("Zenoh configuration {}: {e}", p.display()))?;
+            let c = Config::from_file(p).map_err(|e| Error::Config {
+                key: p.display().to_string(),
+                error: e.to_string(),
+            })?;
             private_keys_owner_only(&c, p)?;
             c
         }
@@ -265,12 +281,14 @@ fn access_control(id: &str, users: &[&str]) -> String {
 fn open(c: Config, endpoint: &str, what: &str) -> Result<Session> {
     zenoh::open(c)
         .wait()
-        .map_err(|e| anyhow!("cannot {what} {endpoint}: {e}"))
+        .map_err(zenoh(|| format!("cannot {what} {endpoint}")))
 }
 
 fn set(c: &mut Config, key: &str, value: &str) -> Result<()> {
-    c.insert_json5(key, value)
-        .map_err(|e| anyhow!("Zenoh configuration {key} = {value}: {e}"))
+    c.insert_json5(key, value).map_err(|e| Error::Config {
+        key: format!("{key} = {value}"),
+        error: e.to_string(),
+    })
 }
 
 fn json(items: &[&str]) -> String {

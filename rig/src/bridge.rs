@@ -122,7 +122,7 @@ impl Common {
 
 /// Runs the command.
 pub fn main(args: &Args) -> ExitCode {
-    let result = match &args.side {
+    let result: anyhow::Result<()> = match &args.side {
         Side::Driver {
             common,
             max_age_periods,
@@ -139,7 +139,8 @@ pub fn main(args: &Args) -> ExitCode {
                 ..bridge::claim::Lease::DEFAULT
             },
         })
-        .map(|counts| eprintln!("bridge for driver {:?}: {counts}", common.driver)),
+        .map(|counts| eprintln!("bridge for driver {:?}: {counts}", common.driver))
+        .map_err(Into::into),
         Side::Rig {
             common,
             same_clock,
@@ -156,7 +157,8 @@ pub fn main(args: &Args) -> ExitCode {
         .map(|(counts, timing)| {
             eprintln!("bridge for driver {:?}: {counts}", common.driver);
             eprintln!("the link:\n{}", timing.summary());
-        }),
+        })
+        .map_err(Into::into),
         Side::Probe {
             common,
             anonymous,
@@ -169,6 +171,7 @@ pub fn main(args: &Args) -> ExitCode {
             *zero_actions,
             *seconds,
         )
+        .map_err(anyhow::Error::from)
         .and_then(|p| {
             println!(
                 "probe of driver {:?} at {}: {} infos and {} samples arrived; {} zero actions put",
