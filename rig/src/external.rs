@@ -72,6 +72,7 @@ impl DriverArgs {
             id,
             timeout: runtime::process::seconds("--driver-timeout", self.driver_timeout)?,
             reset_timeout: runtime::process::seconds("--reset-timeout", self.reset_timeout)?,
+            lockstep_waiting: None,
         })
     }
 }

@@ -133,7 +133,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
             "`--delay-ms`/`--delay-from` (run.delay_ms, run.delay_from) apply in lockstep with the simulated plant only: in real time the delays are real"
         ));
     }
-    let driver = if args.plant == "external" {
+    let mut driver = if args.plant == "external" {
         if realtime.is_some() || args.speed != 1.0 {
             return Err(anyhow!(
                 "`--timing`/`--speed` do not apply with `--plant external`: the driver is the clock"
@@ -152,7 +152,11 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
     } else {
         WaitKind::Block
     });
-    runtime::run::check_waiting(lockstep, waiting)?;
+    if let Some(d) = &mut driver {
+        // Known once the driver's info says which clock it keeps.
+        d.lockstep_waiting = Some(args.wait.waiting(LOCKSTEP_WAIT));
+    }
+    runtime::run::check_waiting(realtime.is_none(), waiting)?;
     let mut scheduling = args.scheduling;
     match scheduling.layout() {
         Some(layout) => layout.check()?,

@@ -25,14 +25,14 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow};
-use driver::contract::{DriverInfo, DriverWatch};
+use driver::contract::{DriverInfo, DriverWatch, clock};
 use wire::{Bus, Waiting};
 
 use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
 use crate::learn::{progress_bar, write_atomic};
 use crate::lock::FolderLock;
-use crate::process::{Scheduling, Spin};
+use crate::process::{Layout, Scheduling, Spin};
 use crate::resume;
 
 mod gaps;
@@ -88,6 +88,10 @@ pub struct ExternalDriver {
     pub timeout: Duration,
     /// How long one reset may take.
     pub reset_timeout: Duration,
+    /// How the processes wait when the driver keeps the lockstep clock, in place of
+    /// [`RunOptions::waiting`] (`None`: as that says; `rig run` without `--wait`: polling
+    /// without end, as a lockstep run with the simulated plant).
+    pub lockstep_waiting: Option<Waiting>,
 }
 
 /// What a run produced.
@@ -125,16 +129,13 @@ pub fn check_waiting(lockstep: bool, waiting: Waiting) -> Result<(), UnwokenWait
 /// Polling without end outside lockstep ([`check_waiting`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "`--wait spin|yield` without `--wait-us` applies in lockstep only: in real time and with an external driver the plant sleeps until its next sample and must be woken"
+    "`--wait spin|yield` without `--wait-us` applies in lockstep only (the simulated plant, or a driver that keeps the lockstep clock): in real time the plant sleeps until its next sample and must be woken"
 )]
 pub struct UnwokenWaiting;
 
 /// Runs experiment `cfg` (one run) as three processes and writes the outputs.
 pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
-    check_waiting(
-        opts.realtime.is_none() && opts.driver.is_none(),
-        opts.waiting,
-    )?;
+    check_waiting(opts.realtime.is_none(), opts.waiting)?;
     let mut cfg = cfg.clone();
     cfg.run.runs = 1;
     let run_id = free_run_id(opts)?;
@@ -161,9 +162,11 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     }
     let bus = Bus::join(&run_id, "rig")?;
     let task = Arc::new(cfg.task());
-    let (watch, driver_info) = match &opts.driver {
-        Some(d) => match wait_for_driver(&bus, d, &task, opts.progress) {
-            Ok((watch, info)) => (Some(watch), Some(info)),
+    let (watch, driver_info, with_driver) = match &opts.driver {
+        Some(d) => match wait_for_driver(&bus, d, &task, opts.progress)
+            .and_then(|(watch, info)| Ok((watch, info, driver_options(opts, d, &info)?)))
+        {
+            Ok((watch, info, with)) => (Some(watch), Some(info), Some(with)),
             Err(e) => {
                 if created {
                     // Holds only the lock file: a refused run leaves no folder behind.
@@ -172,8 +175,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
                 return Err(e);
             }
         },
-        None => (None, None),
+        None => (None, None, None),
     };
+    let opts = with_driver.as_ref().unwrap_or(opts);
     // Nothing is written before the driver is found and fits. A new run in an old
     // directory: old checkpoints must not be taken for its own; a resumed run's after its
     // resume point are of trials it redoes.
@@ -220,7 +224,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     (sup.children, sup.logs) = spawn::processes(&run_id, &config_path, &opts.out, &args)?;
     // Placed after the processes started: they place themselves, from anywhere.
     opts.scheduling.place(crate::process::Part::Recorder)?;
-    if opts.realtime.is_none() && opts.driver.is_none() {
+    if opts.realtime.is_none() && driver_info.is_none_or(|i| i.clock == clock::LOCKSTEP) {
         crate::process::batch_thread();
     }
 
@@ -281,6 +285,23 @@ fn timing(opts: &RunOptions, driver: Option<&DriverInfo>) -> String {
         (_, _, None) => "lockstep".to_string(),
         (_, _, Some(speed)) => format!("realtime, speed {speed}"),
     }
+}
+
+/// The options of a run against driver `d`, whose info is `info`: with a driver that
+/// keeps the lockstep clock, the processes wait as [`ExternalDriver::lockstep_waiting`]
+/// says and, unless `--cpus` said, are placed as a lockstep run that waits so
+/// ([`Layout::lockstep`]); polling without end is refused with a driver in real time.
+fn driver_options(opts: &RunOptions, d: &ExternalDriver, info: &DriverInfo) -> Result<RunOptions> {
+    let mut with = opts.clone();
+    let lockstep = info.clock == clock::LOCKSTEP;
+    if lockstep && let Some(w) = d.lockstep_waiting {
+        with.waiting = w;
+        if with.scheduling.layout().is_none() {
+            with.scheduling.cpus = Some(Layout::lockstep(w));
+        }
+    }
+    check_waiting(lockstep, with.waiting)?;
+    Ok(with)
 }
 
 /// Waits for driver `d`'s info (saying so after a second of silence when `verbose`)
