@@ -14,7 +14,7 @@ A RESET places it at x0 and is answered by a READY sample there; an ACTION answe
 the newest sample while READY is clamped to the task's bounds (or, non-finite or of the
 wrong size, rejected: zero) and moves the simulation one sample period, answered by the
 sample that closes it; any other action is only counted as rejected. The info goes out
-at start and every second. `examples/furuta/` and `examples/gymnasium/` are built on it.
+at start, every second, and at once when a rig subscribes to it. `examples/furuta/` and `examples/gymnasium/` are built on it.
 
 Within a second of its last command the driver polls for the next one, handing the CPU
 on between polls (os.sched_yield), as a lockstep run's processes do: a command reaches it
@@ -63,6 +63,7 @@ class Services:
             .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
             .create(iox2.ServiceType.Ipc)
         )
+        self.info_service = self.pubsub("info", DriverInfo)
         self.info_pub, self.info_note = self.publisher("info", DriverInfo)
         self.sample_pub, self.sample_note = self.publisher("sample", sample_type)
         self.commands = self.pubsub("command", DriverCommand).subscriber_builder().create()
@@ -105,6 +106,10 @@ class Services:
             .create()
         )
         return pub, notifier
+
+    def info_readers(self) -> int:
+        """Subscribers to the info: a new one (a rig starting) is told the info at once."""
+        return self.info_service.dynamic_config.number_of_subscribers
 
     def publish_info(self, info):
         self.info_pub.loan_uninit().write_payload(info).send()
@@ -223,13 +228,18 @@ def serve(services: Services, task, simulation, stopping=lambda: False, log=None
     samples = Samples(task)
     newest = None
     next_info = 0
+    readers = services.info_readers()
     while not stopping():
         if time.monotonic_ns() >= next_info:
             advertised.t_publish_ns = time.monotonic_ns()
             services.publish_info(advertised)
             next_info = time.monotonic_ns() + 1_000_000_000
-        c = services.receive(200)
+        c = services.receive(50)
         if c is None:
+            now_readers = services.info_readers()
+            if now_readers > readers:
+                next_info = 0  # a rig subscribed: its info at once
+            readers = now_readers
             continue
         if c.kind == RESET:
             x0 = c.x0[: task.n]
