@@ -129,6 +129,7 @@ pub fn external_cases(
         let log = out.join(format!("driver-{i}.log"));
         let args: Vec<&str> = cmd[1..].iter().map(String::as_str).collect();
         let _driver = Kill(vec![spawn(Path::new(&cmd[0]), &args, &log)?]);
+        served(&id, &log)?;
         let cfg = resolve(
             None,
             &Overrides {
@@ -161,6 +162,17 @@ pub fn external_cases(
         });
     }
     Ok(cases)
+}
+
+/// Waits until driver `id` publishes its info (started, its imports done), so that the
+/// runs' times leave its start out; `log` is its output.
+fn served(id: &str, log: &Path) -> Result<()> {
+    let bus = wire::Bus::join(&format!("benchwait{}", std::process::id()), "rig")?;
+    let watch = driver::contract::DriverWatch::open(&bus, id)?;
+    let timeout = std::time::Duration::from_secs(60);
+    driver::contract::wait_info(&bus, &watch.info, id, timeout, false, "")
+        .with_context(|| format!("driver {id:?} did not start; see {}", log.display()))?;
+    Ok(())
 }
 
 /// `bench/scripts/env_step.py`'s time per step of Pendulum-v1 over (at least) `samples`

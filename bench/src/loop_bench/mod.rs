@@ -215,8 +215,8 @@ impl LoopReport {
 
     /// The external drivers' lines of the summary: each against its yardstick.
     fn external_summary(&self) -> String {
-        let built_in = median(&self.three_processes).wall.as_secs_f64() * 1e6
-            / self.samples_per_run as f64;
+        let built_in =
+            median(&self.three_processes).wall.as_secs_f64() * 1e6 / self.samples_per_run as f64;
         let mut s = String::new();
         for c in &self.external {
             let (yard, what) = match c.yardstick_us() {

@@ -13,9 +13,9 @@ use std::time::Duration;
 
 use wire::{MAX_U, MAX_X, now_ns};
 
-use super::state::Driver;
 use super::announce::Announcer;
-use super::{Served, Serving, Services, Start};
+use super::state::Driver;
+use super::{Served, Services, Serving, Start};
 use crate::contract::{DriverCommand, clock, kind, status};
 use crate::device::Device;
 use crate::error::Error;

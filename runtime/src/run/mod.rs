@@ -319,3 +319,68 @@ fn wait_for_driver(
     driver::check_info(&d.id, &info, task)?;
     Ok((watch, info))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use wire::FOREVER;
+
+    fn options(
+        waiting: Waiting,
+        lockstep_waiting: Option<Waiting>,
+    ) -> (RunOptions, ExternalDriver) {
+        let d = ExternalDriver {
+            id: "pendulum".into(),
+            timeout: Duration::from_secs(1),
+            reset_timeout: Duration::from_secs(1),
+            lockstep_waiting,
+        };
+        let opts = RunOptions {
+            out: PathBuf::from("out"),
+            run_id: None,
+            progress: false,
+            realtime: None,
+            driver: Some(d.clone()),
+            resume: false,
+            cycles_out: None,
+            scheduling: Scheduling {
+                rt_priority: None,
+                pin_cpus: false,
+                cpus: None,
+            },
+            spin: Spin::default(),
+            waiting,
+            learn_across_gaps: false,
+        };
+        (opts, d)
+    }
+
+    fn info(clock: u64) -> DriverInfo {
+        DriverInfo {
+            clock,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn a_driver_in_lockstep_is_polled_as_a_lockstep_run_and_one_in_real_time_is_not() {
+        let polls = Waiting::Yield(FOREVER);
+        let (opts, d) = options(Waiting::Block, Some(polls));
+        let with = driver_options(&opts, &d, &info(clock::LOCKSTEP)).unwrap();
+        assert_eq!(with.waiting, polls);
+        assert_eq!(with.scheduling.cpus, Some(Layout::lockstep(polls)));
+        let with = driver_options(&opts, &d, &info(clock::REALTIME)).unwrap();
+        assert_eq!(with.waiting, Waiting::Block);
+        assert_eq!(with.scheduling.cpus, None);
+        // `--cpus` given stays.
+        let mut placed = opts.clone();
+        placed.scheduling.cpus = Some(Layout::Shared);
+        let with = driver_options(&placed, &d, &info(clock::LOCKSTEP)).unwrap();
+        assert_eq!(with.scheduling.cpus, Some(Layout::Shared));
+        // Polling without end asked for against a driver in real time is refused.
+        let (opts, d) = options(polls, None);
+        assert!(driver_options(&opts, &d, &info(clock::LOCKSTEP)).is_ok());
+        let e = driver_options(&opts, &d, &info(clock::REALTIME)).unwrap_err();
+        assert!(e.downcast_ref::<UnwokenWaiting>().is_some(), "{e}");
+    }
+}
