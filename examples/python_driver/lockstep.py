@@ -237,8 +237,8 @@ def serve(services: Services, task, simulation, stopping=lambda: False, log=None
         c = services.receive(50)
         if c is None:
             now_readers = services.info_readers()
-            if now_readers > readers:
-                next_info = 0  # a rig subscribed: its info at once
+            if now_readers != readers:
+                next_info = 0  # a rig subscribed (or left, maybe for another): info at once
             readers = now_readers
             continue
         if c.kind == RESET:

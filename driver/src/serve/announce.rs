@@ -1,5 +1,5 @@
-//! When a driver publishes its info: at start, at least once a second, and at once when a
-//! new reader subscribes (a rig that starts need not wait for the next second).
+//! When a driver publishes its info: at start, at least once a second, and at once when
+//! its readers change (a rig that starts need not wait for the next second).
 
 use std::time::Duration;
 
@@ -34,13 +34,14 @@ impl Announcer {
         self.next_ns
     }
 
-    /// Publishes the info if a second has passed since it last went out or a reader
-    /// subscribed since the last call.
+    /// Publishes the info if a second has passed since it last went out or the number
+    /// of its readers changed since the last call (a rig joined, or one left and may be
+    /// followed by another).
     pub fn publish_if_due(&mut self, io: &Services) -> Result<(), Error> {
         let readers = io.infos.receivers();
-        let joined = readers > self.readers;
+        let changed = readers != self.readers;
         self.readers = readers;
-        if joined || now_ns() >= self.next_ns {
+        if changed || now_ns() >= self.next_ns {
             io.publish_info(self.advertised)?;
             self.next_ns = now_ns() + INFO_EVERY.as_nanos() as u64;
         }
