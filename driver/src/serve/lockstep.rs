@@ -33,12 +33,12 @@ pub trait Lockstep: Device {
 /// between polls, as a lockstep run's processes do) before it sleeps until the rig wakes
 /// it: a loop that is running answers within microseconds; a rig that stopped or went
 /// away costs a CPU for this long at most.
-pub const POLL_AFTER_COMMAND: Duration = Duration::from_secs(1);
+const POLL_AFTER_COMMAND: Duration = Duration::from_secs(1);
 
 /// Serves `device` as driver `driver_id` in lockstep until Ctrl-C or SIGTERM (or
 /// [`Serving::stop_after`] samples): each command is answered as the module
-/// documentation says; the info goes out at start, every second and at once to a new
-/// reader ([`Announcer`]).
+/// documentation says; the info goes out at start, every second and at once when its
+/// readers change ([`Announcer`]).
 pub fn serve_lockstep(
     device: &mut impl Lockstep,
     driver_id: &str,
@@ -96,11 +96,11 @@ pub fn serve_lockstep(
     Ok(served)
 }
 
-/// How often a polling driver looks up from polling (for Ctrl-C, a new reader of its
-/// info and the info's second).
+/// How often a polling driver looks up from polling (for Ctrl-C, the readers of its info
+/// and the info's second).
 const LOOK_UP_EVERY: Duration = Duration::from_millis(10);
 
-/// How often a sleeping driver looks up (for a new reader of its info).
+/// How often a sleeping driver looks up (for the readers of its info).
 const LOOK_UP_ASLEEP: Duration = Duration::from_millis(50);
 
 /// The next command: polled for until `poll_until`, handing the CPU on between polls;
