@@ -135,6 +135,7 @@ impl DriverLink {
         let samples = bus.rx_on::<DriverSample>(&service(id, topic::SAMPLE), DRIVER_QOS)?;
         let commands = bus
             .tx_on::<DriverCommand>(&service(id, topic::COMMAND), DRIVER_QOS)
+            .map(Tx::waking)
             .map_err(|e| {
                 if e.publisher_taken() {
                     Error::InUse {
@@ -207,11 +208,12 @@ impl DriverLink {
     }
 
     /// The next sample, waiting at most `silence` ([`DriverInfo::silence_limit`]: longer
-    /// means the driver stopped).
+    /// means the driver stopped), the way `bus` waits ([`wire::Waiting`]: polling, as a
+    /// lockstep run does, or blocked until the driver wakes it).
     pub fn next_sample(&self, bus: &Bus, silence: Duration) -> Result<DriverSample, Error> {
         let t0 = std::time::Instant::now();
         loop {
-            if let Some(s) = self.samples.recv_timeout(Duration::from_millis(100))? {
+            if let Some(s) = self.samples.recv_awhile()? {
                 return Ok(s);
             }
             if bus.interrupted() {

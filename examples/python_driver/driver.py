@@ -311,7 +311,8 @@ class Driver:
             def state(self):
                 return driver.measured()
 
-        serve(self.io, self.task, Simulation(), lambda: self.stopping, self.log)
+        log = self.log if self.args.verbose else None
+        serve(self.io, self.task, Simulation(), lambda: self.stopping, log)
 
     def run(self):
         if self.args.clock == "lockstep":

@@ -14,10 +14,18 @@ A RESET places it at x0 and is answered by a READY sample there; an ACTION answe
 the newest sample while READY is clamped to the task's bounds (or, non-finite or of the
 wrong size, rejected: zero) and moves the simulation one sample period, answered by the
 sample that closes it; any other action is only counted as rejected. The info goes out
-at start and every second. `examples/furuta/` and `examples/gymnasium/` are built on it.
+at start, every second, and at once when a rig subscribes to it. `examples/furuta/` and `examples/gymnasium/` are built on it.
+
+Within a second of its last command the driver polls for the next one, handing the CPU
+on between polls (os.sched_yield), as a lockstep run's processes do: a command reaches it
+within microseconds instead of an operating-system wake-up. After a second without one
+(the rig stopped, or went away) it sleeps until the rig wakes it. Each step reuses one
+command and one sample structure: nothing is built, formatted or logged per step.
 """
 
+import ctypes
 import math
+import os
 import signal
 import sys
 import time
@@ -36,11 +44,18 @@ from messages import (
 )
 
 
+# How long after a command the driver polls for the next one before it sleeps [ns].
+POLL_AFTER_COMMAND_NS = 1_000_000_000
+
+
 class Services:
     """A driver's three services with the settings of docs/driver.md, and its events."""
 
     def __init__(self, driver_id: str, sample_type=DriverSample):
         self.driver_id = driver_id
+        self.command = DriverCommand()  # the command received last, overwritten by the next
+        self.command_at = ctypes.addressof(self.command), ctypes.sizeof(DriverCommand)
+        self.poll_until = 0  # monotonic time until which receive() polls [ns]
         iox2.set_log_level_from_env_or(iox2.LogLevel.Error)
         self.node = (
             iox2.NodeBuilder.new()
@@ -48,6 +63,7 @@ class Services:
             .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
             .create(iox2.ServiceType.Ipc)
         )
+        self.info_service = self.pubsub("info", DriverInfo)
         self.info_pub, self.info_note = self.publisher("info", DriverInfo)
         self.sample_pub, self.sample_note = self.publisher("sample", sample_type)
         self.commands = self.pubsub("command", DriverCommand).subscriber_builder().create()
@@ -91,26 +107,49 @@ class Services:
         )
         return pub, notifier
 
+    def info_readers(self) -> int:
+        """Subscribers to the info: a new one (a rig starting) is told the info at once."""
+        return self.info_service.dynamic_config.number_of_subscribers
+
     def publish_info(self, info):
         self.info_pub.loan_uninit().write_payload(info).send()
         self.info_note.notify()
 
     def publish_sample(self, sample):
-        self.sample_pub.loan_uninit().write_payload(sample).send()
+        self.sample_pub.send_copy(sample)
         self.sample_note.notify()
 
     def receive(self, timeout_ms: int):
-        """The next command, or None after waiting up to `timeout_ms` for one."""
+        """The next command, or None after waiting up to `timeout_ms` for one: polled for
+        within POLL_AFTER_COMMAND_NS of the last command, else waited for asleep. The
+        command returned is `self.command`, overwritten by the next call."""
         c = self.commands.receive()
         if c is None:
-            self.waitset.wait_and_process_with_timeout(iox2.Duration.from_millis(timeout_ms))
-            self.command_events.try_wait()  # consume the wake-up
-            c = self.commands.receive()
+            c = self.wait(time.monotonic_ns() + timeout_ms * 1_000_000)
             if c is None:
                 return None
-        cmd = DriverCommand.from_buffer_copy(c.payload().contents)
+        ctypes.memmove(self.command_at[0], c.payload_ptr, self.command_at[1])
         del c  # returns the slot
-        return cmd
+        self.poll_until = time.monotonic_ns() + POLL_AFTER_COMMAND_NS
+        return self.command
+
+    def wait(self, deadline: int):
+        """The next command's sample, or None at monotonic time `deadline` [ns]: polled
+        for until `self.poll_until`, then waited for asleep until the rig wakes us."""
+        receive, clock, pause = self.commands.receive, time.monotonic_ns, os.sched_yield
+        now = clock()
+        poll_end = min(self.poll_until, deadline)
+        while now < poll_end:
+            pause()
+            c = receive()
+            if c is not None:
+                return c
+            now = clock()
+        if now >= deadline:
+            return None
+        self.waitset.wait_and_process_with_timeout(iox2.Duration.from_nanos(deadline - now))
+        self.command_events.try_wait()  # consume the wake-up
+        return receive()
 
 
 def info(task, clock: int, t_start: int, speed: float = 1.0) -> DriverInfo:
@@ -146,8 +185,8 @@ class Counters:
 
     def admit(self, task, c: DriverCommand) -> None:
         """An action answering the newest sample while READY: clamped, or rejected."""
-        u = [c.u[j] for j in range(task.m)]
-        if c.n_u != task.m or not all(math.isfinite(v) for v in u):
+        u = c.u[: task.m]
+        if c.n_u != task.m or not all(map(math.isfinite, u)):
             self.rejected += 1
             self.u = [0.0] * task.m  # the safe action
             return
@@ -157,49 +196,63 @@ class Counters:
         self.last_command = c.seq
 
 
-def sample(task, counters: Counters, seq: int, x) -> DriverSample:
-    s = DriverSample(
-        seq=seq,
-        t_sample_ns=time.monotonic_ns(),
-        status=counters.status,
-        reset_id=counters.reset_id,
-        last_command=counters.last_command,
-        n_x=task.n,
-        n_u=task.m,
-        clamped=counters.clamped,
-        rejected=counters.rejected,
-    )
-    for i, v in enumerate(x):
-        s.x[i] = v
-    for j, v in enumerate(counters.u):
-        s.u_applied[j] = v
-    s.t_publish_ns = time.monotonic_ns()
-    return s
+class Samples:
+    """The samples of a driver of `task`: one structure, filled in for each."""
+
+    def __init__(self, task):
+        self.n, self.m = task.n, task.m
+        self.s = DriverSample(n_x=task.n, n_u=task.m)
+
+    def fill(self, counters: Counters, seq: int, x) -> DriverSample:
+        """Sample `seq` at state `x`, stamped now (valid until the next fill)."""
+        s = self.s
+        s.seq = seq
+        s.t_sample_ns = time.monotonic_ns()
+        s.status = counters.status
+        s.reset_id = counters.reset_id
+        s.last_command = counters.last_command
+        s.clamped = counters.clamped
+        s.rejected = counters.rejected
+        s.x[: self.n] = x
+        s.u_applied[: self.m] = counters.u
+        s.t_publish_ns = time.monotonic_ns()
+        return s
 
 
-def serve(services: Services, task, simulation, stopping=lambda: False, log=lambda text: None):
-    """Serves `simulation` as the driver of `task` in lockstep until `stopping()`."""
+def serve(services: Services, task, simulation, stopping=lambda: False, log=None):
+    """Serves `simulation` as the driver of `task` in lockstep until `stopping()`;
+    `log(text)`, if given, is told of resets."""
     t_start = time.monotonic_ns()
+    advertised = info(task, LOCKSTEP, t_start)
     counters = Counters(task.m)
+    samples = Samples(task)
     newest = None
     next_info = 0
+    readers = services.info_readers()
     while not stopping():
         if time.monotonic_ns() >= next_info:
-            services.publish_info(info(task, LOCKSTEP, t_start))
+            advertised.t_publish_ns = time.monotonic_ns()
+            services.publish_info(advertised)
             next_info = time.monotonic_ns() + 1_000_000_000
-        c = services.receive(200)
+        c = services.receive(50)
         if c is None:
+            now_readers = services.info_readers()
+            if now_readers != readers:
+                next_info = 0  # a rig subscribed (or left, maybe for another): info at once
+            readers = now_readers
             continue
         if c.kind == RESET:
-            x0 = [c.x0[i] for i in range(task.n)]
-            if c.n_x != task.n or not all(math.isfinite(v) for v in x0):
+            x0 = c.x0[: task.n]
+            if c.n_x != task.n or not all(map(math.isfinite, x0)):
                 counters.rejected += 1
-                log(f"rejected reset {c.seq}: n_x {c.n_x}, x0 {x0}")
+                if log:
+                    log(f"rejected reset {c.seq}: n_x {c.n_x}, x0 {x0}")
                 continue
             simulation.place(x0)
             counters.status, counters.reset_id = READY, c.seq
             counters.u = [0.0] * task.m
-            log(f"reset {c.seq}: placed at {x0}")
+            if log:
+                log(f"reset {c.seq}: placed at {x0}")
         elif c.kind == ACTION and counters.status & READY and c.sample_seq == newest:
             counters.admit(task, c)
             simulation.step(counters.u, task.ts)
@@ -207,7 +260,7 @@ def serve(services: Services, task, simulation, stopping=lambda: False, log=lamb
             counters.rejected += 1  # before a reset, for an older sample, or unknown
             continue
         newest = 0 if newest is None else newest + 1
-        services.publish_sample(sample(task, counters, newest, simulation.state()))
+        services.publish_sample(samples.fill(counters, newest, simulation.state()))
 
 
 def serve_until_signalled(services: Services, task, simulation, who: str, verbose: bool):
@@ -217,8 +270,7 @@ def serve_until_signalled(services: Services, task, simulation, who: str, verbos
         signal.signal(sig, lambda *_: stopping.append(True))
 
     def log(text):
-        if verbose:
-            print(f"{who}: {text}", file=sys.stderr, flush=True)
+        print(f"{who}: {text}", file=sys.stderr, flush=True)
 
-    serve(services, task, simulation, lambda: bool(stopping), log)
+    serve(services, task, simulation, lambda: bool(stopping), log if verbose else None)
     print(f"{who}: stopped", file=sys.stderr)

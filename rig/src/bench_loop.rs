@@ -1,5 +1,6 @@
 //! `rig bench-loop`: the three-process loop against one process and against the
-//! transport's limits; and the ping-pong's processes (`rig pong`).
+//! transport's limits, and against external drivers in lockstep; and the ping-pong's
+//! processes (`rig pong`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -27,6 +28,19 @@ pub struct Args {
     /// run that waits so].
     #[arg(long, value_enum, value_name = "LAYOUT")]
     cpus: Option<Layout>,
+    /// Also time `rig run --plant external` against drivers in lockstep: `rig sim-driver
+    /// --clock lockstep` and, with `--python`, the Python example driver and the
+    /// Gymnasium adapter (Pendulum-v1, beside its own env.step loop in Python).
+    #[arg(long)]
+    external: bool,
+    /// With `--external`: the Python with iceoryx2 (and gymnasium) for the Python drivers
+    /// [default: the Rust driver only].
+    #[arg(long, value_name = "PYTHON", requires = "external")]
+    python: Option<PathBuf>,
+    /// With `--external`: the repository's root, whose examples/ and bench/scripts/ are
+    /// run.
+    #[arg(long, value_name = "DIR", default_value = ".", requires = "external")]
+    root: PathBuf,
     /// Output directory.
     #[arg(long, value_name = "DIR", default_value = "out/bench-loop")]
     out: PathBuf,
@@ -45,6 +59,10 @@ pub fn main(args: &Args) -> ExitCode {
         samples: args.samples as usize,
         waiting,
         layout: args.cpus.unwrap_or_else(|| Layout::lockstep(waiting)),
+        external: args.external.then(|| bench::loop_bench::ExternalOptions {
+            python: args.python.clone(),
+            root: args.root.clone(),
+        }),
     };
     let progress = |what: &str| {
         if !args.quiet {

@@ -134,6 +134,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         driver,
     )?;
     let lockstep = clock.is_lockstep();
+    let clock_is_external = clock.driver().is_some();
     let waiting = args.wait.waiting(if lockstep {
         LOCKSTEP_WAIT
     } else {
@@ -156,6 +157,8 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         scheduling,
         spin: args.spin,
         waiting,
+        // Known once the driver's info says which clock it keeps.
+        lockstep_waiting: clock_is_external.then(|| args.wait.waiting(LOCKSTEP_WAIT)),
         learn_across_gaps: args.gaps == "learn",
     };
     Ok((cfg, opts))

@@ -461,3 +461,59 @@ fn a_lockstep_driver_silent_for_seconds_delays_the_run_but_does_not_end_it() {
     ok(rig_run.wait_with_output().unwrap());
     assert_eq!(returns(&paused), returns(&dir.join("whole")));
 }
+
+/// The CPU time process `pid` has used so far (its `/proc` user and system ticks).
+fn cpu_of(pid: u32) -> std::time::Duration {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap();
+    // After the command's name in parentheses: state is field 3, utime 14, stime 15.
+    let fields: Vec<&str> = stat
+        .rsplit_once(')')
+        .unwrap()
+        .1
+        .split_whitespace()
+        .collect();
+    let ticks: u64 = fields[11].parse::<u64>().unwrap() + fields[12].parse::<u64>().unwrap();
+    // SAFETY: sysconf reads a system constant.
+    let hz = unsafe { libc::sysconf(libc::_SC_CLK_TCK) } as u64;
+    std::time::Duration::from_millis(ticks * 1000 / hz)
+}
+
+/// A lockstep driver tells a rig that starts its info at once, not at its next second
+/// (the rig's process and then its plant process each wait for it); it polls for
+/// commands while a rig commands it, and within 1.5 s of the last command it sleeps: a
+/// driver whose rig has gone costs no CPU.
+#[test]
+fn a_lockstep_driver_tells_a_new_rig_at_once_and_idles_once_the_rig_is_gone() {
+    use driver::contract::{DriverWatch, wait_info};
+    use std::time::{Duration, Instant};
+    let dir = tmp("idle");
+    for kind in drivers() {
+        let d = Driver::launch(&kind, "idle", &["--clock", "lockstep"]);
+        let bus = wire::Bus::join(&format!("idletest{}", std::process::id()), "rig").unwrap();
+        let info = |timeout| {
+            let w = DriverWatch::open(&bus, &d.id).unwrap();
+            let t0 = Instant::now();
+            wait_info(&bus, &w.info, &d.id, timeout, false, "").unwrap();
+            (w, t0.elapsed())
+        };
+        // As `rig run` and then its plant process: the first reader stays.
+        let _first = info(Duration::from_secs(30));
+        // Just after an info went out: the next reader has one well before the next second.
+        let (_, waited) = info(Duration::from_secs(5));
+        assert!(
+            waited < Duration::from_millis(500),
+            "{}: a new reader waited {waited:?} for the info",
+            d.id
+        );
+        ok(run(&d.id, &["--trials", "2"], &dir.join(&d.id)));
+        std::thread::sleep(Duration::from_millis(1500));
+        let cpu0 = cpu_of(d.child.id());
+        std::thread::sleep(Duration::from_secs(1));
+        let used = cpu_of(d.child.id()) - cpu0;
+        assert!(
+            used < Duration::from_millis(200),
+            "{}: {used:?} of CPU in a second without a rig",
+            d.id
+        );
+    }
+}

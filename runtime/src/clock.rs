@@ -106,7 +106,7 @@ pub enum ClockError {
     Predictive,
     /// Polling without end outside lockstep.
     #[error(
-        "`--wait spin|yield` without `--wait-us` applies in lockstep only: in real time and with an external driver the plant sleeps until its next sample and must be woken"
+        "`--wait spin|yield` without `--wait-us` applies in lockstep only (the simulated plant, or a driver that keeps the lockstep clock): in real time the plant sleeps until its next sample and must be woken"
     )]
     Unwoken,
     /// A task the rig cannot simulate, on the simulated plant.
@@ -205,7 +205,8 @@ impl Clock {
     /// Checks the clock against experiment `cfg` and the processes' `waiting`: an
     /// injected delay is lockstep's (in real time the delays are real); predictive
     /// timing and the built-in simulations' checks need the simulated plant; polling
-    /// without end needs lockstep.
+    /// without end needs lockstep (with an external driver, its own: checked once its
+    /// info is read, [`Clock::check_driver_waiting`]).
     pub fn check(&self, cfg: &ExperimentConfig, waiting: Waiting) -> Result<(), ClockError> {
         if self.period() == Some(Duration::ZERO) {
             return Err(ClockError::ZeroPeriod);
@@ -226,7 +227,18 @@ impl Clock {
             }
             _ => cfg.check_simulated()?,
         }
-        if self.is_lockstep() || waiting.needs_wake_up() {
+        let maybe_lockstep = matches!(self, Self::Lockstep | Self::External(_));
+        if maybe_lockstep || waiting.needs_wake_up() {
+            Ok(())
+        } else {
+            Err(ClockError::Unwoken)
+        }
+    }
+
+    /// Checks the processes' `waiting` against the clock an external driver keeps
+    /// (`info`): polling without end needs a driver in lockstep.
+    pub fn check_driver_waiting(info: &DriverInfo, waiting: Waiting) -> Result<(), ClockError> {
+        if info.lockstep() || waiting.needs_wake_up() {
             Ok(())
         } else {
             Err(ClockError::Unwoken)

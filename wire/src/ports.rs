@@ -40,6 +40,14 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Tx<T> {
         Ok(())
     }
 
+    /// This sender waking its receivers whatever this process's [`Waiting`]: for
+    /// receivers in processes that wait their own way and may block (a driver). A wake-up
+    /// the receiver has not taken yet costs the next send nothing.
+    pub fn waking(mut self) -> Self {
+        self.wake = true;
+        self
+    }
+
     /// Receivers currently connected.
     pub fn receivers(&self) -> usize {
         self.service.dynamic_config().number_of_subscribers()
@@ -184,12 +192,7 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
     pub fn recv(&self, bus: &Bus, silence: Duration) -> Result<T, Error> {
         let t0 = std::time::Instant::now();
         loop {
-            let m = match self.waiting {
-                Waiting::Block => self.recv_timeout(CHECK_EVERY)?,
-                Waiting::Spin(bound) => self.poll_then_block(bound, std::hint::spin_loop)?,
-                Waiting::Yield(bound) => self.poll_then_block(bound, std::thread::yield_now)?,
-            };
-            if let Some(m) = m {
+            if let Some(m) = self.recv_awhile()? {
                 bus.prime();
                 return Ok(m);
             }
@@ -197,6 +200,17 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
                 bus.prime();
                 return Ok(m);
             }
+        }
+    }
+
+    /// The next message, waiting for it the way this receiver waits ([`Waiting`]) for
+    /// at most 100 ms; `None` if none came, so that the caller can check on its
+    /// peers and its own time limits before it waits again.
+    pub fn recv_awhile(&self) -> Result<Option<T>, Error> {
+        match self.waiting {
+            Waiting::Block => self.recv_timeout(CHECK_EVERY),
+            Waiting::Spin(bound) => self.poll_then_block(bound, std::hint::spin_loop),
+            Waiting::Yield(bound) => self.poll_then_block(bound, std::thread::yield_now),
         }
     }
 
@@ -266,7 +280,7 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
     }
 }
 
-/// How often a waiting receiver checks on the run's processes.
+/// How often a waiting receiver checks on the run's processes ([`Rx::recv_awhile`]).
 const CHECK_EVERY: Duration = Duration::from_millis(100);
 
 #[cfg(test)]

@@ -394,6 +394,7 @@ fn run_realtime(
             scheduling: opts.scheduling,
             spin: opts.spin,
             waiting: opts.waiting,
+            lockstep_waiting: None,
             // The loop's timing is measured, gaps and all.
             learn_across_gaps: true,
         },

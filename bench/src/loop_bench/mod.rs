@@ -14,6 +14,9 @@
 //!   started as the loop's are: waiting as the loop does, blocking on events (an
 //!   operating-system wake-up per hop), and busy-polling without events (the transport's
 //!   limit). One one-way hop is half a round trip.
+//! * **External drivers** (with [`LoopOptions::external`]): `rig run --plant external`
+//!   against drivers in lockstep, beside the built-in `rig run` or their own yardstick
+//!   ([`external`]).
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -23,9 +26,11 @@ use runtime::learn::write_atomic;
 use runtime::process::Layout;
 use wire::{FOREVER, Waiting};
 
+pub mod external;
 mod raw;
 mod runs;
 
+pub use external::{ExternalCase, ExternalOptions};
 pub use raw::{pong, raw_round_trips};
 pub use runs::Timed;
 
@@ -108,6 +113,8 @@ pub struct LoopOptions {
     pub waiting: Waiting,
     /// Where the three processes and the recorder run.
     pub layout: Layout,
+    /// Also runs against external drivers in lockstep, from here.
+    pub external: Option<ExternalOptions>,
 }
 
 /// What `rig bench-loop` measured.
@@ -133,6 +140,8 @@ pub struct LoopReport {
     pub raw_block: Stats,
     /// Ping-pong round trips, busy-polling without events \[µs\].
     pub raw_poll: Stats,
+    /// Runs against external drivers in lockstep.
+    pub external: Vec<ExternalCase>,
 }
 
 /// The median of `runs`' wall and CPU times.
@@ -201,23 +210,55 @@ impl LoopReport {
             hop("ping-pong, waiting as the loop", &self.raw_waiting),
             hop("ping-pong, blocking on events", &self.raw_block),
             hop("ping-pong, busy-polling", &self.raw_poll),
-        )
+        ) + &self.external_summary()
+    }
+
+    /// The external drivers' lines of the summary: each against its yardstick.
+    fn external_summary(&self) -> String {
+        let built_in =
+            median(&self.three_processes).wall.as_secs_f64() * 1e6 / self.samples_per_run as f64;
+        let mut s = String::new();
+        for c in &self.external {
+            let (yard, what) = match c.yardstick_us() {
+                Some(y) => (y, "env.step alone"),
+                None => (built_in, "rig run"),
+            };
+            s += &format!(
+                "{:<34} wall {:>7.3} s  ({:.1} µs per sample; n = {}); {what} {yard:.1} µs: {:.2} ×\n",
+                c.name,
+                median(&c.runs).wall.as_secs_f64(),
+                c.per_sample_us(),
+                c.runs.len(),
+                c.per_sample_us() / yard
+            );
+        }
+        s
     }
 
     /// `loop.csv`: one row per measured run and per latency distribution.
     fn csv(&self) -> String {
         let mut s = String::from("measurement,repetition,wall_s,cpu_s\n");
+        let external = self.external.iter().map(|c| (c.key, &c.runs));
         for (name, runs) in [
             ("in_process", &self.in_process),
             ("three_processes", &self.three_processes),
             ("unrecorded", &self.unrecorded),
-        ] {
+        ]
+        .into_iter()
+        .chain(external)
+        {
             for (i, t) in runs.iter().enumerate() {
                 s += &format!(
                     "{name},{i},{},{}\n",
                     t.wall.as_secs_f64(),
                     t.cpu.as_secs_f64()
                 );
+            }
+        }
+        for c in &self.external {
+            // The yardstick's loop for as many samples (its own CPU time not taken).
+            for (i, y) in c.yardstick.iter().enumerate() {
+                s += &format!("{}_yardstick,{i},{},\n", c.key, y * c.samples as f64 / 1e6);
             }
         }
         s += "\nmeasurement,n,p50_us,p90_us,p99_us,p999_us,max_us\n";
@@ -281,6 +322,10 @@ pub fn bench_loop(opts: &LoopOptions, progress: &dyn Fn(&str)) -> Result<LoopRep
     let cfg =
         runtime::config::resolve(None, &Default::default()).map_err(|e| anyhow::anyhow!("{e}"))?;
     let samples_per_run = samples_per_run(&cfg, opts.trials);
+    let external = match &opts.external {
+        Some(o) => external::external_cases(&exe, out, opts.trials, opts.repetitions, o, progress)?,
+        None => Vec::new(),
+    };
     let report = LoopReport {
         layout: opts.layout,
         in_process,
@@ -292,6 +337,7 @@ pub fn bench_loop(opts: &LoopOptions, progress: &dyn Fn(&str)) -> Result<LoopRep
         raw_waiting: raw(opts.waiting)?,
         raw_block: raw(Waiting::Block)?,
         raw_poll: raw(Waiting::Spin(FOREVER))?,
+        external,
     };
     write_atomic(&out.join("loop.csv"), &report.csv())?;
     write_atomic(&out.join("summary.txt"), &report.summary())?;

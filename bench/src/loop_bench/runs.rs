@@ -59,7 +59,7 @@ fn wait_all(
 }
 
 /// One `exe args…` to completion, its output in `log`.
-fn timed(exe: &Path, args: &[&str], log: &Path) -> Result<Timed> {
+pub(super) fn timed(exe: &Path, args: &[&str], log: &Path) -> Result<Timed> {
     let (cpu0, t0) = (children_cpu(), Instant::now());
     let kids = Kill(vec![spawn(exe, args, log)?]);
     wait_all(kids, &[args[0]], t0, cpu0, log)

@@ -13,8 +13,9 @@ use std::time::Duration;
 
 use wire::{MAX_U, MAX_X, now_ns};
 
+use super::announce::Announcer;
 use super::state::Driver;
-use super::{Served, Serving, Start};
+use super::{Served, Services, Serving, Start};
 use crate::contract::{DriverCommand, clock, kind, status};
 use crate::device::Device;
 use crate::error::Error;
@@ -28,12 +29,16 @@ pub trait Lockstep: Device {
     fn step(&mut self);
 }
 
-/// How often the info is published while no command arrives.
-const INFO_EVERY: Duration = Duration::from_secs(1);
+/// How long after a command the driver polls for the next one (handing the CPU on
+/// between polls, as a lockstep run's processes do) before it sleeps until the rig wakes
+/// it: a loop that is running answers within microseconds; a rig that stopped or went
+/// away costs a CPU for this long at most.
+const POLL_AFTER_COMMAND: Duration = Duration::from_secs(1);
 
 /// Serves `device` as driver `driver_id` in lockstep until Ctrl-C or SIGTERM (or
 /// [`Serving::stop_after`] samples): each command is answered as the module
-/// documentation says; the info goes out at start and every second.
+/// documentation says; the info goes out at start, every second and at once when its
+/// readers change ([`Announcer`]).
 pub fn serve_lockstep(
     device: &mut impl Lockstep,
     driver_id: &str,
@@ -46,20 +51,19 @@ pub fn serve_lockstep(
         advertised,
         ..
     } = Start::of(device, driver_id, clock::LOCKSTEP, how.verbose)?;
-    let mut next_info = now_ns() + INFO_EVERY.as_nanos() as u64;
+    let mut info = Announcer::new(advertised, &io);
     let mut served = Served::default();
     let mut x = [0.0; MAX_X];
     // The newest sample published (none yet).
     let mut newest: Option<u64> = None;
+    // Until when the driver polls for commands (not at all before the first).
+    let mut poll_until = 0;
     while !io.bus.interrupted() && how.stop_after.is_none_or(|n| served.samples < n) {
-        let Some(c) = io.commands.try_recv().map_err(|e| io.err(e))? else {
-            io.commands.wait_until(next_info).map_err(|e| io.err(e))?;
-            if now_ns() >= next_info {
-                io.publish_info(advertised)?;
-                next_info = now_ns() + INFO_EVERY.as_nanos() as u64;
-            }
+        let Some(c) = next_command(&io, poll_until, info.next_ns())? else {
+            info.publish_if_due(&io)?;
             continue;
         };
+        poll_until = now_ns() + POLL_AFTER_COMMAND.as_nanos() as u64;
         let answered = match c.kind {
             kind::RESET => reset(&mut d, device, &c),
             kind::ACTION if d.status & status::READY != 0 && newest == Some(c.sample_seq) => {
@@ -90,6 +94,40 @@ pub fn serve_lockstep(
     }
     device.apply(now_ns(), &[0.0; MAX_U][..n_u]);
     Ok(served)
+}
+
+/// How often a polling driver looks up from polling (for Ctrl-C, the readers of its info
+/// and the info's second).
+const LOOK_UP_EVERY: Duration = Duration::from_millis(10);
+
+/// How often a sleeping driver looks up (for the readers of its info).
+const LOOK_UP_ASLEEP: Duration = Duration::from_millis(50);
+
+/// The next command: polled for until `poll_until`, handing the CPU on between polls;
+/// after that, waited for asleep until the rig wakes the driver. `None` at `next_info`,
+/// after [`LOOK_UP_EVERY`] of polling or [`LOOK_UP_ASLEEP`] asleep, or after a signal or
+/// a wake-up without a command.
+fn next_command(
+    io: &Services,
+    poll_until: u64,
+    next_info: u64,
+) -> Result<Option<DriverCommand>, Error> {
+    let look_up = now_ns() + LOOK_UP_EVERY.as_nanos() as u64;
+    loop {
+        if let Some(c) = io.commands.try_recv().map_err(|e| io.err(e))? {
+            return Ok(Some(c));
+        }
+        let now = now_ns();
+        if now >= next_info.min(look_up) {
+            return Ok(None);
+        }
+        if now >= poll_until {
+            let wake = next_info.min(now + LOOK_UP_ASLEEP.as_nanos() as u64);
+            io.commands.wait_until(wake).map_err(|e| io.err(e))?;
+            return io.commands.try_recv().map_err(|e| io.err(e));
+        }
+        std::thread::yield_now();
+    }
 }
 
 /// A RESET: the device placed at `x0` at once and READY there, zero in effect; false if

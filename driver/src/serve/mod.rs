@@ -14,6 +14,7 @@ use crate::contract::{
 use crate::device::Device;
 use crate::error::Error;
 
+mod announce;
 mod lockstep;
 mod realtime;
 mod state;

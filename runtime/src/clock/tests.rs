@@ -1,5 +1,6 @@
 use std::time::Duration;
 
+use driver::contract::DriverInfo;
 use wire::{FOREVER, Waiting};
 
 use super::{Clock, ClockError, DriverFlags, ExternalDriver, Timing};
@@ -86,19 +87,34 @@ fn delays_predictive_timing_and_endless_polling_are_refused_where_they_cannot_ho
     let plain = config(Overrides::default());
     let polling = Waiting::Yield(FOREVER);
     assert!(Clock::Lockstep.check(&plain, polling).is_ok());
+    let bounded = Waiting::Yield(Duration::from_micros(50));
     for clock in [&realtime, &external] {
         assert!(clock.check(&plain, Waiting::Block).is_ok());
-        let e = clock.check(&plain, polling).unwrap_err();
-        assert!(matches!(e, ClockError::Unwoken), "{e}");
-        assert!(
-            e.to_string()
-                .starts_with("`--wait spin|yield` without `--wait-us`"),
-            "{e}"
-        );
         // Polling that ends wakes the plant.
-        let bounded = Waiting::Yield(Duration::from_micros(50));
         assert!(clock.check(&plain, bounded).is_ok());
     }
+    let e = realtime.check(&plain, polling).unwrap_err();
+    assert!(matches!(e, ClockError::Unwoken), "{e}");
+    assert!(
+        e.to_string()
+            .starts_with("`--wait spin|yield` without `--wait-us`"),
+        "{e}"
+    );
+    // An external driver's clock is known once its info is read: polling without end
+    // only with a driver in lockstep.
+    assert!(external.check(&plain, polling).is_ok());
+    let driver = |clock| DriverInfo {
+        clock,
+        ..Default::default()
+    };
+    let lockstep = driver(driver::contract::clock::LOCKSTEP);
+    let in_real_time = driver(driver::contract::clock::REALTIME);
+    assert!(Clock::check_driver_waiting(&lockstep, polling).is_ok());
+    assert!(Clock::check_driver_waiting(&in_real_time, bounded).is_ok());
+    assert!(matches!(
+        Clock::check_driver_waiting(&in_real_time, polling),
+        Err(ClockError::Unwoken)
+    ));
     let predictive = config(Overrides {
         sensor: Some(observer::config::SensorKind::Angle),
         observer: Some(observer::config::ObserverKind::Predictive),

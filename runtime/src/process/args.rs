@@ -103,8 +103,8 @@ pub struct Wait {
     /// while waiting, an operating-system wake-up per message); `spin` polls with the
     /// CPU's spin hint (for a core per process); `yield` polls and hands the CPU to the
     /// other processes between polls. Polling lasts `--wait-us`, then blocks [rig run's
-    /// default: yield in lockstep, block in real time and with an external driver; a
-    /// node's: block].
+    /// default: yield in lockstep, with the simulated plant or a driver that keeps the
+    /// lockstep clock; block in real time; a node's: block].
     #[arg(long, value_enum, value_name = "HOW")]
     pub wait: Option<WaitKind>,
     /// With `--wait spin` or `yield`: how long to poll before blocking [µs; default:

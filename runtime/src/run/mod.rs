@@ -28,12 +28,12 @@ use anyhow::{Context, Result, anyhow};
 use driver::contract::{DriverInfo, DriverWatch};
 use wire::{Bus, Waiting};
 
-use crate::clock::{Clock, ExternalDriver};
+use crate::clock::{Clock, ClockError, ExternalDriver};
 use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
 use crate::learn::{progress_bar, write_atomic};
 use crate::lock::FolderLock;
-use crate::process::{Scheduling, Spin};
+use crate::process::{Layout, Scheduling, Spin};
 use crate::resume;
 
 mod gaps;
@@ -72,6 +72,10 @@ pub struct RunOptions {
     pub spin: Spin,
     /// How the three processes wait for their next message.
     pub waiting: Waiting,
+    /// How they wait when an external driver keeps the lockstep clock, in place of
+    /// `waiting` (`None`: as that says; `rig run` without `--wait`: polling without end,
+    /// as a lockstep run with the simulated plant). Known once the driver's info is read.
+    pub lockstep_waiting: Option<Waiting>,
     /// Realtime and external driver: learn across gaps in the loop's timing instead of
     /// cutting the attempt short and running the trial again (`--gaps learn`).
     pub learn_across_gaps: bool,
@@ -131,9 +135,11 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     }
     let bus = Bus::join(&run_id, "rig")?;
     let task = Arc::new(cfg.task());
-    let (watch, driver_info) = match opts.clock.driver() {
-        Some(d) => match wait_for_driver(&bus, d, &task, opts.progress) {
-            Ok((watch, info)) => (Some(watch), Some(info)),
+    let (watch, driver_info, with_driver) = match opts.clock.driver() {
+        Some(d) => match wait_for_driver(&bus, d, &task, opts.progress)
+            .and_then(|(watch, info)| Ok((watch, info, driver_options(opts, &info)?)))
+        {
+            Ok((watch, info, with)) => (Some(watch), Some(info), Some(with)),
             Err(e) => {
                 if created {
                     // Holds only the lock file: a refused run leaves no folder behind.
@@ -142,8 +148,9 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
                 return Err(e);
             }
         },
-        None => (None, None),
+        None => (None, None, None),
     };
+    let opts = with_driver.as_ref().unwrap_or(opts);
     // Nothing is written before the driver is found and fits. A new run in an old
     // directory: old checkpoints must not be taken for its own; a resumed run's after its
     // resume point are of trials it redoes.
@@ -189,7 +196,11 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     (sup.children, sup.logs) = spawn::processes(&opts.out, &nodes)?;
     // Placed after the processes started: they place themselves, from anywhere.
     opts.scheduling.place(crate::process::Part::Recorder)?;
-    if opts.clock.is_lockstep() {
+    let lockstep = match &opts.clock {
+        Clock::External(_) => driver_info.is_some_and(|i| i.lockstep()),
+        clock => clock.is_lockstep(),
+    };
+    if lockstep {
         crate::process::batch_thread();
     }
 
@@ -240,6 +251,24 @@ fn free_run_id(opts: &RunOptions) -> Result<String> {
     Ok(run_id)
 }
 
+/// The options of a run against a driver whose info is `info`: with a driver that keeps
+/// the lockstep clock, the processes wait as [`RunOptions::lockstep_waiting`] says and,
+/// unless `--cpus` said, are placed as a lockstep run that waits so
+/// ([`Layout::lockstep`]); polling without end is refused with a driver in real time.
+fn driver_options(opts: &RunOptions, info: &DriverInfo) -> Result<RunOptions, ClockError> {
+    let mut with = opts.clone();
+    if info.lockstep()
+        && let Some(w) = opts.lockstep_waiting
+    {
+        with.waiting = w;
+        if with.scheduling.layout().is_none() {
+            with.scheduling.cpus = Some(Layout::lockstep(w));
+        }
+    }
+    Clock::check_driver_waiting(info, with.waiting)?;
+    Ok(with)
+}
+
 /// Waits for driver `d`'s info (saying so after a second of silence when `verbose`)
 /// and checks that the driver fits `task`; returns a watch on its traffic (to record it)
 /// and its info.
@@ -254,4 +283,64 @@ fn wait_for_driver(
     let info = driver::contract::wait_info(bus, &watch.info, &d.id, d.timeout, verbose, &serve)?;
     driver::check_info(&d.id, &info, task)?;
     Ok((watch, info))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use driver::contract::clock;
+    use wire::FOREVER;
+
+    fn options(waiting: Waiting, lockstep_waiting: Option<Waiting>) -> RunOptions {
+        RunOptions {
+            out: PathBuf::from("out"),
+            run_id: None,
+            progress: false,
+            clock: Clock::External(ExternalDriver {
+                id: "pendulum".into(),
+                timeout: Duration::from_secs(1),
+                reset_timeout: Duration::from_secs(1),
+            }),
+            resume: false,
+            cycles_out: None,
+            scheduling: Scheduling {
+                rt_priority: None,
+                pin_cpus: false,
+                cpus: None,
+            },
+            spin: Spin::default(),
+            waiting,
+            lockstep_waiting,
+            learn_across_gaps: false,
+        }
+    }
+
+    fn info(clock: u64) -> DriverInfo {
+        DriverInfo {
+            clock,
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn a_driver_in_lockstep_is_polled_as_a_lockstep_run_and_one_in_real_time_is_not() {
+        let polls = Waiting::Yield(FOREVER);
+        let opts = options(Waiting::Block, Some(polls));
+        let with = driver_options(&opts, &info(clock::LOCKSTEP)).unwrap();
+        assert_eq!(with.waiting, polls);
+        assert_eq!(with.scheduling.cpus, Some(Layout::lockstep(polls)));
+        let with = driver_options(&opts, &info(clock::REALTIME)).unwrap();
+        assert_eq!(with.waiting, Waiting::Block);
+        assert_eq!(with.scheduling.cpus, None);
+        // `--cpus` given stays.
+        let mut placed = opts.clone();
+        placed.scheduling.cpus = Some(Layout::Shared);
+        let with = driver_options(&placed, &info(clock::LOCKSTEP)).unwrap();
+        assert_eq!(with.scheduling.cpus, Some(Layout::Shared));
+        // Polling without end asked for against a driver in real time is refused.
+        let opts = options(polls, None);
+        assert!(driver_options(&opts, &info(clock::LOCKSTEP)).is_ok());
+        let e = driver_options(&opts, &info(clock::REALTIME)).unwrap_err();
+        assert!(matches!(e, ClockError::Unwoken), "{e}");
+    }
 }
