@@ -85,27 +85,25 @@ pub struct LstdConfig {
     pub prior: LstdPrior,
 }
 
-/// The prior of an LSTD critic ([`LstdConfig::prior`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LstdPrior {
-    /// `b_0 = 0`: `θ` is drawn towards 0 (§6.4.1).
-    #[default]
-    Zero,
-    /// `b_0 = A_0 θ_0`, `θ_0 = ρ(c, 0) / (1 − γ)` at each basis function's centre `c`.
-    Reward,
+plant::choice! {
+    /// The prior of an LSTD critic ([`LstdConfig::prior`]).
+    #[derive(Debug, Default, PartialEq, Eq)]
+    pub enum LstdPrior {
+        /// `b_0 = 0`: `θ` is drawn towards 0 (§6.4.1).
+        #[default]
+        Zero => "zero",
+        /// `b_0 = A_0 θ_0`, `θ_0 = ρ(c, 0) / (1 − γ)` at each basis function's centre `c`.
+        Reward => "reward",
+    }
 }
 
 impl LstdPrior {
-    /// Both priors, for validation messages.
-    pub const ALL: [LstdPrior; 2] = [LstdPrior::Zero, LstdPrior::Reward];
 
     fn is_zero(&self) -> bool {
         *self == LstdPrior::Zero
     }
 }
 
-plant::choice_names!(LstdPrior, Zero => "zero", Reward => "reward");
 
 /// Where a component sits in the configuration: what its validation needs to know.
 pub(crate) struct Slot<'a> {
