@@ -46,7 +46,7 @@ pub fn run(settings: &ObserverConfig) -> Result<()> {
     super::set_rt_priority(args.scheduling.rt_priority)?;
     args.scheduling.place(super::Part::Node)?;
     let cfg = args.experiment()?;
-    let task = Arc::new(cfg.task());
+    let task = cfg.task();
     let mut front = crate::experiment::front(&task, &cfg);
     let bus = args.join("observer")?;
     let measurements = bus.rx::<Measurement>(topic::MEASUREMENT)?;

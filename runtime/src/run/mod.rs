@@ -130,7 +130,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         eprintln!("note: {note}");
     }
     let bus = Bus::join(&run_id, "rig")?;
-    let task = Arc::new(cfg.task());
+    let task = cfg.task();
     let (watch, driver_info) = match opts.clock.driver() {
         Some(d) => match wait_for_driver(&bus, d, &task, opts.progress) {
             Ok((watch, info)) => (Some(watch), Some(info)),
