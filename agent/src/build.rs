@@ -9,10 +9,10 @@ use crate::approx::rbf::{Rbf, RbfParams};
 use crate::approx::tiles::{Tiles, TilesParams};
 use crate::approx::{Approximator, Differentiable, ValueFunction};
 use crate::config::{EvictionRule, LearningConfig, LstdPrior, TilesConfig};
-use crate::learner::{Algorithm, Learner, Plain, SarsaParts, Smooth, VgbpCritic};
 use crate::critic::{Critic, TdLambda};
 use crate::explore::Exploration;
 use crate::horizon::Horizon;
+use crate::learner::{Algorithm, Learner, Plain, SarsaParts, Smooth, VgbpCritic};
 use crate::lstd::Lstd;
 use crate::mlac::Mlac;
 use crate::model::ProcessModel;
@@ -212,9 +212,14 @@ pub fn build(task: &Task, learner: &Learner, run_seed: u64) -> Box<dyn Agent> {
         }
         Algorithm::Vgbp(p) => {
             let v = &p.vgbp;
-            let vgbp = Vgbp::new(info.clone(), spaces.process_model(&p.model), l.gamma, v.lookahead)
-                .with_action_grid(v.grid)
-                .with_fit_at_zero_action(v.fit_at_zero_action);
+            let vgbp = Vgbp::new(
+                info.clone(),
+                spaces.process_model(&p.model),
+                l.gamma,
+                v.lookahead,
+            )
+            .with_action_grid(v.grid)
+            .with_fit_at_zero_action(v.fit_at_zero_action);
             (vgbp_critic(&spaces, &p.critic, l.gamma), Box::new(vgbp))
         }
     };

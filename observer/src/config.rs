@@ -16,8 +16,7 @@ plant::choice! {
     }
 }
 
-impl SensorKind {
-}
+impl SensorKind {}
 
 plant::choice! {
     /// The state observer (this crate).
@@ -33,8 +32,7 @@ plant::choice! {
     }
 }
 
-impl ObserverKind {
-}
+impl ObserverKind {}
 
 plant::choice! {
     /// The predictive observer's process model.
@@ -48,8 +46,7 @@ plant::choice! {
     }
 }
 
-impl ObserverModel {
-}
+impl ObserverModel {}
 
 plant::choice! {
     /// When the agent acts, relative to the sample it acts on (thesis §6.4.1;
@@ -69,9 +66,7 @@ plant::choice! {
     }
 }
 
-impl ObserverMode {
-}
-
+impl ObserverMode {}
 
 /// Sensor and state observer (`[observer]`); the defaults — full state, pass-through —
 /// are the thesis's simulations, and a configuration with them is written without this

@@ -6,7 +6,6 @@ use std::process::ExitCode;
 
 use clap::Args as Flags;
 use observer::config::ObserverModel;
-use plant::config::Choice;
 
 #[derive(Flags)]
 pub struct Args {

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use plant::config::Choice;
 use plant::{SystemName, Task};
 use runtime::clock::{ClockError, DriverFlags, ExternalDriver};
 

@@ -5,7 +5,6 @@ use std::process::ExitCode;
 
 use clap::Args as Flags;
 use observer::config::{ObserverKind, ObserverMode};
-use plant::config::Choice;
 use runtime::clock::Clock;
 
 use crate::external::DriverArgs;

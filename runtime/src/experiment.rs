@@ -169,7 +169,7 @@ impl Experiment {
             return Err(ResumeError::Observer);
         }
         resumable_delays(cfg)?;
-        let mut e = Self::new(cfg, run);
+        let mut e = Self::new(cfg, run)?;
         c.restore(&cfg.origin(run), e.agent.as_mut())?;
         e.schedule.resume(c.trial, c.sim_time_s);
         Ok(e)
@@ -401,6 +401,9 @@ pub enum ResumeError {
     /// A checkpoint that cannot be read or does not fit the run.
     #[error(transparent)]
     Checkpoint(#[from] CheckpointError),
+    /// A configuration whose learner does not fit its task.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
 }
 
 /// One sample of a time response.

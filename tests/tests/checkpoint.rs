@@ -40,7 +40,7 @@ fn presets() -> Vec<ExperimentConfig> {
 
 fn name(cfg: &ExperimentConfig) -> String {
     let a = &cfg.agent;
-    format!("{} {}/{}/{}", cfg.system, a.algo, a.approx, a.horizon)
+    format!("{} {}/{}/{}", cfg.system(), a.algo, a.approx, a.horizon)
 }
 
 #[test]
@@ -98,7 +98,7 @@ fn a_checkpoint_does_not_restore_into_another_learner() {
     let all = presets();
     let first = &all[0];
     assert_eq!(
-        (first.system, first.agent.algo),
+        (first.system(), first.agent.algo),
         (SystemName::Pendulum, Algo::Sac),
         "{}",
         name(first)

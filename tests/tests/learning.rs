@@ -221,7 +221,9 @@ fn the_arm_and_the_linear_system_learn_with_their_presets() {
             )),
             Some(_) => {}
             None => {
-                let untrained = runtime::experiment::Experiment::new(&cfg, 0).unwrap().greedy_return();
+                let untrained = runtime::experiment::Experiment::new(&cfg, 0)
+                    .unwrap()
+                    .greedy_return();
                 let changed = summary
                     .greedy_curve
                     .iter()

@@ -111,12 +111,10 @@ plant::choice! {
 }
 
 impl LstdPrior {
-
     fn is_zero(&self) -> bool {
         *self == LstdPrior::Zero
     }
 }
-
 
 /// Where a component sits in the configuration: what its validation needs to know.
 pub(crate) struct Slot<'a> {

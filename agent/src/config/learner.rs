@@ -35,7 +35,6 @@ impl Algo {
         }
     }
 
-
     /// Whether the algorithm has an actor (or reference model) component.
     pub fn has_actor(self) -> bool {
         matches!(self, Algo::Sac | Algo::Mlac | Algo::Rmac)
@@ -85,8 +84,7 @@ plant::choice! {
     }
 }
 
-impl ApproxKind {
-}
+impl ApproxKind {}
 
 plant::choice! {
     /// The horizon of the cost function ([`crate::horizon`]).
@@ -102,7 +100,6 @@ plant::choice! {
 }
 
 impl HorizonKind {
-
     /// The runtime horizon of `task`: a finite horizon is one trial, `N` samples.
     pub fn of(self, task: &Task) -> Horizon {
         match self {
@@ -113,7 +110,6 @@ impl HorizonKind {
         }
     }
 }
-
 
 /// The error for a finite horizon with an algorithm that has none (VGBP, SARSA).
 pub(crate) fn finite_horizon_unsupported(algo: Algo) -> ConfigError {

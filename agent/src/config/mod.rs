@@ -22,7 +22,9 @@ mod learning;
 mod sarsa;
 mod vgbp;
 
-pub use component::{Component, EvictionRule, LlrConfig, LstdConfig, LstdPrior, RbfConfig, TilesConfig};
+pub use component::{
+    Component, EvictionRule, LlrConfig, LstdConfig, LstdPrior, RbfConfig, TilesConfig,
+};
 pub(crate) use learner::finite_horizon_unsupported;
 pub use learner::{Algo, ApproxKind, HorizonKind};
 pub use learning::LearningConfig;
@@ -32,8 +34,8 @@ pub use vgbp::VgbpConfig;
 use plant::Task;
 use plant::config::ConfigError;
 
-use component::Slot;
 use crate::learner::{Algorithm, Learner, ModelParts, SacParts, SarsaParts, VgbpParts};
+use component::Slot;
 
 /// The learner's configuration: what an agent is built from.
 #[derive(Clone, Debug, PartialEq)]
@@ -175,10 +177,7 @@ impl AgentConfig {
         self.actor.as_ref().ok_or_else(|| {
             ConfigError::new(
                 "actor",
-                format!(
-                    "{} has an actor: an [actor] section is required",
-                    self.algo
-                ),
+                format!("{} has an actor: an [actor] section is required", self.algo),
             )
         })
     }

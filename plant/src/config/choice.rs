@@ -116,7 +116,9 @@ macro_rules! __choice_value_enum {
                 &Self::ALL
             }
             fn to_possible_value(&self) -> Option<$crate::config::__clap::builder::PossibleValue> {
-                Some($crate::config::__clap::builder::PossibleValue::new(self.as_str()))
+                Some($crate::config::__clap::builder::PossibleValue::new(
+                    self.as_str(),
+                ))
             }
         }
     };

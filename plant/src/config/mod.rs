@@ -23,7 +23,7 @@ pub use choice::{Choice, UnknownChoice, deserialize_choice};
 #[cfg(feature = "clap")]
 #[doc(hidden)]
 pub use clap as __clap;
-#[doc(hidden)]
-pub use serde as __serde;
 pub use error::{ConfigError, check_float, check_int, check_len};
 pub use run::RunConfig;
+#[doc(hidden)]
+pub use serde as __serde;

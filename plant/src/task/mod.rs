@@ -3,7 +3,6 @@
 
 use std::path::Path;
 
-
 use crate::angle::wrap;
 use crate::config::ConfigError;
 use crate::region::Region;

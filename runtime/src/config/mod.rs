@@ -81,11 +81,7 @@ impl ExperimentConfig {
 
     /// The configuration on `system` with the task `task` (`None`: `system`'s shipped
     /// one), which is checked here; an error's key is prefixed with `task.`.
-    pub fn on_task(
-        self,
-        system: SystemName,
-        task: Option<TaskFile>,
-    ) -> Result<Self, ConfigError> {
+    pub fn on_task(self, system: SystemName, task: Option<TaskFile>) -> Result<Self, ConfigError> {
         let learned = match &task {
             Some(file) => task_of(file)?,
             None => Task::new(system),

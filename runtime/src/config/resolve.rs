@@ -4,7 +4,7 @@ use std::path::Path;
 
 use agent::config::{Algo, ApproxKind, EvictionRule, HorizonKind, LstdPrior};
 use observer::config::{ObserverConfig, ObserverKind, ObserverMode, ObserverModel, SensorKind};
-use plant::config::{Choice, ConfigError};
+use plant::config::ConfigError;
 use plant::{SystemName, TaskFile};
 
 use super::ExperimentConfig;

@@ -4,8 +4,6 @@
 //! velocities are NaN — not measured), never the ground truth, and runs the observer
 //! the configuration asks for ([`::observer::build`], as the in-process driver does).
 
-use std::sync::Arc;
-
 use ::observer::timing::{Call, Sample};
 use anyhow::Result;
 use wire::{Estimate, Measurement, flags, now_ns, topic};

@@ -21,7 +21,6 @@
 //! * The output folder is this run's while it lasts ([`crate::lock`]).
 
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow};

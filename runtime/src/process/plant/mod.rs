@@ -19,7 +19,6 @@ mod lockstep;
 mod realtime;
 
 use std::path::Path;
-use std::sync::Arc;
 
 use ::plant::Plant;
 use ::plant::episode::Episode;
