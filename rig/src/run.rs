@@ -228,3 +228,34 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
         opts.out.display()
     );
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::{CommandFactory, Parser};
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    fn parse(flags: &[&str]) -> Result<Args, clap::Error> {
+        Cli::try_parse_from(std::iter::once("run").chain(flags.iter().copied())).map(|c| c.args)
+    }
+
+    #[test]
+    fn plant_and_gaps_are_named_choices() {
+        let a = parse(&[]).unwrap();
+        assert_eq!((a.plant, a.gaps), (PlantSource::Simulated, Gaps::Cut));
+        let a = parse(&["--plant", "sim", "--gaps", "learn"]).unwrap();
+        assert_eq!((a.plant, a.gaps), (PlantSource::Simulated, Gaps::Learn));
+        let a = parse(&["--plant", "external"]).unwrap();
+        assert_eq!(a.plant, PlantSource::External);
+        assert!(parse(&["--gaps", "skip"]).is_err());
+        assert!(parse(&["--plant", "hardware"]).is_err());
+        let help = Cli::command().render_long_help().to_string();
+        assert!(help.contains("[possible values: simulated, external]"), "{help}");
+        assert!(help.contains("[possible values: cut, learn]"), "{help}");
+    }
+}

@@ -145,4 +145,25 @@ mod tests {
             "one of: pendulum, arm-vertical, arm-horizontal, arm-6.4, double-integrator"
         );
     }
+
+    #[test]
+    fn serde_reads_and_writes_the_spellings() {
+        #[derive(serde::Serialize, serde::Deserialize, Debug, PartialEq)]
+        struct Row {
+            system: SystemName,
+        }
+        let row = Row {
+            system: SystemName::Arm64,
+        };
+        let text = toml::to_string(&row).unwrap();
+        assert_eq!(text, "system = \"arm-6.4\"\n");
+        assert_eq!(toml::from_str::<Row>(&text).unwrap(), row);
+        let e = toml::from_str::<Row>("system = \"cartpole\"").unwrap_err();
+        assert!(
+            e.message().starts_with(
+                "unknown variant `cartpole`, expected one of `pendulum`, `arm-vertical`"
+            ),
+            "{e}"
+        );
+    }
 }

@@ -191,3 +191,16 @@ fn a_driven_task_says_where_its_presets_come_from() {
     let simulated = resolve(None, &with_task(&dir.join("heavy.toml"))).unwrap();
     assert!(simulated.to_toml().starts_with("system = \"pendulum\""));
 }
+
+#[test]
+fn a_configuration_with_a_bad_task_is_refused_when_read() {
+    let dir = heavy_pendulum("bad-when-read");
+    let cfg = resolve(None, &with_task(&dir.join("heavy.toml"))).unwrap();
+    let text = cfg.to_toml();
+    assert!(text.contains("state_weights = [8.0, 0.2]"), "{text}");
+    // A settings file whose task has lost a weight: an error when the file is read,
+    // naming the task's key, not a panic when the task is asked for.
+    let bad = text.replace("state_weights = [8.0, 0.2]", "state_weights = [8.0]");
+    let e = toml::from_str::<ExperimentConfig>(&bad).unwrap_err();
+    assert!(e.message().contains("`task."), "{e}");
+}
