@@ -178,8 +178,7 @@ pub fn build(task: &Task, learner: &Learner, run_seed: u64) -> Box<dyn Agent> {
     let (critic, improver): (Box<dyn Critic>, Box<dyn Improver>) = match &learner.algorithm {
         Algorithm::Sarsa(p) => return sarsa(&spaces, p, l, run_seed),
         Algorithm::Sac(p) => {
-            let (m, bounds) = spaces.actions(l);
-            let actor = plain_actor(&p.actor, &spaces.state(m, bounds));
+            let actor = plain_actor(&p.actor, &spaces.actor(l));
             let critic = plain_critic(&p.critic, &spaces.state(1, None));
             (
                 Box::new(TdLambda::new(critic, p.critic.alpha())),
@@ -187,8 +186,7 @@ pub fn build(task: &Task, learner: &Learner, run_seed: u64) -> Box<dyn Agent> {
             )
         }
         Algorithm::Mlac(p) => {
-            let (m, bounds) = spaces.actions(l);
-            let actor = smooth(&p.actor, &spaces.state(m, bounds)).differentiable();
+            let actor = smooth(&p.actor, &spaces.actor(l)).differentiable();
             let mlac = Mlac::new(
                 info.clone(),
                 actor,
@@ -242,14 +240,14 @@ struct Spaces<'a> {
 }
 
 impl Spaces<'_> {
-    /// An actor's outputs: one per action, within the action bounds if the actor is
-    /// bounded.
-    fn actions(&self, l: &LearningConfig) -> (usize, Option<(Vec<f64>, Vec<f64>)>) {
+    /// An actor's space: the state (and time), one output per action, within the action
+    /// bounds if the actor is bounded.
+    fn actor(&self, l: &LearningConfig) -> Space {
         let task = self.task;
         let bounds = l
             .bounded_actor
             .then(|| (task.action_low.clone(), task.action_high.clone()));
-        (task.action_dim(), bounds)
+        self.state(task.action_dim(), bounds)
     }
 
     /// The learned process model on `c`.

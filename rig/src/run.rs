@@ -255,7 +255,10 @@ mod tests {
         assert!(parse(&["--gaps", "skip"]).is_err());
         assert!(parse(&["--plant", "hardware"]).is_err());
         let help = Cli::command().render_long_help().to_string();
-        assert!(help.contains("[possible values: simulated, external]"), "{help}");
+        assert!(
+            help.contains("[possible values: simulated, external]"),
+            "{help}"
+        );
         assert!(help.contains("[possible values: cut, learn]"), "{help}");
     }
 }

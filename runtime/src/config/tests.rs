@@ -339,6 +339,9 @@ fn help_lists_the_choices() {
         assert!(help.contains(list), "{list} not in\n{help}");
     }
     let cli = Cli::try_parse_from(["rig", "--algo", "vgbp", "--system", "arm-6.4"]).unwrap();
-    assert_eq!((cli.o.algo, cli.o.system), (Some(Algo::Vgbp), Some(SystemName::Arm64)));
+    assert_eq!(
+        (cli.o.algo, cli.o.system),
+        (Some(Algo::Vgbp), Some(SystemName::Arm64))
+    );
     assert!(Cli::try_parse_from(["rig", "--algo", "ddpg"]).is_err());
 }
