@@ -254,7 +254,7 @@ mod tests {
         assert_eq!(a.plant, PlantSource::External);
         assert!(parse(&["--gaps", "skip"]).is_err());
         assert!(parse(&["--plant", "hardware"]).is_err());
-        let help = Cli::command().render_long_help().to_string();
+        let help = Cli::command().render_help().to_string();
         assert!(
             help.contains("[possible values: simulated, external]"),
             "{help}"
