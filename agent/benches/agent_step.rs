@@ -36,7 +36,8 @@ fn trained_mlac_llr() -> (Box<dyn Agent>, Vec<Recorded>) {
     let preset = agent::preset::preset(system, Algo::Mlac, ApproxKind::Llr, HorizonKind::Infinite)
         .expect("the default preset");
     let task = Arc::new(Task::new(system));
-    let mut agent = agent::build(&task, &preset.agent, 1);
+    let learner = preset.agent.resolve(&task).expect("a preset resolves");
+    let mut agent = agent::build(&task, &learner, 1);
     let mut plant = Plant::new(task.clone());
     let steps = task.steps_per_trial();
     let mut record = Vec::new();

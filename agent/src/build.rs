@@ -1,4 +1,4 @@
-//! Assembles an agent from a validated configuration.
+//! Assembles an agent from a resolved learner ([`crate::learner`]).
 
 use plant::Task;
 
@@ -8,10 +8,11 @@ use crate::approx::llr::{Eviction, Llr, LlrParams, Search};
 use crate::approx::rbf::{Rbf, RbfParams};
 use crate::approx::tiles::{Tiles, TilesParams};
 use crate::approx::{Approximator, Differentiable, ValueFunction};
-use crate::config::{AgentConfig, Algo, Component, LstdPrior, SarsaConfig};
+use crate::config::{EvictionRule, LearningConfig, LstdPrior, TilesConfig};
 use crate::critic::{Critic, TdLambda};
 use crate::explore::Exploration;
 use crate::horizon::Horizon;
+use crate::learner::{Algorithm, Learner, Plain, SarsaParts, Smooth, VgbpCritic};
 use crate::lstd::Lstd;
 use crate::mlac::Mlac;
 use crate::model::ProcessModel;
@@ -28,40 +29,41 @@ struct Space {
     bounds: Option<(Vec<f64>, Vec<f64>)>,
 }
 
+/// An approximator with a gradient, built.
 enum Built {
     Llr(Box<Llr>),
     Rbf(Box<Rbf>),
-    Tiles(Box<Tiles>),
 }
 
-fn make(c: &Component, s: &Space) -> Built {
+fn smooth(c: &Smooth, s: &Space) -> Built {
     match c {
-        Component::Llr(l) => Built::Llr(Box::new(Llr::new(&LlrParams {
+        Smooth::Llr(l) => Built::Llr(Box::new(Llr::new(&LlrParams {
             memory: l.memory,
             neighbours: l.neighbours,
             weights: l.weights.clone(),
             periodic: s.periodic.clone(),
             outputs: s.outputs,
             bounds: s.bounds.clone(),
-            eviction: if l.eviction == "redundant" {
-                Eviction::Redundant(l.redundancy_radius)
-            } else {
-                Eviction::Oldest
+            eviction: match l.eviction {
+                EvictionRule::Redundant => Eviction::Redundant(l.redundancy_radius),
+                EvictionRule::Oldest => Eviction::Oldest,
             },
             search: Search::KdTree,
             clip_to_neighbours: l.clip_to_neighbours,
         }))),
-        Component::Rbf(r) => Built::Rbf(Box::new(rbf(&r.centres, r.intersection, s))),
-        Component::Lstd(l) => Built::Rbf(Box::new(rbf(&l.centres, l.intersection, s))),
-        Component::Tiles(t) => Built::Tiles(Box::new(Tiles::new(&TilesParams {
-            tilings: t.tilings,
-            tiles: t.tiles.clone(),
-            range: s.range.clone(),
-            periodic: s.periodic.clone(),
-            outputs: s.outputs,
-            bounds: s.bounds.clone(),
-        }))),
+        Smooth::Rbf(r) => Built::Rbf(Box::new(rbf(&r.centres, r.intersection, s))),
     }
+}
+
+fn tiles(t: &TilesConfig, s: &Space) -> Tiles {
+    Tiles::new(&TilesParams {
+        tilings: t.tilings,
+        tiles: t.tiles.clone(),
+        range: s.range.clone(),
+        periodic: s.periodic.clone(),
+        outputs: s.outputs,
+        bounds: s.bounds.clone(),
+    })
 }
 
 fn rbf(centres: &[usize], intersection: f64, s: &Space) -> Rbf {
@@ -77,29 +79,33 @@ fn rbf(centres: &[usize], intersection: f64, s: &Space) -> Rbf {
 }
 
 impl Built {
-    fn any(self) -> Box<dyn Approximator> {
-        match self {
-            Built::Llr(a) => a,
-            Built::Rbf(a) => a,
-            Built::Tiles(a) => a,
-        }
-    }
     fn differentiable(self) -> Box<dyn Differentiable> {
         match self {
             Built::Llr(a) => a,
             Built::Rbf(a) => a,
-            Built::Tiles(_) => {
-                unreachable!("validation rejects tile coding where a gradient is needed")
-            }
         }
     }
     fn value_function(self) -> Box<dyn ValueFunction> {
         match self {
             Built::Llr(a) => a,
             Built::Rbf(a) => a,
-            // A tile-coding critic is used by SAC only, which never asks for its gradient.
-            Built::Tiles(a) => Box::new(GradientFree(*a)),
         }
+    }
+}
+
+/// SAC's actor: any approximator.
+fn plain_actor(c: &Plain, s: &Space) -> Box<dyn Approximator> {
+    match c {
+        Plain::Smooth(c) => smooth(c, s).differentiable(),
+        Plain::Tiles(t) => Box::new(tiles(t, s)),
+    }
+}
+
+/// SAC's critic: any approximator; tile coding is its value without a gradient.
+fn plain_critic(c: &Plain, s: &Space) -> Box<dyn ValueFunction> {
+    match c {
+        Plain::Smooth(c) => smooth(c, s).value_function(),
+        Plain::Tiles(t) => Box::new(GradientFree(tiles(t, s))),
     }
 }
 
@@ -157,29 +163,72 @@ impl crate::approx::Traced for GradientFree {
     }
 }
 
-/// The agent `cfg` describes, for `task`, with every random stream derived from
+/// The agent `learner` describes, for `task`, with every random stream derived from
 /// `run_seed`.
-pub fn build(task: &Task, cfg: &AgentConfig, run_seed: u64) -> Box<dyn Agent> {
+pub fn build(task: &Task, learner: &Learner, run_seed: u64) -> Box<dyn Agent> {
     let spaces = Spaces {
         task,
-        horizon: cfg.horizon.of(task),
+        horizon: learner.horizon.of(task),
     };
-    if let Some(s) = &cfg.sarsa {
-        return sarsa(&spaces, cfg, s, run_seed);
-    }
+    let l = &learner.learning;
     let info = TaskInfo {
         horizon: spaces.horizon,
         ..TaskInfo::of(task)
     };
-    let l = &cfg.learning;
+    let (critic, improver): (Box<dyn Critic>, Box<dyn Improver>) = match &learner.algorithm {
+        Algorithm::Sarsa(p) => return sarsa(&spaces, p, l, run_seed),
+        Algorithm::Sac(p) => {
+            let actor = plain_actor(&p.actor, &spaces.actor(l));
+            let critic = plain_critic(&p.critic, &spaces.state(1, None));
+            (
+                Box::new(TdLambda::new(critic, p.critic.alpha())),
+                Box::new(Sac::new(actor, p.actor.alpha())),
+            )
+        }
+        Algorithm::Mlac(p) => {
+            let actor = smooth(&p.actor, &spaces.actor(l)).differentiable();
+            let mlac = Mlac::new(
+                info.clone(),
+                actor,
+                spaces.process_model(&p.model),
+                p.actor.alpha(),
+                l.gamma,
+                l.saturation_margin,
+            );
+            (td_critic(&spaces, &p.critic), Box::new(mlac))
+        }
+        Algorithm::Rmac(p) => {
+            let n = task.state_dim();
+            let reference = smooth(&p.actor, &spaces.state(n, None)).differentiable();
+            let rmac = Rmac::new(
+                info.clone(),
+                reference,
+                spaces.process_model(&p.model),
+                p.actor.alpha(),
+            );
+            (td_critic(&spaces, &p.critic), Box::new(rmac))
+        }
+        Algorithm::Vgbp(p) => {
+            let v = &p.vgbp;
+            let vgbp = Vgbp::new(
+                info.clone(),
+                spaces.process_model(&p.model),
+                l.gamma,
+                v.lookahead,
+            )
+            .with_action_grid(v.grid)
+            .with_fit_at_zero_action(v.fit_at_zero_action);
+            (vgbp_critic(&spaces, &p.critic, l.gamma), Box::new(vgbp))
+        }
+    };
     Box::new(ActorCritic::new(
-        info.clone(),
+        info,
         Learning {
             gamma: l.gamma,
             lambda: l.lambda,
         },
-        critic(&spaces, cfg),
-        improver(&spaces, cfg, info),
+        critic,
+        improver,
         Exploration::new(l.sigma, l.explore_every, run_seed),
     ))
 }
@@ -191,6 +240,25 @@ struct Spaces<'a> {
 }
 
 impl Spaces<'_> {
+    /// An actor's space: the state (and time), one output per action, within the action
+    /// bounds if the actor is bounded.
+    fn actor(&self, l: &LearningConfig) -> Space {
+        let task = self.task;
+        let bounds = l
+            .bounded_actor
+            .then(|| (task.action_low.clone(), task.action_high.clone()));
+        self.state(task.action_dim(), bounds)
+    }
+
+    /// The learned process model on `c`.
+    fn process_model(&self, c: &Smooth) -> ProcessModel {
+        ProcessModel::new(
+            smooth(c, &self.model()).differentiable(),
+            self.task.angle_mask.clone(),
+            c.alpha(),
+        )
+    }
+
     /// The space of actors, critics and reference models: the state, and time if the
     /// horizon is finite (Eq. 4.6); `outputs` outputs, within `bounds` if given.
     fn state(&self, outputs: usize, bounds: Option<(Vec<f64>, Vec<f64>)>) -> Space {
@@ -233,103 +301,52 @@ impl Spaces<'_> {
 }
 
 /// SARSA (§6.4.1): an RBF Q-function with one output per action of the set.
-fn sarsa(spaces: &Spaces, cfg: &AgentConfig, s: &SarsaConfig, run_seed: u64) -> Box<dyn Agent> {
-    let actions = Sarsa::action_set(&s.actions, spaces.task.action_dim());
-    let Built::Rbf(q) = make(&cfg.critic, &spaces.state(actions.len(), None)) else {
-        unreachable!("validated: SARSA's Q-function is an RBF grid")
-    };
+fn sarsa(spaces: &Spaces, p: &SarsaParts, l: &LearningConfig, run_seed: u64) -> Box<dyn Agent> {
+    let actions = Sarsa::action_set(&p.sarsa.actions, spaces.task.action_dim());
+    let q = rbf(
+        &p.q.centres,
+        p.q.intersection,
+        &spaces.state(actions.len(), None),
+    );
     Box::new(Sarsa::new(
-        *q,
+        q,
         actions,
-        cfg.critic.alpha(),
-        cfg.learning.gamma,
-        cfg.learning.lambda,
+        p.q.alpha,
+        l.gamma,
+        l.lambda,
         Epsilon {
-            decay: s.epsilon_decay,
-            min: s.epsilon_min,
+            decay: p.sarsa.epsilon_decay,
+            min: p.sarsa.epsilon_min,
         },
         run_seed,
     ))
 }
 
-/// The critic: TD(λ) on any approximator, or LSTD (§6.4.1) on an RBF grid, optionally
-/// with the reward prior.
-fn critic(spaces: &Spaces, cfg: &AgentConfig) -> Box<dyn Critic> {
-    match (&cfg.critic, make(&cfg.critic, &spaces.state(1, None))) {
-        (Component::Lstd(c), Built::Rbf(v)) => {
-            let prior = (c.prior == LstdPrior::Reward).then(|| {
-                // θ_0 = ρ(c, 0) / (1 − γ): the value of staying at each centre.
-                let mut centre = vec![0.0; v.input_dim()];
-                (0..v.len())
-                    .map(|i| {
-                        v.centre(i, &mut centre);
-                        spaces.task.reward.state_reward(&centre) / (1.0 - cfg.learning.gamma)
-                    })
-                    .collect()
-            });
-            Box::new(Lstd::new(*v, c.initial_a, prior))
-        }
-        (c, built) => Box::new(TdLambda::new(built.value_function(), c.alpha())),
-    }
+/// A TD(λ) critic on a smooth approximator.
+fn td_critic(spaces: &Spaces, c: &Smooth) -> Box<dyn Critic> {
+    Box::new(TdLambda::new(
+        smooth(c, &spaces.state(1, None)).value_function(),
+        c.alpha(),
+    ))
 }
 
-/// The algorithm's actor update: SAC, MLAC, RMAC or VGBP, with its actor (or reference
-/// model) and process model.
-fn improver(spaces: &Spaces, cfg: &AgentConfig, info: TaskInfo) -> Box<dyn Improver> {
-    let task = spaces.task;
-    let (n, m) = (task.state_dim(), task.action_dim());
-    let l = &cfg.learning;
-    let action_bounds = l
-        .bounded_actor
-        .then(|| (task.action_low.clone(), task.action_high.clone()));
-    let model = || {
-        let c = cfg
-            .model
-            .as_ref()
-            .expect("validated: MLAC, RMAC and VGBP have a model");
-        ProcessModel::new(
-            make(c, &spaces.model()).differentiable(),
-            task.angle_mask.clone(),
-            c.alpha(),
-        )
+/// VGBP's critic: TD(λ), or LSTD (§6.4.1) on an RBF grid, optionally with the reward
+/// prior.
+fn vgbp_critic(spaces: &Spaces, c: &VgbpCritic, gamma: f64) -> Box<dyn Critic> {
+    let c = match c {
+        VgbpCritic::Td(c) => return td_critic(spaces, c),
+        VgbpCritic::Lstd(c) => c,
     };
-    let actor = |outputs, bounds| {
-        let c = cfg
-            .actor
-            .as_ref()
-            .expect("validated: SAC, MLAC and RMAC have an actor");
-        (make(c, &spaces.state(outputs, bounds)).any(), c.alpha())
-    };
-    match cfg.algo {
-        Algo::Sac => {
-            let (a, alpha) = actor(m, action_bounds);
-            Box::new(Sac::new(a, alpha))
-        }
-        Algo::Mlac => {
-            let (a, alpha) = actor(m, action_bounds);
-            Box::new(Mlac::new(
-                info,
-                a,
-                model(),
-                alpha,
-                l.gamma,
-                l.saturation_margin,
-            ))
-        }
-        Algo::Rmac => {
-            let (a, alpha) = actor(n, None);
-            Box::new(Rmac::new(info, a, model(), alpha))
-        }
-        Algo::Vgbp => Box::new(
-            Vgbp::new(
-                info,
-                model(),
-                l.gamma,
-                cfg.vgbp.as_ref().map_or(0, |v| v.lookahead),
-            )
-            .with_action_grid(cfg.vgbp.as_ref().map_or(0, |v| v.grid))
-            .with_fit_at_zero_action(cfg.vgbp.as_ref().is_some_and(|v| v.fit_at_zero_action)),
-        ),
-        Algo::Sarsa => unreachable!("built by `sarsa`"),
-    }
+    let v = rbf(&c.centres, c.intersection, &spaces.state(1, None));
+    let prior = (c.prior == LstdPrior::Reward).then(|| {
+        // θ_0 = ρ(c, 0) / (1 − γ): the value of staying at each centre.
+        let mut centre = vec![0.0; v.input_dim()];
+        (0..v.len())
+            .map(|i| {
+                v.centre(i, &mut centre);
+                spaces.task.reward.state_reward(&centre) / (1.0 - gamma)
+            })
+            .collect()
+    });
+    Box::new(Lstd::new(v, c.initial_a, prior))
 }

@@ -13,7 +13,8 @@
 //! * [`horizon`] — infinite or finite horizon (Chapter 4: time as an input, terminal
 //!   reward; SAC-FH, MLAC-FH, RMAC-FH are the shared step with a finite horizon).
 //! * [`config`] — the agent's part of the configuration, [`preset`] — the thesis's
-//!   values of it, [`build()`] — from it to a running agent; [`checkpoint`] — the
+//!   values of it, [`learner`] — it resolved into one type per algorithm, [`build()`] —
+//!   from that to a running agent; [`checkpoint`] — the
 //!   agent's learned state saved at a trial's end and restored.
 //!
 //! An [`Agent`] is a plain step function; it knows nothing about processes or
@@ -27,6 +28,7 @@ pub mod config;
 pub mod critic;
 pub mod explore;
 pub mod horizon;
+pub mod learner;
 pub mod lstd;
 pub mod mlac;
 pub mod model;

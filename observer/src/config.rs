@@ -4,86 +4,69 @@
 use plant::config::{ConfigError, check_float, check_int};
 use serde::{Deserialize, Serialize};
 
-/// What the plant's sensor measures ([`plant::sensor`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum SensorKind {
-    /// The full state (the thesis's simulations).
-    #[default]
-    Full,
-    /// Encoder angles only (quantised, optionally noisy); velocities are estimated.
-    Angle,
+plant::choice! {
+    /// What the plant's sensor measures ([`plant::sensor`]).
+    #[derive(Debug, Default, PartialEq, Eq, Hash)]
+    pub enum SensorKind {
+        /// The full state (the thesis's simulations).
+        #[default]
+        Full => "full",
+        /// Encoder angles only (quantised, optionally noisy); velocities are estimated.
+        Angle => "angle",
+    }
 }
 
-impl SensorKind {
-    /// Both sensors, for help texts and validation messages.
-    pub const ALL: [SensorKind; 2] = [SensorKind::Full, SensorKind::Angle];
+impl SensorKind {}
+
+plant::choice! {
+    /// The state observer (this crate).
+    #[derive(Debug, Default, PartialEq, Eq, Hash)]
+    pub enum ObserverKind {
+        /// `x̂ = y` (full-state sensor only).
+        #[default]
+        PassThrough => "pass-through",
+        /// Backward-difference velocities, low-pass filtered.
+        FiniteDifference => "finite-difference",
+        /// Model prediction `x̂_{k+1|k} = f̂(x̂_k, u_k)` corrected by the measured angle.
+        Predictive => "predictive",
+    }
 }
 
-/// The state observer (this crate).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ObserverKind {
-    /// `x̂ = y` (full-state sensor only).
-    #[default]
-    PassThrough,
-    /// Backward-difference velocities, low-pass filtered.
-    FiniteDifference,
-    /// Model prediction `x̂_{k+1|k} = f̂(x̂_k, u_k)` corrected by the measured angle.
-    Predictive,
+impl ObserverKind {}
+
+plant::choice! {
+    /// The predictive observer's process model.
+    #[derive(Debug, Default, PartialEq, Eq, Hash)]
+    pub enum ObserverModel {
+        /// LLR learned online from the observer's own estimates (§3.5.2).
+        #[default]
+        Learned => "learned",
+        /// The plant's dynamics integrated with RK4 (the simulator's own model).
+        Known => "known",
+    }
 }
 
-impl ObserverKind {
-    /// Every observer, for help texts and validation messages.
-    pub const ALL: [ObserverKind; 3] = [
-        ObserverKind::PassThrough,
-        ObserverKind::FiniteDifference,
-        ObserverKind::Predictive,
-    ];
+impl ObserverModel {}
+
+plant::choice! {
+    /// When the agent acts, relative to the sample it acts on (thesis §6.4.1;
+    /// [`crate::timing`]).
+    #[derive(Debug, Default, PartialEq, Eq, Hash)]
+    pub enum ObserverMode {
+        /// The agent acts on `x̂_k`; its action takes effect within the interval
+        /// `[t_k, t_{k+1})`, as soon as it is computed and transported (`run.delay_ms` /
+        /// `run.delay_from` after `t_k`; 0: at `t_k`, the thesis's simulations).
+        #[default]
+        Direct => "direct",
+        /// The agent acts on the one-step prediction `x̂_{k+1|k} = f̂(x̂_k, u_k)`; its action
+        /// is applied at `t_{k+1}`, for the whole next interval (a one-sample action
+        /// pipeline, §6.4.1's physical setup): a delay below `Ts` does not reach the plant.
+        /// Needs `observer = "predictive"` (the model) and an infinite horizon.
+        Predictive => "predictive",
+    }
 }
 
-/// The predictive observer's process model.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ObserverModel {
-    /// LLR learned online from the observer's own estimates (§3.5.2).
-    #[default]
-    Learned,
-    /// The plant's dynamics integrated with RK4 (the simulator's own model).
-    Known,
-}
-
-impl ObserverModel {
-    /// Both models, for help texts and validation messages.
-    pub const ALL: [ObserverModel; 2] = [ObserverModel::Learned, ObserverModel::Known];
-}
-
-/// When the agent acts, relative to the sample it acts on (thesis §6.4.1;
-/// [`crate::timing`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ObserverMode {
-    /// The agent acts on `x̂_k`; its action takes effect within the interval
-    /// `[t_k, t_{k+1})`, as soon as it is computed and transported (`run.delay_ms` /
-    /// `run.delay_from` after `t_k`; 0: at `t_k`, the thesis's simulations).
-    #[default]
-    Direct,
-    /// The agent acts on the one-step prediction `x̂_{k+1|k} = f̂(x̂_k, u_k)`; its action
-    /// is applied at `t_{k+1}`, for the whole next interval (a one-sample action
-    /// pipeline, §6.4.1's physical setup): a delay below `Ts` does not reach the plant.
-    /// Needs `observer = "predictive"` (the model) and an infinite horizon.
-    Predictive,
-}
-
-impl ObserverMode {
-    /// Both modes, for help texts and validation messages.
-    pub const ALL: [ObserverMode; 2] = [ObserverMode::Direct, ObserverMode::Predictive];
-}
-
-plant::choice_names!(SensorKind, Full => "full", Angle => "angle");
-plant::choice_names!(ObserverKind, PassThrough => "pass-through", FiniteDifference => "finite-difference", Predictive => "predictive");
-plant::choice_names!(ObserverModel, Learned => "learned", Known => "known");
-plant::choice_names!(ObserverMode, Direct => "direct", Predictive => "predictive");
+impl ObserverMode {}
 
 /// Sensor and state observer (`[observer]`); the defaults — full state, pass-through —
 /// are the thesis's simulations, and a configuration with them is written without this

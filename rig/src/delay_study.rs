@@ -6,7 +6,6 @@ use std::process::ExitCode;
 
 use clap::Args as Flags;
 use observer::config::ObserverModel;
-use plant::config::Choice;
 
 #[derive(Flags)]
 pub struct Args {
@@ -21,7 +20,7 @@ pub struct Args {
     delays: Vec<f64>,
     /// The predictive estimator's process model: learned (LLR, online) or known (the
     /// plant's dynamics — the reference for a perfect prediction) (`observer.model`).
-    #[arg(long, default_value = "learned", value_parser = ObserverModel::parse)]
+    #[arg(long, default_value = "learned", value_enum)]
     observer_model: ObserverModel,
     /// Worker threads [default: one per core].
     #[arg(long)]

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
-use plant::config::Choice;
 use plant::{SystemName, Task};
 use runtime::clock::{ClockError, DriverFlags, ExternalDriver};
 
@@ -15,7 +14,7 @@ use runtime::clock::{ClockError, DriverFlags, ExternalDriver};
 pub struct TaskArgs {
     /// A built-in system: pendulum, arm-vertical, arm-horizontal, arm-6.4,
     /// double-integrator.
-    #[arg(long, value_parser = SystemName::parse, default_value = "pendulum")]
+    #[arg(long, value_enum, default_value = "pendulum")]
     system: SystemName,
     /// A task file (docs/tasks.md) instead of `--system`.
     #[arg(long, value_name = "FILE", conflicts_with = "system")]

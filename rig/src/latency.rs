@@ -5,7 +5,6 @@ use std::process::ExitCode;
 
 use clap::Args as Flags;
 use observer::config::{ObserverKind, ObserverMode};
-use plant::config::Choice;
 use runtime::clock::Clock;
 
 use crate::external::DriverArgs;
@@ -30,13 +29,13 @@ pub struct Args {
     #[arg(long, value_name = "FILE", requires = "driver")]
     task: Option<PathBuf>,
     /// State observer on the angle encoder: finite-difference or predictive.
-    #[arg(long, default_value = "predictive", value_parser = ObserverKind::parse)]
+    #[arg(long, default_value = "predictive", value_enum)]
     observer: ObserverKind,
     /// Timing: predictive (the plant applies the action answering sample k at the next
     /// sample instant t_{k+1}; a deadline miss when it has not arrived by then; needs
     /// `--observer predictive` and the simulated plant) or direct (applied when it
     /// arrives, within the interval) [default: predictive; direct with `--driver`].
-    #[arg(long, value_parser = ObserverMode::parse)]
+    #[arg(long, value_enum)]
     observer_mode: Option<ObserverMode>,
     /// Raw ping-pong round trips for the baseline.
     #[arg(long, default_value_t = 20_000)]

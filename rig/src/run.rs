@@ -43,13 +43,13 @@ pub struct Args {
     wait: runtime::process::Wait,
     #[command(flatten)]
     wakeup: runtime::process::Wakeup,
-    /// `sim`: the plant process simulates the system. `external`: a driver someone else
+    /// `simulated` (also `sim`): the plant process simulates the system. `external`: a driver someone else
     /// started (docs/driver.md; e.g. examples/python_driver/driver.py) is the system and
     /// the clock; `rig run` waits for it, and the plant process resets it before each
     /// trial and passes its samples and the agent's actions on (`--timing` and `--speed`
     /// do not apply).
-    #[arg(long, default_value = "sim", value_parser = ["sim", "external"])]
-    plant: String,
+    #[arg(long, value_enum, default_value_t = PlantSource::Simulated)]
+    plant: PlantSource,
     #[command(flatten)]
     driver: DriverArgs,
     /// Realtime and `--plant external`: what a gap in the loop's timing does — samples
@@ -58,8 +58,8 @@ pub struct Args {
     /// and the trial is run again (listed in gaps.csv). `learn`: the trial goes on and
     /// learns across the gap, counted only as deadline misses — for a simulation run
     /// faster than the machine can keep the period.
-    #[arg(long, default_value = "cut", value_parser = ["cut", "learn"])]
-    gaps: String,
+    #[arg(long, value_enum, default_value_t = Gaps::Cut)]
+    gaps: Gaps,
     /// Continue the run in DIR after a crash, a killed process or Ctrl-C: from its last
     /// trial that is complete in returns.csv, in the agent's checkpoints
     /// (DIR/checkpoints) and in run.mcap. The configuration is DIR/config.toml; of the
@@ -113,6 +113,25 @@ pub fn main(args: &Args) -> ExitCode {
 /// price of busy CPUs while the run lasts).
 pub const LOCKSTEP_WAIT: WaitKind = WaitKind::Yield;
 
+/// What the plant process is (`--plant`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PlantSource {
+    /// The plant process simulates the system.
+    #[value(alias = "sim")]
+    Simulated,
+    /// A driver started elsewhere is the system and the clock.
+    External,
+}
+
+/// What a gap in the loop's timing does (`--gaps`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Gaps {
+    /// The trial's attempt ends at the gap and is run again.
+    Cut,
+    /// The trial learns across the gap.
+    Learn,
+}
+
 /// The experiment and how to run it, from the flags (and, resuming, the run's
 /// directory); an error is a usage error.
 fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
@@ -121,12 +140,12 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         None => resolve_selection(&args.selection),
     }?;
     cfg.run.runs = 1;
-    let driver = match args.plant.as_str() {
-        "external" => Some(args.driver.flags()),
-        _ if args.driver.driver.is_some() => {
+    let driver = match args.plant {
+        PlantSource::External => Some(args.driver.flags()),
+        PlantSource::Simulated if args.driver.driver.is_some() => {
             return Err(anyhow!("`--driver` needs `--plant external`"));
         }
-        _ => None,
+        PlantSource::Simulated => None,
     };
     let clock = Clock::of_flags(
         (args.timing, args.speed),
@@ -159,7 +178,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         waiting,
         // Known once the driver's info says which clock it keeps.
         lockstep_waiting: clock_is_external.then(|| args.wait.waiting(LOCKSTEP_WAIT)),
-        learn_across_gaps: args.gaps == "learn",
+        learn_across_gaps: args.gaps == Gaps::Learn,
     };
     Ok((cfg, opts))
 }
@@ -211,4 +230,38 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
         "  wrote {}/{{returns.csv, run.mcap, config.toml, plant.log, observer.log, agent.log}}",
         opts.out.display()
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::{CommandFactory, Parser};
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    fn parse(flags: &[&str]) -> Result<Args, clap::Error> {
+        Cli::try_parse_from(std::iter::once("run").chain(flags.iter().copied())).map(|c| c.args)
+    }
+
+    #[test]
+    fn plant_and_gaps_are_named_choices() {
+        let a = parse(&[]).unwrap();
+        assert_eq!((a.plant, a.gaps), (PlantSource::Simulated, Gaps::Cut));
+        let a = parse(&["--plant", "sim", "--gaps", "learn"]).unwrap();
+        assert_eq!((a.plant, a.gaps), (PlantSource::Simulated, Gaps::Learn));
+        let a = parse(&["--plant", "external"]).unwrap();
+        assert_eq!(a.plant, PlantSource::External);
+        assert!(parse(&["--gaps", "skip"]).is_err());
+        assert!(parse(&["--plant", "hardware"]).is_err());
+        let help = Cli::command().render_help().to_string();
+        assert!(
+            help.contains("[possible values: simulated, external]"),
+            "{help}"
+        );
+        assert!(help.contains("[possible values: cut, learn]"), "{help}");
+    }
 }

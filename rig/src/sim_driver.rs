@@ -1,5 +1,6 @@
 //! `rig sim-driver`: a simulated system served as a driver, through the driver kit.
 
+use observer::config::SensorKind;
 use std::process::ExitCode;
 
 use clap::Args as Flags;
@@ -44,8 +45,8 @@ pub struct Args {
     /// setup, as the physical pendulum of §6.4.1: positions quantised to
     /// `--counts-per-rev`, velocities NaN (not measured). Against an `angle` driver, run
     /// the rig with `--sensor angle` and an observer that estimates the velocities.
-    #[arg(long, value_name = "SENSOR", value_parser = ["full", "angle"], default_value = "full")]
-    sensor: String,
+    #[arg(long, value_name = "SENSOR", value_enum, default_value_t = SensorKind::Full)]
+    sensor: SensorKind,
     /// Encoder counts per revolution with `--sensor angle`.
     #[arg(long, value_name = "N", default_value_t = 4096)]
     counts_per_rev: u32,
@@ -68,9 +69,9 @@ pub fn main(args: &Args) -> ExitCode {
         })
         .and_then(|task| Ok(Simulated::of(task, args.speed)?))
         .map(|d| if lockstep { d.in_lockstep() } else { d })
-        .and_then(|d| match args.sensor.as_str() {
-            "angle" => Ok(d.measuring_positions_only(args.counts_per_rev)?),
-            _ => Ok(d),
+        .and_then(|d| match args.sensor {
+            SensorKind::Angle => Ok(d.measuring_positions_only(args.counts_per_rev)?),
+            SensorKind::Full => Ok(d),
         });
     let mut device = match device {
         Ok(d) => d,
@@ -82,9 +83,9 @@ pub fn main(args: &Args) -> ExitCode {
     let served = runtime::process::set_rt_priority(args.rt_priority).and_then(|()| {
         let _wakeup = args.wakeup.hold()?;
         let task = driver::Device::task(&device);
-        let sensed = match args.sensor.as_str() {
-            "angle" => format!("positions only, {} counts/rev", args.counts_per_rev),
-            _ => "full state".to_string(),
+        let sensed = match args.sensor {
+            SensorKind::Angle => format!("positions only, {} counts/rev", args.counts_per_rev),
+            SensorKind::Full => "full state".to_string(),
         };
         let clock = if lockstep {
             "lockstep".to_string()

@@ -36,6 +36,7 @@ use agent::checkpoint::{Checkpoint, CheckpointError, Origin, Snapshot};
 use agent::horizon::Horizon;
 use observer::config::{ObserverConfig, ObserverMode, SensorKind};
 use observer::timing::{Front, Sample as AtSample, act};
+use plant::config::ConfigError;
 use plant::delay::Actuator;
 use plant::episode::{Episode, Step};
 use plant::schedule::{Schedule, Trial};
@@ -125,13 +126,15 @@ impl ActedOnError {
 impl Experiment {
     /// Run `run` of the experiment `cfg` describes (all random streams derived from
     /// `cfg.run.seed` and `run`).
-    pub fn new(cfg: &ExperimentConfig, run: u32) -> Self {
-        let task = Arc::new(cfg.task());
+    ///
+    /// The error names the key of the agent's configuration that does not fit the task.
+    pub fn new(cfg: &ExperimentConfig, run: u32) -> Result<Self, ConfigError> {
+        let task = cfg.task();
         let run_seed = agent::seed::run_seed(cfg.run.seed, run);
-        let agent = agent::build(&task, &cfg.agent, run_seed);
+        let agent = agent::build(&task, &cfg.learner()?, run_seed);
         let o = &cfg.observer;
         let sensor = sensor(&task, o, run_seed);
-        Self {
+        Ok(Self {
             episode: Episode::new(Plant::new(task.clone()), actuator(&task, cfg, run_seed)),
             sensor,
             y: vec![0.0; task.state_dim()],
@@ -143,7 +146,7 @@ impl Experiment {
             agent,
             run,
             acted_on_error: ActedOnError::default(),
-        }
+        })
     }
 
     /// The agent's learned state after the last completed trial.
@@ -166,7 +169,7 @@ impl Experiment {
             return Err(ResumeError::Observer);
         }
         resumable_delays(cfg)?;
-        let mut e = Self::new(cfg, run);
+        let mut e = Self::new(cfg, run)?;
         c.restore(&cfg.origin(run), e.agent.as_mut())?;
         e.schedule.resume(c.trial, c.sim_time_s);
         Ok(e)
@@ -398,6 +401,9 @@ pub enum ResumeError {
     /// A checkpoint that cannot be read or does not fit the run.
     #[error(transparent)]
     Checkpoint(#[from] CheckpointError),
+    /// A configuration whose learner does not fit its task.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
 }
 
 /// One sample of a time response.
@@ -442,7 +448,7 @@ mod tests {
     fn the_agent_sees_encoder_angles_only() {
         for o in [ObserverKind::FiniteDifference, ObserverKind::Predictive] {
             let cfg = angle_config(o, "0.0");
-            let mut e = Experiment::new(&cfg, 0);
+            let mut e = Experiment::new(&cfg, 0).unwrap();
             while e.next_trial().is_some() {}
             let q = std::f64::consts::TAU / 4096.0;
             let traj = e.greedy_trajectory(&[std::f64::consts::PI, 0.0]);
@@ -452,7 +458,7 @@ mod tests {
                 assert!(s.x.iter().all(|v| v.is_finite()));
             }
             let noisy = |run| {
-                let mut e = Experiment::new(&angle_config(o, "0.003"), run);
+                let mut e = Experiment::new(&angle_config(o, "0.003"), run).unwrap();
                 (0..3)
                     .map(|_| e.next_trial().unwrap().ret)
                     .collect::<Vec<_>>()

@@ -202,7 +202,7 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
         (0..runs)
             .into_par_iter()
             .map(|run| {
-                let mut exp = Experiment::new(cfg, run);
+                let mut exp = Experiment::new(cfg, run)?;
                 let mut records = Vec::with_capacity(trials as usize);
                 while let Some(r) = exp.next_trial() {
                     bar.inc(1);

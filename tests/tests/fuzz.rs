@@ -102,7 +102,10 @@ fn wild_value(old: &str, rng: &mut ChaCha8Rng) -> String {
 /// An agent of `learner` learns 20 samples on `task`'s plant, every action applied within
 /// the bounds.
 fn learns_within_the_limits(task: Arc<Task>, learner: &agent::config::AgentConfig) {
-    let mut agent = agent::build(&task, learner, 1);
+    let learner = learner
+        .resolve(&task)
+        .expect("a configuration that resolved has a learner");
+    let mut agent = agent::build(&task, &learner, 1);
     let mut plant = Plant::new(task.clone());
     let mut u = vec![0.0; task.action_dim()];
     plant.reset(&task.initial_states[0]);
@@ -143,7 +146,7 @@ fn mutated_configuration_files_are_errors_or_run_but_never_panic() {
             }
             Ok(cfg) => {
                 // Accepted: it must build and learn a few samples within the limits.
-                learns_within_the_limits(Arc::new(cfg.task()), &cfg.agent);
+                learns_within_the_limits(cfg.task(), &cfg.agent);
                 true
             }
         });

@@ -6,6 +6,7 @@ use plant::config::{ConfigError, check_float, check_int, check_len};
 use serde::{Deserialize, Serialize};
 
 use super::{Algo, ApproxKind};
+use crate::learner::{Plain, Smooth, VgbpCritic};
 
 /// One approximator's parameters; which kind is given by the configuration's `approx`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -33,12 +34,24 @@ pub struct LlrConfig {
     pub neighbours: usize,
     /// Input scaling `diag(W)`.
     pub weights: Vec<f64>,
-    /// Memory management: "oldest" or "redundant".
-    pub eviction: String,
+    /// Memory management.
+    pub eviction: EvictionRule,
     /// With "redundant": a new sample replaces a stored one closer than this (scaled).
     pub redundancy_radius: f64,
     /// Limit predictions to the range of the neighbours' outputs (no extrapolation).
     pub clip_to_neighbours: bool,
+}
+
+plant::choice! {
+    /// How a full LLR memory makes room for a new sample (§3.5.2).
+    #[derive(Debug, PartialEq, Eq)]
+    pub enum EvictionRule {
+        /// The oldest sample goes.
+        Oldest => "oldest",
+        /// A stored sample closer than `redundancy_radius` to the new one goes, else the
+        /// oldest.
+        Redundant => "redundant",
+    }
 }
 
 /// RBF grid parameters (Table 3.1).
@@ -85,27 +98,23 @@ pub struct LstdConfig {
     pub prior: LstdPrior,
 }
 
-/// The prior of an LSTD critic ([`LstdConfig::prior`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LstdPrior {
-    /// `b_0 = 0`: `θ` is drawn towards 0 (§6.4.1).
-    #[default]
-    Zero,
-    /// `b_0 = A_0 θ_0`, `θ_0 = ρ(c, 0) / (1 − γ)` at each basis function's centre `c`.
-    Reward,
+plant::choice! {
+    /// The prior of an LSTD critic ([`LstdConfig::prior`]).
+    #[derive(Debug, Default, PartialEq, Eq)]
+    pub enum LstdPrior {
+        /// `b_0 = 0`: `θ` is drawn towards 0 (§6.4.1).
+        #[default]
+        Zero => "zero",
+        /// `b_0 = A_0 θ_0`, `θ_0 = ρ(c, 0) / (1 − γ)` at each basis function's centre `c`.
+        Reward => "reward",
+    }
 }
 
 impl LstdPrior {
-    /// Both priors, for validation messages.
-    pub const ALL: [LstdPrior; 2] = [LstdPrior::Zero, LstdPrior::Reward];
-
     fn is_zero(&self) -> bool {
         *self == LstdPrior::Zero
     }
 }
-
-plant::choice_names!(LstdPrior, Zero => "zero", Reward => "reward");
 
 /// Where a component sits in the configuration: what its validation needs to know.
 pub(crate) struct Slot<'a> {
@@ -149,21 +158,60 @@ impl Component {
         }
     }
 
+    /// The error for a component of a kind not allowed in `at`.
+    fn misplaced(&self, at: &Slot) -> ConfigError {
+        let names: Vec<&str> = at.kinds.iter().map(|k| k.as_str()).collect();
+        ConfigError::new(
+            at.section,
+            format!(
+                "holds {} parameters; {} expects {} parameters here (approx = \"{}\")",
+                self.kind(),
+                at.algo,
+                names.join(" or "),
+                at.approx
+            ),
+        )
+    }
+
+    /// The component as an approximator with a gradient, checked for `at`.
+    pub(crate) fn smooth(&self, at: &Slot) -> Result<Smooth, ConfigError> {
+        self.validate(at)?;
+        match self {
+            Component::Llr(c) => Ok(Smooth::Llr(c.clone())),
+            Component::Rbf(c) => Ok(Smooth::Rbf(c.clone())),
+            _ => Err(self.misplaced(at)),
+        }
+    }
+
+    /// The component as any approximator but LSTD, checked for `at`.
+    pub(crate) fn plain(&self, at: &Slot) -> Result<Plain, ConfigError> {
+        match self {
+            Component::Tiles(c) => self.validate(at).map(|()| Plain::Tiles(c.clone())),
+            _ => self.smooth(at).map(Plain::Smooth),
+        }
+    }
+
+    /// The component as VGBP's critic, checked for `at`.
+    pub(crate) fn vgbp_critic(&self, at: &Slot) -> Result<VgbpCritic, ConfigError> {
+        match self {
+            Component::Lstd(c) => self.validate(at).map(|()| VgbpCritic::Lstd(c.clone())),
+            _ => self.smooth(at).map(VgbpCritic::Td),
+        }
+    }
+
+    /// The component as an RBF grid, checked for `at`.
+    pub(crate) fn rbf(&self, at: &Slot) -> Result<RbfConfig, ConfigError> {
+        match self.smooth(at)? {
+            Smooth::Rbf(c) => Ok(c),
+            Smooth::Llr(_) => Err(self.misplaced(at)),
+        }
+    }
+
     /// Checks that the component is of a kind allowed in `at` and every value against
     /// its allowed range and the input dimension.
     pub(crate) fn validate(&self, at: &Slot) -> Result<(), ConfigError> {
         if !at.kinds.contains(&self.kind()) {
-            let names: Vec<&str> = at.kinds.iter().map(|k| k.as_str()).collect();
-            return Err(ConfigError::new(
-                at.section,
-                format!(
-                    "holds {} parameters; {} expects {} parameters here (approx = \"{}\")",
-                    self.kind(),
-                    at.algo,
-                    names.join(" or "),
-                    at.approx
-                ),
-            ));
+            return Err(self.misplaced(at));
         }
         check_float(&at.key("alpha"), self.alpha(), 0.0, 100.0, false)?;
         match self {
@@ -199,15 +247,6 @@ impl LlrConfig {
         check_len(&at.key("weights"), self.weights.len(), at.dim, at.what)?;
         for (i, w) in self.weights.iter().enumerate() {
             check_float(&format!("{}.weights[{i}]", at.section), *w, 0.0, 1e6, true)?;
-        }
-        if self.eviction != "oldest" && self.eviction != "redundant" {
-            return Err(ConfigError::new(
-                &at.key("eviction"),
-                format!(
-                    "\"{}\" is not a memory-management rule: use \"oldest\" or \"redundant\"",
-                    self.eviction
-                ),
-            ));
         }
         check_float(
             &at.key("redundancy_radius"),
@@ -285,7 +324,7 @@ mod tests {
             memory: 10,
             neighbours: 11,
             weights: vec![1.0, 0.1],
-            eviction: "oldest".into(),
+            eviction: EvictionRule::Oldest,
             redundancy_radius: 0.0,
             clip_to_neighbours: false,
         };

@@ -3,24 +3,24 @@
 
 use plant::Task;
 use plant::config::ConfigError;
-use serde::{Deserialize, Serialize};
 
 use crate::horizon::Horizon;
 
-/// The learning algorithm.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Algo {
-    /// Standard actor-critic (Algorithm 1).
-    Sac,
-    /// Model learning actor-critic (Algorithm 2).
-    Mlac,
-    /// Reference model actor-critic (Algorithm 3).
-    Rmac,
-    /// Value-gradient based policy (Algorithm 7), critic-only.
-    Vgbp,
-    /// SARSA(λ) with ε-greedy discrete actions (§6.2), critic-only.
-    Sarsa,
+plant::choice! {
+    /// The learning algorithm.
+    #[derive(Debug, PartialEq, Eq, Hash)]
+    pub enum Algo {
+        /// Standard actor-critic (Algorithm 1).
+        Sac => "sac",
+        /// Model learning actor-critic (Algorithm 2).
+        Mlac => "mlac",
+        /// Reference model actor-critic (Algorithm 3).
+        Rmac => "rmac",
+        /// Value-gradient based policy (Algorithm 7), critic-only.
+        Vgbp => "vgbp",
+        /// SARSA(λ) with ε-greedy discrete actions (§6.2), critic-only.
+        Sarsa => "sarsa",
+    }
 }
 
 impl Algo {
@@ -34,9 +34,6 @@ impl Algo {
             Algo::Sarsa => &[Rbf],
         }
     }
-
-    /// Every algorithm, for help texts and validation messages.
-    pub const ALL: [Algo; 5] = [Algo::Sac, Algo::Mlac, Algo::Rmac, Algo::Vgbp, Algo::Sarsa];
 
     /// Whether the algorithm has an actor (or reference model) component.
     pub fn has_actor(self) -> bool {
@@ -71,47 +68,38 @@ impl Algo {
     }
 }
 
-/// The function approximator used by every component.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ApproxKind {
-    /// Local linear regression (§3.5.2).
-    Llr,
-    /// Normalised radial basis functions (§3.5.1).
-    Rbf,
-    /// Tile coding (§3.5.3), SAC only.
-    Tiles,
-    /// LSTD(λ) on normalised RBFs (Eq. 6.16–6.19), a VGBP critic; the process model is
-    /// LLR.
-    Lstd,
+plant::choice! {
+    /// The function approximator used by every component.
+    #[derive(Debug, PartialEq, Eq, Hash)]
+    pub enum ApproxKind {
+        /// Local linear regression (§3.5.2).
+        Llr => "llr",
+        /// Normalised radial basis functions (§3.5.1).
+        Rbf => "rbf",
+        /// Tile coding (§3.5.3), SAC only.
+        Tiles => "tiles",
+        /// LSTD(λ) on normalised RBFs (Eq. 6.16–6.19), a VGBP critic; the process model is
+        /// LLR.
+        Lstd => "lstd",
+    }
 }
 
-impl ApproxKind {
-    /// Every approximator, for help texts and validation messages.
-    pub const ALL: [ApproxKind; 4] = [
-        ApproxKind::Llr,
-        ApproxKind::Rbf,
-        ApproxKind::Tiles,
-        ApproxKind::Lstd,
-    ];
-}
+impl ApproxKind {}
 
-/// The horizon of the cost function ([`crate::horizon`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum HorizonKind {
-    /// Discounted rewards without end (Chapters 3, 5, 6).
-    #[default]
-    Infinite,
-    /// A trial is the horizon: its samples' rewards plus the terminal reward `τ_N`, actor
-    /// and critic time-varying (Chapter 4; SAC, MLAC and RMAC, Algorithms 4–6).
-    Finite,
+plant::choice! {
+    /// The horizon of the cost function ([`crate::horizon`]).
+    #[derive(Debug, Default, PartialEq, Eq, Hash)]
+    pub enum HorizonKind {
+        /// Discounted rewards without end (Chapters 3, 5, 6).
+        #[default]
+        Infinite => "infinite",
+        /// A trial is the horizon: its samples' rewards plus the terminal reward `τ_N`, actor
+        /// and critic time-varying (Chapter 4; SAC, MLAC and RMAC, Algorithms 4–6).
+        Finite => "finite",
+    }
 }
 
 impl HorizonKind {
-    /// Both horizons, for help texts and validation messages.
-    pub const ALL: [HorizonKind; 2] = [HorizonKind::Infinite, HorizonKind::Finite];
-
     /// The runtime horizon of `task`: a finite horizon is one trial, `N` samples.
     pub fn of(self, task: &Task) -> Horizon {
         match self {
@@ -122,10 +110,6 @@ impl HorizonKind {
         }
     }
 }
-
-plant::choice_names!(Algo, Sac => "sac", Mlac => "mlac", Rmac => "rmac", Vgbp => "vgbp", Sarsa => "sarsa");
-plant::choice_names!(ApproxKind, Llr => "llr", Rbf => "rbf", Tiles => "tiles", Lstd => "lstd");
-plant::choice_names!(HorizonKind, Infinite => "infinite", Finite => "finite");
 
 /// The error for a finite horizon with an algorithm that has none (VGBP, SARSA).
 pub(crate) fn finite_horizon_unsupported(algo: Algo) -> ConfigError {

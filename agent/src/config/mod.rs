@@ -8,7 +8,9 @@
 //! * [`Component`] — one approximator's parameters ([`LlrConfig`], [`RbfConfig`],
 //!   [`TilesConfig`], [`LstdConfig`]).
 //! * [`VgbpConfig`], [`SarsaConfig`] — the critic-only learners' own settings.
-//! * [`AgentConfig`] — all of them, what [`crate::build()`] builds an agent from.
+//! * [`AgentConfig`] — all of them; [`AgentConfig::resolve`] checks them against a task
+//!   into a typed [`Learner`](crate::learner::Learner), what [`crate::build()`] builds an
+//!   agent from.
 //!
 //! The thesis's values are in [`crate::preset`]; the whole experiment (system, `[run]`,
 //! `[observer]` and this part), its TOML form and its resolution from preset, file and
@@ -20,7 +22,9 @@ mod learning;
 mod sarsa;
 mod vgbp;
 
-pub use component::{Component, LlrConfig, LstdConfig, LstdPrior, RbfConfig, TilesConfig};
+pub use component::{
+    Component, EvictionRule, LlrConfig, LstdConfig, LstdPrior, RbfConfig, TilesConfig,
+};
 pub(crate) use learner::finite_horizon_unsupported;
 pub use learner::{Algo, ApproxKind, HorizonKind};
 pub use learning::LearningConfig;
@@ -30,6 +34,7 @@ pub use vgbp::VgbpConfig;
 use plant::Task;
 use plant::config::ConfigError;
 
+use crate::learner::{Algorithm, Learner, ModelParts, SacParts, SarsaParts, VgbpParts};
 use component::Slot;
 
 /// The learner's configuration: what an agent is built from.
@@ -58,24 +63,65 @@ pub struct AgentConfig {
 
 impl AgentConfig {
     /// Checks every value against its allowed range and `task`'s dimensions, and that the
-    /// sections present are those the algorithm has.
+    /// sections present are those the algorithm has: [`AgentConfig::resolve`] without
+    /// its result.
     pub fn validate(&self, task: &Task) -> Result<(), ConfigError> {
+        self.resolve(task).map(drop)
+    }
+
+    /// The learner this configuration describes for `task`: each of the algorithm's
+    /// components of an approximator it can use, every value in its allowed range. The
+    /// error names the key and what is allowed.
+    pub fn resolve(&self, task: &Task) -> Result<Learner, ConfigError> {
         if self.horizon == HorizonKind::Finite && !self.algo.has_actor() {
             return Err(finite_horizon_unsupported(self.algo));
         }
         self.learning.validate(self.horizon)?;
         self.algo.check_approx(self.approx)?;
-        self.validate_components(task)?;
-        self.validate_vgbp(task)?;
-        self.validate_sarsa(task)
+        self.refuse_foreign_sections()?;
+        Ok(Learner {
+            algorithm: self.algorithm(task)?,
+            learning: self.learning.clone(),
+            horizon: self.horizon,
+        })
     }
 
-    /// Actor, critic and process model: present as the algorithm needs them, of the
-    /// configured approximator, with one input per state (and action) component.
-    fn validate_components(&self, task: &Task) -> Result<(), ConfigError> {
+    /// The sections the algorithm does not have are absent.
+    fn refuse_foreign_sections(&self) -> Result<(), ConfigError> {
+        let algo = self.algo;
+        if self.actor.is_some() && !algo.has_actor() {
+            return Err(ConfigError::new(
+                "actor",
+                format!("{algo} has no actor: remove the [actor] section"),
+            ));
+        }
+        if self.model.is_some() && !algo.has_model() {
+            return Err(ConfigError::new(
+                "model",
+                format!("{algo} learns no process model: remove the [model] section"),
+            ));
+        }
+        if self.vgbp.is_some() && algo != Algo::Vgbp {
+            return Err(ConfigError::new(
+                "vgbp",
+                format!("{algo} is not vgbp: remove the [vgbp] section"),
+            ));
+        }
+        if self.sarsa.is_some() && algo != Algo::Sarsa {
+            return Err(ConfigError::new(
+                "sarsa",
+                format!("{algo} is not sarsa: remove the [sarsa] section"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The algorithm with its components, each checked where it sits: actor, reference
+    /// model and critic read the state (and time if the horizon is finite, Eq. 4.6), the
+    /// process model the state and the action.
+    fn algorithm(&self, task: &Task) -> Result<Algorithm, ConfigError> {
         let (n, m) = (task.state_dim(), task.action_dim());
         let own = [self.approx];
-        // Actor, reference model and critic read the state, and time if finite (Eq. 4.6).
         let (dim, what) = if self.horizon == HorizonKind::Finite {
             (n + 1, "state component and time")
         } else {
@@ -89,67 +135,74 @@ impl AgentConfig {
             algo: self.algo,
             approx: self.approx,
         };
-        let algo = self.algo;
-        match (&self.actor, algo.has_actor()) {
-            (None, true) => {
-                return Err(ConfigError::new(
-                    "actor",
-                    format!("{algo} has an actor: an [actor] section is required"),
-                ));
-            }
-            (Some(_), false) => {
-                return Err(ConfigError::new(
-                    "actor",
-                    format!("{algo} has no actor: remove the [actor] section"),
-                ));
-            }
-            (Some(c), true) => c.validate(&slot("actor", &own, dim, what))?,
-            (None, false) => {}
-        }
-        self.critic.validate(&slot("critic", &own, dim, what))?;
+        let actor = || slot("actor", &own, dim, what);
+        let critic = || slot("critic", &own, dim, what);
         // VGBP's process model is LLR whatever its critic (§6.3.1); the others learn every
         // component with the same approximator.
-        let model_kinds: &[ApproxKind] = if algo == Algo::Vgbp {
+        let model_kinds: &[ApproxKind] = if self.algo == Algo::Vgbp {
             &[ApproxKind::Llr, ApproxKind::Rbf]
         } else {
             &own
         };
-        match (&self.model, algo.has_model()) {
-            (None, true) => Err(ConfigError::new(
-                "model",
-                format!("{algo} learns a process model: a [model] section is required"),
-            )),
-            (Some(_), false) => Err(ConfigError::new(
-                "model",
-                format!("{algo} learns no process model: remove the [model] section"),
-            )),
-            (Some(c), true) => c.validate(&slot(
-                "model",
-                model_kinds,
-                n + m,
-                "state and action component",
-            )),
-            (None, false) => Ok(()),
-        }
+        let model = || slot("model", model_kinds, n + m, "state and action component");
+        let algo = self.algo;
+        let model_parts = || -> Result<ModelParts, ConfigError> {
+            Ok(ModelParts {
+                actor: self.actor()?.smooth(&actor())?,
+                critic: self.critic.smooth(&critic())?,
+                model: self.model()?.smooth(&model())?,
+            })
+        };
+        Ok(match algo {
+            Algo::Sac => Algorithm::Sac(SacParts {
+                actor: self.actor()?.plain(&actor())?,
+                critic: self.critic.plain(&critic())?,
+            }),
+            Algo::Mlac => Algorithm::Mlac(model_parts()?),
+            Algo::Rmac => Algorithm::Rmac(model_parts()?),
+            Algo::Vgbp => Algorithm::Vgbp(VgbpParts {
+                critic: self.critic.vgbp_critic(&critic())?,
+                model: self.model()?.smooth(&model())?,
+                vgbp: self.vgbp_section(task)?,
+            }),
+            Algo::Sarsa => Algorithm::Sarsa(SarsaParts {
+                q: self.critic.rbf(&critic())?,
+                sarsa: self.sarsa_section(task)?,
+            }),
+        })
     }
 
-    /// `[vgbp]`: present for VGBP only; VGBP also needs a reward strictly concave in the
-    /// action.
-    fn validate_vgbp(&self, task: &Task) -> Result<(), ConfigError> {
-        match (&self.vgbp, self.algo) {
-            (None, Algo::Vgbp) => {
-                return Err(ConfigError::new("vgbp", "vgbp needs a [vgbp] section"));
-            }
-            (Some(_), a) if a != Algo::Vgbp => {
-                return Err(ConfigError::new(
-                    "vgbp",
-                    format!("{a} is not vgbp: remove the [vgbp] section"),
-                ));
-            }
-            (Some(v), _) => v.validate()?,
-            (None, _) => {}
-        }
-        if self.algo == Algo::Vgbp && task.reward.p.iter().any(|&p| p <= 0.0) {
+    /// `[actor]`, which the algorithm has.
+    fn actor(&self) -> Result<&Component, ConfigError> {
+        self.actor.as_ref().ok_or_else(|| {
+            ConfigError::new(
+                "actor",
+                format!("{} has an actor: an [actor] section is required", self.algo),
+            )
+        })
+    }
+
+    /// `[model]`, which the algorithm has.
+    fn model(&self) -> Result<&Component, ConfigError> {
+        self.model.as_ref().ok_or_else(|| {
+            ConfigError::new(
+                "model",
+                format!(
+                    "{} learns a process model: a [model] section is required",
+                    self.algo
+                ),
+            )
+        })
+    }
+
+    /// `[vgbp]`, checked; VGBP also needs a reward strictly concave in the action.
+    fn vgbp_section(&self, task: &Task) -> Result<VgbpConfig, ConfigError> {
+        let v = self
+            .vgbp
+            .as_ref()
+            .ok_or_else(|| ConfigError::new("vgbp", "vgbp needs a [vgbp] section"))?;
+        v.validate()?;
+        if task.reward.p.iter().any(|&p| p <= 0.0) {
             return Err(ConfigError::new(
                 "algo",
                 format!(
@@ -158,19 +211,16 @@ impl AgentConfig {
                 ),
             ));
         }
-        Ok(())
+        Ok(v.clone())
     }
 
-    /// `[sarsa]`: present for SARSA only.
-    fn validate_sarsa(&self, task: &Task) -> Result<(), ConfigError> {
-        match (&self.sarsa, self.algo) {
-            (None, Algo::Sarsa) => Err(ConfigError::new("sarsa", "sarsa needs a [sarsa] section")),
-            (Some(_), a) if a != Algo::Sarsa => Err(ConfigError::new(
-                "sarsa",
-                format!("{a} is not sarsa: remove the [sarsa] section"),
-            )),
-            (Some(c), _) => c.validate(task),
-            (None, _) => Ok(()),
-        }
+    /// `[sarsa]`, checked.
+    fn sarsa_section(&self, task: &Task) -> Result<SarsaConfig, ConfigError> {
+        let s = self
+            .sarsa
+            .as_ref()
+            .ok_or_else(|| ConfigError::new("sarsa", "sarsa needs a [sarsa] section"))?;
+        s.validate(task)?;
+        Ok(s.clone())
     }
 }

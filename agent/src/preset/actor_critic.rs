@@ -1,6 +1,7 @@
 //! The actor-critic presets of Chapters 3 and 5 (Tables 3.1, 3.2, §5.3, §5.4): actor,
 //! critic and model per system, algorithm and approximator.
 
+use plant::config::ConfigError;
 use plant::{SystemName, Task};
 
 use super::components::{SAC_REDUNDANCY_RADIUS, llr, llr_critic, llr_model, rbf};
@@ -9,12 +10,12 @@ use crate::config::{Algo, ApproxKind, Component, TilesConfig};
 
 /// The actor (or reference model), the critic and the process model of the
 /// infinite-horizon preset for `(system, algo, approx)`; `algo` has an actor and
-/// supports `approx`.
+/// supports `approx` (else the error names `approx`).
 pub(super) fn components(
     system: SystemName,
     algo: Algo,
     approx: ApproxKind,
-) -> (Component, Component, Option<Component>) {
+) -> Result<(Component, Component, Option<Component>), ConfigError> {
     let task = Task::new(system);
     let (n, m) = (task.state_dim(), task.action_dim());
     // The §6.4.2 manipulator has no actor-critic settings in the thesis; it takes those
@@ -122,7 +123,12 @@ pub(super) fn components(
                 Some(llr_model(100, 10, w_ref_model)),
             )
         }
-        (Mlac | Rmac, Tiles) | (_, Lstd) | (Vgbp | Sarsa, _) => unreachable!("rejected above"),
+        (Mlac | Rmac, Tiles) | (_, Lstd) | (Vgbp | Sarsa, _) => {
+            return Err(ConfigError::new(
+                "approx",
+                format!("{algo} with {approx} has no actor-critic preset"),
+            ));
+        }
     };
     if (algo, approx) == (Sac, Llr) {
         for c in [&mut actor, &mut critic] {
@@ -131,5 +137,5 @@ pub(super) fn components(
             }
         }
     }
-    (actor, critic, model)
+    Ok((actor, critic, model))
 }

@@ -1,6 +1,6 @@
 //! The building blocks of the presets: LLR memories by role, RBF grids.
 
-use crate::config::{Component, LlrConfig, RbfConfig};
+use crate::config::{Component, EvictionRule, LlrConfig, RbfConfig};
 
 /// LLR memories of actors, critics and reference models replace a stored sample closer
 /// than this (in scaled units) instead of purging the oldest; see the module docs.
@@ -11,15 +11,19 @@ pub const SAC_REDUNDANCY_RADIUS: f64 = 0.1;
 
 /// An actor or reference-model memory (redundancy-based management).
 pub(super) fn llr(alpha: f64, memory: usize, neighbours: usize, weights: Vec<f64>) -> Component {
-    Component::Llr(LlrConfig {
+    Component::Llr(llr_memory(alpha, memory, neighbours, weights))
+}
+
+fn llr_memory(alpha: f64, memory: usize, neighbours: usize, weights: Vec<f64>) -> LlrConfig {
+    LlrConfig {
         alpha,
         memory,
         neighbours,
         weights,
-        eviction: "redundant".into(),
+        eviction: EvictionRule::Redundant,
         redundancy_radius: REDUNDANCY_RADIUS,
         clip_to_neighbours: false,
-    })
+    }
 }
 
 /// A critic memory: as an actor memory, with predictions clipped to the neighbours'
@@ -30,13 +34,10 @@ pub(super) fn llr_critic(
     neighbours: usize,
     weights: Vec<f64>,
 ) -> Component {
-    match llr(alpha, memory, neighbours, weights) {
-        Component::Llr(c) => Component::Llr(LlrConfig {
-            clip_to_neighbours: true,
-            ..c
-        }),
-        _ => unreachable!(),
-    }
+    Component::Llr(LlrConfig {
+        clip_to_neighbours: true,
+        ..llr_memory(alpha, memory, neighbours, weights)
+    })
 }
 
 /// A process-model memory: it only stores transitions, and the thesis's 100 most recent
@@ -47,7 +48,7 @@ pub(super) fn llr_model(memory: usize, neighbours: usize, weights: Vec<f64>) -> 
         memory,
         neighbours,
         weights,
-        eviction: "oldest".into(),
+        eviction: EvictionRule::Oldest,
         redundancy_radius: 0.0,
         clip_to_neighbours: false,
     })

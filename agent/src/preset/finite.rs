@@ -44,17 +44,6 @@ pub fn finite_horizon(
     algo: Algo,
     approx: ApproxKind,
 ) -> Result<Preset, ConfigError> {
-    if !algo.has_actor() {
-        return Err(finite_horizon_unsupported(algo));
-    }
-    if approx != ApproxKind::Rbf {
-        return Err(ConfigError::new(
-            "approx",
-            format!(
-                "the finite-horizon presets (§4.4) use rbf; there is none for {algo} with {approx}"
-            ),
-        ));
-    }
     let task = Task::new(system);
     let (n, m) = (task.state_dim(), task.action_dim());
     // Actor, critic, reference model: state and time; process model: state and action.
@@ -72,8 +61,16 @@ pub fn finite_horizon(
             rbf(0.2, timed, 0.7),
             Some(rbf(0.6, model, 0.6)),
         ),
-        Algo::Vgbp | Algo::Sarsa => unreachable!("rejected above"),
+        Algo::Vgbp | Algo::Sarsa => return Err(finite_horizon_unsupported(algo)),
     };
+    if approx != ApproxKind::Rbf {
+        return Err(ConfigError::new(
+            "approx",
+            format!(
+                "the finite-horizon presets (§4.4) use rbf; there is none for {algo} with {approx}"
+            ),
+        ));
+    }
     let agent = AgentConfig {
         algo,
         approx,

@@ -133,7 +133,7 @@ pub fn preset(
     if matches!(algo, Algo::Vgbp | Algo::Sarsa) {
         return Ok(critic_only(system, algo, approx));
     }
-    let (actor, critic, model) = actor_critic::components(system, algo, approx);
+    let (actor, critic, model) = actor_critic::components(system, algo, approx)?;
     // The §6.4.2 manipulator takes the settings of Chapter 5's arms (see
     // [`actor_critic::components`]).
     let arm = matches!(

@@ -164,7 +164,7 @@ pub(super) fn measure(
                 .count();
             hits as f64 / n as f64
         },
-        swings: if cfg.system == SystemName::Pendulum {
+        swings: if cfg.system() == SystemName::Pendulum {
             summary.responses.iter().map(|r| swings(r)).collect()
         } else {
             Vec::new()

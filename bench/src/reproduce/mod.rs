@@ -162,7 +162,7 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
                 fig.title.split(':').next().unwrap_or(fig.id)
             ),
             &labelled,
-            match fig.curves[0].cfg.system {
+            match fig.curves[0].cfg.system() {
                 SystemName::Pendulum => ("angle φ [rad]", "action u [V]"),
                 _ => ("angle φ₁ [rad]", "torque u₁ [N m]"),
             },
@@ -182,7 +182,7 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
                 style,
             })
             .collect();
-        let pendulum = fig.curves[0].cfg.system == SystemName::Pendulum
+        let pendulum = fig.curves[0].cfg.system() == SystemName::Pendulum
             && fig.curves[0].cfg.agent.horizon == HorizonKind::Infinite;
         runtime::report::plot_curves(
             &dir.join("figure.png"),

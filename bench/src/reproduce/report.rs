@@ -86,7 +86,7 @@ pub(super) fn write_report(
             s,
             "| curve | runs × trials | final greedy | median [worst] | final level | t₉₀ [min] | % of optimal | thesis says |\n|---|---|---|---|---|---|---|---|"
         );
-        let pendulum = fig.curves[0].cfg.system == SystemName::Pendulum
+        let pendulum = fig.curves[0].cfg.system() == SystemName::Pendulum
             && fig.curves[0].cfg.agent.horizon == HorizonKind::Infinite;
         for m in &r.measured {
             let says = fig

@@ -5,8 +5,8 @@
 //!   allowed; [`check_float`], [`check_int`], [`check_len`] — the range checks every
 //!   section's validation uses.
 //! * [`Choice`] — a value chosen by name on the command line and in configuration files
-//!   ([`SystemName`](crate::SystemName) is one); [`choice_names!`](crate::choice_names)
-//!   spells an enum's values.
+//!   ([`SystemName`](crate::SystemName) is one); [`choice!`](crate::choice)
+//!   defines such an enum, its spellings written once.
 //! * [`RunConfig`] — `[run]`: the trial schedule, the seed and the sample-to-actuation
 //!   delays, with its validation.
 //!
@@ -18,6 +18,12 @@ mod choice;
 mod error;
 mod run;
 
-pub use choice::{Choice, UnknownChoice};
+pub use choice::{Choice, UnknownChoice, deserialize_choice};
+
+#[cfg(feature = "clap")]
+#[doc(hidden)]
+pub use clap as __clap;
 pub use error::{ConfigError, check_float, check_int, check_len};
 pub use run::RunConfig;
+#[doc(hidden)]
+pub use serde as __serde;

@@ -3,8 +3,6 @@
 
 use std::path::Path;
 
-use serde::{Deserialize, Serialize};
-
 use crate::angle::wrap;
 use crate::config::ConfigError;
 use crate::region::Region;
@@ -19,50 +17,22 @@ mod number;
 pub use file::TaskFile;
 pub use number::Number;
 
-/// The built-in systems: simulated dynamics, each with its shipped task file and the
-/// thesis's tuned presets. Any other system is a task file a driver serves.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum SystemName {
-    /// Pendulum swing-up, §3.6 and §6.4.1 (Appendix A.1).
-    Pendulum,
-    /// Two-link arm in the vertical plane, Case I (§5.3): inject damping.
-    ArmVertical,
-    /// Two-link arm in the horizontal plane, Case II (§5.4): reach a reference.
-    ArmHorizontal,
-    /// Linear double integrator with a quadratic reward (LQR check).
-    DoubleIntegrator,
-    /// The manipulator of §6.4.2 (Table 6.3): horizontal plane, `|u| ≤ 0.1 N m`, operating
-    /// range ±1.2 rad (leaving it ends the trial with reward −4·10⁴), four start states.
-    #[serde(rename = "arm-6.4")]
-    Arm64,
-}
-
-impl SystemName {
-    /// All systems, for `--help` texts and validation messages.
-    pub const ALL: [SystemName; 5] = [
-        SystemName::Pendulum,
-        SystemName::ArmVertical,
-        SystemName::ArmHorizontal,
-        SystemName::Arm64,
-        SystemName::DoubleIntegrator,
-    ];
-
-    /// The command-line / config spelling.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            SystemName::Pendulum => "pendulum",
-            SystemName::ArmVertical => "arm-vertical",
-            SystemName::ArmHorizontal => "arm-horizontal",
-            SystemName::DoubleIntegrator => "double-integrator",
-            SystemName::Arm64 => "arm-6.4",
-        }
-    }
-}
-
-impl std::fmt::Display for SystemName {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.as_str())
+crate::choice! {
+    /// The built-in systems: simulated dynamics, each with its shipped task file and the
+    /// thesis's tuned presets. Any other system is a task file a driver serves.
+    #[derive(Debug, PartialEq, Eq, Hash)]
+    pub enum SystemName {
+        /// Pendulum swing-up, §3.6 and §6.4.1 (Appendix A.1).
+        Pendulum => "pendulum",
+        /// Two-link arm in the vertical plane, Case I (§5.3): inject damping.
+        ArmVertical => "arm-vertical",
+        /// Two-link arm in the horizontal plane, Case II (§5.4): reach a reference.
+        ArmHorizontal => "arm-horizontal",
+        /// The manipulator of §6.4.2 (Table 6.3): horizontal plane, `|u| ≤ 0.1 N m`, operating
+        /// range ±1.2 rad (leaving it ends the trial with reward −4·10⁴), four start states.
+        Arm64 => "arm-6.4",
+        /// Linear double integrator with a quadratic reward (LQR check).
+        DoubleIntegrator => "double-integrator",
     }
 }
 

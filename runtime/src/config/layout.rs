@@ -9,7 +9,9 @@ use agent::config::{
 };
 use observer::config::ObserverConfig;
 use plant::config::RunConfig;
-use plant::{SystemName, TaskFile};
+use std::sync::Arc;
+
+use plant::{SystemName, Task, TaskFile};
 use serde::{Deserialize, Serialize};
 
 use super::ExperimentConfig;
@@ -47,8 +49,11 @@ pub(super) struct Layout {
     task: Option<TaskFile>,
 }
 
-impl From<Layout> for ExperimentConfig {
-    fn from(l: Layout) -> Self {
+impl TryFrom<Layout> for ExperimentConfig {
+    type Error = plant::config::ConfigError;
+
+    /// The configuration, its task read and checked.
+    fn try_from(l: Layout) -> Result<Self, Self::Error> {
         let simulated = match &l.task {
             Some(t) => t
                 .simulation
@@ -56,9 +61,15 @@ impl From<Layout> for ExperimentConfig {
                 .map_or(SystemName::Pendulum, |s| s.system),
             None => SystemName::Pendulum,
         };
-        Self {
-            system: l.system.unwrap_or(simulated),
+        let system = l.system.unwrap_or(simulated);
+        let learned = match &l.task {
+            Some(file) => super::task_of(file)?,
+            None => Task::new(system),
+        };
+        Ok(Self {
+            system,
             task: l.task,
+            learned: super::Learned(Arc::new(learned)),
             agent: AgentConfig {
                 algo: l.algo,
                 approx: l.approx,
@@ -72,7 +83,7 @@ impl From<Layout> for ExperimentConfig {
             },
             run: l.run,
             observer: l.observer,
-        }
+        })
     }
 }
 

@@ -19,7 +19,10 @@ mod tests;
 pub use resolve::{Overrides, resolve};
 
 use agent::checkpoint::{self, Origin};
+use std::sync::Arc;
+
 use agent::config::{AgentConfig, Algo, ApproxKind, HorizonKind};
+use agent::learner::Learner;
 use observer::config::{ObserverConfig, ObserverMode};
 use plant::config::{ConfigError, RunConfig};
 use plant::{SystemName, Task, TaskFile};
@@ -28,15 +31,21 @@ use serde::{Deserialize, Serialize};
 /// A complete experiment. Its TOML form keeps every key where a user writes it (see
 /// `layout`): the system and the learner's choices at the top level, then `[run]`, the
 /// agent's sections and `[observer]` (written only when it is not the default).
+///
+/// The task is read and checked once, when the configuration is made (from a preset,
+/// from TOML, or [`ExperimentConfig::on_task`]); [`ExperimentConfig::task`] hands out
+/// that one.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(from = "layout::Layout", into = "layout::Layout")]
+#[serde(try_from = "layout::Layout", into = "layout::Layout")]
 pub struct ExperimentConfig {
     /// The system learned on: the built-in system whose presets the learner starts from
     /// and whose task it learns, unless `task` gives another.
-    pub system: SystemName,
+    system: SystemName,
     /// The task learned, when a task file gives it (`task = "FILE"` or `[task]`,
     /// `--task`); `None`: `system`'s shipped task file.
-    pub task: Option<TaskFile>,
+    task: Option<TaskFile>,
+    /// The task learned, checked: `task`'s, else `system`'s.
+    learned: Learned,
     /// The learner: algorithm, approximator, horizon and their sections.
     pub agent: AgentConfig,
     /// Trials, runs, seed, evaluation, delays.
@@ -63,16 +72,42 @@ impl ExperimentConfig {
         Self {
             system,
             task: None,
+            learned: Learned(Arc::new(Task::new(system))),
             agent: preset.agent,
             run: preset.run,
             observer: ObserverConfig::default(),
         }
     }
 
+    /// The configuration on `system` with the task `task` (`None`: `system`'s shipped
+    /// one), which is checked here; an error's key is prefixed with `task.`.
+    pub fn on_task(self, system: SystemName, task: Option<TaskFile>) -> Result<Self, ConfigError> {
+        let learned = match &task {
+            Some(file) => task_of(file)?,
+            None => Task::new(system),
+        };
+        Ok(Self {
+            system,
+            task,
+            learned: Learned(Arc::new(learned)),
+            ..self
+        })
+    }
+
+    /// The system learned on (see [`ExperimentConfig::task`] for the task).
+    pub fn system(&self) -> SystemName {
+        self.system
+    }
+
+    /// The task file, when one gives the task; `None`: the system's shipped task.
+    pub fn task_file(&self) -> Option<&TaskFile> {
+        self.task.as_ref()
+    }
+
     /// Checks every value against its allowed range and the system's dimensions, section
     /// by section, then what spans sections.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let task = self.checked_task()?;
+        let task = self.task();
         self.run.validate(&task)?;
         self.observer.validate()?;
         if task.simulation.is_none() && self.observer.uses_known_model() {
@@ -95,21 +130,15 @@ impl ExperimentConfig {
         self.agent.validate(&task)
     }
 
-    /// The task learned: `task`'s, else `system`'s shipped one.
-    ///
-    /// # Panics
-    /// If `task` is invalid, which [`ExperimentConfig::validate`] refuses.
-    pub fn task(&self) -> Task {
-        self.checked_task()
-            .unwrap_or_else(|e| panic!("a validated configuration's task: {e}"))
+    /// The task learned: `task`'s, else `system`'s shipped one, as read when the
+    /// configuration was made.
+    pub fn task(&self) -> Arc<Task> {
+        self.learned.0.clone()
     }
 
-    /// The task learned, checked; an error's key is prefixed with `task.`.
-    fn checked_task(&self) -> Result<Task, ConfigError> {
-        match &self.task {
-            Some(file) => task_of(file),
-            None => Ok(Task::new(self.system)),
-        }
+    /// The learner the agent's keys describe for the task ([`AgentConfig::resolve`]).
+    pub fn learner(&self) -> Result<Learner, ConfigError> {
+        self.agent.resolve(&self.learned.0)
     }
 
     /// Checks that the rig can simulate the task (`rig learn`, the simulated plant); the
@@ -170,8 +199,25 @@ impl ExperimentConfig {
     }
 }
 
+/// The task learned, shared by the configuration's copies. It follows from `system` and
+/// `task`, so it takes no part in comparing configurations.
+#[derive(Clone)]
+struct Learned(Arc<Task>);
+
+impl PartialEq for Learned {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+impl std::fmt::Debug for Learned {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0.name)
+    }
+}
+
 /// The task of a `[task]` table, checked; an error's key is prefixed with `task.`.
-fn task_of(file: &TaskFile) -> Result<Task, ConfigError> {
+pub(super) fn task_of(file: &TaskFile) -> Result<Task, ConfigError> {
     file.task(None).map_err(|mut e| {
         e.key = if e.key.is_empty() {
             "task".into()

@@ -2,9 +2,9 @@
 
 use std::path::Path;
 
-use agent::config::{Algo, ApproxKind, HorizonKind, LstdPrior};
+use agent::config::{Algo, ApproxKind, EvictionRule, HorizonKind, LstdPrior};
 use observer::config::{ObserverConfig, ObserverKind, ObserverMode, ObserverModel, SensorKind};
-use plant::config::{Choice, ConfigError};
+use plant::config::ConfigError;
 use plant::{SystemName, TaskFile};
 
 use super::ExperimentConfig;
@@ -18,7 +18,7 @@ pub struct Overrides {
     /// arm-horizontal (Case II, §5.4), arm-6.4 (the manipulator of §6.4.2: ±0.1 N m,
     /// ±1.2 rad operating range, four start states) or double-integrator (LQR check)
     /// [default: pendulum].
-    #[arg(long, value_parser = SystemName::parse)]
+    #[arg(long, value_enum)]
     pub system: Option<SystemName>,
     /// A task file: the system as the rig needs to know it — states, actions and their
     /// bounds, sampling time, trial, start states, reward, operating range (see
@@ -29,11 +29,11 @@ pub struct Overrides {
     pub task: Option<std::path::PathBuf>,
     /// Algorithm: sac (Algorithm 1), mlac (Algorithm 2), rmac (Algorithm 3), vgbp
     /// (Algorithm 7) or sarsa (§6.2) [default: mlac].
-    #[arg(long, value_parser = Algo::parse)]
+    #[arg(long, value_enum)]
     pub algo: Option<Algo>,
     /// Function approximator: llr, rbf, tiles (sac only) or lstd (vgbp only: an LSTD
     /// critic on RBFs with an LLR process model); sarsa uses rbf [default: llr].
-    #[arg(long, value_parser = ApproxKind::parse)]
+    #[arg(long, value_enum)]
     pub approx: Option<ApproxKind>,
     /// Horizon of the cost function. `infinite`: discounted rewards without end
     /// (Chapters 3, 5, 6). `finite`: a trial is the horizon — its return is the rewards
@@ -41,7 +41,7 @@ pub struct Overrides {
     /// time as an extra input (Chapter 4, Eq. 4.6; sac, mlac, rmac with rbf: SAC-FH,
     /// MLAC-FH, RMAC-FH, Algorithms 4–6, with the parameters of §4.4) [default:
     /// infinite].
-    #[arg(long, value_parser = HorizonKind::parse)]
+    #[arg(long, value_enum)]
     pub horizon: Option<HorizonKind>,
     /// Trials per run [preset: 400 for the pendulum (vgbp, sarsa: 200; finite horizon:
     /// 600), 600 for the arms (vgbp, sarsa: 200)].
@@ -62,13 +62,13 @@ pub struct Overrides {
     /// What the plant's sensor measures: full (the state) or angle (an encoder: angles
     /// quantised to `observer.counts_per_rev`, default 4096, plus optional Gaussian noise
     /// `observer.noise_std`; velocities must be estimated) [default: full].
-    #[arg(long, value_parser = SensorKind::parse)]
+    #[arg(long, value_enum)]
     pub sensor: Option<SensorKind>,
     /// State observer: pass-through (full sensor only), finite-difference (backward
     /// difference, low-pass `observer.filter`) or predictive (model prediction corrected by
     /// the measured angle; `observer.model` = learned (LLR) or known (RK4 of the plant),
     /// velocity gain `observer.gain`) [default: pass-through].
-    #[arg(long, value_parser = ObserverKind::parse)]
+    #[arg(long, value_enum)]
     pub observer: Option<ObserverKind>,
     /// Sample-to-actuation delay [ms], in [0, Ts): over each sample period the previous
     /// action stays in effect this long, then the new one — deterministic, for delay
@@ -92,7 +92,7 @@ pub struct Overrides {
     /// x̂_{k+1|k}; its action is applied at the next sample instant, so a delay below Ts
     /// does not reach the plant; needs `--observer predictive`) (`observer.mode`)
     /// [default: direct].
-    #[arg(long, value_parser = ObserverMode::parse)]
+    #[arg(long, value_enum)]
     pub observer_mode: Option<ObserverMode>,
 }
 
@@ -300,11 +300,10 @@ pub fn resolve(
     let mut merged = choice.table().map_err(with_file)?;
     merge(&mut merged, user, "").map_err(with_file)?;
     check_choices(&merged).map_err(with_file)?;
-    let mut cfg: ExperimentConfig = toml::Value::Table(merged)
+    let cfg: ExperimentConfig = toml::Value::Table(merged)
         .try_into()
         .map_err(|e: toml::de::Error| with_file(ConfigError::new("", e.message())))?;
-    cfg.system = choice.system;
-    cfg.task = task;
+    let mut cfg = cfg.on_task(choice.system, task).map_err(with_file)?;
     cfg.agent.algo = choice.algo;
     cfg.agent.approx = choice.approx;
     cfg.agent.horizon = choice.horizon;
@@ -313,12 +312,15 @@ pub fn resolve(
     Ok(cfg)
 }
 
-/// Checks the spellings of the choice keys in sections (`[observer]`, an LSTD critic's
-/// prior), so that a wrong one is reported with its key and the allowed values.
+/// Checks the spellings of the choice keys in sections (`[observer]`, an LLR memory's
+/// eviction, an LSTD critic's prior), so that a wrong one is reported with its key and the allowed values.
 fn check_choices(merged: &toml::Table) -> Result<(), ConfigError> {
     check_choice::<SensorKind>(merged, "observer", "sensor")?;
     check_choice::<ObserverKind>(merged, "observer", "observer")?;
     check_choice::<ObserverModel>(merged, "observer", "model")?;
     check_choice::<ObserverMode>(merged, "observer", "mode")?;
+    for section in ["actor", "critic", "model"] {
+        check_choice::<EvictionRule>(merged, section, "eviction")?;
+    }
     check_choice::<LstdPrior>(merged, "critic", "prior")
 }

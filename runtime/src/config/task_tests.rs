@@ -39,7 +39,11 @@ fn with_task(path: &Path) -> Overrides {
 fn a_task_file_gives_the_task_and_its_simulation_the_presets() {
     let dir = heavy_pendulum("gives");
     let cfg = resolve(None, &with_task(&dir.join("heavy.toml"))).unwrap();
-    assert_eq!(cfg.system, SystemName::Pendulum, "the system it simulates");
+    assert_eq!(
+        cfg.system(),
+        SystemName::Pendulum,
+        "the system it simulates"
+    );
     assert_eq!(cfg.task_name(), "heavy");
     let task = cfg.task();
     assert_eq!(task.reward.q, [8.0, 0.2]);
@@ -123,7 +127,7 @@ fn a_task_without_a_simulation_takes_the_pendulum_presets_by_rules() {
     let dir = heavy_pendulum("driven");
     let driven = without_simulation(&dir);
     let cfg = resolve(None, &with_task(&driven)).unwrap();
-    assert_eq!(cfg.system, SystemName::Pendulum, "the presets' basis");
+    assert_eq!(cfg.system(), SystemName::Pendulum, "the presets' basis");
     let task = cfg.task();
     assert!(task.simulation.is_none());
     let rules = agent::preset::for_task(&task, cfg.agent.algo, cfg.agent.approx, cfg.agent.horizon);
@@ -186,4 +190,17 @@ fn a_driven_task_says_where_its_presets_come_from() {
     // A simulated task keeps its system.
     let simulated = resolve(None, &with_task(&dir.join("heavy.toml"))).unwrap();
     assert!(simulated.to_toml().starts_with("system = \"pendulum\""));
+}
+
+#[test]
+fn a_configuration_with_a_bad_task_is_refused_when_read() {
+    let dir = heavy_pendulum("bad-when-read");
+    let cfg = resolve(None, &with_task(&dir.join("heavy.toml"))).unwrap();
+    let text = cfg.to_toml();
+    assert!(text.contains("state_weights = [8.0, 0.2]"), "{text}");
+    // A settings file whose task has lost a weight: an error when the file is read,
+    // naming the task's key, not a panic when the task is asked for.
+    let bad = text.replace("state_weights = [8.0, 0.2]", "state_weights = [8.0]");
+    let e = toml::from_str::<ExperimentConfig>(&bad).unwrap_err();
+    assert!(e.message().contains("`task."), "{e}");
 }

@@ -272,3 +272,76 @@ fn a_checkpoint_origin_fingerprints_the_learning_parameters() {
     reseeded.run.seed = 2;
     assert_ne!(reseeded.origin(0).fingerprint, origin.fingerprint);
 }
+
+#[test]
+fn the_task_is_read_once_and_shared_by_copies() {
+    let c = resolve(None, &Overrides::default()).unwrap();
+    assert!(std::sync::Arc::ptr_eq(&c.task(), &c.task()));
+    assert!(std::sync::Arc::ptr_eq(&c.task(), &c.clone().task()));
+    assert_eq!(c.task().name, "pendulum");
+}
+
+#[test]
+fn an_unknown_eviction_rule_is_named_with_the_rules() {
+    let e = resolve_str("[actor]\neviction = \"newest\"\n").unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "exp.toml: `actor.eviction`: \"newest\" is not one of: oldest, redundant"
+    );
+}
+
+#[test]
+fn the_learner_is_the_algorithm_with_its_components() {
+    use agent::learner::{Algorithm, Plain, Smooth};
+    let o = |algo, approx| Overrides {
+        algo: Some(algo),
+        approx: Some(approx),
+        ..Default::default()
+    };
+    let c = resolve(None, &o(Algo::Sac, ApproxKind::Tiles)).unwrap();
+    let Algorithm::Sac(sac) = c.learner().unwrap().algorithm else {
+        panic!("not SAC")
+    };
+    assert!(matches!(sac.critic, Plain::Tiles(_)), "{sac:?}");
+    let c = resolve(None, &o(Algo::Rmac, ApproxKind::Rbf)).unwrap();
+    let Algorithm::Rmac(rmac) = c.learner().unwrap().algorithm else {
+        panic!("not RMAC")
+    };
+    assert!(matches!(rmac.model, Smooth::Rbf(_)), "{rmac:?}");
+    // A component the algorithm cannot use is an error of the learner, naming its key.
+    let mut bad = c.clone();
+    bad.agent.model = None;
+    let e = bad.learner().unwrap_err();
+    assert_eq!(
+        (e.key.as_str(), e.message.as_str()),
+        (
+            "model",
+            "rmac learns a process model: a [model] section is required"
+        )
+    );
+}
+
+#[test]
+fn help_lists_the_choices() {
+    use clap::{CommandFactory, Parser};
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        o: Overrides,
+    }
+    let help = Cli::command().render_long_help().to_string();
+    for list in [
+        "[possible values: sac, mlac, rmac, vgbp, sarsa]",
+        "[possible values: llr, rbf, tiles, lstd]",
+        "[possible values: pendulum, arm-vertical, arm-horizontal, arm-6.4, double-integrator]",
+        "[possible values: pass-through, finite-difference, predictive]",
+    ] {
+        assert!(help.contains(list), "{list} not in\n{help}");
+    }
+    let cli = Cli::try_parse_from(["rig", "--algo", "vgbp", "--system", "arm-6.4"]).unwrap();
+    assert_eq!(
+        (cli.o.algo, cli.o.system),
+        (Some(Algo::Vgbp), Some(SystemName::Arm64))
+    );
+    assert!(Cli::try_parse_from(["rig", "--algo", "ddpg"]).is_err());
+}

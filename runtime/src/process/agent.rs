@@ -73,7 +73,7 @@ impl Learner {
         let task = cfg.task();
         let mut agent = ::agent::build(
             &task,
-            &cfg.agent,
+            &cfg.learner()?,
             ::agent::seed::run_seed(cfg.run.seed, run),
         );
         let origin = cfg.origin(run);

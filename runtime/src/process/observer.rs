@@ -4,8 +4,6 @@
 //! velocities are NaN — not measured), never the ground truth, and runs the observer
 //! the configuration asks for ([`::observer::build`], as the in-process driver does).
 
-use std::sync::Arc;
-
 use ::observer::timing::{Call, Sample};
 use anyhow::Result;
 use wire::{Estimate, Measurement, flags, now_ns, topic};
@@ -46,7 +44,7 @@ pub fn run(settings: &ObserverConfig) -> Result<()> {
     super::set_rt_priority(args.scheduling.rt_priority)?;
     args.scheduling.place(super::Part::Node)?;
     let cfg = args.experiment()?;
-    let task = Arc::new(cfg.task());
+    let task = cfg.task();
     let mut front = crate::experiment::front(&task, &cfg);
     let bus = args.join("observer")?;
     let measurements = bus.rx::<Measurement>(topic::MEASUREMENT)?;

@@ -21,7 +21,6 @@
 //! * The output folder is this run's while it lasts ([`crate::lock`]).
 
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow};
@@ -134,7 +133,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         eprintln!("note: {note}");
     }
     let bus = Bus::join(&run_id, "rig")?;
-    let task = Arc::new(cfg.task());
+    let task = cfg.task();
     let (watch, driver_info, with_driver) = match opts.clock.driver() {
         Some(d) => match wait_for_driver(&bus, d, &task, opts.progress)
             .and_then(|(watch, info)| Ok((watch, info, driver_options(opts, &info)?)))

@@ -54,7 +54,7 @@ fn metadata(about: &About) -> BTreeMap<String, String> {
     [
         ("run_id", about.run_id.to_string()),
         ("seed", cfg.run.seed.to_string()),
-        ("system", cfg.system.to_string()),
+        ("system", cfg.system().to_string()),
         ("task", cfg.task_name()),
         ("algo", cfg.agent.algo.to_string()),
         ("approx", cfg.agent.approx.to_string()),

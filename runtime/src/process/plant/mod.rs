@@ -19,7 +19,6 @@ mod lockstep;
 mod realtime;
 
 use std::path::Path;
-use std::sync::Arc;
 
 use ::plant::Plant;
 use ::plant::episode::Episode;
@@ -57,7 +56,7 @@ pub fn run(args: &PlantConfig) -> Result<()> {
     args.clock
         .check(&cfg, args.node.waiting())
         .map_err(|e| anyhow::anyhow!(e))?;
-    let task = Arc::new(cfg.task());
+    let task = cfg.task();
     let run_seed = ::agent::seed::run_seed(cfg.run.seed, args.node.run_index);
     let sensor = crate::experiment::sensor(&task, &cfg.observer, run_seed);
     let resume = args.resume.unwrap_or(Continuation {
