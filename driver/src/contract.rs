@@ -31,6 +31,10 @@ use crate::error::{Error, InfoError, SampleError};
 pub use crate::link::{DriverLink, DriverWatch, running, wait_info};
 pub use crate::serving::how_to_serve;
 
+// A task's states and actions fit the messages: the plant's bounds are the wire's (a
+// build fails where they part).
+const _: () = assert!(plant::MAX_STATE == MAX_X && plant::MAX_ACTION == MAX_U);
+
 /// The protocol version in [`DriverInfo::version`].
 pub const VERSION: u64 = 2;
 
