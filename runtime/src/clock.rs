@@ -227,22 +227,13 @@ impl Clock {
             }
             _ => cfg.check_simulated()?,
         }
-        let maybe_lockstep = matches!(self, Self::Lockstep | Self::External(_));
-        if maybe_lockstep || waiting.needs_wake_up() {
-            Ok(())
-        } else {
-            Err(ClockError::Unwoken)
-        }
+        polls_only_in_lockstep(matches!(self, Self::Lockstep | Self::External(_)), waiting)
     }
 
     /// Checks the processes' `waiting` against the clock an external driver keeps
     /// (`info`): polling without end needs a driver in lockstep.
     pub fn check_driver_waiting(info: &DriverInfo, waiting: Waiting) -> Result<(), ClockError> {
-        if info.lockstep() || waiting.needs_wake_up() {
-            Ok(())
-        } else {
-            Err(ClockError::Unwoken)
-        }
+        polls_only_in_lockstep(info.lockstep(), waiting)
     }
 
     /// The clock in words, for the recording's metadata: `ts` is the task's sampling
@@ -260,6 +251,16 @@ impl Clock {
             ),
             (Self::External(d), None) => format!("external driver {:?}", d.id),
         }
+    }
+}
+
+/// Refuses polling without end ([`Waiting::needs_wake_up`]) unless the clock is (or may
+/// be) `lockstep`: in real time the plant sleeps until its next sample and must be woken.
+fn polls_only_in_lockstep(lockstep: bool, waiting: Waiting) -> Result<(), ClockError> {
+    if lockstep || waiting.needs_wake_up() {
+        Ok(())
+    } else {
+        Err(ClockError::Unwoken)
     }
 }
 
