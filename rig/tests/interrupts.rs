@@ -111,23 +111,29 @@ fn resume(dir: &Path, extra: &[&str]) -> (Output, u32) {
     (out, after)
 }
 
-const TRIALS: &str = "600";
+/// Trials of the uninterrupted run: enough for the latest interruption point and the trials
+/// learned past it.
+const WHOLE: usize = 1000;
+/// Trials an interrupted run is started for: so many that it is still under way when the
+/// signal comes, however fast the machine (a run learns fewer trials than asked for, so
+/// its rows are the first of any longer run's).
+const INTERRUPTED: &str = "100000";
 /// Trials a resumed run learns past its interruption (`--resume --trials`): its rows are
 /// the uninterrupted run's, byte for byte, as a whole resumed run's are.
 const AFTER_RESUME: usize = 40;
 
 /// Interrupts at points drawn from seed 36: after a number of rows, then a pause,
-/// alternately SIGINT and SIGKILL. At most 450 rows and 100 ms: the run (about 400 trials
-/// a second in the release build on an idle machine) is still under way when the signal
-/// comes, with room for a machine twice as fast. The last complete trial is the resume point: after
+/// alternately SIGINT and SIGKILL. The interrupted runs are asked for far more trials than
+/// they get to, so that each is still under way when the signal comes. The last complete
+/// trial is the resume point: after
 /// Ctrl-C the rows in `returns.csv`; after `kill -9` as many as the recording kept.
 #[test]
 fn lockstep_runs_interrupted_at_random_points_resume_from_their_last_complete_trial() {
     let dir = tmp("lockstep");
-    let args = ["--trials", TRIALS, "--quiet"];
+    let args = ["--trials", INTERRUPTED, "--quiet"];
     ok(rig()
         .arg("run")
-        .args(args)
+        .args(["--trials", &WHOLE.to_string(), "--quiet"])
         .arg("--out")
         .arg(dir.join("whole"))
         .output()
@@ -152,7 +158,11 @@ fn lockstep_runs_interrupted_at_random_points_resume_from_their_last_complete_tr
         let newest = checkpoints(&out).into_iter().filter(|&t| t <= done).max();
         // On for AFTER_RESUME trials past the interruption: the bytes of the uninterrupted
         // run's first trials, as many.
-        let upto = (done + AFTER_RESUME).min(TRIALS.parse().unwrap());
+        let upto = done + AFTER_RESUME;
+        assert!(
+            upto <= WHOLE,
+            "{signal} after {done} rows: past the whole run"
+        );
         let (_, after) = resume(&out, &["--trials", &upto.to_string()]);
         println!(
             "{signal} after {done} rows: resumed after trial {after} (newest checkpoint {newest:?})"
