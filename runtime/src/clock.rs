@@ -13,16 +13,17 @@ use wire::Waiting;
 use crate::config::ExperimentConfig;
 use plant::config::ConfigError;
 
-/// How the simulated plant keeps time (`rig run --timing`, `rig sim-driver --clock`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Timing {
-    /// Simulated time advances only when the action for a sample has arrived
-    /// (deterministic).
-    Lockstep,
-    /// Samples at absolute deadlines of the monotonic clock; a late action is applied
-    /// from the moment it arrives.
-    Realtime,
+plant::choice! {
+    /// How the simulated plant keeps time (`rig run --timing`, `rig sim-driver --clock`).
+    #[derive(Debug, PartialEq, Eq)]
+    pub enum Timing {
+        /// Simulated time advances only when the action for a sample has arrived
+        /// (deterministic).
+        Lockstep => "lockstep",
+        /// Samples at absolute deadlines of the monotonic clock; a late action is applied
+        /// from the moment it arrives.
+        Realtime => "realtime",
+    }
 }
 
 /// An external driver in place of the simulated plant (`rig run --plant external`).

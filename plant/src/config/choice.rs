@@ -55,13 +55,13 @@ macro_rules! choice {
     (
         $(#[$meta:meta])*
         $vis:vis enum $t:ident {
-            $( $(#[$vmeta:meta])* $v:ident => $s:literal ),+ $(,)?
+            $( $(#[$($vmeta:tt)*])* $v:ident => $s:literal ),+ $(,)?
         }
     ) => {
         $(#[$meta])*
         #[derive(Clone, Copy)]
         $vis enum $t {
-            $( $(#[$vmeta])* $v ),+
+            $( $(#[$($vmeta)*])* $v ),+
         }
         impl $t {
             /// Every value, in the order messages and help texts list them.
@@ -90,8 +90,18 @@ macro_rules! choice {
                 $crate::config::deserialize_choice(d, &Self::NAMES)
             }
         }
-        $crate::__choice_value_enum!($t);
+        $crate::__choice_value_enum!($t, $( $s => $crate::__choice_doc!($(#[$($vmeta)*])*) ),+);
     };
+}
+
+/// The doc comment among a variant's attributes, its lines joined (the help text of the
+/// value in `--help`).
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __choice_doc {
+    () => { "" };
+    (#[doc = $d:literal] $($rest:tt)*) => { concat!($d, $crate::__choice_doc!($($rest)*)) };
+    (#[$($m:tt)*] $($rest:tt)*) => { $crate::__choice_doc!($($rest)*) };
 }
 
 /// A [`Choice`] read from its spelling; an unknown one is serde's "unknown variant" error
@@ -110,15 +120,18 @@ where
 #[doc(hidden)]
 #[macro_export]
 macro_rules! __choice_value_enum {
-    ($t:ident) => {
+    ($t:ident, $( $s:literal => $doc:expr ),+) => {
         impl $crate::config::__clap::ValueEnum for $t {
             fn value_variants<'a>() -> &'a [Self] {
                 &Self::ALL
             }
             fn to_possible_value(&self) -> Option<$crate::config::__clap::builder::PossibleValue> {
-                Some($crate::config::__clap::builder::PossibleValue::new(
-                    self.as_str(),
-                ))
+                let help = match self.as_str() { $( $s => $doc, )+ _ => "" };
+                let value = $crate::config::__clap::builder::PossibleValue::new(self.as_str());
+                Some(match help.trim() {
+                    "" => value,
+                    help => value.help(help),
+                })
             }
         }
     };
@@ -129,7 +142,7 @@ macro_rules! __choice_value_enum {
 #[doc(hidden)]
 #[macro_export]
 macro_rules! __choice_value_enum {
-    ($t:ident) => {};
+    ($($any:tt)*) => {};
 }
 
 #[cfg(test)]
@@ -143,6 +156,20 @@ mod tests {
         assert_eq!(
             SystemName::parse("cartpole").unwrap_err().to_string(),
             "one of: pendulum, arm-vertical, arm-horizontal, arm-6.4, double-integrator"
+        );
+    }
+
+    #[cfg(feature = "clap")]
+    #[test]
+    fn a_values_doc_comment_is_its_help_on_the_command_line() {
+        use clap::ValueEnum;
+        let value = SystemName::Arm64.to_possible_value().unwrap();
+        assert_eq!(value.get_name(), "arm-6.4");
+        assert_eq!(
+            value.get_help().unwrap().to_string(),
+            "The manipulator of §6.4.2 (Table 6.3): horizontal plane, `|u| ≤ 0.1 N m`, \
+             operating range ±1.2 rad (leaving it ends the trial with reward −4·10⁴), four \
+             start states."
         );
     }
 

@@ -1,10 +1,10 @@
 //! Configuration errors and the range checks that produce them.
 
-use std::fmt;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// A configuration error: where, which key, what is wrong.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}{}{message}", file_prefix(file.as_deref()), key_prefix(key))]
 pub struct ConfigError {
     /// The file the value came from, if any.
     pub file: Option<PathBuf>,
@@ -25,19 +25,20 @@ impl ConfigError {
     }
 }
 
-impl fmt::Display for ConfigError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if let Some(p) = &self.file {
-            write!(f, "{}: ", p.display())?;
-        }
-        if !self.key.is_empty() {
-            write!(f, "`{}`: ", self.key)?;
-        }
-        f.write_str(&self.message)
-    }
+/// `FILE: ` when the error has a file.
+fn file_prefix(file: Option<&Path>) -> String {
+    file.map(|p| format!("{}: ", p.display()))
+        .unwrap_or_default()
 }
 
-impl std::error::Error for ConfigError {}
+/// `` `KEY`: `` when the error has a key.
+fn key_prefix(key: &str) -> String {
+    if key.is_empty() {
+        String::new()
+    } else {
+        format!("`{key}`: ")
+    }
+}
 
 /// Checks `lo ≤ v ≤ hi` (`lo < v < hi` if `open`) and finiteness for a float key; the
 /// error names the range.

@@ -152,14 +152,15 @@ pub struct GoalSpec {
     pub reward: Option<Number>,
 }
 
-/// The distributions start states may be drawn from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum StartKind {
-    /// Uniform in a box: `low`, `high`.
-    Uniform,
-    /// Normal: `mean`, `std`.
-    Normal,
+crate::choice! {
+    /// The distributions start states may be drawn from.
+    #[derive(Debug, PartialEq, Eq)]
+    pub enum StartKind {
+        /// Uniform in a box: `low`, `high`.
+        Uniform => "uniform",
+        /// Normal: `mean`, `std`.
+        Normal => "normal",
+    }
 }
 
 /// `[start_distribution]`: where learning trials start.

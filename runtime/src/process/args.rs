@@ -82,16 +82,17 @@ impl Default for Spin {
     }
 }
 
-/// How the loop's processes wait for their next message (`--wait`, [`Waiting`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum WaitKind {
-    /// Sleep until woken: no CPU while waiting, an operating-system wake-up per message.
-    Block,
-    /// Poll with the CPU's spin hint: for a machine with a core per process.
-    Spin,
-    /// Poll, handing the CPU to the other processes between polls.
-    Yield,
+plant::choice! {
+    /// How the loop's processes wait for their next message (`--wait`, [`Waiting`]).
+    #[derive(Debug, PartialEq, Eq)]
+    pub enum WaitKind {
+        /// Sleep until woken: no CPU while waiting, an operating-system wake-up per message.
+        Block => "block",
+        /// Poll with the CPU's spin hint: for a machine with a core per process.
+        Spin => "spin",
+        /// Poll, handing the CPU to the other processes between polls.
+        Yield => "yield",
+    }
 }
 
 /// How a process waits for its next message: a flag of `rig run` and a setting of

@@ -14,20 +14,19 @@
 use anyhow::{Result, bail};
 use wire::{FOREVER, Waiting};
 
-/// Where the processes of a run are placed (`--cpus`).
-#[derive(
-    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
-)]
-#[serde(rename_all = "kebab-case")]
-pub enum Layout {
-    /// Wherever the operating system puts them.
-    Shared,
-    /// The plant (the clock) alone on the last CPU; the observer, the agent and the
-    /// recorder on the others.
-    PlantAlone,
-    /// The recorder and the checkpoint writer alone on the last CPU; the plant, the
-    /// observer and the agent on the others.
-    RecorderAlone,
+plant::choice! {
+    /// Where the processes of a run are placed (`--cpus`).
+    #[derive(Debug, PartialEq, Eq)]
+    pub enum Layout {
+        /// Wherever the operating system puts them.
+        Shared => "shared",
+        /// The plant (the clock) alone on the last CPU; the observer, the agent and the
+        /// recorder on the others.
+        PlantAlone => "plant-alone",
+        /// The recorder and the checkpoint writer alone on the last CPU; the plant, the
+        /// observer and the agent on the others.
+        RecorderAlone => "recorder-alone",
+    }
 }
 
 /// A part of a run, as far as its placement goes.
