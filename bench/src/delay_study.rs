@@ -39,9 +39,9 @@ use observer::config::{ObserverKind, ObserverMode, ObserverModel, SensorKind};
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
 use runtime::config::{Overrides, resolve};
-use runtime::learn::{
-    LAST_EVALUATIONS, LearnOptions, Progress, final_greedy, learn, progress_bar, write_atomic,
-};
+use runtime::learn::{LearnOptions, Progress, learn};
+use runtime::output::runs::{LAST_EVALUATIONS, final_greedy};
+use runtime::output::{progress_bar, write_atomic};
 use runtime::report::plot::{PointSeries, plot_points};
 use runtime::report::{CurvePoint, Series, SeriesStyle, curve, plot_curves};
 

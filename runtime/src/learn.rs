@@ -32,11 +32,14 @@ use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 use crate::config::ExperimentConfig;
 use crate::experiment::{Experiment, Sample, TrialRecord};
+use crate::output::responses::{write_acted_on, write_responses};
+use crate::output::runs::{OrderedWriter, RUNS_HEADER, curves};
+use crate::output::{progress_bar, write_atomic};
 use crate::report::{self, CurvePoint, Series, SeriesStyle};
 
 /// How to run and where to write.
@@ -81,89 +84,6 @@ pub struct LearnSummary {
     pub acted_on_rmse: Vec<Vec<f64>>,
 }
 
-/// Writes `runs.csv` in run order, each row as soon as it can be: the rows of the first
-/// unfinished run as its trials end (a study can follow a run trial by trial), those of
-/// later runs once every run before them has finished.
-struct OrderedWriter<W: Write> {
-    /// The run whose rows are written as they come.
-    next: u32,
-    /// Rows of later runs, and whether each has finished.
-    pending: BTreeMap<u32, (Vec<TrialRecord>, bool)>,
-    out: W,
-}
-
-impl<W: Write> OrderedWriter<W> {
-    /// One trial of `run` has ended.
-    fn trial(&mut self, run: u32, r: &TrialRecord) -> Result<()> {
-        if run == self.next {
-            write_row(&mut self.out, r)?;
-            self.out.flush()?;
-        } else {
-            self.pending.entry(run).or_default().0.push(r.clone());
-        }
-        Ok(())
-    }
-
-    /// Every trial of `run` has ended.
-    fn finished(&mut self, run: u32) -> Result<()> {
-        self.pending.entry(run).or_default().1 = true;
-        while self.pending.get(&self.next).is_some_and(|(_, done)| *done) {
-            self.pending.remove(&self.next);
-            self.next += 1;
-            if let Some((rows, _)) = self.pending.get_mut(&self.next) {
-                for r in rows.drain(..) {
-                    write_row(&mut self.out, &r)?;
-                }
-            }
-        }
-        self.out.flush()?;
-        Ok(())
-    }
-}
-
-/// A progress bar of `len` trials on stderr (hidden when `enabled` is false, or when
-/// stderr is not a terminal).
-pub fn progress_bar(len: u64, enabled: bool, label: &str) -> ProgressBar {
-    let target = if enabled {
-        ProgressDrawTarget::stderr()
-    } else {
-        ProgressDrawTarget::hidden()
-    };
-    let bar = ProgressBar::with_draw_target(Some(len), target);
-    let template = format!(
-        "{{spinner}} {label} [{{bar:40}}] {{pos}}/{{len}} trials, {{per_sec}}, eta {{eta}}"
-    );
-    bar.set_style(
-        ProgressStyle::with_template(&template)
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    bar
-}
-
-/// The header of `runs.csv`.
-pub const RUNS_HEADER: &str = "run,trial,sim_time_s,return,greedy_return";
-
-/// One `runs.csv` row (numbers in Rust's shortest round-trip form).
-pub fn write_row(out: &mut impl Write, r: &TrialRecord) -> std::io::Result<()> {
-    match r.greedy {
-        Some(g) => writeln!(
-            out,
-            "{},{},{},{},{}",
-            r.run, r.trial, r.sim_time_s, r.ret, g
-        ),
-        None => writeln!(out, "{},{},{},{},", r.run, r.trial, r.sim_time_s, r.ret),
-    }
-}
-
-/// Writes `text` to `path` atomically (temporary file, then rename).
-pub fn write_atomic(path: &Path, text: &str) -> Result<()> {
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, text).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path)
-        .with_context(|| format!("cannot rename {} to {}", tmp.display(), path.display()))
-}
-
 /// Runs every run of `cfg` and writes the outputs.
 pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary> {
     cfg.check_simulated()?;
@@ -177,11 +97,7 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
             .with_context(|| format!("cannot create {}", runs_path.display()))?,
     );
     writeln!(out, "{RUNS_HEADER}")?;
-    let writer = Mutex::new(OrderedWriter {
-        next: 0,
-        pending: BTreeMap::new(),
-        out,
-    });
+    let writer = Mutex::new(OrderedWriter::new(out));
 
     let (runs, trials) = (cfg.run.runs, cfg.run.trials);
     let bar = match &opts.progress {
@@ -284,189 +200,4 @@ fn write_curves(
         &series,
         None,
     )
-}
-
-/// Writes each run's acted-on error as `run,x_0,...` (shortest round-trip numbers).
-fn write_acted_on(path: &Path, rmse: &[Vec<f64>]) -> Result<()> {
-    let n = rmse.first().map_or(0, Vec::len);
-    let mut text = String::from("run");
-    for i in 0..n {
-        text += &format!(",x_{i}");
-    }
-    for (run, r) in rmse.iter().enumerate() {
-        text += &format!("\n{run}");
-        for v in r {
-            text += &format!(",{v}");
-        }
-    }
-    text.push('\n');
-    write_atomic(path, &text)
-}
-
-/// Writes each run's time response as `run,t,x_0,...,u_0,...,reward` (shortest
-/// round-trip numbers).
-fn write_responses(path: &Path, responses: &[Vec<Sample>]) -> Result<()> {
-    let mut s = String::new();
-    if let Some(first) = responses.iter().flatten().next() {
-        let cols: Vec<String> = (0..first.x.len())
-            .map(|i| format!("x_{i}"))
-            .chain((0..first.u.len()).map(|i| format!("u_{i}")))
-            .collect();
-        s.push_str(&format!("run,t,{},reward\n", cols.join(",")));
-    }
-    for (run, samples) in responses.iter().enumerate() {
-        for p in samples {
-            let v: Vec<String> = std::iter::once(p.t)
-                .chain(p.x.iter().copied())
-                .chain(p.u.iter().copied())
-                .chain(std::iter::once(p.reward))
-                .map(|v| v.to_string())
-                .collect();
-            s.push_str(&format!("{run},{}\n", v.join(",")));
-        }
-    }
-    write_atomic(path, &s)
-}
-
-/// Reads what `write_responses` wrote for `runs` runs; `None` if the file is missing,
-/// malformed or incomplete.
-pub fn read_responses(path: &Path, runs: usize) -> Option<Vec<Vec<Sample>>> {
-    let mut reader = csv::Reader::from_path(path).ok()?;
-    let n = reader
-        .headers()
-        .ok()?
-        .iter()
-        .filter(|h| h.starts_with("x_"))
-        .count();
-    let mut out = vec![Vec::new(); runs];
-    for row in reader.records() {
-        let row = row.ok()?;
-        let run: usize = row.get(0)?.parse().ok()?;
-        let v: Vec<f64> = row
-            .iter()
-            .skip(1)
-            .map(|f| f.parse().ok())
-            .collect::<Option<_>>()?;
-        let last = v.len().checked_sub(1)?;
-        out.get_mut(run)?.push(Sample {
-            t: v[0],
-            x: v.get(1..1 + n)?.to_vec(),
-            u: v.get(1 + n..last)?.to_vec(),
-            reward: v[last],
-        });
-    }
-    out.iter().all(|r| !r.is_empty()).then_some(out)
-}
-
-/// The greedy evaluations a run's final policy is judged by (the thesis's figures end on
-/// them): the mean of the last this many.
-pub const LAST_EVALUATIONS: usize = 3;
-
-/// Per run, the mean of its last [`LAST_EVALUATIONS`] greedy evaluations.
-pub fn final_greedy(records: &[TrialRecord], runs: u32) -> Result<Vec<f64>> {
-    (0..runs)
-        .map(|run| {
-            let g: Vec<f64> = records
-                .iter()
-                .filter(|r| r.run == run)
-                .filter_map(|r| r.greedy)
-                .collect();
-            let last = &g[g.len().saturating_sub(LAST_EVALUATIONS)..];
-            if last.is_empty() {
-                return Err(anyhow::anyhow!(
-                    "run {run} has no greedy evaluation (more trials than run.eval_every needed)"
-                ));
-            }
-            Ok(last.iter().sum::<f64>() / last.len() as f64)
-        })
-        .collect()
-}
-
-/// Learning and greedy curves from the records of `runs` runs of `trials` trials.
-pub fn curves(
-    records: &[TrialRecord],
-    runs: usize,
-    trials: usize,
-) -> Result<(Vec<CurvePoint>, Vec<CurvePoint>)> {
-    let mut ret = vec![Vec::with_capacity(runs); trials];
-    let mut time = vec![0.0; trials];
-    let mut greedy: BTreeMap<u32, (f64, Vec<f64>)> = BTreeMap::new();
-    for r in records {
-        let i = r.trial as usize - 1;
-        ret[i].push(r.ret);
-        time[i] = r.sim_time_s;
-        if let Some(g) = r.greedy {
-            greedy
-                .entry(r.trial)
-                .or_insert_with(|| (r.sim_time_s, Vec::new()))
-                .1
-                .push(g);
-        }
-    }
-    let trial_numbers: Vec<u32> = (1..=trials as u32).collect();
-    let curve = report::curve(&trial_numbers, &time, &ret)?;
-    let greedy_curve = if greedy.is_empty() {
-        Vec::new()
-    } else {
-        let t: Vec<u32> = greedy.keys().copied().collect();
-        let s: Vec<f64> = greedy.values().map(|v| v.0).collect();
-        let v: Vec<Vec<f64>> = greedy.into_values().map(|v| v.1).collect();
-        report::curve(&t, &s, &v)?
-    };
-    Ok((curve, greedy_curve))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn record(run: u32, trial: u32) -> TrialRecord {
-        TrialRecord {
-            run,
-            trial,
-            sim_time_s: f64::from(trial),
-            ret: -1.0,
-            greedy: None,
-        }
-    }
-
-    fn rows(w: &OrderedWriter<Vec<u8>>) -> Vec<String> {
-        String::from_utf8(w.out.clone())
-            .unwrap()
-            .lines()
-            .map(|l| l[..3].to_string())
-            .collect()
-    }
-
-    #[test]
-    fn the_first_unfinished_run_is_written_as_its_trials_end_and_later_runs_wait() {
-        let mut w = OrderedWriter {
-            next: 0,
-            pending: BTreeMap::new(),
-            out: Vec::new(),
-        };
-        w.trial(1, &record(1, 1)).unwrap();
-        w.trial(0, &record(0, 1)).unwrap();
-        assert_eq!(rows(&w), ["0,1"], "run 0's row at once, run 1's held back");
-        w.trial(2, &record(2, 1)).unwrap();
-        w.trial(2, &record(2, 2)).unwrap();
-        w.finished(2).unwrap();
-        w.trial(0, &record(0, 2)).unwrap();
-        assert_eq!(rows(&w), ["0,1", "0,2"]);
-        w.finished(0).unwrap();
-        assert_eq!(
-            rows(&w),
-            ["0,1", "0,2", "1,1"],
-            "run 1 is now written as it goes"
-        );
-        w.trial(1, &record(1, 2)).unwrap();
-        assert_eq!(rows(&w), ["0,1", "0,2", "1,1", "1,2"]);
-        w.finished(1).unwrap();
-        assert_eq!(
-            rows(&w),
-            ["0,1", "0,2", "1,1", "1,2", "2,1", "2,2"],
-            "the finished run 2 follows at once, in run order"
-        );
-        assert!(w.pending.is_empty());
-    }
 }

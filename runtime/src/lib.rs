@@ -3,7 +3,9 @@
 //! - The experiment's [`config`]: the sections of plant, observer and agent composed,
 //!   resolved from preset, file and flags, validated, written as TOML.
 //! - In one process: [`experiment`] (one run, trial by trial) and [`learn`] (runs in
-//!   parallel, `runs.csv`, curves and plots through [`report`]).
+//!   parallel, curves and plots through [`report`]).
+//! - The files the commands write: [`output`] (`runs.csv`, responses, atomic writes,
+//!   progress bars).
 //! - As processes over iceoryx2: the nodes in [`process`] (plant, observer, agent), the
 //!   supervisor that starts, watches and records them ([`run`]), the MCAP writer
 //!   ([`record`]) and [`resume`] after a crash; [`lock`]: an output folder belongs to one
@@ -17,6 +19,7 @@ pub mod config;
 pub mod experiment;
 pub mod learn;
 pub mod lock;
+pub mod output;
 pub mod process;
 pub mod record;
 pub mod report;

@@ -64,7 +64,7 @@ use machine::Counters;
 pub use machine::MachineLoad;
 use runtime::clock::Clock;
 use runtime::config::Overrides;
-use runtime::learn::write_atomic;
+use runtime::output::write_atomic;
 use runtime::process::{CpuSet, Layout, Scheduling, Spin, Wakeup};
 use runtime::report::plot::{Histogram, plot_histograms};
 use runtime::run::{RunOptions, run};

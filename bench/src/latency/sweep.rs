@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 
 use anyhow::{Context, Result, bail};
-use runtime::learn::write_atomic;
+use runtime::output::write_atomic;
 
 use runtime::clock::Clock;
 

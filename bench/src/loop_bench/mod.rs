@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 
 use anyhow::{Context, Result};
-use runtime::learn::write_atomic;
+use runtime::output::write_atomic;
 use runtime::process::Layout;
 use wire::{FOREVER, Waiting};
 

@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow, bail};
-use runtime::learn::write_atomic;
+use runtime::output::write_atomic;
 use runtime::process::{
     AgentConfig, Layout, NodeConfig, ObserverConfig, PlantConfig, Scheduling, Settings, Wait,
 };

@@ -108,8 +108,8 @@ pub(super) fn measure(
         e.1 += r.sim_time_s;
         e.2 += 1;
     }
-    let finals =
-        runtime::learn::final_greedy(records, runs as u32).with_context(|| label.to_string())?;
+    let finals = runtime::output::runs::final_greedy(records, runs as u32)
+        .with_context(|| label.to_string())?;
     let n = finals.len() as f64;
     let final_greedy = finals.iter().sum::<f64>() / n;
     let final_greedy_sd = if finals.len() > 1 {

@@ -34,7 +34,8 @@ use plant::SystemName;
 
 use runtime::config::ExperimentConfig;
 use runtime::experiment::TrialRecord;
-use runtime::learn::{LearnOptions, LearnSummary, Progress, learn, progress_bar, write_atomic};
+use runtime::learn::{LearnOptions, LearnSummary, Progress, learn};
+use runtime::output::{progress_bar, write_atomic};
 use runtime::report::{CurvePoint, Series, SeriesStyle};
 
 mod claims;
@@ -376,8 +377,8 @@ fn load_finished(dir: &Path, cfg: &ExperimentConfig) -> Option<LearnSummary> {
     if records.len() != runs * trials {
         return None;
     }
-    let (curve, greedy_curve) = runtime::learn::curves(&records, runs, trials).ok()?;
-    let responses = runtime::learn::read_responses(&dir.join("responses.csv"), runs)?;
+    let (curve, greedy_curve) = runtime::output::runs::curves(&records, runs, trials).ok()?;
+    let responses = runtime::output::responses::read_responses(&dir.join("responses.csv"), runs)?;
     Some(LearnSummary {
         records,
         curve,

@@ -9,7 +9,7 @@ use agent::config::HorizonKind;
 use anyhow::Result;
 use plant::SystemName;
 
-use runtime::learn::write_atomic;
+use runtime::output::write_atomic;
 
 use super::FigureResult;
 use super::figures::Figure;

@@ -9,7 +9,7 @@ use anyhow::Result;
 use plant::SystemName;
 
 use runtime::config::ExperimentConfig;
-use runtime::learn::write_atomic;
+use runtime::output::write_atomic;
 
 use super::Runner;
 use super::figures::preset;

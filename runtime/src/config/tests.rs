@@ -330,13 +330,19 @@ fn help_lists_the_choices() {
         o: Overrides,
     }
     let help = Cli::command().render_long_help().to_string();
-    for list in [
-        "[possible values: sac, mlac, rmac, vgbp, sarsa]",
-        "[possible values: llr, rbf, tiles, lstd]",
-        "[possible values: pendulum, arm-vertical, arm-horizontal, arm-6.4, double-integrator]",
-        "[possible values: pass-through, finite-difference, predictive]",
+    // Each value with its doc comment as its help.
+    for value in [
+        "- sac:   Standard actor-critic (Algorithm 1).",
+        "- sarsa: SARSA(λ) with ε-greedy discrete actions (§6.2), critic-only.",
+        "- llr:",
+        "- lstd:",
+        "- pendulum:",
+        "- arm-6.4:",
+        "- double-integrator:",
+        "- pass-through:",
+        "- predictive:",
     ] {
-        assert!(help.contains(list), "{list} not in\n{help}");
+        assert!(help.contains(value), "{value} not in\n{help}");
     }
     let cli = Cli::try_parse_from(["rig", "--algo", "vgbp", "--system", "arm-6.4"]).unwrap();
     assert_eq!(

@@ -30,8 +30,8 @@ use wire::{Bus, Waiting};
 use crate::clock::{Clock, ClockError, ExternalDriver};
 use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
-use crate::learn::{progress_bar, write_atomic};
 use crate::lock::FolderLock;
+use crate::output::{progress_bar, write_atomic};
 use crate::process::{Layout, Scheduling, Spin};
 use crate::resume;
 

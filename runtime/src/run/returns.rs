@@ -13,7 +13,7 @@ use wire::flags;
 
 use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
-use crate::learn::{RUNS_HEADER, write_row};
+use crate::output::runs::{RUNS_HEADER, write_row};
 use crate::resume::ResumePoint;
 
 /// Builds `returns.csv` rows from the plant's measurements.
