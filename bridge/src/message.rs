@@ -30,34 +30,47 @@ use crate::claim::Claim;
 /// Implement only for such types: [`to_bytes`] reads and [`from_bytes`] writes every
 /// byte of the value.
 pub unsafe trait Message: Copy + 'static {
-    /// The type's name in errors (its iceoryx2 type name where it has one).
-    const NAME: &'static str;
+    /// The type's name in errors: the contract's iceoryx2 type name where it has one, so
+    /// that a new version of a contract message is named by its own version.
+    fn name() -> &'static str;
 }
 
 // SAFETY: u64, f64 and [u8; 32] fields only, sizes pinned by the driver contract's tests
 // (176, 184, 144 bytes: the sums of their fields).
 unsafe impl Message for DriverInfo {
-    const NAME: &'static str = "rig.DriverInfo.v2";
+    fn name() -> &'static str {
+        wire::type_name_of::<Self>()
+    }
 }
 // SAFETY: as above.
 unsafe impl Message for DriverSample {
-    const NAME: &'static str = "rig.DriverSample.v1";
+    fn name() -> &'static str {
+        wire::type_name_of::<Self>()
+    }
 }
 // SAFETY: as above.
 unsafe impl Message for DriverCommand {
-    const NAME: &'static str = "rig.DriverCommand.v1";
+    fn name() -> &'static str {
+        wire::type_name_of::<Self>()
+    }
 }
 // SAFETY: three u64.
 unsafe impl Message for Ping {
-    const NAME: &'static str = "rig.BridgePing.v1";
+    fn name() -> &'static str {
+        "rig.BridgePing.v1"
+    }
 }
 // SAFETY: three u64.
 unsafe impl Message for Stamps {
-    const NAME: &'static str = "rig.BridgeStamps.v1";
+    fn name() -> &'static str {
+        "rig.BridgeStamps.v1"
+    }
 }
 // SAFETY: [u8; 16] and three u64 (40 bytes).
 unsafe impl Message for Claim {
-    const NAME: &'static str = "rig.BridgeClaim.v1";
+    fn name() -> &'static str {
+        "rig.BridgeClaim.v1"
+    }
 }
 
 /// The bytes of `m`.
@@ -70,7 +83,7 @@ pub fn to_bytes<T: Message>(m: &T) -> Vec<u8> {
 pub fn from_bytes<T: Message>(b: &[u8]) -> Result<T> {
     if b.len() != size_of::<T>() {
         return Err(Error::Length {
-            name: T::NAME,
+            name: T::name(),
             found: b.len(),
             want: size_of::<T>(),
         });

@@ -421,7 +421,7 @@ pub fn service(driver_id: &str, topic: &str) -> String {
 /// The iceoryx2 node name a driver should use: `rig-driver-<id>` (the rig lists nodes
 /// to say which drivers are running).
 pub fn node_name(driver_id: &str) -> String {
-    format!("rig-driver-{driver_id}")
+    wire::node_name(wire::DRIVER_RUN, driver_id)
 }
 
 /// The connection of driver `driver_id`'s process: node `rig-driver-<id>`
@@ -429,7 +429,7 @@ pub fn node_name(driver_id: &str) -> String {
 /// are opened with [`Bus::tx_on`] and [`Bus::rx_on`] on [`service`] names.
 pub fn bus(driver_id: &str) -> Result<Bus, Error> {
     check_id(driver_id)?;
-    Ok(Bus::with_node(&node_name(driver_id), "driver")?)
+    Ok(Bus::with_node(&node_name(driver_id), wire::DRIVER_RUN)?)
 }
 
 /// Checks a driver id: letters, digits, '-' and '_'.

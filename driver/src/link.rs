@@ -4,8 +4,6 @@
 use std::cell::Cell;
 use std::time::Duration;
 
-use iceoryx2::prelude::*;
-
 use wire::{Bus, Rx, Tx, now_ns};
 
 use crate::contract::{
@@ -16,17 +14,11 @@ use crate::error::Error;
 
 /// Drivers whose nodes are alive on this host: `(id, process id)`, by node name.
 pub fn running(bus: &Bus) -> Vec<(String, u32)> {
-    use iceoryx2::node::NodeView;
-    let mut found = Vec::new();
-    let _ = Node::<ipc::Service>::list(bus.node().config(), |state| {
-        if let NodeState::Alive(v) = &state
-            && let Some(d) = v.details()
-            && let Some(id) = d.name().to_string().strip_prefix("rig-driver-")
-        {
-            found.push((id.to_string(), d.process_id().value() as u32));
-        }
-        CallbackProgression::Continue
-    });
+    let mut found: Vec<(String, u32)> = wire::peers(bus.node().config(), wire::DRIVER_RUN)
+        .into_iter()
+        .filter(|p| p.alive)
+        .map(|p| (p.role, p.pid))
+        .collect();
     found.sort();
     found
 }

@@ -8,6 +8,7 @@ use iceoryx2::prelude::*;
 use iceoryx2::port::{BackpressureAction, BackpressureInfo};
 
 use crate::PATIENCE;
+use crate::nodes::{DRIVER_RUN, node_name, peers};
 use crate::{Error, Qos, RUN_QOS, Recorded, Rx, Tx, Waiting, describe_service, type_name_of};
 
 /// One process's connection to a run.
@@ -32,10 +33,10 @@ impl Bus {
         {
             return Err(Error::RunId(run_id.to_string()));
         }
-        if run_id == "driver" {
+        if run_id == DRIVER_RUN {
             return Err(Error::ReservedRunId);
         }
-        Self::with_node(&format!("rig-{run_id}-{name}"), run_id)
+        Self::with_node(&node_name(run_id, name), run_id)
     }
 
     /// A connection through a new node named `node_name`, of run `run_id` (the driver
@@ -68,20 +69,11 @@ impl Bus {
     /// "plant"]`): non-empty when a run with this id is going on. Processes killed
     /// without cleaning up do not count.
     pub fn live_roles(run_id: &str) -> Vec<String> {
-        use iceoryx2::node::NodeView;
-        let prefix = format!("rig-{run_id}-");
-        let mut roles = Vec::new();
-        let _ = Node::<ipc::Service>::list(&iceoryx2::config::Config::default(), |state| {
-            if let NodeState::Alive(v) = &state
-                && let Some(role) = v
-                    .details()
-                    .as_ref()
-                    .and_then(|d| d.name().to_string().strip_prefix(&prefix).map(String::from))
-            {
-                roles.push(role);
-            }
-            CallbackProgression::Continue
-        });
+        let mut roles: Vec<String> = peers(&iceoryx2::config::Config::default(), run_id)
+            .into_iter()
+            .filter(|p| p.alive)
+            .map(|p| p.role)
+            .collect();
         roles.sort();
         roles.dedup();
         roles
@@ -254,24 +246,11 @@ impl Bus {
     /// This run's processes that are gone: seen alive by an earlier call and now dead
     /// (killed without cleaning up) or no longer there, e.g. `["agent"]`.
     pub fn lost_peers(&self) -> Vec<String> {
-        use iceoryx2::node::NodeView;
-        let prefix = format!("rig-{}-", self.run_id);
-        let (mut alive, mut dead) = (Vec::new(), Vec::new());
-        let _ = Node::<ipc::Service>::list(self.node.config(), |state| {
-            let (view_name, is_alive) = match &state {
-                NodeState::Alive(v) => (v.details().as_ref().map(|d| d.name().to_string()), true),
-                NodeState::Dead(v) => (v.details().as_ref().map(|d| d.name().to_string()), false),
-                _ => (None, false),
-            };
-            if let Some(role) = view_name.as_deref().and_then(|n| n.strip_prefix(&prefix)) {
-                if is_alive {
-                    alive.push(role.to_string())
-                } else {
-                    dead.push(role.to_string())
-                }
-            }
-            CallbackProgression::Continue
-        });
+        let (alive, dead): (Vec<_>, Vec<_>) = peers(self.node.config(), &self.run_id)
+            .into_iter()
+            .partition(|p| p.alive);
+        let alive: Vec<String> = alive.into_iter().map(|p| p.role).collect();
+        let dead: Vec<String> = dead.into_iter().map(|p| p.role).collect();
         let mut seen = self.seen.borrow_mut();
         seen.extend(alive.iter().cloned());
         let mut lost: Vec<String> = seen

@@ -80,7 +80,7 @@ impl Services {
     /// one-line error.
     fn open(driver_id: &str) -> Result<Self, Error> {
         crate::contract::check_id(driver_id)?;
-        let bus = Bus::with_node(&crate::contract::node_name(driver_id), "driver")
+        let bus = Bus::with_node(&crate::contract::node_name(driver_id), wire::DRIVER_RUN)
             .map_err(Error::transport(driver_id))?;
         let open = |t: &str, e: wire::Error| {
             if e.publisher_taken() {
