@@ -71,9 +71,11 @@ fn run_messages(path: &Path) -> Messages {
     m
 }
 
-/// Long enough that a process killed after a few trials dies mid-run, however loaded
-/// the machine (a trial takes about 2 ms in lockstep).
+/// The uninterrupted run (a trial takes about 2 ms in lockstep).
 const RUN: [&str; 6] = ["--trials", "150", "--eval-every", "5", "--quiet", "--out"];
+/// A run that is killed: asked for so many trials that it dies mid-run however fast or
+/// loaded the machine; resumed with `--trials 150`, it is the uninterrupted run.
+const KILLED: [&str; 6] = ["--trials", "100000", "--eval-every", "5", "--quiet", "--out"];
 
 #[test]
 fn a_process_killed_in_lockstep_loses_no_trial_and_resume_continues_bit_for_bit() {
@@ -90,7 +92,7 @@ fn a_process_killed_in_lockstep_loses_no_trial_and_resume_continues_bit_for_bit(
         let out = dir.join(role);
         let sup = rig()
             .arg("run")
-            .args(RUN)
+            .args(KILLED)
             .arg(&out)
             .stderr(Stdio::piped())
             .spawn()
@@ -118,7 +120,7 @@ fn a_process_killed_in_lockstep_loses_no_trial_and_resume_continues_bit_for_bit(
         }
 
         let resumed = ok(rig()
-            .args(["run", "--quiet", "--resume"])
+            .args(["run", "--quiet", "--trials", "150", "--resume"])
             .arg(&out)
             .output()
             .unwrap());
