@@ -7,7 +7,7 @@
 //! - As processes over iceoryx2: the nodes in [`process`] (plant, observer, agent), the
 //!   supervisor that starts, watches and records them ([`run`]), the MCAP writer
 //!   ([`record`]) and [`resume`] after a crash; [`lock`]: an output folder belongs to one
-//!   command.
+//!   command; [`replay`]: a recording's observer and agent run again, bit for bit.
 //! - The run's [`clock`]: lockstep, real time or an external driver, and its rules.
 //! - Against an external driver: [`check_driver`] (`rig check-driver`).
 
@@ -19,6 +19,7 @@ pub mod learn;
 pub mod lock;
 pub mod process;
 pub mod record;
+pub mod replay;
 pub mod report;
 pub mod resume;
 pub mod run;
