@@ -7,7 +7,8 @@
 use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::Output;
+use std::process::{Output, Stdio};
+use std::time::Duration;
 
 mod common;
 use common::drivers::{Driver, python};
@@ -111,6 +112,36 @@ fn a_realtime_run_replays_identical() {
     replays_identical(&dir);
 }
 
+/// A trial cut short by a gap and run again (the agent stopped for 200 ms in real time,
+/// as in `driver.rs`): the agent's bookkeeping of the cut trial replays too.
+#[test]
+fn a_realtime_run_with_a_trial_cut_by_a_gap_replays_identical() {
+    let dir = tmp("gap");
+    let sup = rig()
+        .args([
+            "run", "--cpus", "shared", "--timing", "realtime", "--speed", "2",
+        ])
+        .args(["--trials", "3", "--eval-every", "0", "--out"])
+        .arg(&dir)
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    common::wait_for_lines(&dir.join("returns.csv"), 2);
+    std::thread::sleep(Duration::from_millis(500));
+    let agent = common::child_running(sup.id(), "agent");
+    common::signal(agent, "-STOP");
+    std::thread::sleep(Duration::from_millis(200));
+    common::signal(agent, "-CONT");
+    ok(sup.wait_with_output().unwrap());
+    let msgs = common::messages(&dir.join("run.mcap"));
+    let flags = common::field(&msgs, "/plant/measurement", "flags");
+    assert!(
+        flags.values().any(|&f| f as u64 & wire::flags::GAP != 0),
+        "no trial was cut by a gap"
+    );
+    replays_identical(&dir);
+}
+
 /// Against the Python example driver (official iceoryx2 bindings; skipped, the reason
 /// printed, without them), in real time at 10 × speed, learning across gaps.
 #[test]
@@ -164,10 +195,8 @@ fn rewrite(
 ) {
     let bytes = std::fs::read(src).unwrap();
     let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
-    let mut w = mcap::Writer::new(std::io::BufWriter::new(
-        std::fs::File::create(dst).unwrap(),
-    ))
-    .unwrap();
+    let mut w =
+        mcap::Writer::new(std::io::BufWriter::new(std::fs::File::create(dst).unwrap())).unwrap();
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
         let mut v: serde_json::Map<String, serde_json::Value> =
@@ -180,7 +209,8 @@ fn rewrite(
         w.write(&m).unwrap();
     }
     for i in &summary.attachment_indexes {
-        w.attach(&mcap::read::attachment(&bytes, i).unwrap()).unwrap();
+        w.attach(&mcap::read::attachment(&bytes, i).unwrap())
+            .unwrap();
     }
     for i in &summary.metadata_indexes {
         let mut meta = mcap::read::metadata(&bytes, i).unwrap();
@@ -259,13 +289,23 @@ fn an_old_or_foreign_recording_is_refused_in_one_line() {
     refused(
         "recorded in an older format (its /plant/measurement has no field u_next_0); rig replay reads recording format 2",
     );
-    rewrite(&original, &path, |_, _| {}, |m| {
-        m.insert("recording_format".into(), "7".into());
-    });
+    rewrite(
+        &original,
+        &path,
+        |_, _| {},
+        |m| {
+            m.insert("recording_format".into(), "7".into());
+        },
+    );
     refused("recorded in format 7; rig replay reads recording format 2");
-    rewrite(&original, &path, |_, _| {}, |m| {
-        m.clear();
-    });
+    rewrite(
+        &original,
+        &path,
+        |_, _| {},
+        |m| {
+            m.clear();
+        },
+    );
     refused("not a recording of `rig run`: it has no metadata `run`");
     std::fs::write(&path, b"not an MCAP file").unwrap();
     refused("not a recording of `rig run`: not a readable MCAP file");
@@ -317,11 +357,17 @@ fn another_observer_is_compared_on_the_recorded_data() {
     let other = table("predictive");
     for rows in [&same, &other] {
         assert_eq!(rows.len(), 2);
-        assert_eq!((rows[0][0].as_str(), rows[1][0].as_str()), ("phi", "phi_dot"));
+        assert_eq!(
+            (rows[0][0].as_str(), rows[1][0].as_str()),
+            ("phi", "phi_dot")
+        );
         // Every non-start sample of 4 learning trials and 2 greedy ones against the truth.
         assert_eq!(num(&rows[1][5]), 6.0 * 100.0);
         // The encoder's quantisation: the angle is within half a count of the truth.
-        assert!(num(&rows[0][4]) < 2.0 * std::f64::consts::PI / 4096.0, "{rows:?}");
+        assert!(
+            num(&rows[0][4]) < 2.0 * std::f64::consts::PI / 4096.0,
+            "{rows:?}"
+        );
     }
     assert_eq!((num(&same[1][1]), num(&same[1][2])), (0.0, 0.0));
     assert!(num(&other[1][1]) > 1e-3, "{other:?}");

@@ -31,13 +31,7 @@ impl fmt::Display for Difference {
         write!(
             f,
             "{} at sample seq {} (trial {}, step {}), field {}: recorded {}, replayed {}",
-            self.topic,
-            self.seq,
-            self.trial,
-            self.step,
-            self.field,
-            self.recorded,
-            self.replayed
+            self.topic, self.seq, self.trial, self.step, self.field, self.recorded, self.replayed
         )
     }
 }

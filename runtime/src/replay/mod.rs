@@ -126,25 +126,29 @@ pub fn replay(rec: &Recording, progress: &ProgressBar) -> Result<Outcome, Replay
     let task = cfg.task();
     let (n, m) = (task.state_dim(), task.action_dim());
     let mut front = crate::experiment::front(&task, cfg);
-    let mut learner = Learner::new(cfg, 0, None, None).map_err(|e| ReplayError::Agent {
-        seq: 0,
-        cause: format!("{e:#}"),
-    })?;
+    let mut learner =
+        Learner::new(cfg, 0, None, None).map_err(|e| ReplayError::Config(format!("{e:#}")))?;
     for x in &rec.measurements {
         progress.inc(1);
         let e = crate::process::observer::estimate(&mut front, x);
         let Some(recorded) = rec.estimates.get(&x.header.seq) else {
-            return Ok(Outcome::Differs(Difference::missing(ESTIMATE, &e.header, false)));
+            return Ok(Outcome::Differs(Difference::missing(
+                ESTIMATE, &e.header, false,
+            )));
         };
         if let Some(d) = compare::estimate(ESTIMATE, recorded, &e, n, m) {
             return Ok(Outcome::Differs(d));
         }
-        let a = learner.action(&e, false).map_err(|err| ReplayError::Agent {
-            seq: e.header.seq,
-            cause: format!("{err:#}"),
-        })?;
+        let a = learner
+            .action(&e, false)
+            .map_err(|err| ReplayError::Agent {
+                seq: e.header.seq,
+                cause: format!("{err:#}"),
+            })?;
         let Some(recorded) = rec.actions.get(&x.header.seq) else {
-            return Ok(Outcome::Differs(Difference::missing(ACTION, &a.header, false)));
+            return Ok(Outcome::Differs(Difference::missing(
+                ACTION, &a.header, false,
+            )));
         };
         if let Some(d) = compare::action(ACTION, recorded, &a, m) {
             return Ok(Outcome::Differs(d));
@@ -162,7 +166,11 @@ pub fn replay(rec: &Recording, progress: &ProgressBar) -> Result<Outcome, Replay
 fn unmatched(rec: &Recording) -> Option<Difference> {
     let measured: std::collections::BTreeSet<u64> =
         rec.measurements.iter().map(|x| x.header.seq).collect();
-    if let Some(e) = rec.estimates.values().find(|e| !measured.contains(&e.header.seq)) {
+    if let Some(e) = rec
+        .estimates
+        .values()
+        .find(|e| !measured.contains(&e.header.seq))
+    {
         return Some(Difference::missing(ESTIMATE, &e.header, true));
     }
     rec.actions
