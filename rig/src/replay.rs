@@ -55,7 +55,7 @@ fn run(args: &Args) -> Result<bool, ReplayError> {
         about("seed"),
         about("timing"),
     );
-    let bar = runtime::learn::progress_bar(rec.measurements.len() as u64, !args.quiet, "replay");
+    let bar = runtime::replay::progress_bar(rec.measurements.len() as u64, !args.quiet);
     let outcome = replay(&rec, &bar);
     bar.finish_and_clear();
     let identical = match outcome? {

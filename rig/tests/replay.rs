@@ -185,6 +185,34 @@ fn a_resumed_run_replays_identical() {
     replays_identical(&dir);
 }
 
+/// A run killed (`kill -9` of every process at once) and resumed after its last trial
+/// complete everywhere: the new recording holds the kept trials and the rest.
+#[test]
+fn a_run_killed_and_resumed_replays_identical() {
+    let dir = tmp("killed");
+    let mut sup = rig()
+        .args(["run", "--cpus", "shared", "--trials", "300", "--out"])
+        .arg(&dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    common::wait_for_lines(&dir.join("returns.csv"), 30);
+    common::kill_run(sup.id());
+    sup.wait().unwrap();
+    let resumed = ok(rig()
+        .args(["run", "--cpus", "shared", "--resume"])
+        .arg(&dir)
+        .output()
+        .unwrap());
+    assert!(
+        stdout(&resumed).contains("resumed after trial"),
+        "{}",
+        stdout(&resumed)
+    );
+    replays_identical(&dir);
+}
+
 /// Copies the recording `src` to `dst`, every message through `edit(topic, message)` and
 /// the metadata `run` through `about` (left out when `about` empties it).
 fn rewrite(

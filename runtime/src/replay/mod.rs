@@ -22,7 +22,7 @@
 
 use std::path::PathBuf;
 
-use indicatif::ProgressBar;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::process::agent::Learner;
 
@@ -117,6 +117,22 @@ pub enum Outcome {
     },
     /// The first difference.
     Differs(Difference),
+}
+
+/// A progress bar of `samples` samples on standard error, or a hidden one.
+pub fn progress_bar(samples: u64, shown: bool) -> ProgressBar {
+    let target = if shown {
+        ProgressDrawTarget::stderr()
+    } else {
+        ProgressDrawTarget::hidden()
+    };
+    let bar = ProgressBar::with_draw_target(Some(samples), target);
+    bar.set_style(
+        ProgressStyle::with_template("replay [{bar:40}] {pos}/{len} samples, eta {eta}")
+            .expect("a valid template")
+            .progress_chars("=> "),
+    );
+    bar
 }
 
 /// Replays `rec`'s observer and agent over its measurements, counting samples on
