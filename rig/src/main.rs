@@ -19,6 +19,7 @@ mod latency;
 mod learn;
 mod node;
 mod optimal;
+mod replay;
 mod reproduce;
 mod run;
 mod selection;
@@ -39,6 +40,11 @@ enum Command {
     /// Run independent learning experiments in one process, in parallel on all cores,
     /// and write runs.csv, curve.csv, greedy_curve.csv, curve.png/svg and config.toml.
     Learn(learn::Args),
+    /// Run a recorded run's observer and agent again, in one process, over its recorded
+    /// measurements, and check that they reproduce its estimates and actions bit for bit;
+    /// reports the first difference (topic, sample, field, both values) and exits 1 then.
+    /// `--observer KIND` compares another observer on the same data.
+    Replay(replay::Args),
     /// Run one experiment as three processes — plant, observer, agent — exchanging
     /// measurements, estimates and actions over iceoryx2 shared memory in lockstep;
     /// writes returns.csv, config.toml and one log per process.
@@ -113,6 +119,7 @@ fn main() -> ExitCode {
     match Cli::parse().command {
         Command::Learn(args) => learn::main(&args),
         Command::Run(args) => run::main(&args),
+        Command::Replay(args) => replay::main(&args),
         Command::Config(selection) => config::main(&selection),
         Command::CheckDriver(args) => check_driver::main(&args),
         Command::SimDriver(args) => sim_driver::main(&args),

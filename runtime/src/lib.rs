@@ -9,7 +9,7 @@
 //! - As processes over iceoryx2: the nodes in [`process`] (plant, observer, agent), the
 //!   supervisor that starts, watches and records them ([`run`]), the MCAP writer
 //!   ([`record`]) and [`resume`] after a crash; [`lock`]: an output folder belongs to one
-//!   command.
+//!   command; [`replay`]: a recording's observer and agent run again, bit for bit.
 //! - The run's [`clock`]: lockstep, real time or an external driver, and its rules.
 //! - Against an external driver: [`check_driver`] (`rig check-driver`).
 
@@ -22,6 +22,7 @@ pub mod lock;
 pub mod output;
 pub mod process;
 pub mod record;
+pub mod replay;
 pub mod report;
 pub mod resume;
 pub mod run;

@@ -1,9 +1,12 @@
 //! The agent process: state estimates in, actions out; learns as it goes.
 
+use std::path::Path;
+
 use ::agent::Agent;
 use ::agent::checkpoint::{Checkpoint, Origin, Snapshot};
 use ::observer::config::ObserverMode;
 use ::observer::timing::{Call, ToAgent, act};
+
 use anyhow::{Result, anyhow, bail};
 use wire::{Action, Estimate, flags, now_ns, topic};
 
@@ -17,7 +20,12 @@ pub fn run(args: &AgentConfig) -> Result<()> {
     super::set_rt_priority(node.scheduling.rt_priority)?;
     node.scheduling.place(super::Part::Node)?;
     let cfg = node.experiment()?;
-    let mut learner = Learner::new(args, &cfg)?;
+    let checkpoints = args
+        .checkpoints
+        .as_deref()
+        .map(|dir| CheckpointWriter::new(dir, node.scheduling.layout(), args.keep_checkpoints))
+        .transpose()?;
+    let mut learner = Learner::new(&cfg, node.run_index, args.resume.as_deref(), checkpoints)?;
     let bus = node.join("agent")?;
     let estimates = bus.rx::<Estimate>(topic::ESTIMATE)?;
     let out = bus.tx::<Action>(topic::ACTION)?;
@@ -27,18 +35,9 @@ pub fn run(args: &AgentConfig) -> Result<()> {
         let e = estimates.recv(&bus, STARTUP.max(SILENCE))?;
         let t_received_ns = now_ns();
         let f = e.header.flags;
-        let mut u = vec![0.0; learner.m];
-        if f & flags::SHUTDOWN == 0 && !args.trivial {
-            learner.answer(&e, &mut u)?;
-        }
-        let a = Action {
-            header: e.header,
-            n_u: learner.m as u64,
-            u: pack(&u),
-            t_sample_ns: e.t_sample_ns,
-            t_received_ns,
-            t_publish_ns: now_ns(),
-        };
+        let mut a = learner.action(&e, args.trivial)?;
+        a.t_received_ns = t_received_ns;
+        a.t_publish_ns = now_ns();
         out.send(a)?;
         if f & flags::SHUTDOWN != 0 {
             if let Some(w) = &mut learner.checkpoints {
@@ -50,7 +49,7 @@ pub fn run(args: &AgentConfig) -> Result<()> {
 }
 
 /// The agent of the run, its checkpoints, and which learning trial is due.
-struct Learner {
+pub struct Learner {
     agent: Box<dyn Agent>,
     /// Which experiment and run this is (for checkpoints).
     origin: Origin,
@@ -67,9 +66,14 @@ struct Learner {
 }
 
 impl Learner {
-    /// The agent of run `run_index` of `cfg`, from the checkpoint `resume` if given.
-    fn new(args: &AgentConfig, cfg: &ExperimentConfig) -> Result<Self> {
-        let run = args.node.run_index;
+    /// The agent of run `run` of `cfg`, from the checkpoint `resume` if given, writing
+    /// a checkpoint of every learning trial to `checkpoints` if given.
+    pub fn new(
+        cfg: &ExperimentConfig,
+        run: u32,
+        resume: Option<&Path>,
+        checkpoints: Option<CheckpointWriter>,
+    ) -> Result<Self> {
         let task = cfg.task();
         let mut agent = ::agent::build(
             &task,
@@ -79,19 +83,12 @@ impl Learner {
         let origin = cfg.origin(run);
         // The first learning trial this process runs.
         let mut expect_trial = 1;
-        if let Some(path) = &args.resume {
+        if let Some(path) = resume {
             let c = Checkpoint::read(path).map_err(|e| anyhow!("{e}"))?;
             c.restore(&origin, agent.as_mut())
                 .map_err(|e| anyhow!("{}: {e}", path.display()))?;
             expect_trial = u64::from(c.trial) + 1;
         }
-        let checkpoints = args
-            .checkpoints
-            .as_deref()
-            .map(|dir| {
-                CheckpointWriter::new(dir, args.node.scheduling.layout(), args.keep_checkpoints)
-            })
-            .transpose()?;
         Ok(Self {
             agent,
             origin,
@@ -100,6 +97,23 @@ impl Learner {
             cut: false,
             predictive: cfg.observer.mode == ObserverMode::Predictive,
             m: task.action_dim(),
+        })
+    }
+
+    /// The action the agent sends for estimate `e` (zero for the run's end, or always
+    /// when `trivial`); its wall-clock stamps (`t_received_ns`, `t_publish_ns`) are left 0
+    /// for the caller. `rig replay` takes the same step over a recording.
+    pub fn action(&mut self, e: &Estimate, trivial: bool) -> Result<Action> {
+        let mut u = vec![0.0; self.m];
+        if e.header.flags & flags::SHUTDOWN == 0 && !trivial {
+            self.answer(e, &mut u)?;
+        }
+        Ok(Action {
+            header: e.header,
+            n_u: self.m as u64,
+            u: pack(&u),
+            t_sample_ns: e.t_sample_ns,
+            ..Action::default()
         })
     }
 

@@ -4,7 +4,7 @@
 //! velocities are NaN — not measured), never the ground truth, and runs the observer
 //! the configuration asks for ([`::observer::build`], as the in-process driver does).
 
-use ::observer::timing::{Call, Sample};
+use ::observer::timing::{Call, Front, Sample};
 use anyhow::Result;
 use wire::{Estimate, Measurement, flags, now_ns, topic};
 
@@ -38,6 +38,43 @@ pub fn call_of(f: u64) -> Call {
     }
 }
 
+/// The estimate the observer sends for measurement `m`, the observer's step
+/// (`front`) taken unless `m` announces the run's end; its own wall-clock stamps
+/// (`t_received_ns`, `t_publish_ns`) are left 0 for the caller. `rig replay` takes the
+/// same step over a recording.
+pub fn estimate(front: &mut Front, m: &Measurement) -> Estimate {
+    let (n, nu) = (m.n_x as usize, m.n_u as usize);
+    let f = m.header.flags;
+    let mut e = Estimate {
+        header: m.header,
+        n_x: m.n_x,
+        n_u: m.n_u,
+        reward: m.reward,
+        u_applied: m.u_applied,
+        t_sample_ns: m.t_sample_ns,
+        ..Estimate::default()
+    };
+    if f & flags::SHUTDOWN == 0 {
+        let t = front.sample(&Sample {
+            step: m.header.step as usize,
+            start: f & flags::START != 0,
+            primed: f & flags::PRIMED != 0,
+            end: f & flags::END != 0,
+            terminal: f & flags::TERMINAL != 0,
+            y: &m.y[..n],
+            reward: m.reward,
+            u_applied: &m.u_applied[..nu],
+            u_next: &m.u_next[..nu],
+        });
+        e.header.flags = call_flags(f, t.call);
+        // After a gap there is no transition, and no reward, to learn.
+        e.reward = if f & flags::GAP != 0 { 0.0 } else { t.reward };
+        e.x = pack(t.x);
+        e.u_applied = pack(t.u_prev);
+    }
+    e
+}
+
 /// Runs the observer side of a run until the plant announces its end.
 pub fn run(settings: &ObserverConfig) -> Result<()> {
     let args = &settings.node;
@@ -54,36 +91,9 @@ pub fn run(settings: &ObserverConfig) -> Result<()> {
     loop {
         let m = measurements.recv(&bus, STARTUP.max(SILENCE))?;
         let t_received_ns = now_ns();
-        let (n, nu) = (m.n_x as usize, m.n_u as usize);
         let f = m.header.flags;
-        let mut e = Estimate {
-            header: m.header,
-            n_x: m.n_x,
-            n_u: m.n_u,
-            reward: m.reward,
-            u_applied: m.u_applied,
-            t_sample_ns: m.t_sample_ns,
-            t_received_ns,
-            ..Estimate::default()
-        };
-        if f & flags::SHUTDOWN == 0 {
-            let t = front.sample(&Sample {
-                step: m.header.step as usize,
-                start: f & flags::START != 0,
-                primed: f & flags::PRIMED != 0,
-                end: f & flags::END != 0,
-                terminal: f & flags::TERMINAL != 0,
-                y: &m.y[..n],
-                reward: m.reward,
-                u_applied: &m.u_applied[..nu],
-                u_next: &m.u_next[..nu],
-            });
-            e.header.flags = call_flags(f, t.call);
-            // After a gap there is no transition, and no reward, to learn.
-            e.reward = if f & flags::GAP != 0 { 0.0 } else { t.reward };
-            e.x = pack(t.x);
-            e.u_applied = pack(t.u_prev);
-        }
+        let mut e = estimate(&mut front, &m);
+        e.t_received_ns = t_received_ns;
         e.t_publish_ns = now_ns();
         out.send(e)?;
         if f & flags::SHUTDOWN != 0 {

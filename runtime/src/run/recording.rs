@@ -61,6 +61,9 @@ fn metadata(about: &About) -> BTreeMap<String, String> {
         ("horizon", cfg.agent.horizon.to_string()),
         ("timing", about.timing.clone()),
         ("rig_version", env!("CARGO_PKG_VERSION").to_string()),
+        // What `rig replay` reads: the channels' fields and what the observer and the
+        // agent consume (crate::replay::FORMAT).
+        ("recording_format", crate::replay::FORMAT.to_string()),
         // The reward's weights, so that a reader can recompute a finite horizon's
         // terminal reward τ_N(x_N) = −eᵀQ_N e (Eq. 4.1; tests/python/check_mcap.py).
         ("reward_q", join(&task.reward.q)),
