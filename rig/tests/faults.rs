@@ -71,11 +71,22 @@ fn run_messages(path: &Path) -> Messages {
     m
 }
 
-/// The uninterrupted run (a trial takes about 2 ms in lockstep).
-const RUN: [&str; 6] = ["--trials", "150", "--eval-every", "5", "--quiet", "--out"];
+/// The uninterrupted run's trials: enough for the killed runs' rows to stay below them
+/// while the kill takes effect (a trial takes about 2 ms in lockstep; finding and
+/// killing a process on a loaded machine, a few hundred ms).
+const TRIALS: &str = "400";
+/// The uninterrupted run.
+const RUN: [&str; 6] = ["--trials", TRIALS, "--eval-every", "5", "--quiet", "--out"];
 /// A run that is killed: asked for so many trials that it dies mid-run however fast or
-/// loaded the machine; resumed with `--trials 150`, it is the uninterrupted run.
-const KILLED: [&str; 6] = ["--trials", "100000", "--eval-every", "5", "--quiet", "--out"];
+/// loaded the machine; resumed with `--trials 400`, it is the uninterrupted run.
+const KILLED: [&str; 6] = [
+    "--trials",
+    "100000",
+    "--eval-every",
+    "5",
+    "--quiet",
+    "--out",
+];
 
 #[test]
 fn a_process_killed_in_lockstep_loses_no_trial_and_resume_continues_bit_for_bit() {
@@ -113,14 +124,17 @@ fn a_process_killed_in_lockstep_loses_no_trial_and_resume_continues_bit_for_bit(
         assert!(whole.starts_with(&before), "{role}: {before}");
         let recorded = run_messages(&out.join("run.mcap"));
         let rows = before.lines().count() - 1;
-        assert!(rows >= 4 + 5 * i && rows < 150, "{role}: {rows} rows");
+        assert!(
+            rows >= 4 + 5 * i && rows < TRIALS.parse().unwrap(),
+            "{role}: {rows} rows"
+        );
         for (topic, msgs) in &recorded {
             let n = msgs.len();
             assert_eq!(msgs[..], whole_msgs[topic][..n], "{role}: {topic}");
         }
 
         let resumed = ok(rig()
-            .args(["run", "--quiet", "--trials", "150", "--resume"])
+            .args(["run", "--quiet", "--trials", TRIALS, "--resume"])
             .arg(&out)
             .output()
             .unwrap());
