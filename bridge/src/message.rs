@@ -35,13 +35,13 @@ pub unsafe trait Message: Copy + 'static {
 }
 
 // SAFETY: u64, f64 and [u8; 32] fields only, sizes pinned by the driver contract's tests
-// (176, 184, 144 bytes: the sums of their fields).
+// (184, 200, 144 bytes: the sums of their fields).
 unsafe impl Message for DriverInfo {
-    const NAME: &'static str = "rig.DriverInfo.v2";
+    const NAME: &'static str = "rig.DriverInfo.v3";
 }
 // SAFETY: as above.
 unsafe impl Message for DriverSample {
-    const NAME: &'static str = "rig.DriverSample.v1";
+    const NAME: &'static str = "rig.DriverSample.v2";
 }
 // SAFETY: as above.
 unsafe impl Message for DriverCommand {

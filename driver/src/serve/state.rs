@@ -140,6 +140,28 @@ impl Driver {
         self.log(|| format!("reset {} done at {x:?}", self.reset_id));
     }
 
+    /// Puts into sample `s` the reward and ending of the period it closes, from a device
+    /// that provides them, if `closes_period`: it closes a period of a trial (not a
+    /// reset's READY sample).
+    pub(super) fn outcome(
+        &self,
+        device: &mut impl Device,
+        s: &mut DriverSample,
+        closes_period: bool,
+    ) {
+        if closes_period && device.provides_reward() {
+            let o = device.outcome();
+            s.reward = o.reward;
+            s.ending = o.ending;
+        }
+    }
+
+    /// Whether the sample taken now closes a period of a trial on a real-time clock:
+    /// READY, with an action applied since the reset.
+    pub(super) fn in_trial(&self) -> bool {
+        self.status & status::READY != 0 && self.acted_since_reset
+    }
+
     /// The sample of instant `seq` at `t_ns` with state `x`, before this instant's
     /// decisions (`u_applied`: the action in effect at `t_ns`).
     pub(super) fn sample(&self, seq: u64, t_ns: u64, x: &[f64]) -> DriverSample {

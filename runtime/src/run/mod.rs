@@ -23,7 +23,7 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result, anyhow, bail};
 use driver::contract::{DriverInfo, DriverWatch};
 use wire::{Bus, Waiting};
 
@@ -136,7 +136,10 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let task = cfg.task();
     let (watch, driver_info, with_driver) = match opts.clock.driver() {
         Some(d) => match wait_for_driver(&bus, d, &task, opts.progress)
-            .and_then(|(watch, info)| Ok((watch, info, driver_options(opts, &info)?)))
+            .and_then(|(watch, info)| {
+                check_reward_source(&cfg, &d.id, &info)?;
+                Ok((watch, info, driver_options(opts, &info)?))
+            })
         {
             Ok((watch, info, with)) => (Some(watch), Some(info), Some(with)),
             Err(e) => {
@@ -266,6 +269,19 @@ fn driver_options(opts: &RunOptions, info: &DriverInfo) -> Result<RunOptions, Cl
     }
     Clock::check_driver_waiting(info, with.waiting)?;
     Ok(with)
+}
+
+/// Refuses a learner that needs the reward's gradient with a driver that provides the
+/// reward as numbers only.
+fn check_reward_source(cfg: &ExperimentConfig, id: &str, info: &DriverInfo) -> Result<()> {
+    let algo = cfg.agent.algo;
+    if info.provides_reward() && algo.needs_reward_gradient() {
+        bail!(
+            "--algo {algo} needs the reward's gradient ∂ρ/∂u, but driver {id:?} (task {:?}) provides its own reward as numbers: use an actor-critic (--algo sac, mlac or rmac) or serve the task's reward (the Gymnasium adapter's --task-reward)",
+            info.task_name()
+        );
+    }
+    Ok(())
 }
 
 /// Waits for driver `d`'s info (saying so after a second of silence when `verbose`)
