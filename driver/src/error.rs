@@ -222,7 +222,9 @@ pub enum InfoError {
         version: u64,
     },
     /// Unknown bits in `provides`.
-    #[error("provides = {found}: must be 0 or {reward} (the samples carry the reward and the endings)")]
+    #[error(
+        "provides = {found}: must be 0 or {reward} (the samples carry the reward and the endings)"
+    )]
     Provides {
         /// The driver's bits.
         found: u64,
@@ -265,7 +267,9 @@ pub enum SampleError {
         hint: &'static str,
     },
     /// A reward that is not finite from a driver that provides the reward.
-    #[error("sample {seq}: reward = {reward}: a driver that provides the reward sends a finite one")]
+    #[error(
+        "sample {seq}: reward = {reward}: a driver that provides the reward sends a finite one"
+    )]
     Reward {
         /// The sample's sequence number.
         seq: u64,

@@ -105,8 +105,12 @@ impl DriverWatch {
     pub fn open(bus: &Bus, id: &str) -> Result<Self, Error> {
         check_id(id)?;
         Ok(Self {
-            info: bus.rx_on(&service(id, topic::INFO), DRIVER_QOS)?,
-            samples: bus.rx_on(&service(id, topic::SAMPLE), DRIVER_QOS)?,
+            info: bus
+                .rx_on(&service(id, topic::INFO), DRIVER_QOS)
+                .map_err(other_version::<DriverInfo>(id))?,
+            samples: bus
+                .rx_on(&service(id, topic::SAMPLE), DRIVER_QOS)
+                .map_err(other_version::<DriverSample>(id))?,
             commands: bus.rx_on(&service(id, topic::COMMAND), DRIVER_QOS)?,
             link: bus.rx_on(&service(id, topic::LINK), DRIVER_QOS)?,
         })

@@ -135,12 +135,10 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let bus = Bus::join(&run_id, "rig")?;
     let task = cfg.task();
     let (watch, driver_info, with_driver) = match opts.clock.driver() {
-        Some(d) => match wait_for_driver(&bus, d, &task, opts.progress)
-            .and_then(|(watch, info)| {
-                check_reward_source(&cfg, &d.id, &info)?;
-                Ok((watch, info, driver_options(opts, &info)?))
-            })
-        {
+        Some(d) => match wait_for_driver(&bus, d, &task, opts.progress).and_then(|(watch, info)| {
+            check_reward_source(&cfg, &d.id, &info)?;
+            Ok((watch, info, driver_options(opts, &info)?))
+        }) {
             Ok((watch, info, with)) => (Some(watch), Some(info), Some(with)),
             Err(e) => {
                 if created {
@@ -166,6 +164,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         timing: opts.clock.describe(task.ts, driver_info.as_ref()),
         realtime: !opts.clock.is_lockstep(),
         driver: opts.clock.driver().is_some(),
+        driver_reward: driver_info.is_some_and(|i| i.provides_reward()),
         point: point.as_ref(),
     };
     let recording = Recording::open(&opts.out, &about)?;
