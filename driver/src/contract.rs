@@ -642,4 +642,69 @@ mod tests {
             })
         ));
     }
+
+    /// A driver that provides the reward sends a finite one and at most one ending; a
+    /// driver that does not sends neither.
+    #[test]
+    fn sample_validation_checks_the_reward_and_the_ending() {
+        let mut info = DriverInfo {
+            n_x: 2,
+            n_u: 1,
+            provides: provides::REWARD,
+            ..Default::default()
+        };
+        let sample = |reward: f64, ending: u64| DriverSample {
+            seq: 4,
+            n_x: 2,
+            n_u: 1,
+            reward,
+            ending,
+            ..Default::default()
+        };
+        assert_eq!(sample(-1.5, 0).validate(&info), Ok(()));
+        assert_eq!(sample(0.0, ending::TERMINATED).validate(&info), Ok(()));
+        assert_eq!(sample(2.0, ending::TRUNCATED).validate(&info), Ok(()));
+        assert!(sample(0.0, ending::TRUNCATED).truncated());
+        assert!(!sample(0.0, ending::TRUNCATED).terminated());
+        let nan = sample(f64::NAN, 0).validate(&info).unwrap_err().to_string();
+        assert_eq!(
+            nan,
+            "sample 4: reward = NaN: a driver that provides the reward sends a finite one"
+        );
+        assert!(matches!(
+            sample(f64::INFINITY, 0).validate(&info),
+            Err(SampleError::Reward { .. })
+        ));
+        for bad in [3, 4] {
+            let e = sample(0.0, bad).validate(&info).unwrap_err().to_string();
+            assert!(e.contains("ending must be 0, 1 (terminated) or 2"), "{e}");
+        }
+        info.provides = 0;
+        assert_eq!(sample(0.0, 0).validate(&info), Ok(()));
+        for (reward, ending) in [(1.0, 0), (0.0, ending::TERMINATED)] {
+            let e = sample(reward, ending)
+                .validate(&info)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("does not provide the reward"), "{e}");
+        }
+        let mut valid = DriverInfo {
+            version: VERSION,
+            period_ns: 30_000_000,
+            time_scale: 1.0,
+            watchdog_periods: 1,
+            provides: provides::REWARD,
+            ..info
+        };
+        valid.u_max[0] = 1.0;
+        assert_eq!(valid.validate(), Ok(()));
+        valid.provides = 2;
+        assert_eq!(
+            valid.validate(),
+            Err(InfoError::Provides {
+                found: 2,
+                reward: provides::REWARD
+            })
+        );
+    }
 }

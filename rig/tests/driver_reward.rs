@@ -57,30 +57,6 @@ fn run(id: &str, extra: &[&str], dir: &Path) -> Output {
         .unwrap()
 }
 
-/// The recording's `run` metadata and its plant measurements (JSON).
-fn recorded(
-    dir: &Path,
-) -> (
-    std::collections::BTreeMap<String, String>,
-    Vec<serde_json::Value>,
-) {
-    let bytes = std::fs::read(dir.join("run.mcap")).unwrap();
-    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
-    let meta = summary
-        .metadata_indexes
-        .iter()
-        .map(|mi| mcap::read::metadata(&bytes, mi).unwrap())
-        .find(|m| m.name == "run")
-        .expect("the run's metadata");
-    let measurements = mcap::MessageStream::new(&bytes)
-        .unwrap()
-        .map(Result::unwrap)
-        .filter(|m| m.channel.topic == "/plant/measurement")
-        .map(|m| serde_json::from_slice(&m.data).unwrap())
-        .collect();
-    (meta.metadata, measurements)
-}
-
 /// A run against a driver whose trials end at step `end_at`, `ending`: every trial's
 /// return (and greedy return) is `end_at` (a reward of 1 per step); each trial's last
 /// measurement is its step `end_at`, marked `END` with `TERMINAL` exactly when
@@ -103,7 +79,7 @@ fn ends_where_the_driver_says(ending: &str, end_at: u32, terminal: bool) {
         let greedy = if i % 2 == 1 { at.as_str() } else { "" };
         assert_eq!(cells[4], greedy, "greedy return: {returns}");
     }
-    let (meta, measurements) = recorded(&dir);
+    let (meta, measurements) = common::run_metadata_and_measurements(&dir);
     assert_eq!(meta.get("reward_from").map(String::as_str), Some("driver"));
     let mut ends = 0;
     for m in &measurements {
