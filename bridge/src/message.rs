@@ -36,7 +36,7 @@ pub unsafe trait Message: Copy + 'static {
 }
 
 // SAFETY: u64, f64 and [u8; 32] fields only, sizes pinned by the driver contract's tests
-// (176, 184, 144 bytes: the sums of their fields).
+// (184, 200, 144 bytes: the sums of their fields).
 unsafe impl Message for DriverInfo {
     fn name() -> &'static str {
         wire::type_name_of::<Self>()

@@ -36,7 +36,7 @@ pub use crate::serving::how_to_serve;
 const _: () = assert!(plant::MAX_STATE == MAX_X && plant::MAX_ACTION == MAX_U);
 
 /// The protocol version in [`DriverInfo::version`].
-pub const VERSION: u64 = 2;
+pub const VERSION: u64 = 3;
 
 /// Settings of every driver service: one publisher (one driver per id; one rig
 /// commanding it at a time), up to eight subscribers (the rig's plant process, its
@@ -77,6 +77,24 @@ pub mod status {
     pub const WATCHDOG: u64 = 4;
 }
 
+/// Bits of [`DriverInfo::provides`]: what a driver computes besides the samples.
+pub mod provides {
+    /// Each sample carries the reward of the period it closes and the trial's ending
+    /// ([`super::DriverSample::reward`], [`super::DriverSample::ending`]); the rig learns
+    /// them as they are instead of computing the task's reward and operating range.
+    pub const REWARD: u64 = 1;
+}
+
+/// Bits of [`DriverSample::ending`], with [`provides::REWARD`]: how the trial ends at
+/// this sample (at most one).
+pub mod ending {
+    /// The state is terminal (a goal reached, a failure): nothing follows, its value is
+    /// zero, the learners bootstrap nothing past it.
+    pub const TERMINATED: u64 = 1;
+    /// The trial's time is up: the state goes on, the learners bootstrap through it.
+    pub const TRUNCATED: u64 = 2;
+}
+
 /// Values of [`DriverInfo::clock`].
 pub mod clock {
     /// The driver samples every period on its own, whether or not actions arrive:
@@ -100,7 +118,7 @@ pub mod kind {
 /// at least once a second (a rig that starts later learns it from the next one).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("rig.DriverInfo.v2")]
+#[type_name("rig.DriverInfo.v3")]
 pub struct DriverInfo {
     /// Protocol version: [`VERSION`].
     pub version: u64,
@@ -133,12 +151,15 @@ pub struct DriverInfo {
     pub t_start_ns: u64,
     /// When this message was published (monotonic ns).
     pub t_publish_ns: u64,
+    /// [`provides`] bits: 0, or [`provides::REWARD`] for a driver whose samples carry
+    /// the reward and the trial's endings.
+    pub provides: u64,
 }
 
 /// Driver → rig: one sample, published every period.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, ZeroCopySend)]
-#[type_name("rig.DriverSample.v1")]
+#[type_name("rig.DriverSample.v2")]
 pub struct DriverSample {
     /// Period index since the driver started: `t_sample_ns ≈ t_start_ns + seq ·
     /// period_ns`. A gap means the driver missed periods.
@@ -170,6 +191,12 @@ pub struct DriverSample {
     pub rejected: u64,
     /// Times the watchdog engaged so far.
     pub watchdog_trips: u64,
+    /// With [`provides::REWARD`]: the reward of the period this sample closes (finite;
+    /// 0 at a reset's READY sample); otherwise 0.
+    pub reward: f64,
+    /// With [`provides::REWARD`]: [`ending`] bits, how the trial ends at this sample (0:
+    /// it goes on); otherwise 0.
+    pub ending: u64,
 }
 
 /// Rig → driver: apply an action, or reset.
@@ -341,7 +368,19 @@ impl DriverInfo {
                 version: VERSION,
             });
         }
+        if self.provides & !provides::REWARD != 0 {
+            return Err(InfoError::Provides {
+                found: self.provides,
+                reward: provides::REWARD,
+            });
+        }
         Ok(())
+    }
+
+    /// Whether the driver's samples carry the reward and the endings
+    /// ([`provides::REWARD`]).
+    pub fn provides_reward(&self) -> bool {
+        self.provides & provides::REWARD != 0
     }
 }
 
@@ -359,6 +398,16 @@ impl DriverSample {
     /// Whether the status has bit `bit`.
     pub fn has(&self, bit: u64) -> bool {
         self.status & bit != 0
+    }
+
+    /// Whether the trial ends at this sample in a terminal state ([`ending::TERMINATED`]).
+    pub fn terminated(&self) -> bool {
+        self.ending & ending::TERMINATED != 0
+    }
+
+    /// Whether the trial's time is up at this sample ([`ending::TRUNCATED`]).
+    pub fn truncated(&self) -> bool {
+        self.ending & ending::TRUNCATED != 0
     }
 
     /// Whether the driver measures positions only: the velocities — the second half of
@@ -409,6 +458,33 @@ impl DriverSample {
                 });
             }
         }
+        self.validate_outcome(info)
+    }
+
+    /// Checks the reward and the ending: with [`provides::REWARD`] a finite reward and
+    /// at most one [`ending`] bit; without it both zero.
+    fn validate_outcome(&self, info: &DriverInfo) -> Result<(), SampleError> {
+        let provided = info.provides_reward();
+        if provided && !self.reward.is_finite() {
+            return Err(SampleError::Reward {
+                seq: self.seq,
+                reward: self.reward,
+            });
+        }
+        let known = ending::TERMINATED | ending::TRUNCATED;
+        let consistent = if provided {
+            self.ending & !known == 0 && self.ending != known
+        } else {
+            self.ending == 0 && self.reward == 0.0
+        };
+        if !consistent {
+            return Err(SampleError::Ending {
+                seq: self.seq,
+                ending: self.ending,
+                reward: self.reward,
+                provided,
+            });
+        }
         Ok(())
     }
 }
@@ -451,8 +527,9 @@ mod tests {
 
     #[test]
     fn layouts_are_fixed() {
-        assert_eq!(size_of::<DriverInfo>(), 176);
-        assert_eq!(size_of::<DriverSample>(), 184);
+        // Version 3: DriverInfo.v3 + provides, DriverSample.v2 + reward, ending.
+        assert_eq!(size_of::<DriverInfo>(), 184);
+        assert_eq!(size_of::<DriverSample>(), 200);
         assert_eq!(size_of::<DriverCommand>(), 144);
         assert_eq!(size_of::<LinkSample>(), 64);
         assert_eq!(size_of::<DriverNotice>(), 256);
@@ -564,5 +641,70 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    /// A driver that provides the reward sends a finite one and at most one ending; a
+    /// driver that does not sends neither.
+    #[test]
+    fn sample_validation_checks_the_reward_and_the_ending() {
+        let mut info = DriverInfo {
+            n_x: 2,
+            n_u: 1,
+            provides: provides::REWARD,
+            ..Default::default()
+        };
+        let sample = |reward: f64, ending: u64| DriverSample {
+            seq: 4,
+            n_x: 2,
+            n_u: 1,
+            reward,
+            ending,
+            ..Default::default()
+        };
+        assert_eq!(sample(-1.5, 0).validate(&info), Ok(()));
+        assert_eq!(sample(0.0, ending::TERMINATED).validate(&info), Ok(()));
+        assert_eq!(sample(2.0, ending::TRUNCATED).validate(&info), Ok(()));
+        assert!(sample(0.0, ending::TRUNCATED).truncated());
+        assert!(!sample(0.0, ending::TRUNCATED).terminated());
+        let nan = sample(f64::NAN, 0).validate(&info).unwrap_err().to_string();
+        assert_eq!(
+            nan,
+            "sample 4: reward = NaN: a driver that provides the reward sends a finite one"
+        );
+        assert!(matches!(
+            sample(f64::INFINITY, 0).validate(&info),
+            Err(SampleError::Reward { .. })
+        ));
+        for bad in [3, 4] {
+            let e = sample(0.0, bad).validate(&info).unwrap_err().to_string();
+            assert!(e.contains("ending must be 0, 1 (terminated) or 2"), "{e}");
+        }
+        info.provides = 0;
+        assert_eq!(sample(0.0, 0).validate(&info), Ok(()));
+        for (reward, ending) in [(1.0, 0), (0.0, ending::TERMINATED)] {
+            let e = sample(reward, ending)
+                .validate(&info)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("does not provide the reward"), "{e}");
+        }
+        let mut valid = DriverInfo {
+            version: VERSION,
+            period_ns: 30_000_000,
+            time_scale: 1.0,
+            watchdog_periods: 1,
+            provides: provides::REWARD,
+            ..info
+        };
+        valid.u_max[0] = 1.0;
+        assert_eq!(valid.validate(), Ok(()));
+        valid.provides = 2;
+        assert_eq!(
+            valid.validate(),
+            Err(InfoError::Provides {
+                found: 2,
+                reward: provides::REWARD
+            })
+        );
     }
 }

@@ -33,6 +33,32 @@ pub trait Device {
     /// Whether state `x` is at rest at `x0`, by the device's own tolerance; a reset is
     /// done after [`REST_SAMPLES`] such samples in a row.
     fn at_rest(&self, x: &[f64], x0: &[f64]) -> bool;
+
+    /// Whether the device computes the reward and the trial's endings itself (a
+    /// simulator with its own reward, such as a Gymnasium environment): the driver then
+    /// advertises [`provides::REWARD`](crate::contract::provides::REWARD) and each
+    /// sample that closes a period of a trial carries [`Device::outcome`]. Default: no,
+    /// the rig computes the task's reward.
+    fn provides_reward(&self) -> bool {
+        false
+    }
+
+    /// With [`Device::provides_reward`]: the reward of the period that closed at the
+    /// state just sampled, and how the trial ends there. Called once per such sample,
+    /// right after [`Device::sample`].
+    fn outcome(&mut self) -> Outcome {
+        Outcome::default()
+    }
+}
+
+/// What a period of a trial came to, by the device's own reward ([`Device::outcome`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Outcome {
+    /// The period's reward (finite: the rig refuses any other).
+    pub reward: f64,
+    /// [`ending`](crate::contract::ending) bits: 0 (the trial goes on),
+    /// `TERMINATED` or `TRUNCATED`.
+    pub ending: u64,
 }
 
 /// Consecutive samples at rest that end a reset.

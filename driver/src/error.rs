@@ -31,6 +31,21 @@ pub enum Error {
         /// The service whose publisher is taken.
         service: String,
     },
+    /// A driver that speaks another protocol version: its services carry other payloads
+    /// (`found` describes them).
+    #[error(
+        "driver {id:?} speaks another protocol version than this rig's {speaks} ({service}: {found}): update the driver to protocol version {speaks} (docs/driver.md)"
+    )]
+    OtherVersion {
+        /// The driver id.
+        id: String,
+        /// The service whose payload differs.
+        service: String,
+        /// What the service carries.
+        found: String,
+        /// The rig's version.
+        speaks: u64,
+    },
     /// A second rig process commanding the same driver.
     #[error("driver {id:?} is in use: another rig process is commanding it ({service})")]
     InUse {
@@ -206,6 +221,16 @@ pub enum InfoError {
         /// The protocol version.
         version: u64,
     },
+    /// Unknown bits in `provides`.
+    #[error(
+        "provides = {found}: must be 0 or {reward} (the samples carry the reward and the endings)"
+    )]
+    Provides {
+        /// The driver's bits.
+        found: u64,
+        /// The reward's bit.
+        reward: u64,
+    },
 }
 
 /// What is wrong with a driver's sample ([`DriverSample::validate`]).
@@ -240,6 +265,31 @@ pub enum SampleError {
         value: f64,
         /// An explanation, or empty.
         hint: &'static str,
+    },
+    /// A reward that is not finite from a driver that provides the reward.
+    #[error(
+        "sample {seq}: reward = {reward}: a driver that provides the reward sends a finite one"
+    )]
+    Reward {
+        /// The sample's sequence number.
+        seq: u64,
+        /// The reward.
+        reward: f64,
+    },
+    /// Ending bits (or a reward) that do not fit what the driver provides.
+    #[error(
+        "sample {seq}: ending = {ending}, reward = {reward}: {}",
+        if *provided { "ending must be 0, 1 (terminated) or 2 (truncated)" } else { "both must be 0 from a driver whose info does not provide the reward" }
+    )]
+    Ending {
+        /// The sample's sequence number.
+        seq: u64,
+        /// The ending bits.
+        ending: u64,
+        /// The reward.
+        reward: f64,
+        /// Whether the driver's info provides the reward.
+        provided: bool,
     },
 }
 

@@ -26,7 +26,7 @@ mod serve;
 mod serving;
 mod simulated;
 
-pub use device::{Device, REST_SAMPLES};
+pub use device::{Device, Outcome, REST_SAMPLES};
 pub use error::{Error, InfoError, SampleError, TaskMismatch, Unfit};
 pub use fits::{check_info, fits_task};
 pub use plant::safety;

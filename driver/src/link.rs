@@ -97,11 +97,42 @@ impl DriverWatch {
     pub fn open(bus: &Bus, id: &str) -> Result<Self, Error> {
         check_id(id)?;
         Ok(Self {
-            info: bus.rx_on(&service(id, topic::INFO), DRIVER_QOS)?,
-            samples: bus.rx_on(&service(id, topic::SAMPLE), DRIVER_QOS)?,
+            info: bus
+                .rx_on(&service(id, topic::INFO), DRIVER_QOS)
+                .map_err(other_version::<DriverInfo>(id))?,
+            samples: bus
+                .rx_on(&service(id, topic::SAMPLE), DRIVER_QOS)
+                .map_err(other_version::<DriverSample>(id))?,
             commands: bus.rx_on(&service(id, topic::COMMAND), DRIVER_QOS)?,
             link: bus.rx_on(&service(id, topic::LINK), DRIVER_QOS)?,
         })
+    }
+}
+
+/// Names a driver of another protocol version in an error opening its service of
+/// payload `T`: the service carries another driver message's type name (another
+/// version's layout). A wrong layout under the right name stays iceoryx2's error.
+fn other_version<T: ZeroCopySend>(id: &str) -> impl Fn(wire::Error) -> Error + '_ {
+    let ours = format!(" {} (", wire::type_name_of::<T>());
+    use iceoryx2::service::builder::publish_subscribe::{
+        PublishSubscribeOpenError, PublishSubscribeOpenOrCreateError,
+    };
+    move |e| match e {
+        wire::Error::Service {
+            service,
+            error:
+                PublishSubscribeOpenOrCreateError::PublishSubscribeOpenError(
+                    PublishSubscribeOpenError::IncompatibleTypes,
+                ),
+            found,
+            ..
+        } if found.contains(" rig.Driver") && !found.contains(&ours) => Error::OtherVersion {
+            id: id.to_string(),
+            service,
+            found,
+            speaks: crate::contract::VERSION,
+        },
+        e => e.into(),
     }
 }
 
@@ -123,8 +154,12 @@ impl DriverLink {
     /// incompatible payload, and when another rig process is commanding the driver.
     pub fn connect(bus: &Bus, id: &str) -> Result<Self, Error> {
         check_id(id)?;
-        let info = bus.rx_on::<DriverInfo>(&service(id, topic::INFO), DRIVER_QOS)?;
-        let samples = bus.rx_on::<DriverSample>(&service(id, topic::SAMPLE), DRIVER_QOS)?;
+        let info = bus
+            .rx_on::<DriverInfo>(&service(id, topic::INFO), DRIVER_QOS)
+            .map_err(other_version::<DriverInfo>(id))?;
+        let samples = bus
+            .rx_on::<DriverSample>(&service(id, topic::SAMPLE), DRIVER_QOS)
+            .map_err(other_version::<DriverSample>(id))?;
         let commands = bus
             .tx_on::<DriverCommand>(&service(id, topic::COMMAND), DRIVER_QOS)
             .map(Tx::waking)

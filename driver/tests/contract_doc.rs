@@ -5,7 +5,9 @@
 use std::collections::BTreeMap;
 use std::mem::{align_of, offset_of, size_of};
 
-use driver::contract::{DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, kind, status};
+use driver::contract::{
+    DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, ending, kind, provides, status,
+};
 use wire::type_name_of;
 
 const DOC: &str = include_str!("../../docs/driver.md");
@@ -65,6 +67,7 @@ fn rust_layouts() -> BTreeMap<String, Layout> {
             watchdog_periods: "u64",
             t_start_ns: "u64",
             t_publish_ns: "u64",
+            provides: "u64",
         }),
         layout!(DriverSample {
             seq: "u64",
@@ -80,6 +83,8 @@ fn rust_layouts() -> BTreeMap<String, Layout> {
             clamped: "u64",
             rejected: "u64",
             watchdog_trips: "u64",
+            reward: "f64",
+            ending: "u64",
         }),
         layout!(DriverCommand {
             seq: "u64",
@@ -213,6 +218,9 @@ fn the_docs_settings_and_constants_are_the_codes() {
         ("WATCHDOG", status::WATCHDOG),
         ("ACTION", kind::ACTION),
         ("RESET", kind::RESET),
+        ("PROVIDES_REWARD", provides::REWARD),
+        ("TERMINATED", ending::TERMINATED),
+        ("TRUNCATED", ending::TRUNCATED),
     ] {
         assert_eq!(v.get(key), Some(&want.to_string()), "docs/driver.md: {key}");
     }
@@ -241,7 +249,7 @@ for cls in (m.DriverInfo, m.DriverSample, m.DriverCommand):
     for name, _ in cls._fields_:
         f = getattr(cls, name)
         print(" ", name, f.offset, f.size)
-for c in ("READY", "RESETTING", "WATCHDOG", "ACTION", "RESET", "MAX_X", "MAX_U", "VERSION"):
+for c in ("READY", "RESETTING", "WATCHDOG", "ACTION", "RESET", "PROVIDES_REWARD", "TERMINATED", "TRUNCATED", "MAX_X", "MAX_U", "VERSION"):
     print("=", c, getattr(m, c))
 "#
     );
@@ -307,7 +315,16 @@ for c in ("READY", "RESETTING", "WATCHDOG", "ACTION", "RESET", "MAX_X", "MAX_U",
         assert_eq!(strip(&got.rows), strip(&want.rows), "messages.py: {name}");
     }
     let v = doc_values();
-    for c in ["READY", "RESETTING", "WATCHDOG", "ACTION", "RESET"] {
+    for c in [
+        "READY",
+        "RESETTING",
+        "WATCHDOG",
+        "ACTION",
+        "RESET",
+        "PROVIDES_REWARD",
+        "TERMINATED",
+        "TRUNCATED",
+    ] {
         assert_eq!(Some(&consts[c].to_string()), v.get(c), "messages.py: {c}");
     }
     assert_eq!(consts["MAX_X"], wire::MAX_X as u64);

@@ -15,10 +15,13 @@ The mapping module says how the environment and the task meet:
 A RESET resets the environment (seeded from --seed and the reset's sequence number, so
 two runs see the same environment) and places it at the rig's start state; each action
 is one env.step(u) of the environment's own dt, which must be the task's sampling time.
-The environment's reward, termination and truncation are not used: the rig computes the
-task's reward and runs its own trials, so the task file must express the environment's
-reward (for Pendulum-v1 it does, exactly). Needs gymnasium and numpy besides the driver's
-requirements.
+The environment's own reward, termination and truncation go to the rig with each sample
+(the driver provides the reward, docs/driver.md): the rig learns them as they are —
+terminated ends the trial at a terminal state, truncated (the environment's time limit)
+ends it and the critic bootstraps through it. With --task-reward the rig computes the
+task file's reward and ends trials by the task instead (the task file must then express
+the environment's reward; for Pendulum-v1 it does, exactly). Needs gymnasium and numpy
+besides the driver's requirements.
 """
 
 import argparse
@@ -47,8 +50,10 @@ def load(path: str):
 class Environment:
     """A Gymnasium environment as the lockstep driver's simulation."""
 
-    def __init__(self, mapping, task, seed: int):
+    def __init__(self, mapping, task, seed: int, provides_reward: bool):
         self.mapping, self.task, self.seed = mapping, task, seed
+        self.provides_reward = provides_reward
+        self.last = (0.0, False, False)  # the last step's reward, terminated, truncated
         self.env = gymnasium.make(mapping.ENV_ID)
         space = self.env.action_space
         if not isinstance(space, gymnasium.spaces.Box) or space.shape != (task.m,):
@@ -64,7 +69,12 @@ class Environment:
         self.mapping.place(self.env, x0)
 
     def step(self, u, dt):
-        self.env.step(np.asarray(u, dtype=np.float64))
+        _, reward, terminated, truncated, _ = self.env.step(np.asarray(u, dtype=np.float64))
+        self.last = (float(reward), bool(terminated), bool(truncated))
+
+    def outcome(self):
+        """The last step's reward, terminated and truncated, as the environment said."""
+        return self.last
 
     def state(self):
         return [float(v) for v in self.mapping.state(self.env)]
@@ -80,6 +90,12 @@ def main():
         "[default: the task's name without dots]",
     )
     p.add_argument("--seed", type=int, default=1, help="seeds the environment's resets [default: 1]")
+    p.add_argument(
+        "--task-reward",
+        action="store_true",
+        help="leave the reward and the trials' endings to the rig (the task file's) instead "
+        "of sending the environment's own [default: the environment's]",
+    )
     p.add_argument("--verbose", action="store_true", help="log resets to stderr")
     args = p.parse_args()
     mapping = load(args.mapping)
@@ -90,11 +106,13 @@ def main():
         p.error(f"--task: {e}")
     driver_id = args.driver_id or task.name.replace(".", "-")
     try:
-        sim = Environment(mapping, task, args.seed)
+        sim = Environment(mapping, task, args.seed, provides_reward=not args.task_reward)
     except ValueError as e:
         p.error(str(e))
+    reward = "the task's (the rig computes it)" if args.task_reward else "the environment's"
     print(
-        f"adapter {driver_id!r}: {mapping.ENV_ID} as task {task.name}, Ts {task.ts * 1e3:g} ms, lockstep",
+        f"adapter {driver_id!r}: {mapping.ENV_ID} as task {task.name}, Ts {task.ts * 1e3:g} ms, lockstep, "
+        f"reward {reward}",
         file=sys.stderr,
         flush=True,
     )

@@ -56,13 +56,13 @@ PENDULUM_TASK = Path(__file__).resolve().parents[2] / "plant" / "tasks" / "pendu
 
 
 class BadSample(ctypes.Structure):
-    """--inject-fault layout: the right type name with a wrong layout (no counters)."""
+    """--inject-fault layout: the right type name with a wrong layout (no counters, no reward)."""
 
-    _fields_ = DriverSample._fields_[:-3]
+    _fields_ = DriverSample._fields_[:-5]
 
     @staticmethod
     def type_name() -> str:
-        return "rig.DriverSample.v1"
+        return DriverSample.type_name()
 
 
 class Pendulum:

@@ -10,6 +10,13 @@ The simulation is any object with
     step(u, dt)      integrate dt seconds with the action u (m floats, within the bounds)
     state()          the state, n floats, angles wrapped to [-pi, pi)
 
+and, if it computes the reward and the trial's endings itself (a Gymnasium environment),
+
+    provides_reward  True: the info says so (PROVIDES_REWARD) and each sample that
+                     closes a step carries them
+    outcome()        (reward, terminated, truncated) of the last step: a finite float
+                     and two bools (terminated wins if both are set)
+
 A RESET places it at x0 and is answered by a READY sample there; an ACTION answering
 the newest sample while READY is clamped to the task's bounds (or, non-finite or of the
 wrong size, rejected: zero) and moves the simulation one sample period, answered by the
@@ -35,8 +42,11 @@ import iceoryx2 as iox2
 from messages import (
     ACTION,
     LOCKSTEP,
+    PROVIDES_REWARD,
     READY,
     RESET,
+    TERMINATED,
+    TRUNCATED,
     VERSION,
     DriverCommand,
     DriverInfo,
@@ -152,8 +162,9 @@ class Services:
         return receive()
 
 
-def info(task, clock: int, t_start: int, speed: float = 1.0) -> DriverInfo:
-    """The DriverInfo of a driver of `task`, `speed` times faster than real time."""
+def info(task, clock: int, t_start: int, speed: float = 1.0, provides: int = 0) -> DriverInfo:
+    """The DriverInfo of a driver of `task`, `speed` times faster than real time,
+    `provides` PROVIDES_REWARD or not (0)."""
     i = DriverInfo(
         version=VERSION,
         task=task.name.encode(),
@@ -166,6 +177,7 @@ def info(task, clock: int, t_start: int, speed: float = 1.0) -> DriverInfo:
         watchdog_periods=1,
         t_start_ns=t_start,
         t_publish_ns=time.monotonic_ns(),
+        provides=provides,
     )
     for j in range(task.m):
         i.u_min[j], i.u_max[j] = task.low[j], task.high[j]
@@ -203,9 +215,15 @@ class Samples:
         self.n, self.m = task.n, task.m
         self.s = DriverSample(n_x=task.n, n_u=task.m)
 
-    def fill(self, counters: Counters, seq: int, x) -> DriverSample:
-        """Sample `seq` at state `x`, stamped now (valid until the next fill)."""
+    def fill(self, counters: Counters, seq: int, x, outcome=None) -> DriverSample:
+        """Sample `seq` at state `x`, stamped now (valid until the next fill), with
+        `outcome` (reward, terminated, truncated) of the step it closes, if given."""
         s = self.s
+        s.reward, s.ending = 0.0, 0
+        if outcome is not None:
+            reward, terminated, truncated = outcome
+            s.reward = float(reward)
+            s.ending = TERMINATED if terminated else TRUNCATED if truncated else 0
         s.seq = seq
         s.t_sample_ns = time.monotonic_ns()
         s.status = counters.status
@@ -223,7 +241,8 @@ def serve(services: Services, task, simulation, stopping=lambda: False, log=None
     """Serves `simulation` as the driver of `task` in lockstep until `stopping()`;
     `log(text)`, if given, is told of resets."""
     t_start = time.monotonic_ns()
-    advertised = info(task, LOCKSTEP, t_start)
+    provides = getattr(simulation, "provides_reward", False)
+    advertised = info(task, LOCKSTEP, t_start, provides=PROVIDES_REWARD if provides else 0)
     counters = Counters(task.m)
     samples = Samples(task)
     newest = None
@@ -253,14 +272,16 @@ def serve(services: Services, task, simulation, stopping=lambda: False, log=None
             counters.u = [0.0] * task.m
             if log:
                 log(f"reset {c.seq}: placed at {x0}")
+            outcome = None
         elif c.kind == ACTION and counters.status & READY and c.sample_seq == newest:
             counters.admit(task, c)
             simulation.step(counters.u, task.ts)
+            outcome = simulation.outcome() if provides else None
         else:
             counters.rejected += 1  # before a reset, for an older sample, or unknown
             continue
         newest = 0 if newest is None else newest + 1
-        services.publish_sample(samples.fill(counters, newest, simulation.state()))
+        services.publish_sample(samples.fill(counters, newest, simulation.state(), outcome))
 
 
 def serve_until_signalled(services: Services, task, simulation, who: str, verbose: bool):

@@ -11,7 +11,7 @@ import ctypes
 
 MAX_X = 8
 MAX_U = 4
-VERSION = 2
+VERSION = 3
 
 # status bits of DriverSample.status
 READY = 1
@@ -20,13 +20,18 @@ WATCHDOG = 4
 # DriverCommand.kind
 ACTION = 1
 RESET = 2
+# DriverInfo.provides bits
+PROVIDES_REWARD = 1
+# DriverSample.ending bits (with PROVIDES_REWARD)
+TERMINATED = 1
+TRUNCATED = 2
 # DriverInfo.clock
 REALTIME = 0
 LOCKSTEP = 1
 
 
 class DriverInfo(ctypes.Structure):
-    """rig.DriverInfo.v2 (docs/driver.md)."""
+    """rig.DriverInfo.v3 (docs/driver.md)."""
 
     _fields_ = [
         ("version", ctypes.c_uint64),
@@ -42,15 +47,16 @@ class DriverInfo(ctypes.Structure):
         ("watchdog_periods", ctypes.c_uint64),
         ("t_start_ns", ctypes.c_uint64),
         ("t_publish_ns", ctypes.c_uint64),
+        ("provides", ctypes.c_uint64),
     ]
 
     @staticmethod
     def type_name() -> str:
-        return "rig.DriverInfo.v2"
+        return "rig.DriverInfo.v3"
 
 
 class DriverSample(ctypes.Structure):
-    """rig.DriverSample.v1 (docs/driver.md)."""
+    """rig.DriverSample.v2 (docs/driver.md)."""
 
     _fields_ = [
         ("seq", ctypes.c_uint64),
@@ -66,11 +72,13 @@ class DriverSample(ctypes.Structure):
         ("clamped", ctypes.c_uint64),
         ("rejected", ctypes.c_uint64),
         ("watchdog_trips", ctypes.c_uint64),
+        ("reward", ctypes.c_double),
+        ("ending", ctypes.c_uint64),
     ]
 
     @staticmethod
     def type_name() -> str:
-        return "rig.DriverSample.v1"
+        return "rig.DriverSample.v2"
 
 
 class DriverCommand(ctypes.Structure):

@@ -213,6 +213,11 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
             s.deadline_misses,
             s.messages / 3
         );
+        if i.provides_reward() {
+            println!(
+                "  rewards and trial endings: the driver's own (returns.csv sums them; run.mcap metadata reward_from = driver)"
+            );
+        }
     } else if opts.clock.period().is_some() {
         println!(
             "  deadline misses: {} of {} samples",

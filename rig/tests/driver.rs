@@ -530,8 +530,8 @@ fn a_driver_with_an_incompatible_payload_is_a_one_line_error() {
         "error: ",
         &format!("rig/driver/{}/sample", d.id),
         "IncompatibleTypes",
-        "rig.DriverSample.v1 (184 bytes",
-        "rig.DriverSample.v1 (160 bytes",
+        "rig.DriverSample.v2 (200 bytes",
+        "rig.DriverSample.v2 (160 bytes",
     ] {
         assert!(stderr.contains(part), "{part:?} in {stderr}");
     }

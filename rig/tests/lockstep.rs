@@ -1,4 +1,4 @@
-//! Drivers of a task (`DriverInfo.v2`: its name and hash) and drivers in lockstep: `rig
+//! Drivers of a task (`DriverInfo.v3`: its name and hash) and drivers in lockstep: `rig
 //! sim-driver --clock lockstep` and the Python example's `--clock lockstep`, against `rig
 //! check-driver` and `rig run --plant external`; a task file only a driver serves.
 //!
@@ -348,7 +348,9 @@ fn the_furuta_pendulum_is_a_task_file_and_a_python_driver() {
 /// A Gymnasium environment through the adapter (examples/gymnasium/): Pendulum-v1's
 /// reward is the task file's, step for step (check_reward.py); with its mapping and task
 /// file the adapter passes `rig check-driver --task`, and SAC/LLR learns a few trials
-/// through the rig, the same returns twice. Skipped, with the reason printed, without
+/// through the rig, the same returns twice. The rewards are the environment's own (every
+/// measurement flagged DRIVER_REWARD, the recording's `reward_from = driver`); with
+/// `--task-reward` the rig's (neither). Skipped, with the reason printed, without
 /// gymnasium.
 #[test]
 fn gymnasium_pendulum_v1_is_served_by_the_adapter() {
@@ -400,6 +402,29 @@ fn gymnasium_pendulum_v1_is_served_by_the_adapter() {
     ok(run(&d.id, &args, &dir.join("a")));
     ok(run(&d.id, &args, &dir.join("b")));
     assert_eq!(returns(&dir.join("a")), returns(&dir.join("b")));
+    assert_eq!(reward_from(&dir.join("a")), Some(true));
+    drop(d);
+    let d = Driver::script(
+        &python,
+        "examples/gymnasium/adapter.py",
+        "gym-task",
+        &["--mapping", mapping.to_str().unwrap(), "--task-reward"],
+    );
+    ok(run(&d.id, &args, &dir.join("c")));
+    assert_eq!(reward_from(&dir.join("c")), Some(false));
+}
+
+/// Whether the run in `dir` learned the driver's rewards: every measurement flagged
+/// DRIVER_REWARD and the recording's metadata `reward_from = driver` (`Some(true)`), or
+/// neither (`Some(false)`); `None` if they disagree.
+fn reward_from(dir: &Path) -> Option<bool> {
+    let (meta, measurements) = common::run_metadata_and_measurements(dir);
+    let said = meta.get("reward_from").map(String::as_str) == Some("driver");
+    let flagged: Vec<bool> = measurements
+        .iter()
+        .map(|v| v["flags"].as_u64().unwrap() & 1024 != 0)
+        .collect();
+    flagged.iter().all(|&f| f == said).then_some(said)
 }
 
 /// `rig sim-driver --task FILE --clock lockstep` serves a task file with a simulation

@@ -41,6 +41,11 @@ pub mod flags {
     /// after its instant. The transition into it is not learned (no agent call learns
     /// it), the trial's attempt ends here, cut short, and the trial is run again.
     pub const GAP: u64 = 512;
+    /// Plant → observer (and on, in every message of the run): the rewards and the
+    /// trials' endings are the external driver's own (its info provides them,
+    /// `docs/driver.md`), not the task's `ρ`: [`END`] with [`TERMINAL`] where the driver
+    /// said terminated, [`END`] alone where it said truncated.
+    pub const DRIVER_REWARD: u64 = 1024;
 }
 
 /// Header fields shared by all messages.

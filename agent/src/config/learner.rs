@@ -40,6 +40,13 @@ impl Algo {
         matches!(self, Algo::Sac | Algo::Mlac | Algo::Rmac)
     }
 
+    /// Whether the algorithm needs the reward's gradient `∂ρ/∂u` (VGBP's action
+    /// selection, Eq. 4.15): a reward given as numbers only (an external driver's) cannot
+    /// serve it.
+    pub fn needs_reward_gradient(self) -> bool {
+        self == Algo::Vgbp
+    }
+
     /// Whether the algorithm learns a process model.
     pub fn has_model(self) -> bool {
         matches!(self, Algo::Mlac | Algo::Rmac | Algo::Vgbp)

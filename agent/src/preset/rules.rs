@@ -18,8 +18,11 @@
 //! 5. **Exploration** `σ` and the saturation margin scale with the smallest action
 //!    half-width over the pendulum's 3 V; SARSA's actions are the lowest common bound,
 //!    the midpoint and the highest common bound.
-//! 6. Learning rates, `γ`, `λ`, trials, runs and the evaluation cadence are the
-//!    pendulum's.
+//! 6. **The discount** comes from the task's time scale, in seconds: its horizon
+//!    `Ts / (1 − γ)` is a third of the trial, `γ = 1 − 3 Ts / T_trial` ([`discount`]) —
+//!    the pendulum's `0.97` at `Ts = 0.03 s`, `T_trial = 3 s`, and the same horizon in
+//!    seconds for the same task sampled faster. With a finite horizon `γ = 1` stays.
+//! 7. Learning rates, `λ`, trials, runs and the evaluation cadence are the pendulum's.
 //!
 //! Applied to the pendulum's own task the rules give its preset (tested).
 
@@ -29,6 +32,20 @@ use plant::Task;
 
 use super::Preset;
 use crate::config::{Component, HorizonKind};
+
+/// Discount horizons per trial: the pendulum's `γ = 0.97` looks `Ts / (1 − γ) = 1 s`
+/// ahead in its 3 s trials (docs/configuration.md, "The discount of a task": measured on
+/// a goal task at two sampling times).
+pub const HORIZONS_PER_TRIAL: f64 = 3.0;
+
+/// The least discount [`discount`] gives (a trial of fewer than 6 samples).
+pub const MIN_DISCOUNT: f64 = 0.5;
+
+/// The discount of `task` (rule 6): `γ = 1 − 3 Ts / T_trial`, its horizon `Ts / (1 − γ)`
+/// a third of the trial in seconds; at least [`MIN_DISCOUNT`].
+pub fn discount(task: &Task) -> f64 {
+    (1.0 - HORIZONS_PER_TRIAL * task.ts / task.trial_seconds).max(MIN_DISCOUNT)
+}
 
 /// The most basis functions a derived grid has: LSTD's limit, and a bound on every RBF
 /// step's cost.
@@ -103,6 +120,9 @@ pub(super) fn adapt(mut preset: Preset, task: &Task) -> Preset {
     let u_ratio = (0..task.action_dim())
         .map(|j| ratio(task, Input::Action(j)))
         .fold(f64::INFINITY, f64::min);
+    if !time {
+        agent.learning.gamma = discount(task);
+    }
     agent.learning.sigma *= u_ratio;
     agent.learning.saturation_margin *= u_ratio;
     if let Some(sarsa) = &mut agent.sarsa {

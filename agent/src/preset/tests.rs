@@ -85,6 +85,46 @@ fn the_rules_carry_the_pendulum_preset_over_to_the_pendulum_itself() {
     });
 }
 
+/// The discount of a task without a thesis preset comes from its time scale in seconds:
+/// the pendulum's 0.97 for the pendulum's 30 ms and 3 s trials; the same horizon (1 s,
+/// a third of the trial) for other sampling times and trial lengths; a finite horizon
+/// keeps `γ = 1`.
+#[test]
+fn the_discount_of_a_task_is_a_third_of_its_trial_in_seconds() {
+    let pendulum = plant::task::builtin::text(SystemName::Pendulum);
+    let task = |ts: &str, seconds: &str| {
+        let text = pendulum
+            .replace("sampling_time = 0.03", &format!("sampling_time = {ts}"))
+            .replace("trial_seconds = 3.0", &format!("trial_seconds = {seconds}"));
+        assert_eq!(text != pendulum, ts != "0.03" || seconds != "3.0", "{text}");
+        driven(&text)
+    };
+    let gamma = |t: &Task, horizon| {
+        for_task(t, Algo::Mlac, ApproxKind::Rbf, horizon)
+            .unwrap()
+            .agent
+            .learning
+            .gamma
+    };
+    let infinite = HorizonKind::Infinite;
+    assert_eq!(gamma(&task("0.03", "3.0"), infinite), 0.97);
+    assert_eq!(rules::discount(&task("0.03", "3.0")), 0.97);
+    let cases = [
+        ("0.01", "3.0", 0.99),
+        ("0.03", "4.0", 0.9775),
+        ("0.01", "4.0", 0.9925),
+    ];
+    for (ts, seconds, want) in cases {
+        let g = gamma(&task(ts, seconds), infinite);
+        assert!((g - want).abs() < 1e-12, "Ts {ts}, trial {seconds}: {g}");
+    }
+    // 999 samples of a trial (a Gymnasium time limit): 1 − 3/999.
+    let long = gamma(&task("0.01", "9.99"), infinite);
+    assert!((long - (1.0 - 3.0 / 999.0)).abs() < 1e-12, "{long}");
+    assert_eq!(gamma(&task("0.03", "0.06"), infinite), rules::MIN_DISCOUNT);
+    assert_eq!(gamma(&task("0.01", "4.0"), HorizonKind::Finite), 1.0);
+}
+
 /// A rotary pendulum's shape: four states (arm and pendulum angles, their velocities) and
 /// one action of ±10 V.
 const ROTARY: &str = r#"

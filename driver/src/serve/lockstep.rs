@@ -86,6 +86,7 @@ pub fn serve_lockstep(
             let t = now_ns();
             device.sample(t, &mut x[..n_x]);
             let mut s = d.sample(seq, t, &x[..n_x]);
+            d.outcome(device, &mut s, c.kind == kind::ACTION);
             s.t_publish_ns = now_ns();
             io.samples.send(s).map_err(|e| io.err(e))?;
             newest = Some(seq);

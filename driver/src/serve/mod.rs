@@ -5,11 +5,10 @@
 //! motor is one `impl Device` for its amplifier and encoder. [`serve_lockstep`] serves a
 //! simulation ([`Lockstep`]) without a clock: one period per action.
 
-use plant::Task;
 use wire::{Bus, Rx, Tx, now_ns};
 
 use crate::contract::{
-    DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, VERSION, service, topic,
+    DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, VERSION, provides, service, topic,
 };
 use crate::device::Device;
 use crate::error::Error;
@@ -22,9 +21,10 @@ mod state;
 pub use lockstep::{Lockstep, serve_lockstep};
 pub use realtime::serve;
 
-/// The [`DriverInfo`] of a driver of `task` at time scale `time_scale`, keeping time by
-/// `clock`, started at `t_start_ns`, with period `period_ns`.
-fn info(task: &Task, time_scale: f64, clock: u64, period_ns: u64, t_start_ns: u64) -> DriverInfo {
+/// The [`DriverInfo`] of `device`, keeping time by `clock`, started at `t_start_ns`,
+/// with period `period_ns`.
+fn info(device: &impl Device, clock: u64, period_ns: u64, t_start_ns: u64) -> DriverInfo {
+    let (task, time_scale) = (device.task(), device.time_scale());
     let mut i = DriverInfo {
         version: VERSION,
         clock,
@@ -35,6 +35,11 @@ fn info(task: &Task, time_scale: f64, clock: u64, period_ns: u64, t_start_ns: u6
         watchdog_periods: 1,
         t_start_ns,
         t_publish_ns: now_ns(),
+        provides: if device.provides_reward() {
+            provides::REWARD
+        } else {
+            0
+        },
         ..Default::default()
     };
     let name = task.name.as_bytes();
@@ -152,13 +157,7 @@ impl Start {
         let d = state::Driver::new(device.task(), verbose);
         let t_start = now_ns();
         device.apply(t_start, &d.u[..d.n_u]);
-        let advertised = info(
-            device.task(),
-            device.time_scale(),
-            clock,
-            period_ns,
-            t_start,
-        );
+        let advertised = info(device, clock, period_ns, t_start);
         io.publish_info(advertised)?;
         Ok(Self {
             io,

@@ -56,6 +56,7 @@ pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result
         let t_sample = now_ns();
         device.sample(t_sample, &mut x[..n_x]);
         let mut s = d.sample(seq, t_sample, &x[..n_x]);
+        d.outcome(device, &mut s, d.in_trial());
         d.decide(device, t_sample, &x[..n_x]);
         s.status = d.status;
         s.t_publish_ns = now_ns();

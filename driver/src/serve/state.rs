@@ -140,6 +140,28 @@ impl Driver {
         self.log(|| format!("reset {} done at {x:?}", self.reset_id));
     }
 
+    /// Puts into sample `s` the reward and ending of the period it closes, from a device
+    /// that provides them, if `closes_period`: it closes a period of a trial (not a
+    /// reset's READY sample).
+    pub(super) fn outcome(
+        &self,
+        device: &mut impl Device,
+        s: &mut DriverSample,
+        closes_period: bool,
+    ) {
+        if closes_period && device.provides_reward() {
+            let o = device.outcome();
+            s.reward = o.reward;
+            s.ending = o.ending;
+        }
+    }
+
+    /// Whether the sample taken now closes a period of a trial on a real-time clock:
+    /// READY, with an action applied since the reset.
+    pub(super) fn in_trial(&self) -> bool {
+        self.status & status::READY != 0 && self.acted_since_reset
+    }
+
     /// The sample of instant `seq` at `t_ns` with state `x`, before this instant's
     /// decisions (`u_applied`: the action in effect at `t_ns`).
     pub(super) fn sample(&self, seq: u64, t_ns: u64, x: &[f64]) -> DriverSample {
@@ -275,5 +297,60 @@ mod tests {
         wrong.n_u = 2;
         d.command(&mut dev, 18, &wrong);
         assert_eq!((d.u[0], d.other_rejected), (0.0, 3));
+    }
+
+    /// A device that provides the reward and endings: a sample that closes a period of a
+    /// trial carries them; a reset's READY sample, and any sample of a device that does
+    /// not provide them, carries zero.
+    #[test]
+    fn samples_carry_the_outcome_of_a_device_that_provides_it() {
+        struct Scored(Probe);
+        impl Device for Scored {
+            fn task(&self) -> &Task {
+                &self.0.task
+            }
+            fn sample(&mut self, t: u64, x: &mut [f64]) {
+                self.0.sample(t, x)
+            }
+            fn apply(&mut self, t: u64, u: &[f64]) {
+                self.0.apply(t, u)
+            }
+            fn reset_action(&mut self, x: &[f64], x0: &[f64], u: &mut [f64]) {
+                self.0.reset_action(x, x0, u)
+            }
+            fn at_rest(&self, x: &[f64], x0: &[f64]) -> bool {
+                self.0.at_rest(x, x0)
+            }
+            fn provides_reward(&self) -> bool {
+                true
+            }
+            fn outcome(&mut self) -> crate::Outcome {
+                crate::Outcome {
+                    reward: -2.5,
+                    ending: crate::contract::ending::TRUNCATED,
+                }
+            }
+        }
+        let task = Task::new(SystemName::Pendulum);
+        let probe = || Probe {
+            task: Task::new(SystemName::Pendulum),
+            x: vec![0.0, 0.0],
+            applied: vec![],
+        };
+        let mut dev = Scored(probe());
+        let mut d = Driver::new(&task, false);
+        d.command(&mut dev, 1, &reset(1, [0.0, 0.0]));
+        d.ready(&[0.0, 0.0]);
+        let mut s = d.sample(1, 2, &[0.0, 0.0]);
+        d.outcome(&mut dev, &mut s, d.in_trial());
+        assert_eq!((s.reward, s.ending), (0.0, 0), "the READY sample");
+        d.command(&mut dev, 3, &action(3, 1.0));
+        let mut s = d.sample(2, 4, &[0.0, 0.0]);
+        d.outcome(&mut dev, &mut s, d.in_trial());
+        assert_eq!((s.reward, s.ending), (-2.5, 2));
+        let mut plain = probe();
+        let mut s = d.sample(3, 5, &[0.0, 0.0]);
+        d.outcome(&mut plain, &mut s, true);
+        assert_eq!((s.reward, s.ending), (0.0, 0), "a device without a reward");
     }
 }

@@ -113,6 +113,27 @@ pub fn messages(mcap_path: &Path) -> BTreeMap<String, Vec<(u64, Vec<u8>)>> {
     out
 }
 
+/// The `run` metadata of the recording `DIR/run.mcap` and its plant measurements (JSON).
+pub fn run_metadata_and_measurements(
+    dir: &Path,
+) -> (BTreeMap<String, String>, Vec<serde_json::Value>) {
+    let bytes = std::fs::read(dir.join("run.mcap")).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let meta = summary
+        .metadata_indexes
+        .iter()
+        .map(|mi| mcap::read::metadata(&bytes, mi).unwrap())
+        .find(|m| m.name == "run")
+        .expect("the run's metadata");
+    let measurements = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(Result::unwrap)
+        .filter(|m| m.channel.topic == "/plant/measurement")
+        .map(|m| serde_json::from_slice(&m.data).unwrap())
+        .collect();
+    (meta.metadata, measurements)
+}
+
 /// Per sample `seq`: a field of a recorded JSON message on `topic`.
 pub fn field(
     msgs: &BTreeMap<String, Vec<(u64, Vec<u8>)>>,

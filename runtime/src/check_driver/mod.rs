@@ -240,7 +240,7 @@ impl Probe<'_> {
             .validate()
             .map(|()| driver::fits_task(&i, &self.task).err());
         let text = format!(
-            "task {} (hash {:016x}), {} clock, n_x {}, n_u {}, Ts {:.3} ms (period {:.3} ms × time scale {}), u_min {}, u_max {}, watchdog {} period(s)",
+            "task {} (hash {:016x}), {} clock, n_x {}, n_u {}, Ts {:.3} ms (period {:.3} ms × time scale {}), u_min {}, u_max {}, watchdog {} period(s), reward {}",
             i.task_name(),
             i.task_hash,
             if i.lockstep() { "lockstep" } else { "realtime" },
@@ -251,7 +251,12 @@ impl Probe<'_> {
             i.time_scale,
             vector(&i.u_min[..(i.n_u as usize).min(MAX_U)]),
             vector(&i.u_max[..(i.n_u as usize).min(MAX_U)]),
-            i.watchdog_periods
+            i.watchdog_periods,
+            if i.provides_reward() {
+                "and endings from the driver"
+            } else {
+                "computed by the rig"
+            }
         );
         match fits {
             Err(e) => {

@@ -23,7 +23,7 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result, anyhow, bail};
 use driver::contract::{DriverInfo, DriverWatch};
 use wire::{Bus, Waiting};
 
@@ -135,9 +135,10 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     let bus = Bus::join(&run_id, "rig")?;
     let task = cfg.task();
     let (watch, driver_info, with_driver) = match opts.clock.driver() {
-        Some(d) => match wait_for_driver(&bus, d, &task, opts.progress)
-            .and_then(|(watch, info)| Ok((watch, info, driver_options(opts, &info)?)))
-        {
+        Some(d) => match wait_for_driver(&bus, d, &task, opts.progress).and_then(|(watch, info)| {
+            check_reward_source(&cfg, &d.id, &info)?;
+            Ok((watch, info, driver_options(opts, &info)?))
+        }) {
             Ok((watch, info, with)) => (Some(watch), Some(info), Some(with)),
             Err(e) => {
                 if created {
@@ -163,6 +164,7 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         timing: opts.clock.describe(task.ts, driver_info.as_ref()),
         realtime: !opts.clock.is_lockstep(),
         driver: opts.clock.driver().is_some(),
+        driver_reward: driver_info.is_some_and(|i| i.provides_reward()),
         point: point.as_ref(),
     };
     let recording = Recording::open(&opts.out, &about)?;
@@ -266,6 +268,19 @@ fn driver_options(opts: &RunOptions, info: &DriverInfo) -> Result<RunOptions, Cl
     }
     Clock::check_driver_waiting(info, with.waiting)?;
     Ok(with)
+}
+
+/// Refuses a learner that needs the reward's gradient with a driver that provides the
+/// reward as numbers only.
+fn check_reward_source(cfg: &ExperimentConfig, id: &str, info: &DriverInfo) -> Result<()> {
+    let algo = cfg.agent.algo;
+    if info.provides_reward() && algo.needs_reward_gradient() {
+        bail!(
+            "--algo {algo} needs the reward's gradient ∂ρ/∂u, but driver {id:?} (task {:?}) provides its own reward as numbers: use an actor-critic (--algo sac, mlac or rmac) or serve the task's reward (the Gymnasium adapter's --task-reward)",
+            info.task_name()
+        );
+    }
+    Ok(())
 }
 
 /// Waits for driver `d`'s info (saying so after a second of silence when `verbose`)

@@ -79,6 +79,11 @@ fn metadata(about: &About) -> BTreeMap<String, String> {
         ),
     ]
     .into_iter()
+    .chain(
+        about
+            .driver_reward
+            .then(|| ("reward_from", "driver".to_string())),
+    )
     .map(|(k, v)| (k.to_string(), v))
     .collect()
 }
@@ -119,6 +124,9 @@ pub(super) struct About<'a> {
     pub(super) realtime: bool,
     /// An external driver's traffic is recorded too.
     pub(super) driver: bool,
+    /// The driver provides the rewards and the trials' endings (metadata `reward_from =
+    /// driver`; absent otherwise, where the rig computes the task's reward).
+    pub(super) driver_reward: bool,
     /// Where a resumed run continues.
     pub(super) point: Option<&'a ResumePoint>,
 }

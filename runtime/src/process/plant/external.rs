@@ -11,6 +11,12 @@
 //! [`flags::ESTIMATED_REWARD`], and the observer computes `ρ(x̂_k, u_k)` from its
 //! estimate; its start samples take the velocities of `x0` (READY is at rest there).
 //!
+//! A driver that provides the reward (`provides::REWARD` in its info) gives each period's
+//! reward and the trial's ending with the sample that closes it: the measurement carries
+//! that reward and [`flags::DRIVER_REWARD`]; *terminated* ends the trial at a terminal
+//! state (`END | TERMINAL`: nothing is bootstrapped past it), *truncated* ends it as the
+//! task's time limit does (`END`: the learners bootstrap through it).
+//!
 //! The driver is the clock. When the agent answers late — the driver's next sample shows
 //! that the action was not applied by then — the trial goes on and the miss is counted
 //! in [`wire::Measurement::deadline_misses`]. When the loop loses the driver's timing —
@@ -58,7 +64,7 @@ pub struct Bridge {
 impl Bridge {
     /// Connects to driver `d`: waits for its info (its `timeout`), checks it against the
     /// task, then waits for the observer (and recorder) to listen.
-    pub(super) fn connect(link: Link, d: &ExternalDriver, args: &PlantConfig) -> Result<Self> {
+    pub(super) fn connect(mut link: Link, d: &ExternalDriver, args: &PlantConfig) -> Result<Self> {
         let driver_id = d.id.as_str();
         let driver = DriverLink::connect(&link.bus, driver_id)?;
         let timeout = d.timeout;
@@ -67,6 +73,9 @@ impl Bridge {
         driver::check_info(driver_id, &info, &link.task)?;
         link.out
             .wait_for_receivers(args.node.receivers, STARTUP, &link.bus)?;
+        if info.provides_reward() {
+            link.run_flags |= flags::DRIVER_REWARD;
+        }
         Ok(Self {
             safety: Supervisor::new(&link.task),
             limit: TimeLimit::new(link.task.steps_per_trial()),
@@ -208,15 +217,31 @@ impl Bridge {
         // Leaving the task's operating range ends the trial with its penalty (§6.4.2); no
         // further action is sent, so the driver's watchdog applies zero.
         let left = self.safety.check(next.measured());
-        // ρ(x_k, u): unknown here if the velocities are not measured (the observer
-        // computes it from its estimate, flags::ESTIMATED_REWARD).
-        let reward = if self.positions_only == Some(true) {
-            f64::NAN
+        let step = if self.info.provides_reward() {
+            self.driver_step(&next, left)
         } else {
-            self.link.task.reward.reward(s.state(), next.applied())
+            // ρ(x_k, u): unknown here if the velocities are not measured (the observer
+            // computes it from its estimate, flags::ESTIMATED_REWARD).
+            let reward = if self.positions_only == Some(true) {
+                f64::NAN
+            } else {
+                self.link.task.reward.reward(s.state(), next.applied())
+            };
+            self.limit.step(left.unwrap_or(reward), left.is_some())
         };
-        let step = self.limit.step(left.unwrap_or(reward), left.is_some());
         Ok((next, step, gap))
+    }
+
+    /// The period closed by `next` of a driver that provides the reward: its reward
+    /// and ending — terminated (or out of the operating range, `left`: its penalty) at a
+    /// terminal state; truncated by the driver or by the task's time limit.
+    fn driver_step(&mut self, next: &DriverSample, left: Option<f64>) -> Step {
+        let mut step = self.limit.step(
+            left.unwrap_or(next.reward),
+            left.is_some() || next.terminated(),
+        );
+        step.truncated |= next.truncated() && !step.terminated;
+        step
     }
 }
 

@@ -40,8 +40,9 @@ pub(super) struct Link {
     pub(super) cycles: Vec<[u64; 4]>,
     /// Deadlines missed so far (realtime, external driver).
     pub(super) misses: u64,
-    /// Flags of every message from here on: [`flags::ESTIMATED_REWARD`] once a driver
-    /// turned out to measure positions only.
+    /// Flags of every message from here on: [`flags::DRIVER_REWARD`] with a driver that
+    /// provides the rewards; otherwise [`flags::ESTIMATED_REWARD`] once a driver turned
+    /// out to measure positions only.
     pub(super) run_flags: u64,
 }
 
@@ -137,7 +138,9 @@ impl Link {
                 "driver {driver_id:?} measures positions only (its velocities are NaN): run with `--sensor angle` and an observer that estimates them (`--observer finite-difference` or `--observer predictive`)"
             );
         }
-        self.run_flags |= flags::ESTIMATED_REWARD;
+        if self.run_flags & flags::DRIVER_REWARD == 0 {
+            self.run_flags |= flags::ESTIMATED_REWARD;
+        }
         Ok(())
     }
 
