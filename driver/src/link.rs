@@ -4,6 +4,7 @@
 use std::cell::Cell;
 use std::time::Duration;
 
+use iceoryx2::prelude::ZeroCopySend;
 use wire::{Bus, Rx, Tx, now_ns};
 
 use crate::contract::{
