@@ -100,10 +100,10 @@ impl DriverWatch {
         Ok(Self {
             info: bus
                 .rx_on(&service(id, topic::INFO), DRIVER_QOS)
-                .map_err(other_version::<DriverInfo>(id))?,
+                .map_err(other_version::<DriverInfo>(bus, id))?,
             samples: bus
                 .rx_on(&service(id, topic::SAMPLE), DRIVER_QOS)
-                .map_err(other_version::<DriverSample>(id))?,
+                .map_err(other_version::<DriverSample>(bus, id))?,
             commands: bus.rx_on(&service(id, topic::COMMAND), DRIVER_QOS)?,
             link: bus.rx_on(&service(id, topic::LINK), DRIVER_QOS)?,
         })
@@ -111,10 +111,12 @@ impl DriverWatch {
 }
 
 /// Names a driver of another protocol version in an error opening its service of
-/// payload `T`: the service carries another driver message's type name (another
+/// payload `T` on `bus`: the service carries another driver message's type (another
 /// version's layout). A wrong layout under the right name stays iceoryx2's error.
-fn other_version<T: ZeroCopySend>(id: &str) -> impl Fn(wire::Error) -> Error + '_ {
-    let ours = format!(" {} (", wire::type_name_of::<T>());
+fn other_version<'a, T: ZeroCopySend>(
+    bus: &'a Bus,
+    id: &'a str,
+) -> impl Fn(wire::Error) -> Error + 'a {
     use iceoryx2::service::builder::publish_subscribe::{
         PublishSubscribeOpenError, PublishSubscribeOpenOrCreateError,
     };
@@ -127,12 +129,16 @@ fn other_version<T: ZeroCopySend>(id: &str) -> impl Fn(wire::Error) -> Error + '
                 ),
             found,
             ..
-        } if found.contains(" rig.Driver") && !found.contains(&ours) => Error::OtherVersion {
-            id: id.to_string(),
-            service,
-            found,
-            speaks: crate::contract::VERSION,
-        },
+        } if wire::payload_type_name(&service, bus.node().config())
+            .is_some_and(|t| t.starts_with("rig.Driver") && t != wire::type_name_of::<T>()) =>
+        {
+            Error::OtherVersion {
+                id: id.to_string(),
+                service,
+                found,
+                speaks: crate::contract::VERSION,
+            }
+        }
         e => e.into(),
     }
 }
@@ -157,10 +163,10 @@ impl DriverLink {
         check_id(id)?;
         let info = bus
             .rx_on::<DriverInfo>(&service(id, topic::INFO), DRIVER_QOS)
-            .map_err(other_version::<DriverInfo>(id))?;
+            .map_err(other_version::<DriverInfo>(bus, id))?;
         let samples = bus
             .rx_on::<DriverSample>(&service(id, topic::SAMPLE), DRIVER_QOS)
-            .map_err(other_version::<DriverSample>(id))?;
+            .map_err(other_version::<DriverSample>(bus, id))?;
         let commands = bus
             .tx_on::<DriverCommand>(&service(id, topic::COMMAND), DRIVER_QOS)
             .map(Tx::waking)

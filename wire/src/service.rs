@@ -49,6 +49,15 @@ pub fn type_name_of<T: ZeroCopySend>() -> &'static str {
     unsafe { <T as ZeroCopySend>::type_name() }
 }
 
+/// The payload type name of existing publish-subscribe service `service` (e.g.
+/// `rig.DriverInfo.v3`), if there is one and its settings can be read.
+pub fn payload_type_name(service: &str, config: &iceoryx2::config::Config) -> Option<String> {
+    let name = ServiceName::new(service).ok()?;
+    let d = ipc::Service::details(&name, config, MessagingPattern::PublishSubscribe).ok()??;
+    let ps = d.static_details.publish_subscribe();
+    Some(ps.message_type_details().payload.type_name().to_string())
+}
+
 /// What an existing publish-subscribe service carries, in words, e.g. "the existing
 /// service carries payload `X` (16 bytes, alignment 8), max 1 publisher(s), 8
 /// subscribers, buffer 2" — for error messages about incompatible peers.
