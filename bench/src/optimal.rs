@@ -341,7 +341,7 @@ pub fn write_trajectory(path: &std::path::Path, trajectory: &[Sample]) -> anyhow
             s.t, s.x[0], s.x[1], s.u[0], s.reward
         )?;
     }
-    runtime::output::write_atomic(path, &text)
+    Ok(runtime::output::write_atomic(path, &text)?)
 }
 
 #[cfg(test)]

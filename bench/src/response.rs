@@ -4,12 +4,12 @@
 
 use std::path::Path;
 
-use anyhow::{Result, ensure};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use runtime::experiment::Sample;
 use runtime::report::plot::{Drawing, colours, draw_legend, padded_range, render, tick_label};
+use runtime::report::{DrawError, PlotError};
 
 /// Plots the time responses `(label, samples)` into a PNG and an SVG image.
 ///
@@ -22,15 +22,22 @@ pub fn plot_responses(
     title: &str,
     responses: &[(&str, &[Sample])],
     labels: (&str, &str),
-) -> Result<()> {
-    ensure!(!responses.is_empty(), "plot '{title}': no time response");
+) -> Result<(), PlotError> {
+    if responses.is_empty() {
+        return Err(PlotError::data(title, "no time response"));
+    }
     for (label, r) in responses {
-        ensure!(!r.is_empty(), "plot '{title}': response '{label}' is empty");
-        ensure!(
-            r.iter()
-                .all(|s| s.t.is_finite() && s.x[0].is_finite() && s.u[0].is_finite()),
-            "plot '{title}': response '{label}' has a non-finite value"
-        );
+        if r.is_empty() {
+            return Err(PlotError::data(
+                title,
+                format!("response '{label}' is empty"),
+            ));
+        }
+        let finite = |s: &Sample| s.t.is_finite() && s.x[0].is_finite() && s.u[0].is_finite();
+        if !r.iter().all(finite) {
+            let why = format!("response '{label}' has a non-finite value");
+            return Err(PlotError::data(title, why));
+        }
     }
     render(
         png,
@@ -54,7 +61,7 @@ struct Responses<'a> {
 type Component = fn(&Sample) -> f64;
 
 impl Drawing for Responses<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), DrawError>
     where
         DB::ErrorType: 'static,
     {

@@ -5,13 +5,13 @@
 
 use std::path::Path;
 
-use anyhow::{Result, ensure};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use runtime::report::plot::{
     Drawing, KEY_WIDTH, colours, draw_legend, padded_range, render, tick_label,
 };
+use runtime::report::{DrawError, PlotError};
 
 /// One parameter's line: `(factor, final greedy return, rise time [min])` per point,
 /// ordered by factor.
@@ -33,20 +33,19 @@ pub fn plot_sensitivity(
     svg: &Path,
     title: &str,
     algorithms: &[(&str, Vec<Sweep>)],
-) -> Result<()> {
-    ensure!(
-        !algorithms.is_empty() && algorithms.iter().all(|(_, s)| !s.is_empty()),
-        "plot '{title}': nothing to plot"
-    );
+) -> Result<(), PlotError> {
+    if algorithms.is_empty() || algorithms.iter().any(|(_, s)| s.is_empty()) {
+        return Err(PlotError::data(title, "nothing to plot"));
+    }
+    let fine =
+        |p: &(f64, f64, f64)| p.0 > 0.0 && p.0.is_finite() && p.1.is_finite() && p.2.is_finite();
     for (algo, sweeps) in algorithms {
-        for s in sweeps {
-            ensure!(
-                s.points
-                    .iter()
-                    .all(|p| p.0 > 0.0 && p.0.is_finite() && p.1.is_finite() && p.2.is_finite()),
-                "plot '{title}': {algo} {} has a non-finite value or a factor ≤ 0",
+        if let Some(s) = sweeps.iter().find(|s| !s.points.iter().all(fine)) {
+            let why = format!(
+                "{algo} {} has a non-finite value or a factor ≤ 0",
                 s.parameter
             );
+            return Err(PlotError::data(title, why));
         }
     }
     render(png, svg, &Sensitivity { title, algorithms })
@@ -61,7 +60,7 @@ struct Sensitivity<'a> {
 type Row = (&'static str, fn(&(f64, f64, f64)) -> f64);
 
 impl Drawing for Sensitivity<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), DrawError>
     where
         DB::ErrorType: 'static,
     {

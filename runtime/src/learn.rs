@@ -31,16 +31,41 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 use crate::config::ExperimentConfig;
+use crate::error::{AtFile, FileError};
 use crate::experiment::{Experiment, Sample, TrialRecord};
+use crate::lock::LockError;
 use crate::output::responses::{write_acted_on, write_responses};
 use crate::output::runs::{OrderedWriter, RUNS_HEADER, curves};
 use crate::output::{progress_bar, write_atomic};
-use crate::report::{self, CurvePoint, Series, SeriesStyle};
+use crate::report::{self, CurveError, CurvePoint, PlotError, Series, SeriesStyle};
+use plant::config::ConfigError;
+
+/// Why `rig learn` stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum LearnError {
+    /// The configuration cannot be learned in one process.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// The output folder is another command's.
+    #[error(transparent)]
+    Lock(#[from] LockError),
+    /// An output file could not be written.
+    #[error(transparent)]
+    File(#[from] FileError),
+    /// The worker threads could not be started.
+    #[error("cannot start the worker threads")]
+    Threads(#[from] rayon::ThreadPoolBuildError),
+    /// The learning curves could not be computed or written.
+    #[error(transparent)]
+    Curve(#[from] CurveError),
+    /// The learning curves could not be plotted.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+}
 
 /// How to run and where to write.
 #[derive(Clone, Debug)]
@@ -85,18 +110,14 @@ pub struct LearnSummary {
 }
 
 /// Runs every run of `cfg` and writes the outputs.
-pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary> {
+pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary, LearnError> {
     cfg.check_simulated()?;
-    std::fs::create_dir_all(&opts.out)
-        .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
+    std::fs::create_dir_all(&opts.out).at("cannot create output directory", &opts.out)?;
     let _folder = crate::lock::FolderLock::acquire(&opts.out)?;
     write_atomic(&opts.out.join("config.toml"), &cfg.to_toml())?;
     let runs_path = opts.out.join("runs.csv");
-    let mut out = BufWriter::new(
-        File::create(&runs_path)
-            .with_context(|| format!("cannot create {}", runs_path.display()))?,
-    );
-    writeln!(out, "{RUNS_HEADER}")?;
+    let mut out = BufWriter::new(File::create(&runs_path).at("cannot create", &runs_path)?);
+    writeln!(out, "{RUNS_HEADER}").at("cannot write", &runs_path)?;
     let writer = Mutex::new(OrderedWriter::new(out));
 
     let (runs, trials) = (cfg.run.runs, cfg.run.trials);
@@ -114,7 +135,7 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
     let t0 = Instant::now();
     let x0 = cfg.task().initial_states[0].clone();
     let responses = Mutex::new(BTreeMap::new());
-    let results: Result<Vec<Vec<TrialRecord>>> = pool.install(|| {
+    let results: Result<Vec<Vec<TrialRecord>>, LearnError> = pool.install(|| {
         (0..runs)
             .into_par_iter()
             .map(|run| {
@@ -122,7 +143,8 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
                 let mut records = Vec::with_capacity(trials as usize);
                 while let Some(r) = exp.next_trial() {
                     bar.inc(1);
-                    writer.lock().expect("writer poisoned").trial(run, &r)?;
+                    let mut w = writer.lock().expect("writer poisoned");
+                    w.trial(run, &r).at("cannot write", &runs_path)?;
                     records.push(r);
                 }
                 let acted_on = exp.acted_on_error().rmse();
@@ -131,7 +153,8 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
                     .lock()
                     .expect("responses poisoned")
                     .insert(run, (response, acted_on));
-                writer.lock().expect("writer poisoned").finished(run)?;
+                let mut w = writer.lock().expect("writer poisoned");
+                w.finished(run).at("cannot write", &runs_path)?;
                 Ok(records)
             })
             .collect()
@@ -171,7 +194,7 @@ fn write_curves(
     out: &Path,
     curve: &[CurvePoint],
     greedy_curve: &[CurvePoint],
-) -> Result<()> {
+) -> Result<(), LearnError> {
     report::write_curve_csv(&out.join("curve.csv"), curve)?;
     let title = format!(
         "{} {}/{} — {} runs",
@@ -199,5 +222,6 @@ fn write_curves(
         &title,
         &series,
         None,
-    )
+    )?;
+    Ok(())
 }

@@ -16,6 +16,7 @@
 pub mod check_driver;
 pub mod clock;
 pub mod config;
+pub mod error;
 pub mod experiment;
 pub mod learn;
 pub mod lock;

@@ -457,7 +457,8 @@ fn plot_stages(
         &series,
         x_max,
         120,
-    )
+    )?;
+    Ok(())
 }
 
 /// `DIR` relative to a base, for messages.

@@ -40,7 +40,7 @@ pub(super) fn write_summary(path: &Path, m: &[Measured], optimum: Option<f64>) -
             c.wall.as_secs_f64()
         );
     }
-    write_atomic(path, &s)
+    Ok(write_atomic(path, &s)?)
 }
 
 pub(super) fn write_report(
@@ -129,7 +129,7 @@ pub(super) fn write_report(
     if let Some(sens) = sensitivity {
         write_sensitivity(&mut s, sens);
     }
-    write_atomic(&out.join("REPORT.md"), &s)
+    Ok(write_atomic(&out.join("REPORT.md"), &s)?)
 }
 
 /// The sensitivity section of `REPORT.md`.

@@ -7,18 +7,18 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 pub mod responses;
 pub mod runs;
 
+use crate::error::{AtFile, FileError};
+
 /// Writes `text` to `path` atomically (temporary file, then rename).
-pub fn write_atomic(path: &Path, text: &str) -> Result<()> {
+pub fn write_atomic(path: &Path, text: &str) -> Result<(), FileError> {
     let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, text).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path)
-        .with_context(|| format!("cannot rename {} to {}", tmp.display(), path.display()))
+    std::fs::write(&tmp, text).at("cannot write", &tmp)?;
+    std::fs::rename(&tmp, path).at("cannot rename over it", path)
 }
 
 /// A progress bar of `len` trials on stderr (hidden when `enabled` is false, or when

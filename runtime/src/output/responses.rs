@@ -4,13 +4,12 @@
 
 use std::path::Path;
 
-use anyhow::Result;
-
 use super::write_atomic;
+use crate::error::FileError;
 use crate::experiment::Sample;
 
 /// Writes each run's acted-on error as `run,x_0,...` (shortest round-trip numbers).
-pub fn write_acted_on(path: &Path, rmse: &[Vec<f64>]) -> Result<()> {
+pub fn write_acted_on(path: &Path, rmse: &[Vec<f64>]) -> Result<(), FileError> {
     let n = rmse.first().map_or(0, Vec::len);
     let mut text = String::from("run");
     for i in 0..n {
@@ -28,7 +27,7 @@ pub fn write_acted_on(path: &Path, rmse: &[Vec<f64>]) -> Result<()> {
 
 /// Writes each run's time response as `run,t,x_0,...,u_0,...,reward` (shortest
 /// round-trip numbers).
-pub fn write_responses(path: &Path, responses: &[Vec<Sample>]) -> Result<()> {
+pub fn write_responses(path: &Path, responses: &[Vec<Sample>]) -> Result<(), FileError> {
     let mut s = String::new();
     if let Some(first) = responses.iter().flatten().next() {
         let cols: Vec<String> = (0..first.x.len())

@@ -5,10 +5,8 @@
 use std::collections::BTreeMap;
 use std::io::Write;
 
-use anyhow::Result;
-
 use crate::experiment::TrialRecord;
-use crate::report::{self, CurvePoint};
+use crate::report::{self, CurveError, CurvePoint};
 
 /// The header of `runs.csv`.
 pub const RUNS_HEADER: &str = "run,trial,sim_time_s,return,greedy_return";
@@ -47,7 +45,7 @@ impl<W: Write> OrderedWriter<W> {
     }
 
     /// One trial of `run` has ended.
-    pub(crate) fn trial(&mut self, run: u32, r: &TrialRecord) -> Result<()> {
+    pub(crate) fn trial(&mut self, run: u32, r: &TrialRecord) -> std::io::Result<()> {
         if run == self.next {
             write_row(&mut self.out, r)?;
             self.out.flush()?;
@@ -58,7 +56,7 @@ impl<W: Write> OrderedWriter<W> {
     }
 
     /// Every trial of `run` has ended.
-    pub(crate) fn finished(&mut self, run: u32) -> Result<()> {
+    pub(crate) fn finished(&mut self, run: u32) -> std::io::Result<()> {
         self.pending.entry(run).or_default().1 = true;
         while self.pending.get(&self.next).is_some_and(|(_, done)| *done) {
             self.pending.remove(&self.next);
@@ -79,7 +77,7 @@ impl<W: Write> OrderedWriter<W> {
 pub const LAST_EVALUATIONS: usize = 3;
 
 /// Per run, the mean of its last [`LAST_EVALUATIONS`] greedy evaluations.
-pub fn final_greedy(records: &[TrialRecord], runs: u32) -> Result<Vec<f64>> {
+pub fn final_greedy(records: &[TrialRecord], runs: u32) -> Result<Vec<f64>, CurveError> {
     (0..runs)
         .map(|run| {
             let g: Vec<f64> = records
@@ -89,9 +87,7 @@ pub fn final_greedy(records: &[TrialRecord], runs: u32) -> Result<Vec<f64>> {
                 .collect();
             let last = &g[g.len().saturating_sub(LAST_EVALUATIONS)..];
             if last.is_empty() {
-                return Err(anyhow::anyhow!(
-                    "run {run} has no greedy evaluation (more trials than run.eval_every needed)"
-                ));
+                return Err(CurveError::NoEvaluation { run });
             }
             Ok(last.iter().sum::<f64>() / last.len() as f64)
         })
@@ -103,7 +99,7 @@ pub fn curves(
     records: &[TrialRecord],
     runs: usize,
     trials: usize,
-) -> Result<(Vec<CurvePoint>, Vec<CurvePoint>)> {
+) -> Result<(Vec<CurvePoint>, Vec<CurvePoint>), CurveError> {
     let mut ret = vec![Vec::with_capacity(runs); trials];
     let mut time = vec![0.0; trials];
     let mut greedy: BTreeMap<u32, (f64, Vec<f64>)> = BTreeMap::new();

@@ -8,7 +8,8 @@
 use std::fs;
 use std::path::Path;
 
-use anyhow::{Context, Result, bail, ensure};
+use super::error::{CurveError, PointError};
+use crate::error::AtFile;
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
 /// Statistics across runs at one point of a learning curve.
@@ -61,26 +62,32 @@ pub const CSV_HEADER: [&str; 7] = [
 /// Non-finite input is never averaged: the function fails if any value or time
 /// is NaN or infinite, if a point has no values, if the three slices differ in
 /// length, or if the statistics overflow `f64`.
-pub fn curve(trials: &[u32], sim_time_s: &[f64], values: &[Vec<f64>]) -> Result<Vec<CurvePoint>> {
-    ensure!(
-        trials.len() == sim_time_s.len() && trials.len() == values.len(),
-        "curve: length mismatch: {} trials, {} times, {} value rows",
-        trials.len(),
-        sim_time_s.len(),
-        values.len()
-    );
+pub fn curve(
+    trials: &[u32],
+    sim_time_s: &[f64],
+    values: &[Vec<f64>],
+) -> Result<Vec<CurvePoint>, CurveError> {
+    if !(trials.len() == sim_time_s.len() && trials.len() == values.len()) {
+        return Err(CurveError::Lengths {
+            trials: trials.len(),
+            times: sim_time_s.len(),
+            rows: values.len(),
+        });
+    }
     let mut quantile = TQuantileCache::default();
     trials
         .iter()
         .zip(sim_time_s)
         .zip(values)
         .map(|((&trial, &time), runs)| {
-            ensure!(
-                time.is_finite(),
-                "curve: trial {trial}: simulated time is {time}"
-            );
-            point(trial, time, runs, &mut quantile)
-                .with_context(|| format!("curve: trial {trial} (t = {time} s)"))
+            if !time.is_finite() {
+                return Err(CurveError::Time { trial, time });
+            }
+            point(trial, time, runs, &mut quantile).map_err(|why| CurveError::Point {
+                trial,
+                time,
+                why,
+            })
         })
         .collect()
 }
@@ -91,16 +98,21 @@ fn point(
     sim_time_s: f64,
     runs: &[f64],
     quantile: &mut TQuantileCache,
-) -> Result<CurvePoint> {
-    ensure!(!runs.is_empty(), "no values");
+) -> Result<CurvePoint, PointError> {
+    if runs.is_empty() {
+        return Err(PointError::NoValues);
+    }
     if let Some(run) = runs.iter().position(|v| !v.is_finite()) {
-        bail!("run {run} has non-finite value {}", runs[run]);
+        let value = runs[run];
+        return Err(PointError::NonFinite { run, value });
     }
     let n = runs.len();
     let min = runs.iter().copied().fold(f64::INFINITY, f64::min);
     let max = runs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let sum: f64 = runs.iter().sum();
-    ensure!(sum.is_finite(), "the sum of the values overflows f64");
+    if !sum.is_finite() {
+        return Err(PointError::SumOverflow);
+    }
     let mean = (sum / n as f64).clamp(min, max);
     let half_width = if n == 1 {
         0.0
@@ -109,10 +121,9 @@ fn point(
         quantile.get(n - 1)? * (var / n as f64).sqrt()
     };
     let (ci_low, ci_high) = (mean - half_width, mean + half_width);
-    ensure!(
-        ci_low.is_finite() && ci_high.is_finite(),
-        "the confidence interval overflows f64"
-    );
+    if !(ci_low.is_finite() && ci_high.is_finite()) {
+        return Err(PointError::IntervalOverflow);
+    }
     Ok(CurvePoint {
         trial,
         sim_time_s,
@@ -134,12 +145,15 @@ struct TQuantileCache {
 
 impl TQuantileCache {
     /// The 0.975 quantile of Student's t with `dof` degrees of freedom.
-    fn get(&mut self, dof: usize) -> Result<f64> {
+    fn get(&mut self, dof: usize) -> Result<f64, PointError> {
         match self.last {
             Some((d, t)) if d == dof => Ok(t),
             _ => {
                 let t = StudentsT::new(0.0, 1.0, dof as f64)
-                    .with_context(|| format!("Student's t with {dof} degrees of freedom"))?
+                    .map_err(|e| PointError::StudentsT {
+                        dof,
+                        why: e.to_string(),
+                    })?
                     .inverse_cdf(0.975);
                 self.last = Some((dof, t));
                 Ok(t)
@@ -173,24 +187,21 @@ pub fn median(values: &[f64]) -> f64 {
 ///
 /// Fails if the file cannot be written, synced or renamed; the temporary file
 /// is then removed.
-pub fn write_curve_csv(path: &Path, points: &[CurvePoint]) -> Result<()> {
+pub fn write_curve_csv(path: &Path, points: &[CurvePoint]) -> Result<(), CurveError> {
     let tmp = path.with_extension("csv.tmp");
-    let result = write_csv_to(&tmp, points).and_then(|()| {
-        fs::rename(&tmp, path)
-            .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))
-    });
+    let result = write_csv_to(&tmp, points)
+        .and_then(|()| fs::rename(&tmp, path).at("renaming the temporary file onto", path));
     if result.is_err() {
         // Best effort: do not leave a half-written temporary file behind.
         let _ = fs::remove_file(&tmp);
     }
-    result
+    Ok(result?)
 }
 
 /// Writes and syncs the CSV file at `path`.
-fn write_csv_to(path: &Path, points: &[CurvePoint]) -> Result<()> {
-    let mut w =
-        csv::Writer::from_path(path).with_context(|| format!("creating {}", path.display()))?;
-    w.write_record(CSV_HEADER)?;
+fn write_csv_to(path: &Path, points: &[CurvePoint]) -> Result<(), crate::error::FileError> {
+    let mut w = csv::Writer::from_path(path).at("creating", path)?;
+    w.write_record(CSV_HEADER).at("writing", path)?;
     for p in points {
         w.write_record([
             p.trial.to_string(),
@@ -200,13 +211,14 @@ fn write_csv_to(path: &Path, points: &[CurvePoint]) -> Result<()> {
             p.max.to_string(),
             p.ci_low.to_string(),
             p.ci_high.to_string(),
-        ])?;
+        ])
+        .at("writing", path)?;
     }
     let file = w
         .into_inner()
-        .map_err(|e| anyhow::anyhow!("flushing {}: {}", path.display(), e.error()))?;
-    file.sync_all()
-        .with_context(|| format!("syncing {}", path.display()))
+        .map_err(|e| e.into_error())
+        .at("flushing", path)?;
+    file.sync_all().at("syncing", path)
 }
 
 #[cfg(test)]
@@ -275,7 +287,8 @@ mod tests {
     #[test]
     fn non_finite_and_malformed_input_rejected() {
         let err = curve(&[1, 2], &[3.0, 6.0], &[vec![1.0, 2.0], vec![1.0, f64::NAN]]).unwrap_err();
-        let msg = format!("{err:#}");
+        // As the commands print it: the error and its sources.
+        let msg = format!("{:#}", anyhow::Error::new(err));
         assert!(msg.contains("trial 2") && msg.contains("run 1"), "{msg}");
         assert!(curve(&[1], &[3.0], &[vec![f64::INFINITY]]).is_err());
         assert!(curve(&[1], &[f64::NAN], &[vec![1.0]]).is_err());

@@ -13,7 +13,9 @@
 //!   ([`plot_curves`]).
 
 pub mod curve;
+mod error;
 pub mod plot;
 
 pub use curve::{CurvePoint, curve, write_curve_csv};
+pub use error::{CurveError, DrawError, PlotError, PointError};
 pub use plot::{Series, SeriesStyle, plot_curves};

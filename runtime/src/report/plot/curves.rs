@@ -4,7 +4,7 @@
 use std::ops::Range;
 use std::path::Path;
 
-use anyhow::{Result, bail, ensure};
+use crate::report::error::{DrawError, PlotError};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -62,7 +62,7 @@ pub fn plot_curves(
     title: &str,
     series: &[Series],
     reference: Option<(&str, f64)>,
-) -> Result<()> {
+) -> Result<(), PlotError> {
     render(png, svg, &Plot::new(title, series, reference)?)
 }
 
@@ -81,33 +81,32 @@ impl<'s, 'a> Plot<'s, 'a> {
         title: &'s str,
         series: &'s [Series<'a>],
         reference: Option<(&'s str, f64)>,
-    ) -> Result<Self> {
-        ensure!(!series.is_empty(), "plot '{title}': no series to plot");
+    ) -> Result<Self, PlotError> {
+        let no = |why: String| Err(PlotError::data(title, why));
+        if series.is_empty() {
+            return no("no series to plot".into());
+        }
         // Learning curves start at time zero, like the thesis's figures.
         let mut x = Extent::default();
         x.add(0.0);
         let mut y = Extent::default();
         for s in series {
-            ensure!(
-                !s.points.is_empty(),
-                "plot '{title}': series '{}' has no points",
-                s.label
-            );
+            if s.points.is_empty() {
+                return no(format!("series '{}' has no points", s.label));
+            }
             for (i, p) in s.points.iter().enumerate() {
                 let fields = [p.sim_time_s, p.mean, p.min, p.max, p.ci_low, p.ci_high];
                 if fields.iter().any(|v| !v.is_finite()) {
-                    bail!(
-                        "plot '{title}': series '{}', trial {}: non-finite value in {p:?}",
-                        s.label,
-                        p.trial
-                    );
+                    return no(format!(
+                        "series '{}', trial {}: non-finite value in {p:?}",
+                        s.label, p.trial
+                    ));
                 }
                 if i > 0 && p.sim_time_s < s.points[i - 1].sim_time_s {
-                    bail!(
-                        "plot '{title}': series '{}': time decreases at trial {}",
-                        s.label,
-                        p.trial
-                    );
+                    return no(format!(
+                        "series '{}': time decreases at trial {}",
+                        s.label, p.trial
+                    ));
                 }
                 x.add(minutes(p));
                 y.add(p.mean);
@@ -119,10 +118,9 @@ impl<'s, 'a> Plot<'s, 'a> {
             }
         }
         if let Some((label, value)) = reference {
-            ensure!(
-                value.is_finite(),
-                "plot '{title}': reference '{label}' is {value}"
-            );
+            if !value.is_finite() {
+                return no(format!("reference '{label}' is {value}"));
+            }
             y.add(value);
         }
         Ok(Self {
@@ -137,7 +135,7 @@ impl<'s, 'a> Plot<'s, 'a> {
 
 impl Drawing for Plot<'_, '_> {
     /// Draws the plot onto `root` and presents it.
-    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), DrawError>
     where
         DB::ErrorType: 'static,
     {

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use anyhow::{Result, ensure};
+use crate::report::error::{DrawError, PlotError};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -27,11 +27,11 @@ pub fn plot_histograms(
     series: &[Histogram],
     x_max: f64,
     bins: usize,
-) -> Result<()> {
-    ensure!(
-        x_max.is_finite() && x_max > 0.0 && bins > 0,
-        "histogram '{title}': x range [0, {x_max}] with {bins} bins"
-    );
+) -> Result<(), PlotError> {
+    if !(x_max.is_finite() && x_max > 0.0 && bins > 0) {
+        let why = format!("x range [0, {x_max}] with {bins} bins");
+        return Err(PlotError::data(title, why));
+    }
     let width = x_max / bins as f64;
     let counts: Vec<Vec<u64>> = series
         .iter()
@@ -71,7 +71,7 @@ struct Histograms<'a> {
 }
 
 impl Drawing for Histograms<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), DrawError>
     where
         DB::ErrorType: 'static,
     {

@@ -26,7 +26,7 @@ use std::ops::Range;
 use std::path::Path;
 use std::sync::OnceLock;
 
-use anyhow::{Context, Result, ensure};
+use super::error::{DrawError, PlotError};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::{CoordTranslate, Shift};
 use plotters::element::DashedPathElement;
@@ -55,24 +55,28 @@ pub const KEY_WIDTH: i32 = 24;
 /// A picture that draws itself the same way on any plotters backend.
 pub trait Drawing {
     /// Draws the picture on `root`.
-    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), DrawError>
     where
         DB::ErrorType: 'static;
 }
 
 /// Draws `picture` into a PNG and an SVG image of [`PLOT_SIZE`].
-pub fn render(png: &Path, svg: &Path, picture: &impl Drawing) -> Result<()> {
+pub fn render(png: &Path, svg: &Path, picture: &impl Drawing) -> Result<(), PlotError> {
     register_fonts()?;
+    let image = |path: &Path, why| PlotError::Image {
+        path: path.to_path_buf(),
+        why,
+    };
     picture
         .draw(BitMapBackend::new(png, PLOT_SIZE).into_drawing_area())
-        .with_context(|| format!("writing {}", png.display()))?;
+        .map_err(|why| image(png, why))?;
     picture
         .draw(SVGBackend::new(svg, PLOT_SIZE).into_drawing_area())
-        .with_context(|| format!("writing {}", svg.display()))
+        .map_err(|why| image(svg, why))
 }
 
 /// Registers the embedded font as plotters' `sans-serif`, once per process.
-pub fn register_fonts() -> Result<()> {
+pub fn register_fonts() -> Result<(), PlotError> {
     static REGISTERED: OnceLock<bool> = OnceLock::new();
     let ok = *REGISTERED.get_or_init(|| {
         register_font(
@@ -82,8 +86,7 @@ pub fn register_fonts() -> Result<()> {
         )
         .is_ok()
     });
-    ensure!(ok, "the embedded Ubuntu Light font could not be loaded");
-    Ok(())
+    if ok { Ok(()) } else { Err(PlotError::Font) }
 }
 
 /// A chart in the house style on `root`: caption, axis descriptions, tick labels to the
@@ -94,7 +97,7 @@ fn styled_chart<'a, DB: DrawingBackend>(
     (x_label, y_label): (&str, &str),
     x: Range<f64>,
     y: Range<f64>,
-) -> Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>>
+) -> Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>, DrawError>
 where
     DB::ErrorType: 'static,
 {
@@ -176,7 +179,7 @@ pub fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
     chart: &mut ChartContext<'a, DB, CT>,
     position: SeriesLabelPosition,
     font_size: u32,
-) -> Result<()>
+) -> Result<(), DrawError>
 where
     DB::ErrorType: 'static,
 {

@@ -3,7 +3,7 @@
 use std::ops::Range;
 use std::path::Path;
 
-use anyhow::{Result, bail, ensure};
+use crate::report::error::{DrawError, PlotError};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -37,11 +37,13 @@ pub fn plot_points(
     title: &str,
     (x_label, y_label): (&str, &str),
     series: &[PointSeries],
-) -> Result<()> {
+) -> Result<(), PlotError> {
     let all = || series.iter().flat_map(|s| s.points.iter());
-    ensure!(all().next().is_some(), "plot '{title}': no points");
+    if all().next().is_none() {
+        return Err(PlotError::data(title, "no points"));
+    }
     if let Some(p) = all().find(|p| ![p.0, p.1, p.2, p.3].iter().all(|v| v.is_finite())) {
-        bail!("plot '{title}': non-finite value in {p:?}");
+        return Err(PlotError::data(title, format!("non-finite value in {p:?}")));
     }
     let x = padded_range(all().map(|p| p.0), 0.05);
     let y = padded_range(all().flat_map(|p| [p.1, p.2, p.3]), 0.08);
@@ -68,7 +70,7 @@ struct Points<'a> {
 }
 
 impl Drawing for Points<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<()>
+    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), DrawError>
     where
         DB::ErrorType: 'static,
     {

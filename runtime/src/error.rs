@@ -1,0 +1,67 @@
+//! Errors shared by the runtime's modules: a file operation that failed, named by what
+//! was done to which file.
+//!
+//! Each module has its own error type for what can go wrong there; they carry a
+//! [`FileError`] for the files they read and write, so that every message names the file
+//! and the operating system's reason (`{:#}` prints both).
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// A file operation that failed: what was done, to which file; the operating system's
+/// error is its source.
+#[derive(Debug, thiserror::Error)]
+#[error("{action} {}", path.display())]
+pub struct FileError {
+    /// What was done, as the message says it ("cannot write", "creating", …).
+    pub action: &'static str,
+    /// The file.
+    pub path: PathBuf,
+    /// The operating system's error.
+    #[source]
+    pub source: io::Error,
+}
+
+/// Names the file and the action of an I/O result's error (a typed `with_context`).
+pub trait AtFile<T> {
+    /// The result, its error a [`FileError`] of `action` on `path`.
+    fn at(self, action: &'static str, path: &Path) -> Result<T, FileError>;
+}
+
+impl<T> AtFile<T> for io::Result<T> {
+    fn at(self, action: &'static str, path: &Path) -> Result<T, FileError> {
+        self.map_err(|source| FileError {
+            action,
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+}
+
+impl<T> AtFile<T> for csv::Result<T> {
+    fn at(self, action: &'static str, path: &Path) -> Result<T, FileError> {
+        self.map_err(|e| FileError {
+            action,
+            path: path.to_path_buf(),
+            source: e.into(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_file_error_names_the_action_the_file_and_the_reason() {
+        let e = std::fs::read("/nonexistent/file")
+            .at("cannot read", Path::new("/nonexistent/file"))
+            .unwrap_err();
+        assert_eq!(e.to_string(), "cannot read /nonexistent/file");
+        let chain = format!("{:#}", anyhow::Error::new(e));
+        assert!(
+            chain.contains("cannot read /nonexistent/file: No such file"),
+            "{chain}"
+        );
+    }
+}
