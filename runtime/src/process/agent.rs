@@ -167,6 +167,7 @@ impl Learner {
             trial: e.header.trial as u32,
             sim_time_s: e.header.t_sim,
             state,
-        })
+        })?;
+        Ok(())
     }
 }

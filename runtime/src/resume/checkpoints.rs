@@ -1,12 +1,13 @@
 //! The checkpoints of a run: where they are, which there are, and the agent's writer
 //! that keeps the loop from waiting for the disk.
 
+use super::error::WriteError;
+use crate::error::AtFile;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::thread::JoinHandle;
 
 use agent::checkpoint::Checkpoint;
-use anyhow::{Context, Result, anyhow};
 
 use crate::lock::FolderLock;
 use crate::process::{Layout, Part};
@@ -79,7 +80,7 @@ fn remove(dir: &Path, which: impl Fn(u32) -> bool) {
 /// few trials after the newest checkpoint written. Dropped, it writes what is queued.
 pub struct CheckpointWriter {
     tx: Option<mpsc::Sender<Checkpoint>>,
-    thread: Option<JoinHandle<Result<()>>>,
+    thread: Option<JoinHandle<Result<(), WriteError>>>,
     /// The folder is this writer's while it lasts.
     _folder: FolderLock,
 }
@@ -87,12 +88,12 @@ pub struct CheckpointWriter {
 impl CheckpointWriter {
     /// A writer into `dir` (created if missing, and held: [`FolderLock`]), its thread
     /// placed as `layout` places the checkpoint writer, keeping the `keep` newest (0: all).
-    pub fn new(dir: &Path, layout: Option<Layout>, keep: usize) -> Result<Self> {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    pub fn new(dir: &Path, layout: Option<Layout>, keep: usize) -> Result<Self, WriteError> {
+        std::fs::create_dir_all(dir).at("cannot create", dir)?;
         let folder = FolderLock::acquire(dir)?;
         let (tx, rx) = mpsc::channel::<Checkpoint>();
         let dir = dir.to_owned();
-        let thread = std::thread::spawn(move || -> Result<()> {
+        let thread = std::thread::spawn(move || -> Result<(), WriteError> {
             // Beside the loop: never preempting it (and never real-time).
             crate::process::batch_thread();
             // Where it cannot be pinned it runs on the agent's CPUs: no reason to stop.
@@ -106,8 +107,7 @@ impl CheckpointWriter {
                     c = newer;
                 }
                 let path = checkpoint_path(&dir, c.trial);
-                c.write(&path)
-                    .with_context(|| format!("cannot write checkpoint {}", path.display()))?;
+                c.write(&path).at("cannot write checkpoint", &path)?;
                 written.push_back(c.trial);
                 if keep > 0 && written.len() > keep {
                     written.pop_front();
@@ -124,7 +124,7 @@ impl CheckpointWriter {
     }
 
     /// Queues checkpoint `c` (of trial `c.trial`); fails if an earlier write failed.
-    pub fn save(&mut self, c: Checkpoint) -> Result<()> {
+    pub fn save(&mut self, c: Checkpoint) -> Result<(), WriteError> {
         let sent = self.tx.as_ref().is_some_and(|tx| tx.send(c).is_ok());
         if !sent {
             return self.finish();
@@ -133,12 +133,10 @@ impl CheckpointWriter {
     }
 
     /// Waits until every queued checkpoint is written.
-    pub fn finish(&mut self) -> Result<()> {
+    pub fn finish(&mut self) -> Result<(), WriteError> {
         drop(self.tx.take());
         match self.thread.take() {
-            Some(t) => t
-                .join()
-                .map_err(|_| anyhow!("the checkpoint writer panicked"))?,
+            Some(t) => t.join().map_err(|_| WriteError::Panicked)?,
             None => Ok(()),
         }
     }

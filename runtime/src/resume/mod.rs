@@ -24,18 +24,19 @@
 use std::path::{Path, PathBuf};
 
 use agent::checkpoint::Checkpoint;
-use anyhow::{Result, anyhow, bail};
 
 use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
 
 mod checkpoints;
+mod error;
 mod recorded;
 
 pub use checkpoints::{
     CheckpointWriter, checkpoint_dir, checkpoint_path, checkpoints, discard_after,
     keep_from_newest, prune,
 };
+pub use error::{PrepareError, WriteError};
 pub use recorded::RecordedMessage;
 use recorded::{Recorded, index, kept, read_recording, read_returns, same_plant};
 
@@ -66,24 +67,30 @@ pub struct ResumePoint {
 /// velocity filter) nor where the sensor's noise stream stands. Nor can a run continue on
 /// another plant than it was made on: `external` says whether the resumed part runs
 /// against an external driver, and must match the recording (which holds the driver's
-pub fn prepare(out: &Path, cfg: &ExperimentConfig, external: bool) -> Result<ResumePoint> {
+pub fn prepare(
+    out: &Path,
+    cfg: &ExperimentConfig,
+    external: bool,
+) -> Result<ResumePoint, PrepareError> {
     resumable(out, cfg)?;
     let mut notes = Vec::new();
     let rows = read_returns(&out.join("returns.csv"), &mut notes)?;
     let done = rows.len() as u32;
     if done >= cfg.run.trials {
-        bail!(
-            "{}: all {} trials of the run are done; nothing to resume (pass `--trials N` with N > {done} to learn on)",
-            out.display(),
-            cfg.run.trials
-        );
+        return Err(PrepareError::Done {
+            dir: out.to_path_buf(),
+            trials: cfg.run.trials,
+            done,
+        });
     }
     let messages = read_recording(out, &mut notes)?;
     same_plant(out, &messages, external)?;
     let dir = checkpoint_dir(out);
     let available = checkpoints(&dir);
     let (c, first_seq) = last_complete_trial(cfg, &available, done, &index(&messages)?)
-        .ok_or_else(|| anyhow!("{}: the recording holds no complete trial", out.display()))?;
+        .ok_or_else(|| PrepareError::NoCompleteTrial {
+            dir: out.to_path_buf(),
+        })?;
     let checkpoint = (c > 0).then(|| checkpoint_path(&dir, c));
     let sim_time_s = if c > 0 {
         rows[c as usize - 1].sim_time_s
@@ -112,17 +119,16 @@ pub fn prepare(out: &Path, cfg: &ExperimentConfig, external: bool) -> Result<Res
 
 /// Refuses a run whose state a checkpoint does not hold all of: an observer or sensor
 /// other than the defaults, or delays that cannot continue mid-run.
-fn resumable(out: &Path, cfg: &ExperimentConfig) -> Result<()> {
+fn resumable(out: &Path, cfg: &ExperimentConfig) -> Result<(), PrepareError> {
+    let config = out.join("config.toml");
     if !cfg.observer.is_default() {
-        bail!(
-            "{}: cannot resume a run with `[observer]` sensor {} / observer {}: checkpoints hold the agent's state only, not the observer's (its learned model, its filter) nor the sensor's noise stream; start a new run",
-            out.join("config.toml").display(),
-            cfg.observer.sensor,
-            cfg.observer.observer
-        );
+        return Err(PrepareError::Observer {
+            config,
+            sensor: cfg.observer.sensor.to_string(),
+            observer: cfg.observer.observer.to_string(),
+        });
     }
-    crate::experiment::resumable_delays(cfg)
-        .map_err(|e| anyhow!("{}: {e}", out.join("config.toml").display()))
+    crate::experiment::resumable_delays(cfg).map_err(|why| PrepareError::Config { config, why })
 }
 
 /// The last trial, at most `done`, that has a checkpoint (`available`; trial 0 needs
@@ -161,24 +167,25 @@ fn check_checkpoint(
     cfg: &ExperimentConfig,
     (c, sim_time_s): (u32, f64),
     available: &[u32],
-) -> Result<()> {
-    let ck =
-        Checkpoint::read(path).map_err(|e| match available.iter().rev().find(|&&t| t < c) {
-            Some(t) => {
-                anyhow!("cannot resume: {e}; remove it to resume from the checkpoint of trial {t}")
-            }
-            None => anyhow!("cannot resume: {e}"),
-        })?;
+) -> Result<(), PrepareError> {
+    let ck = Checkpoint::read(path).map_err(|why| PrepareError::Unreadable {
+        why,
+        fallback: available.iter().rev().find(|&&t| t < c).copied(),
+    })?;
     ck.check_origin(&cfg.origin(0))
-        .map_err(|e| anyhow!("cannot resume from {}: {e}", path.display()))?;
+        .map_err(|why| PrepareError::Foreign {
+            path: path.to_path_buf(),
+            why,
+        })?;
     let apart = (ck.sim_time_s - sim_time_s).abs();
     if ck.trial != c || apart.is_nan() || apart >= 0.5 * cfg.task().ts {
-        bail!(
-            "cannot resume: {} is of trial {} at {} s, but returns.csv has trial {c} at {sim_time_s} s",
-            path.display(),
-            ck.trial,
-            ck.sim_time_s
-        );
+        return Err(PrepareError::Elsewhere {
+            path: path.to_path_buf(),
+            trial: ck.trial,
+            sim_time_s: ck.sim_time_s,
+            rows_trial: c,
+            rows_time_s: sim_time_s,
+        });
     }
     Ok(())
 }

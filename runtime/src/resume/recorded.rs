@@ -4,7 +4,7 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow, bail};
+use super::error::PrepareError;
 use serde::Deserialize;
 use wire::flags;
 
@@ -33,12 +33,13 @@ struct Head {
 
 /// Reads the rows of a `returns.csv`, but a last line cut short (a row being written when
 /// the disk filled up), which `notes` then mentions.
-pub(super) fn read_returns(path: &Path, notes: &mut Vec<String>) -> Result<Vec<TrialRecord>> {
-    let text = std::fs::read_to_string(path).with_context(|| {
-        format!(
-            "{}: cannot read (is this a `rig run` directory?)",
-            path.display()
-        )
+pub(super) fn read_returns(
+    path: &Path,
+    notes: &mut Vec<String>,
+) -> Result<Vec<TrialRecord>, PrepareError> {
+    let text = std::fs::read_to_string(path).map_err(|source| PrepareError::NoReturns {
+        path: path.to_path_buf(),
+        source,
     })?;
     let lines = text.rfind('\n').map_or("", |end| &text[..=end]);
     if lines.len() < text.len() {
@@ -52,35 +53,28 @@ pub(super) fn read_returns(path: &Path, notes: &mut Vec<String>) -> Result<Vec<T
     let mut rows = Vec::new();
     for (i, rec) in reader.records().enumerate() {
         let line = i + 2;
-        let rec = rec.with_context(|| format!("{}:{line}: unreadable row", path.display()))?;
+        let bad = |why: String| PrepareError::Row {
+            path: path.to_path_buf(),
+            line,
+            why,
+        };
+        let rec = rec.map_err(|e| bad(format!("unreadable row: {e}")))?;
         let field = |j: usize| rec.get(j).unwrap_or("");
-        let num = |j: usize| -> Result<f64> {
+        let num = |j: usize| -> Result<f64, PrepareError> {
             field(j)
                 .parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite())
-                .ok_or_else(|| {
-                    anyhow!(
-                        "{}:{line}: column {} is not a number: {:?}",
-                        path.display(),
-                        j + 1,
-                        field(j)
-                    )
-                })
+                .ok_or_else(|| bad(format!("column {} is not a number: {:?}", j + 1, field(j))))
         };
-        let trial: u32 = field(1).parse().map_err(|_| {
-            anyhow!(
-                "{}:{line}: trial {:?} is not a trial number",
-                path.display(),
-                field(1)
-            )
-        })?;
+        let trial: u32 = field(1)
+            .parse()
+            .map_err(|_| bad(format!("trial {:?} is not a trial number", field(1))))?;
         if trial as usize != rows.len() + 1 {
-            bail!(
-                "{}:{line}: trial {trial} where trial {} was expected: the file was edited",
-                path.display(),
-                rows.len() + 1
-            );
+            let want = rows.len() + 1;
+            return Err(bad(format!(
+                "trial {trial} where trial {want} was expected: the file was edited"
+            )));
         }
         rows.push(TrialRecord {
             run: 0,
@@ -99,18 +93,23 @@ pub(super) fn read_returns(path: &Path, notes: &mut Vec<String>) -> Result<Vec<T
 
 /// Reads every message of the recording in `out` that can be read: `run.mcap`, or the
 /// `run.mcap.part` a killed supervisor leaves (its completed chunks).
-pub(super) fn read_recording(out: &Path, notes: &mut Vec<String>) -> Result<Vec<RecordedMessage>> {
+pub(super) fn read_recording(
+    out: &Path,
+    notes: &mut Vec<String>,
+) -> Result<Vec<RecordedMessage>, PrepareError> {
     let full = out.join("run.mcap");
     let part = out.join("run.mcap.part");
     let path = if full.exists() { full } else { part };
-    let bytes = std::fs::read(&path).with_context(|| {
-        format!(
-            "{}: cannot read the run's recording, so the recorded trials cannot be kept",
-            path.display()
-        )
+    let bytes = std::fs::read(&path).map_err(|source| PrepareError::NoRecording {
+        path: path.clone(),
+        source,
+    })?;
+    let stream = mcap::MessageStream::new(&bytes).map_err(|source| PrepareError::NotMcap {
+        path: path.clone(),
+        source,
     })?;
     let mut messages = Vec::new();
-    for m in mcap::MessageStream::new(&bytes)? {
+    for m in stream {
         match m {
             Ok(m) => messages.push(RecordedMessage {
                 topic: m.channel.topic.clone(),
@@ -134,19 +133,19 @@ pub(super) fn read_recording(out: &Path, notes: &mut Vec<String>) -> Result<Vec<
 /// Refuses to continue a run on another plant than it was made on: a hardware run
 /// finished in the simulator (or the reverse) would mix two systems in one learning
 /// curve.
-pub(super) fn same_plant(out: &Path, messages: &[RecordedMessage], external: bool) -> Result<()> {
+pub(super) fn same_plant(
+    out: &Path,
+    messages: &[RecordedMessage],
+    external: bool,
+) -> Result<(), PrepareError> {
     let recorded = messages.iter().any(|m| m.topic.starts_with("/driver/"));
-    match (recorded, external) {
-        (true, false) => bail!(
-            "{} was run against an external driver; resume it with `--plant external` and the same `--driver`",
-            out.display()
-        ),
-        (false, true) => bail!(
-            "{} was run with the simulated plant; resume it without `--plant external`",
-            out.display()
-        ),
-        _ => Ok(()),
+    if recorded == external {
+        return Ok(());
     }
+    Err(PrepareError::OtherPlant {
+        dir: out.to_path_buf(),
+        external: recorded,
+    })
 }
 
 /// What the recording holds, per learning trial.
@@ -159,7 +158,7 @@ pub(super) struct Recorded {
 
 const MAIN: [&str; 3] = ["/plant/measurement", "/observer/estimate", "/agent/action"];
 
-pub(super) fn index(messages: &[RecordedMessage]) -> Result<Recorded> {
+pub(super) fn index(messages: &[RecordedMessage]) -> Result<Recorded, PrepareError> {
     let mut r = Recorded {
         seqs: Default::default(),
         measurements: Vec::new(),
@@ -168,8 +167,10 @@ pub(super) fn index(messages: &[RecordedMessage]) -> Result<Recorded> {
         let Some(i) = MAIN.iter().position(|t| *t == m.topic) else {
             continue;
         };
-        let h: Head = serde_json::from_slice(&m.data)
-            .with_context(|| format!("run.mcap: unreadable message on {}", m.topic))?;
+        let h: Head = serde_json::from_slice(&m.data).map_err(|source| PrepareError::Message {
+            topic: m.topic.clone(),
+            source,
+        })?;
         r.seqs[i].insert(h.seq);
         if i == 0 {
             r.measurements.push((h.seq, h.trial, h.flags));
