@@ -19,7 +19,7 @@ pub struct NodeFile {
 
 impl NodeFile {
     /// Reads the settings and runs `node` with them; an error on one line.
-    pub fn run<S: Settings>(&self, node: fn(&S) -> anyhow::Result<()>) -> ExitCode {
+    pub fn run<S: Settings>(&self, node: fn(&S) -> runtime::process::Result<()>) -> ExitCode {
         runtime::process::exit_code(
             S::read(&self.node)
                 .map_err(Into::into)

@@ -87,7 +87,7 @@ pub fn main(args: &Args) -> ExitCode {
     let wakeup = match args.wakeup.hold() {
         Ok(w) => w,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", runtime::error::chain(&e));
             return ExitCode::FAILURE;
         }
     };

@@ -80,39 +80,41 @@ pub fn main(args: &Args) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let served = runtime::process::set_rt_priority(args.rt_priority).and_then(|()| {
-        let _wakeup = args.wakeup.hold()?;
-        let task = driver::Device::task(&device);
-        let sensed = match args.sensor {
-            SensorKind::Angle => format!("positions only, {} counts/rev", args.counts_per_rev),
-            SensorKind::Full => "full state".to_string(),
-        };
-        let clock = if lockstep {
-            "lockstep".to_string()
-        } else {
-            format!(
-                "period {:.3} ms of wall time (speed {})",
-                task.ts * 1e3 / args.speed,
-                args.speed
-            )
-        };
-        eprintln!(
-            "driver {:?}: task {} ({sensed}), Ts {} ms, {clock}",
-            args.driver_id,
-            task.name,
-            task.ts * 1e3,
-        );
-        let how = Serving {
-            stop_after: None,
-            spin_ns: args.spin_us.saturating_mul(1000),
-            verbose: args.verbose,
-        };
-        if lockstep {
-            Ok(serve_lockstep(&mut device, &args.driver_id, &how)?)
-        } else {
-            Ok(serve(&mut device, &args.driver_id, &how)?)
-        }
-    });
+    let served = runtime::process::set_rt_priority(args.rt_priority)
+        .map_err(anyhow::Error::from)
+        .and_then(|()| {
+            let _wakeup = args.wakeup.hold()?;
+            let task = driver::Device::task(&device);
+            let sensed = match args.sensor {
+                SensorKind::Angle => format!("positions only, {} counts/rev", args.counts_per_rev),
+                SensorKind::Full => "full state".to_string(),
+            };
+            let clock = if lockstep {
+                "lockstep".to_string()
+            } else {
+                format!(
+                    "period {:.3} ms of wall time (speed {})",
+                    task.ts * 1e3 / args.speed,
+                    args.speed
+                )
+            };
+            eprintln!(
+                "driver {:?}: task {} ({sensed}), Ts {} ms, {clock}",
+                args.driver_id,
+                task.name,
+                task.ts * 1e3,
+            );
+            let how = Serving {
+                stop_after: None,
+                spin_ns: args.spin_us.saturating_mul(1000),
+                verbose: args.verbose,
+            };
+            if lockstep {
+                Ok(serve_lockstep(&mut device, &args.driver_id, &how)?)
+            } else {
+                Ok(serve(&mut device, &args.driver_id, &how)?)
+            }
+        });
     match served {
         Ok(s) => {
             eprintln!(

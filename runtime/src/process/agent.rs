@@ -7,10 +7,9 @@ use ::agent::checkpoint::{Checkpoint, Origin, Snapshot};
 use ::observer::config::ObserverMode;
 use ::observer::timing::{Call, ToAgent, act};
 
-use anyhow::{Result, anyhow, bail};
 use wire::{Action, Estimate, flags, now_ns, topic};
 
-use super::{AgentConfig, SILENCE, STARTUP, pack};
+use super::{AgentConfig, NodeError, Result, SILENCE, STARTUP, pack};
 use crate::config::ExperimentConfig;
 use crate::resume::CheckpointWriter;
 
@@ -84,9 +83,12 @@ impl Learner {
         // The first learning trial this process runs.
         let mut expect_trial = 1;
         if let Some(path) = resume {
-            let c = Checkpoint::read(path).map_err(|e| anyhow!("{e}"))?;
+            let c = Checkpoint::read(path)?;
             c.restore(&origin, agent.as_mut())
-                .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+                .map_err(|why| NodeError::Restore {
+                    path: path.to_path_buf(),
+                    why,
+                })?;
             expect_trial = u64::from(c.trial) + 1;
         }
         Ok(Self {
@@ -127,11 +129,10 @@ impl Learner {
             // A trial cut short by a gap is run again.
             let again = std::mem::take(&mut self.cut) && e.header.trial + 1 == self.expect_trial;
             if !again && e.header.trial != self.expect_trial {
-                bail!(
-                    "the plant started trial {} where trial {} was due (a resumed agent continues after its checkpoint's trial)",
-                    e.header.trial,
-                    self.expect_trial
-                );
+                return Err(NodeError::TrialOutOfTurn {
+                    started: e.header.trial,
+                    due: self.expect_trial,
+                });
             }
             self.expect_trial += u64::from(!again);
         }

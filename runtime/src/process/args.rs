@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use anyhow::Result;
+use super::SystemError;
 use clap::Args;
 use serde::{Deserialize, Serialize};
 use wire::{FOREVER, Waiting};
@@ -51,7 +51,7 @@ impl Scheduling {
     }
 
     /// Places the calling process's `part` as [`Scheduling::layout`] says.
-    pub fn place(&self, part: Part) -> Result<()> {
+    pub fn place(&self, part: Part) -> Result<(), SystemError> {
         self.layout().unwrap_or(Layout::Shared).place(part)
     }
 

@@ -11,7 +11,7 @@
 //!   shares its CPUs and hands each message on with a context switch instead of waiting
 //!   for the recorder's time slice to end (`docs/results/speed.md`).
 
-use anyhow::{Result, bail};
+use super::SystemError;
 use wire::{FOREVER, Waiting};
 
 plant::choice! {
@@ -77,19 +77,18 @@ impl Layout {
 
     /// An error if this layout cannot be had here: one that sets a CPU apart on a
     /// machine with one CPU online.
-    pub fn check(self) -> Result<()> {
+    pub fn check(self) -> Result<(), SystemError> {
         if self != Layout::Shared && online() < 2 {
-            bail!(
-                "--cpus {} needs at least two CPUs; 1 is online",
-                self.name()
-            );
+            return Err(SystemError::OneCpu {
+                layout: Some(self.name()),
+            });
         }
         Ok(())
     }
 
     /// Pins the calling thread as this layout places `part` (nothing for
     /// [`Layout::Shared`]).
-    pub fn place(self, part: Part) -> Result<()> {
+    pub fn place(self, part: Part) -> Result<(), SystemError> {
         match self.cpus(part) {
             Some(set) => pin(set),
             None => Ok(()),
@@ -141,10 +140,10 @@ pub fn allowed() -> Vec<usize> {
 /// Pins the calling thread (and the threads and processes it starts afterwards) to
 /// `set` of the CPUs online; an error if fewer than two are online or the operating
 /// system refuses (a CPU outside this process's cgroup or `taskset`).
-pub fn pin(set: CpuSet) -> Result<()> {
+pub fn pin(set: CpuSet) -> Result<(), SystemError> {
     let last = last_cpu();
     if last < 1 {
-        bail!("--cpus needs at least two CPUs; 1 is online");
+        return Err(SystemError::OneCpu { layout: None });
     }
     let chosen = match set {
         CpuSet::Last => last..last + 1,
@@ -161,12 +160,11 @@ pub fn pin(set: CpuSet) -> Result<()> {
         libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &mask) == 0
     };
     if !ok {
-        bail!(
-            "cannot pin this process to CPUs {}–{} (--cpus): {}",
-            chosen.start,
-            chosen.end - 1,
-            std::io::Error::last_os_error()
-        );
+        return Err(SystemError::Pin {
+            first: chosen.start,
+            last: chosen.end - 1,
+            os: std::io::Error::last_os_error(),
+        });
     }
     Ok(())
 }

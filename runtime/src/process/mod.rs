@@ -22,6 +22,7 @@
 pub mod agent;
 mod args;
 pub mod cpus;
+mod error;
 pub mod node;
 pub mod observer;
 pub mod plant;
@@ -29,7 +30,7 @@ pub mod wakeup;
 
 use std::time::Duration;
 
-use anyhow::Result;
+pub use error::{NodeError, Result, SystemError};
 
 pub use cpus::{CpuSet, Layout, Part};
 pub use wakeup::{Wakeup, WakeupLimit};
@@ -46,7 +47,7 @@ pub const STARTUP: Duration = Duration::from_secs(30);
 /// memory (`mlockall`, no page faults in the loop); nothing for `None`. A control loop's
 /// usual remedy against being preempted by other work on the machine (measured in
 /// `docs/results/latency.md`).
-pub fn set_rt_priority(priority: Option<u8>) -> Result<()> {
+pub fn set_rt_priority(priority: Option<u8>) -> Result<(), SystemError> {
     let Some(p) = priority else {
         return Ok(());
     };
@@ -56,18 +57,18 @@ pub fn set_rt_priority(priority: Option<u8>) -> Result<()> {
     // SAFETY: `sched_setscheduler` reads the parameter struct for this process (pid 0)
     // and has no other effect on memory.
     if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } != 0 {
-        anyhow::bail!(
-            "cannot run under SCHED_FIFO at --rt-priority {p}: {} (needs root, CAP_SYS_NICE or an rtprio limit in /etc/security/limits.conf)",
-            std::io::Error::last_os_error()
-        );
+        return Err(SystemError::RtPriority {
+            priority: p,
+            os: std::io::Error::last_os_error(),
+        });
     }
     // No page fault in the loop: every page mapped now and later stays in memory.
     // SAFETY: `mlockall` takes flags only.
     if unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } != 0 {
-        anyhow::bail!(
-            "cannot lock this process's memory (mlockall) for --rt-priority {p}: {} (needs root, CAP_IPC_LOCK or a memlock limit in /etc/security/limits.conf)",
-            std::io::Error::last_os_error()
-        );
+        return Err(SystemError::Mlock {
+            priority: p,
+            os: std::io::Error::last_os_error(),
+        });
     }
     Ok(())
 }
@@ -87,7 +88,7 @@ pub fn exit_code(done: Result<()>) -> std::process::ExitCode {
     match done {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
-            let _ = writeln!(std::io::stderr(), "error: {e:#}");
+            let _ = writeln!(std::io::stderr(), "error: {}", crate::error::chain(&e));
             std::process::ExitCode::FAILURE
         }
     }

@@ -6,7 +6,8 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use super::Result;
+use crate::error::AtFile;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use wire::{Bus, Waiting};
@@ -121,8 +122,7 @@ impl NodeConfig {
 
     /// Reads and validates the run's configuration.
     pub fn experiment(&self) -> Result<ExperimentConfig> {
-        let text = std::fs::read_to_string(&self.config)
-            .with_context(|| format!("{}: cannot read", self.config.display()))?;
+        let text = std::fs::read_to_string(&self.config).at("cannot read", &self.config)?;
         Ok(resolve(Some((&self.config, &text)), &Overrides::default())?)
     }
 

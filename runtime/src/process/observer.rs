@@ -4,8 +4,8 @@
 //! velocities are NaN — not measured), never the ground truth, and runs the observer
 //! the configuration asks for ([`::observer::build`], as the in-process driver does).
 
+use super::Result;
 use ::observer::timing::{Call, Front, Sample};
-use anyhow::Result;
 use wire::{Estimate, Measurement, flags, now_ns, topic};
 
 use super::{ObserverConfig, SILENCE, STARTUP, pack};

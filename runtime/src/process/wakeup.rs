@@ -11,7 +11,7 @@ use std::fs::File;
 use std::io::{Read, Write};
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use super::SystemError;
 use clap::Args;
 
 /// The PM QoS device of the CPU wake-up latency limit.
@@ -41,30 +41,25 @@ pub struct WakeupLimit {
 
 impl Wakeup {
     /// Makes the request, if one is asked for; an error names the device and the flag.
-    pub fn hold(&self) -> Result<WakeupLimit> {
+    pub fn hold(&self) -> Result<WakeupLimit, SystemError> {
         hold_at(Path::new(DEVICE), self.cpu_wakeup_us)
     }
 }
 
 /// Requests a limit of `us` µs through `device` (nothing for `None`).
-fn hold_at(device: &Path, us: Option<u32>) -> Result<WakeupLimit> {
+fn hold_at(device: &Path, us: Option<u32>) -> Result<WakeupLimit, SystemError> {
     let Some(us) = us else {
         return Ok(WakeupLimit { _device: None });
     };
-    let value = i32::try_from(us)
-        .with_context(|| format!("`--cpu-wakeup-us` {us} is out of range: at most {MAX_US}"))?;
-    let context = || {
-        format!(
-            "cannot hold the CPU wake-up latency limit at {us} µs (--cpu-wakeup-us) through {} (needs root and a kernel with PM QoS)",
-            device.display()
-        )
+    let value = i32::try_from(us).map_err(|_| SystemError::WakeupRange { us, max: MAX_US })?;
+    let refused = |source| SystemError::Wakeup {
+        us,
+        device: device.to_path_buf(),
+        source,
     };
-    let mut file = File::options()
-        .write(true)
-        .open(device)
-        .with_context(context)?;
+    let mut file = File::options().write(true).open(device).map_err(refused)?;
     // The kernel reads a binary `s32` in the machine's byte order.
-    file.write_all(&value.to_ne_bytes()).with_context(context)?;
+    file.write_all(&value.to_ne_bytes()).map_err(refused)?;
     Ok(WakeupLimit {
         _device: Some(file),
     })

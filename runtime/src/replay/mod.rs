@@ -24,6 +24,7 @@ use std::path::PathBuf;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
+use crate::error::chain;
 use crate::process::agent::Learner;
 
 pub mod compare;
@@ -143,7 +144,7 @@ pub fn replay(rec: &Recording, progress: &ProgressBar) -> Result<Outcome, Replay
     let (n, m) = (task.state_dim(), task.action_dim());
     let mut front = crate::experiment::front(&task, cfg);
     let mut learner =
-        Learner::new(cfg, 0, None, None).map_err(|e| ReplayError::Config(format!("{e:#}")))?;
+        Learner::new(cfg, 0, None, None).map_err(|e| ReplayError::Config(chain(&e)))?;
     for x in &rec.measurements {
         progress.inc(1);
         let e = crate::process::observer::estimate(&mut front, x);
@@ -159,7 +160,7 @@ pub fn replay(rec: &Recording, progress: &ProgressBar) -> Result<Outcome, Replay
             .action(&e, false)
             .map_err(|err| ReplayError::Agent {
                 seq: e.header.seq,
-                cause: format!("{err:#}"),
+                cause: chain(&err),
             })?;
         let Some(recorded) = rec.actions.get(&x.header.seq) else {
             return Ok(Outcome::Differs(Difference::missing(

@@ -1,7 +1,7 @@
 //! The actions that arrive within one realtime sample interval, and how the realtime
 //! plant waits for them without letting the transport delay the next sampling instant.
 
-use anyhow::Result;
+use crate::process::Result;
 use wire::{Action, MAX_U, now_ns};
 
 /// The last stretch before a sampling instant in which the realtime plant only reads the

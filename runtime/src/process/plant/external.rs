@@ -28,10 +28,10 @@
 
 use std::time::Duration;
 
+use crate::process::{NodeError, Result};
 use ::plant::episode::{Step, TimeLimit};
 use ::plant::safety::{SafetyCounts, Supervisor};
 use ::plant::schedule::Trial;
-use anyhow::{Result, anyhow, bail};
 use driver::contract::{DriverInfo, DriverLink, DriverSample, status};
 use wire::{flags, now_ns};
 
@@ -102,13 +102,14 @@ impl Bridge {
         let now = s.positions_only();
         match self.positions_only {
             None if now => self.link.estimate_rewards(&self.driver.id)?,
-            Some(before) if before != now => bail!(
-                "driver {:?} changed what it measures at sample {}: velocities {} before, {} now",
-                self.driver.id,
-                s.seq,
-                if before { "NaN" } else { "measured" },
-                if now { "NaN" } else { "measured" }
-            ),
+            Some(before) if before != now => {
+                return Err(NodeError::MeasuresChanged {
+                    driver: self.driver.id.clone(),
+                    seq: s.seq,
+                    before,
+                    now,
+                });
+            }
             _ => {}
         }
         self.positions_only = Some(now);
@@ -123,17 +124,19 @@ impl Bridge {
             if let Some(newer) = self.driver.latest_sample()? {
                 s = newer;
             }
-            s.validate(&self.info)
-                .map_err(|e| anyhow!("driver {:?}: {e}", self.driver.id))?;
+            s.validate(&self.info).map_err(|why| NodeError::Sample {
+                driver: self.driver.id.clone(),
+                why,
+            })?;
             self.positions_only(&s)?;
             if !s.has(status::READY) || s.reset_id != reset_id {
-                bail!(
-                    "driver {:?} left the trial: sample {} has status {:#x} and reset_id {} (expected READY from reset {reset_id}); was it restarted or reset by another process?",
-                    self.driver.id,
-                    s.seq,
-                    s.status,
-                    s.reset_id
-                );
+                return Err(NodeError::LeftTrial {
+                    driver: self.driver.id.clone(),
+                    seq: s.seq,
+                    status: s.status,
+                    reset_id: s.reset_id,
+                    expected: reset_id,
+                });
             }
             if s.seq > after {
                 return Ok(s);

@@ -3,11 +3,11 @@
 
 use std::sync::Arc;
 
+use crate::process::{NodeError, Result};
 use ::plant::Task;
 use ::plant::episode::Step;
 use ::plant::schedule::Trial;
 use ::plant::sensor::Sensor;
-use anyhow::{Result, bail};
 use wire::{Action, Bus, Header, Measurement, Truth, flags, now_ns, topic};
 
 use super::super::pack;
@@ -134,9 +134,9 @@ impl Link {
     /// velocities to the observer (`--sensor angle`).
     pub(super) fn estimate_rewards(&mut self, driver_id: &str) -> Result<()> {
         if matches!(self.sensor, Sensor::Full) {
-            bail!(
-                "driver {driver_id:?} measures positions only (its velocities are NaN): run with `--sensor angle` and an observer that estimates them (`--observer finite-difference` or `--observer predictive`)"
-            );
+            return Err(NodeError::PositionsOnly {
+                driver: driver_id.to_string(),
+            });
         }
         if self.run_flags & flags::DRIVER_REWARD == 0 {
             self.run_flags |= flags::ESTIMATED_REWARD;
@@ -147,10 +147,10 @@ impl Link {
     /// Checks that action `a` answers sample `seq`.
     pub(super) fn check_answer(a: &Action, seq: u64) -> Result<()> {
         if a.header.seq != seq {
-            bail!(
-                "action for sample {} arrived while waiting for sample {seq}",
-                a.header.seq
-            );
+            return Err(NodeError::ActionOutOfTurn {
+                got: a.header.seq,
+                want: seq,
+            });
         }
         Ok(())
     }

@@ -1,10 +1,10 @@
 //! The simulated plant in lockstep: simulated time advances only when the action for
 //! the sample has arrived, exactly as in process ([`crate::experiment::Experiment`]).
 
+use crate::process::Result;
 use ::plant::episode::Episode;
 use ::plant::safety::SafetyCounts;
 use ::plant::schedule::Trial;
-use anyhow::Result;
 use wire::{Header, flags, now_ns};
 
 use super::super::SILENCE;

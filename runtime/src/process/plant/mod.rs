@@ -20,11 +20,12 @@ mod realtime;
 
 use std::path::Path;
 
+use crate::error::AtFile;
+use crate::process::{NodeError, Result};
 use ::plant::Plant;
 use ::plant::episode::Episode;
 use ::plant::safety::SafetyCounts;
 use ::plant::schedule::{Schedule, Trial};
-use anyhow::{Result, bail};
 
 use super::node::Continuation;
 use super::{PlantConfig, STARTUP, Scheduling};
@@ -53,9 +54,7 @@ pub const CYCLES_HEADER: &str = "seq,t_sample_ns,t_woke_ns,t_action_ns";
 pub fn run(args: &PlantConfig) -> Result<()> {
     schedule_clock(&args.node.scheduling)?;
     let cfg = args.node.experiment()?;
-    args.clock
-        .check(&cfg, args.node.waiting())
-        .map_err(|e| anyhow::anyhow!(e))?;
+    args.clock.check(&cfg, args.node.waiting())?;
     let task = cfg.task();
     let run_seed = ::agent::seed::run_seed(cfg.run.seed, args.node.run_index);
     let sensor = crate::experiment::sensor(&task, &cfg.observer, run_seed);
@@ -95,7 +94,7 @@ pub fn run(args: &PlantConfig) -> Result<()> {
 /// the same core, and where the layout puts it (`cpus`).
 fn schedule_clock(s: &Scheduling) -> Result<()> {
     super::set_rt_priority(s.rt_priority.map(|p| p.saturating_add(1).min(99)))?;
-    s.place(super::Part::Plant)
+    Ok(s.place(super::Part::Plant)?)
 }
 
 /// Attempts of one trial cut by gaps in a row after which the run stops.
@@ -107,10 +106,12 @@ fn whole(runner: &mut dyn Trials, trial: &Trial) -> Result<usize> {
     for cuts in 1.. {
         match runner.trial(trial)? {
             Ended::Done(skipped) => return Ok(skipped),
-            Ended::Cut if cuts == MAX_CUTS => bail!(
-                "{} was cut short by gaps {MAX_CUTS} times in a row: the loop does not keep the period (see gaps.csv)",
-                trial_name(trial)
-            ),
+            Ended::Cut if cuts == MAX_CUTS => {
+                return Err(NodeError::CutTooOften {
+                    trial: trial_name(trial),
+                    cuts,
+                });
+            }
             Ended::Cut => {}
         }
     }
@@ -235,5 +236,5 @@ fn write_timing(link: &Link, args: &PlantConfig) -> Result<()> {
 
 /// Writes `text` to `path`, an error naming the file.
 fn write(path: &Path, text: &str) -> Result<()> {
-    std::fs::write(path, text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+    Ok(std::fs::write(path, text).at("cannot write", path)?)
 }

@@ -19,11 +19,11 @@
 
 use std::time::Duration;
 
+use crate::process::Result;
 use ::plant::Plant;
 use ::plant::episode::{Episode, Step};
 use ::plant::safety::SafetyCounts;
 use ::plant::schedule::Trial;
-use anyhow::Result;
 use wire::{Header, MAX_U, flags, now_ns};
 
 use super::super::SILENCE;
