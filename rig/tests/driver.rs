@@ -836,15 +836,9 @@ fn a_stalled_agent_against_a_driver_cuts_the_trial_short_and_it_is_run_again() {
     let d = Driver::launch(&Kind::Rust, "stall", &[]);
     let dir = tmp(&format!("stall-{}", d.id));
     let sup = rig()
-        .args(["run", "--plant", "external", "--driver", &d.id])
-        .args([
-            "--trials",
-            "3",
-            "--eval-every",
-            "0",
-            "--driver-timeout",
-            "20",
-        ])
+        .arg("run")
+        .args(common::external(&d.id))
+        .args(["--trials", "3", "--eval-every", "0"])
         .arg("--out")
         .arg(&dir)
         .stdout(Stdio::piped())

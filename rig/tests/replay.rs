@@ -149,23 +149,8 @@ fn a_run_against_the_python_driver_replays_identical() {
     let Some(py) = python() else { return };
     let d = Driver::start(&py, "replay", &["--speed", "10"]);
     let dir = tmp(&format!("driver-{}", d.id));
-    run(
-        &dir,
-        &[
-            "--plant",
-            "external",
-            "--driver",
-            &d.id,
-            "--gaps",
-            "learn",
-            "--driver-timeout",
-            "20",
-            "--trials",
-            "4",
-            "--eval-every",
-            "2",
-        ],
-    );
+    let flags = ["--gaps", "learn", "--trials", "4", "--eval-every", "2"];
+    run(&dir, &[&common::external(&d.id)[..], &flags].concat());
     drop(d);
     let msgs = common::messages(&dir.join("run.mcap"));
     assert!(msgs.contains_key("/driver/sample"), "not a driver's run");

@@ -20,6 +20,19 @@ pub fn rig() -> Command {
     Command::new(env!("CARGO_BIN_EXE_rig"))
 }
 
+/// The flags of `rig run` against driver `id`, waiting up to 20 s for it (a Python
+/// driver's start on a loaded machine).
+pub fn external(id: &str) -> [&str; 6] {
+    [
+        "--plant",
+        "external",
+        "--driver",
+        id,
+        "--driver-timeout",
+        "20",
+    ]
+}
+
 /// A fresh scratch directory `rig-<suite>-<pid>-<name>` in the temporary directory.
 pub fn tmp(suite: &str, name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("rig-{suite}-{}-{name}", std::process::id()));
