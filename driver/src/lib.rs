@@ -9,6 +9,8 @@
 //!   device (`rig sim-driver`).
 //! - [`safety`]: the supervisor every action passes (clamps, rejection, watchdog, range
 //!   stop), the same one the simulated plant uses.
+//! - [`conformance`]: the check a driver passes (`rig check-driver`), for a driver's own
+//!   tests too.
 //! - [`fits_task`]: whether a driver's limits fit a task; [`check_info`] checks an info
 //!   on its own and against a task.
 //! - [`Error`]: what can go wrong on either end, keeping the transport's typed errors;
@@ -17,6 +19,7 @@
 //!
 //! `examples/motor_driver.rs` is the template for a hardware driver.
 
+pub mod conformance;
 pub mod contract;
 pub mod device;
 mod error;

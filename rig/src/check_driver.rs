@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use std::sync::Arc;
 
 use clap::Args as Flags;
-use runtime::check_driver::{CheckOptions, check};
+use driver::conformance::{CheckOptions, check};
 
 use crate::external::{DriverArgs, TaskArgs};
 

@@ -11,9 +11,7 @@
 //!   ([`record`]) and [`resume`] after a crash; [`lock`]: an output folder belongs to one
 //!   command; [`replay`]: a recording's observer and agent run again, bit for bit.
 //! - The run's [`clock`]: lockstep, real time or an external driver, and its rules.
-//! - Against an external driver: [`check_driver`] (`rig check-driver`).
 
-pub mod check_driver;
 pub mod clock;
 pub mod config;
 pub mod error;

@@ -1,4 +1,5 @@
-//! `rig check-driver`: a conformance check against a running driver (`docs/driver.md`).
+//! The conformance check against a running driver (`docs/driver.md`): `rig check-driver`,
+//! or a driver author's own tests ([`check`]).
 //!
 //! It connects as the rig would (so a driver with incompatible payloads is a one-line
 //! error naming the service and both layouts), then, with real messages and the
@@ -30,8 +31,8 @@
 
 use std::time::Duration;
 
-use anyhow::Result;
-use driver::contract::{DriverCommand, DriverInfo, DriverLink, DriverSample, service};
+use crate::Error;
+use crate::contract::{DriverCommand, DriverInfo, DriverLink, DriverSample, service};
 use plant::Task;
 use plant::angle::wrap;
 use wire::{Bus, MAX_U, type_name_of};
@@ -53,7 +54,7 @@ pub struct CheckOptions {
     /// How long to wait for the driver's info (saying so after a second).
     pub timeout: Duration,
     /// How to start a driver of the task, for the error when none answers
-    /// ([`driver::contract::how_to_serve`]).
+    /// ([`crate::contract::how_to_serve`]).
     pub serve: String,
     /// How long one reset may take.
     pub reset_timeout: Duration,
@@ -90,7 +91,7 @@ impl std::fmt::Display for Outcome {
 /// Runs the check against a running driver; `report` sees each outcome as soon as it is
 /// known. An error means the check could not start: no driver, incompatible payloads, the
 /// driver in use by another rig process.
-pub fn check(opts: &CheckOptions, report: &mut dyn FnMut(&Outcome)) -> Result<Vec<Outcome>> {
+pub fn check(opts: &CheckOptions, report: &mut dyn FnMut(&Outcome)) -> Result<Vec<Outcome>, Error> {
     let bus = Bus::join(&format!("check-{}", std::process::id()), "check-driver")?;
     let link = DriverLink::connect(&bus, &opts.driver)?;
     let info = link.wait_info(&bus, opts.timeout, true, &opts.serve)?;
@@ -195,17 +196,20 @@ impl Probe<'_> {
 
     /// The next sample, in order, well-formed (dimensions, finite values): a lockstep
     /// driver's sample left pending by the last phase, else the next to arrive.
-    fn sample(&mut self) -> Result<DriverSample> {
+    fn sample(&mut self) -> Result<DriverSample, Error> {
         if let Some(s) = self.pending.take() {
             return Ok(s);
         }
         let s = self.link.next_sample(&self.bus, self.silence)?;
-        s.validate(&self.info)?;
+        s.validate(&self.info).map_err(|error| Error::Sample {
+            id: self.opts.driver.clone(),
+            error,
+        })?;
         Ok(s)
     }
 
-    fn act(&self, u: &[f64], answering: &DriverSample) -> Result<u64> {
-        Ok(self.link.act(u, answering.seq)?)
+    fn act(&self, u: &[f64], answering: &DriverSample) -> Result<u64, Error> {
+        self.link.act(u, answering.seq)
     }
 
     /// The task's action `fraction` of the way from the middle of the range to the upper
@@ -238,7 +242,7 @@ impl Probe<'_> {
         let i = self.info;
         let fits = i
             .validate()
-            .map(|()| driver::fits_task(&i, &self.task).err());
+            .map(|()| crate::fits_task(&i, &self.task).err());
         let text = format!(
             "task {} (hash {:016x}), {} clock, n_x {}, n_u {}, Ts {:.3} ms (period {:.3} ms × time scale {}), u_min {}, u_max {}, watchdog {} period(s), reward {}",
             i.task_name(),

@@ -4,8 +4,8 @@
 
 use std::time::Duration;
 
-use anyhow::Result;
-use driver::contract::DriverSample;
+use crate::Error;
+use crate::contract::DriverSample;
 
 use super::{Probe, STEP_PERIODS, vector};
 
@@ -15,7 +15,7 @@ const SILENCE_PROBE: Duration = Duration::from_millis(200);
 impl Probe<'_> {
     /// Samples answered with zero, each followed by exactly the next; then silence
     /// without a command.
-    pub(super) fn lockstep(&mut self) -> Result<()> {
+    pub(super) fn lockstep(&mut self) -> Result<(), Error> {
         let samples = self.zero_input_samples()?;
         let mut wrong = Vec::new();
         for w in samples.windows(2) {
@@ -59,7 +59,7 @@ impl Probe<'_> {
     /// elsewhere than zero input does (compared exactly: both from the same reset, so an
     /// unstable start state, which zero input leaves fast, is no obstacle), and shows as
     /// applied.
-    pub(super) fn step_against_zero(&mut self) -> Result<()> {
+    pub(super) fn step_against_zero(&mut self) -> Result<(), Error> {
         let u = self.action(self.opts.step);
         let zero = self.replay(&vec![0.0; u.len()])?;
         let step = self.replay(&u)?;
@@ -84,7 +84,7 @@ impl Probe<'_> {
     }
 
     /// The same reset and actions twice give the same samples, bit for bit.
-    pub(super) fn determinism(&mut self) -> Result<()> {
+    pub(super) fn determinism(&mut self) -> Result<(), Error> {
         let u = self.action(self.opts.step);
         let first = self.replay(&u)?;
         let second = self.replay(&u)?;
@@ -114,7 +114,7 @@ impl Probe<'_> {
 
     /// Resets to the start state and answers [`STEP_PERIODS`] samples with `u`: the
     /// READY sample and the ones after, the last left pending.
-    fn replay(&mut self, u: &[f64]) -> Result<Vec<DriverSample>> {
+    fn replay(&mut self, u: &[f64]) -> Result<Vec<DriverSample>, Error> {
         // The reset answers the pending sample.
         self.pending = None;
         let x0 = self.task.initial_states[0].clone();

@@ -3,8 +3,8 @@
 
 use std::time::{Duration, Instant};
 
-use anyhow::Result;
-use driver::contract::{DriverCommand, DriverSample, kind, status};
+use crate::Error;
+use crate::contract::{DriverCommand, DriverSample, kind, status};
 use wire::now_ns;
 
 use super::clock::{clock_diagnosis, interval_jitter, lateness, percentile};
@@ -13,7 +13,7 @@ use super::{Probe, STEP_PERIODS, measures, same, vector};
 impl Probe<'_> {
     /// The phases in order; the first that cannot go on ends the check.
     pub(super) fn run_phases(&mut self) {
-        type Phase<'r> = (&'static str, fn(&mut Probe<'r>) -> Result<()>);
+        type Phase<'r> = (&'static str, fn(&mut Probe<'r>) -> Result<(), Error>);
         let realtime: [Phase<'_>; 6] = [
             ("reset", Probe::reset),
             ("sample rate", Probe::rate),
@@ -43,7 +43,7 @@ impl Probe<'_> {
         }
     }
 
-    fn reset(&mut self) -> Result<()> {
+    fn reset(&mut self) -> Result<(), Error> {
         let x0 = self.task.initial_states[0].clone();
         let t0 = Instant::now();
         let id = self.link.reset(&x0)?;
@@ -72,7 +72,7 @@ impl Probe<'_> {
 
     /// Samples for `--rate-seconds`, each answered with zero: well-formed, at the
     /// advertised rate, each action applied by the next sample.
-    fn rate(&mut self) -> Result<()> {
+    fn rate(&mut self) -> Result<(), Error> {
         let samples = self.zero_input_samples()?;
         self.record_rate(&samples);
         // Zero input's drift over the step's horizon, for the step response to beat.
@@ -86,7 +86,7 @@ impl Probe<'_> {
     /// Samples for `--rate-seconds` (at least enough for the step's horizon), each
     /// answered with zero, with the time that answer was sent; records whether they are
     /// well-formed.
-    pub(super) fn zero_input_samples(&mut self) -> Result<Vec<(DriverSample, u64)>> {
+    pub(super) fn zero_input_samples(&mut self) -> Result<Vec<(DriverSample, u64)>, Error> {
         let zero = vec![0.0; self.n_u()];
         // A lockstep driver has no rate to measure: enough samples for the step's horizon.
         let seconds = if self.info.lockstep() {
@@ -208,7 +208,7 @@ impl Probe<'_> {
     }
 
     /// A small step for [`STEP_PERIODS`] periods, from rest.
-    fn step(&mut self) -> Result<()> {
+    fn step(&mut self) -> Result<(), Error> {
         let u = self.action(self.opts.step);
         let s0 = self.sample()?;
         self.act(&u, &s0)?;
@@ -238,7 +238,7 @@ impl Probe<'_> {
     }
 
     /// Actions stop after the step: zero and WATCHDOG within two periods.
-    fn watchdog(&mut self) -> Result<()> {
+    fn watchdog(&mut self) -> Result<(), Error> {
         let period = self.period_ns();
         let t_a = self.t_last_action as f64;
         // The driver decides at sample instants; allow for its jitter.
@@ -290,7 +290,7 @@ impl Probe<'_> {
 
     /// Sends `cmd` answering the next sample; returns that sample and the one after it
     /// (which a lockstep driver's next probe answers).
-    fn probe(&mut self, cmd: DriverCommand) -> Result<(DriverSample, DriverSample)> {
+    fn probe(&mut self, cmd: DriverCommand) -> Result<(DriverSample, DriverSample), Error> {
         let before = self.sample()?;
         self.link.send_raw(DriverCommand {
             sample_seq: before.seq,
@@ -315,7 +315,7 @@ impl Probe<'_> {
     }
 
     /// Actions far above and below the limits: clamped, counted.
-    fn out_of_range(&mut self) -> Result<()> {
+    fn out_of_range(&mut self) -> Result<(), Error> {
         let n = self.n_u();
         let (lo, hi) = (self.info.u_min[..n].to_vec(), self.info.u_max[..n].to_vec());
         let span: Vec<f64> = (0..n).map(|j| hi[j] - lo[j]).collect();
@@ -344,7 +344,7 @@ impl Probe<'_> {
     }
 
     /// NaN, ±inf and a wrong `n_u`, each after a valid action: rejected, zero applied.
-    fn non_finite(&mut self) -> Result<()> {
+    fn non_finite(&mut self) -> Result<(), Error> {
         let n = self.n_u();
         let valid = self.action(0.5);
         let mut wrong = Vec::new();
