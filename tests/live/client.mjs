@@ -11,8 +11,11 @@
 import { writeFileSync } from "node:fs";
 import { connect as tcpConnect } from "node:net";
 import { parseArgs } from "node:util";
-import { FoxgloveClient } from "@foxglove/ws-protocol";
+import protocol from "@foxglove/ws-protocol";
 import { WebSocket } from "ws";
+
+const { FoxgloveClient } = protocol;
+const SUBPROTOCOL = "foxglove.sdk.v1";
 
 const { values: args } = parseArgs({
   options: {
@@ -25,7 +28,9 @@ const { values: args } = parseArgs({
 const deadline = Date.now() + 1000 * Number(args["connect-seconds"]);
 
 function connect() {
-  const ws = new WebSocket(args.url, [FoxgloveClient.SUPPORTED_SUBPROTOCOL]);
+  // The Foxglove SDK's server speaks the protocol as `foxglove.sdk.v1`, the same
+  // messages as the client's `foxglove.websocket.v1` under a new name.
+  const ws = new WebSocket(args.url, [SUBPROTOCOL]);
   ws.on("error", () => {}); // retried below, or reported by the client
   ws.once("unexpected-response", () => {});
   ws.once("close", () => {

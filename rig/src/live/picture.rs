@@ -78,9 +78,10 @@ impl Body {
                     true => at(a, 0.0, b),
                     false => at(a, b, 0.0),
                 };
-                let (c, s) = match vertical {
-                    true => (|t: f64| t.sin(), |t: f64| -t.cos()),
-                    false => (|t: f64| t.cos(), |t: f64| t.sin()),
+                type Axis = fn(f64) -> f64;
+                let (c, s): (Axis, Axis) = match vertical {
+                    true => (f64::sin, |t| -t.cos()),
+                    false => (f64::cos, f64::sin),
                 };
                 let elbow = (l1 * c(p1), l1 * s(p1));
                 let tip = (elbow.0 + l2 * c(p1 + p2), elbow.1 + l2 * s(p1 + p2));
