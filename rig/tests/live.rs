@@ -176,7 +176,16 @@ fn the_foxglove_client_receives_every_channel_equal_to_the_recording() {
     let port = free_port();
     let run = rig()
         .args(["run", "--cpus", "shared", "--quiet", "--timing", "realtime"])
-        .args(["--speed", "10", "--gaps", "learn", "--trials", "8", "--eval-every", "2"])
+        .args([
+            "--speed",
+            "10",
+            "--gaps",
+            "learn",
+            "--trials",
+            "8",
+            "--eval-every",
+            "2",
+        ])
         .arg("--live")
         .arg(format!("127.0.0.1:{port}"))
         .arg("--out")
@@ -200,7 +209,11 @@ fn the_foxglove_client_receives_every_channel_equal_to_the_recording() {
         .map(|(_, d)| {
             let v = numbers(&serde_json::from_slice(d).unwrap());
             let int = |k: &str| v[k].unwrap() as u64;
-            let stamps = (int("t_sample_ns"), int("t_received_ns"), int("t_publish_ns"));
+            let stamps = (
+                int("t_sample_ns"),
+                int("t_received_ns"),
+                int("t_publish_ns"),
+            );
             (int("seq"), stamps)
         })
         .collect();
@@ -266,8 +279,14 @@ fn a_viewer_that_stops_reading_changes_nothing_of_the_run() {
     finish(client, "the stalled client");
     let read = |d: &Path| std::fs::read(d.join("returns.csv")).unwrap();
     assert_eq!(read(&dir), read(&plain));
-    let (with, without) = (messages(&dir.join("run.mcap")), messages(&plain.join("run.mcap")));
-    assert_eq!(with.keys().collect::<Vec<_>>(), without.keys().collect::<Vec<_>>());
+    let (with, without) = (
+        messages(&dir.join("run.mcap")),
+        messages(&plain.join("run.mcap")),
+    );
+    assert_eq!(
+        with.keys().collect::<Vec<_>>(),
+        without.keys().collect::<Vec<_>>()
+    );
     for topic in ["/plant/measurement", "/observer/estimate", "/agent/action"] {
         assert_eq!(with[topic], without[topic], "{topic}");
     }

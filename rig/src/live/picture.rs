@@ -48,7 +48,9 @@ impl Body {
             Some(SystemName::ArmHorizontal) => {
                 arm(plant::two_link::TwoLink::horizontal().length, false)
             }
-            Some(SystemName::Arm64) => arm(plant::two_link::TwoLink::manipulator_6_4().length, false),
+            Some(SystemName::Arm64) => {
+                arm(plant::two_link::TwoLink::manipulator_6_4().length, false)
+            }
             Some(SystemName::DoubleIntegrator) | None => Body::Bars {
                 ranges: task.state_range.clone(),
             },
@@ -68,7 +70,10 @@ impl Body {
         match self {
             Body::Pendulum => {
                 let phi = angle(0);
-                links(&mut entity, &[at(0.0, 0.0, 0.0), at(phi.sin(), 0.0, phi.cos())]);
+                links(
+                    &mut entity,
+                    &[at(0.0, 0.0, 0.0), at(phi.sin(), 0.0, phi.cos())],
+                );
             }
             Body::Arm { lengths, vertical } => {
                 let (p1, p2) = (angle(0), angle(1));
@@ -87,7 +92,11 @@ impl Body {
                 let tip = (elbow.0 + l2 * c(p1 + p2), elbow.1 + l2 * s(p1 + p2));
                 links(
                     &mut entity,
-                    &[point(0.0, 0.0), point(elbow.0, elbow.1), point(tip.0, tip.1)],
+                    &[
+                        point(0.0, 0.0),
+                        point(elbow.0, elbow.1),
+                        point(tip.0, tip.1),
+                    ],
                 );
             }
             Body::Bars { ranges } => bars(&mut entity, ranges, x),

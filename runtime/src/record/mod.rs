@@ -82,8 +82,8 @@ mod tap;
 mod tests;
 
 pub use schema::{Field, FieldKind, Value};
-pub use tap::Tap;
 use schema::{json_schema, json_string};
+pub use tap::Tap;
 /// A channel of a [`Recorder`], returned by [`Recorder::channel`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ChannelId(usize);
@@ -226,10 +226,12 @@ impl Recorder {
                 let schema_id = self
                     .writer
                     .add_schema(schema_name, SCHEMA_ENCODING, &schema)?;
-                Some(
-                    self.writer
-                        .add_channel(schema_id, topic, MESSAGE_ENCODING, &BTreeMap::new())?,
-                )
+                Some(self.writer.add_channel(
+                    schema_id,
+                    topic,
+                    MESSAGE_ENCODING,
+                    &BTreeMap::new(),
+                )?)
             }
             false => None,
         };
@@ -346,7 +348,9 @@ impl Recorder {
 
     /// Whether a channel of `topic` is declared in the file.
     pub fn has_topic(&self, topic: &str) -> bool {
-        self.channels.iter().any(|c| c.id.is_some() && c.topic == topic)
+        self.channels
+            .iter()
+            .any(|c| c.id.is_some() && c.topic == topic)
     }
 
     /// Records a message already encoded for the channel of `topic` — one copied from an

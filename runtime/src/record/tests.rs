@@ -30,7 +30,9 @@ fn record_to(path: &Path, tap: Option<Kept>) {
     if let Some(tap) = tap {
         r.set_tap(Box::new(tap));
     }
-    let live = r.live_channel("/live", "Live", &[Field::number("v")]).unwrap();
+    let live = r
+        .live_channel("/live", "Live", &[Field::number("v")])
+        .unwrap();
     let mut meas = vec![Field::integer("seq"), Field::number("reward")];
     meas.extend(Field::array("x", 2, FieldKind::Number));
     let m = r
@@ -429,7 +431,9 @@ fn a_tap_gets_the_files_channels_and_messages_and_its_own_and_the_file_stays_the
     // Declared before the tap: handed on when it is set.
     let before = r.channel("/before", "Seq", &seq).unwrap();
     r.set_tap(Box::new(kept.clone()));
-    let live = r.live_channel("/live", "Live", &[Field::number("v")]).unwrap();
+    let live = r
+        .live_channel("/live", "Live", &[Field::number("v")])
+        .unwrap();
     assert!(r.has_topic("/before") && !r.has_topic("/live"));
     r.write(before, 5, 5, &[Value::Int(7)]).unwrap();
     r.write(live, 6, 6, &[Value::Num(f64::NAN)]).unwrap();
@@ -440,7 +444,10 @@ fn a_tap_gets_the_files_channels_and_messages_and_its_own_and_the_file_stays_the
     assert_eq!(channels[0].2, json_schema(&seq));
     assert_eq!(
         messages,
-        [(0, 5, br#"{"seq":7}"#.to_vec()), (1, 6, br#"{"v":null}"#.to_vec())]
+        [
+            (0, 5, br#"{"seq":7}"#.to_vec()),
+            (1, 6, br#"{"v":null}"#.to_vec())
+        ]
     );
     // The file has the file's channel and message only.
     let bytes = std::fs::read(&tapped).unwrap();
@@ -456,5 +463,8 @@ fn a_tap_gets_the_files_channels_and_messages_and_its_own_and_the_file_stays_the
     let kept = Kept::default();
     record_to(&again, Some(kept.clone()));
     assert_eq!(kept.0.lock().unwrap().1.len(), 15);
-    assert_eq!(std::fs::read(&again).unwrap(), std::fs::read(&plain).unwrap());
+    assert_eq!(
+        std::fs::read(&again).unwrap(),
+        std::fs::read(&plain).unwrap()
+    );
 }
