@@ -400,7 +400,10 @@ fn a_crash_keeps_every_message_recorded_before_the_last_flush() {
 
 /// A tap that keeps what it is handed.
 #[derive(Clone, Default)]
-struct Kept(std::sync::Arc<std::sync::Mutex<(Vec<(String, String, Vec<u8>)>, Vec<Tapped>)>>);
+struct Kept(std::sync::Arc<std::sync::Mutex<(Vec<Declared>, Vec<Tapped>)>>);
+
+/// A channel declared to a tap: topic, schema name, schema.
+type Declared = (String, String, Vec<u8>);
 
 /// A message handed to a tap: channel index, log time, data.
 type Tapped = (usize, u64, Vec<u8>);
