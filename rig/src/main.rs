@@ -17,6 +17,11 @@ mod delay_study;
 mod external;
 mod latency;
 mod learn;
+#[cfg(feature = "live")]
+mod live;
+#[cfg(not(feature = "live"))]
+#[path = "live_absent.rs"]
+mod live;
 mod node;
 mod optimal;
 mod replay;

@@ -1,6 +1,7 @@
 //! `rig run`: one experiment as three processes — plant, observer, agent — over
 //! iceoryx2, against the simulated plant or an external driver.
 
+use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -9,9 +10,10 @@ use clap::Args as Flags;
 use runtime::clock::{Clock, Timing};
 use runtime::config::ExperimentConfig;
 use runtime::process::{Layout, WaitKind};
-use runtime::run::{RunOptions, RunSummary, run};
+use runtime::run::{RunOptions, RunSummary, run_with};
 
 use crate::external::DriverArgs;
+use crate::live::LiveView;
 use crate::selection::{Selection, resolve_selection, resume_selection};
 
 #[derive(Flags)]
@@ -70,10 +72,21 @@ pub struct Args {
     /// returns.csv and run.mcap.
     #[arg(long, value_name = "DIR", conflicts_with = "out")]
     resume: Option<PathBuf>,
+    /// Serve the run live over the Foxglove WebSocket protocol at ADDR (host:port;
+    /// without ADDR 127.0.0.1:8765, this host only): every channel of run.mcap, the
+    /// trials' returns (/returns), the loop's latency (/latency) and the system drawn
+    /// from its state (/scene). Open docs/live-layout.json in Foxglove or Lichtblick.
+    /// The loop never waits for a viewer: one too slow misses messages. In a rig built
+    /// with the `live` feature (`cargo run --release -p rig --features live`).
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = LIVE_ADDR)]
+    live: Option<SocketAddr>,
     /// No progress bar and no summary.
     #[arg(long)]
     quiet: bool,
 }
+
+/// Where `--live` serves without an address: this host only.
+const LIVE_ADDR: &str = "127.0.0.1:8765";
 
 /// Runs the command.
 pub fn main(args: &Args) -> ExitCode {
@@ -84,6 +97,23 @@ pub fn main(args: &Args) -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    let live = match args.live.map(|addr| LiveView::start(addr, &cfg.task())) {
+        None => None,
+        Some(Ok(live)) => Some(live),
+        Some(Err(e)) => {
+            eprintln!("error: {e:#}");
+            return ExitCode::from(2);
+        }
+    };
+    let (live, tap) = live.unzip();
+    if let Some(l) = &live
+        && !args.quiet
+    {
+        eprintln!(
+            "live view: ws://{} (open docs/live-layout.json in Foxglove or Lichtblick)",
+            l.addr()
+        );
+    }
     let wakeup = match args.wakeup.hold() {
         Ok(w) => w,
         Err(e) => {
@@ -91,8 +121,14 @@ pub fn main(args: &Args) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    let done = run(&cfg, &opts);
+    let done = run_with(&cfg, &opts, tap);
     drop(wakeup);
+    if let Some(l) = live {
+        let served = l.close();
+        if !args.quiet {
+            eprintln!("{served}");
+        }
+    }
     match done {
         Ok(s) => {
             if !args.quiet {

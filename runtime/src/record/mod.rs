@@ -43,6 +43,11 @@
 //!   (`RecordLengthLimitExceeded`). With the default `log_time_order=True` the Python
 //!   reader sorts all messages before yielding any, so it yields none.
 //!
+//! A [`Tap`] given to [`Recorder::set_tap`] receives every channel and every message as
+//! it is written, in the same encoding; channels declared with [`Recorder::live_channel`]
+//! go to the tap only, so that a live view's extra channels leave the file's bytes as they
+//! are.
+//!
 //! [`Recorder::flush`] closes the current chunk and writes it out, which bounds what a
 //! crash can lose; without it a chunk closes every 1 MiB of messages, written out the
 //! same way. [`Recorder::flushes`] counts them: what was recorded before the last one
@@ -72,21 +77,25 @@ const CHUNK_SIZE: u64 = 1024 * 1024;
 const MESSAGE_RECORD: u64 = 1 + 8 + 2 + 4 + 8 + 8;
 
 mod schema;
+mod tap;
 #[cfg(test)]
 mod tests;
 
 pub use schema::{Field, FieldKind, Value};
 use schema::{json_schema, json_string};
+pub use tap::Tap;
 /// A channel of a [`Recorder`], returned by [`Recorder::channel`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ChannelId(usize);
 
 /// What the recorder keeps per channel to encode its messages.
 struct Channel {
-    /// The MCAP channel id.
-    id: u16,
+    /// The MCAP channel id; `None` for a channel of the tap only.
+    id: Option<u16>,
     /// The topic, for error messages.
     topic: String,
+    /// The schema's name, for a tap set later.
+    schema_name: String,
     /// Per field, its kind and its JSON key with separators: `"seq":`, `,"x_0":`, ...
     fields: Vec<(FieldKind, Box<[u8]>)>,
     /// The MCAP sequence number of the next message.
@@ -109,6 +118,8 @@ pub struct Recorder {
     chunk_bytes: u64,
     /// How often everything recorded was written out ([`Recorder::flushes`]).
     flushes: u64,
+    /// Where every channel and message goes besides the file ([`Recorder::set_tap`]).
+    tap: Option<Box<dyn Tap>>,
 }
 
 impl Recorder {
@@ -142,6 +153,7 @@ impl Recorder {
             buf: Vec::with_capacity(1024),
             chunk_bytes: 0,
             flushes: 0,
+            tap: None,
         })
     }
 
@@ -153,6 +165,38 @@ impl Recorder {
         topic: &str,
         schema_name: &str,
         fields: &[Field],
+    ) -> Result<ChannelId> {
+        self.declare(topic, schema_name, fields, true)
+    }
+
+    /// Declares a channel as [`channel`](Self::channel) does, but for the [`Tap`] only:
+    /// its messages are encoded the same way and handed to the tap, never written to the
+    /// file (without a tap they go nowhere).
+    pub fn live_channel(
+        &mut self,
+        topic: &str,
+        schema_name: &str,
+        fields: &[Field],
+    ) -> Result<ChannelId> {
+        self.declare(topic, schema_name, fields, false)
+    }
+
+    /// Hands every channel declared so far, and from now on every channel and message, to
+    /// `tap` too.
+    pub fn set_tap(&mut self, mut tap: Box<dyn Tap>) {
+        for c in &self.channels {
+            tap.channel(&c.topic, &c.schema_name, &self.schemas[&c.schema_name]);
+        }
+        self.tap = Some(tap);
+    }
+
+    /// Declares a channel, in the file or for the tap only.
+    fn declare(
+        &mut self,
+        topic: &str,
+        schema_name: &str,
+        fields: &[Field],
+        in_file: bool,
     ) -> Result<ChannelId> {
         ensure!(
             self.channels.iter().all(|c| c.topic != topic),
@@ -177,12 +221,23 @@ impl Recorder {
                 self.schemas.insert(schema_name.to_owned(), schema.clone());
             }
         }
-        let schema_id = self
-            .writer
-            .add_schema(schema_name, SCHEMA_ENCODING, &schema)?;
-        let id = self
-            .writer
-            .add_channel(schema_id, topic, MESSAGE_ENCODING, &BTreeMap::new())?;
+        let id = match in_file {
+            true => {
+                let schema_id = self
+                    .writer
+                    .add_schema(schema_name, SCHEMA_ENCODING, &schema)?;
+                Some(self.writer.add_channel(
+                    schema_id,
+                    topic,
+                    MESSAGE_ENCODING,
+                    &BTreeMap::new(),
+                )?)
+            }
+            false => None,
+        };
+        if let Some(tap) = &mut self.tap {
+            tap.channel(topic, schema_name, &schema);
+        }
         let fields = fields
             .iter()
             .enumerate()
@@ -199,6 +254,7 @@ impl Recorder {
         self.channels.push(Channel {
             id,
             topic: topic.to_owned(),
+            schema_name: schema_name.to_owned(),
             fields,
             sequence: 0,
         });
@@ -256,7 +312,7 @@ impl Recorder {
     }
 
     /// Writes an encoded message on channel `index`, with the channel's next sequence
-    /// number.
+    /// number, and hands it to the tap.
     fn put(
         &mut self,
         index: usize,
@@ -264,6 +320,12 @@ impl Recorder {
         publish_time_ns: u64,
         data: &[u8],
     ) -> Result<()> {
+        if let Some(tap) = &mut self.tap {
+            tap.message(index, log_time_ns, data);
+        }
+        let Some(channel_id) = self.channels[index].id else {
+            return Ok(());
+        };
         // As the `mcap` writer closes a chunk grown past its target size, but written
         // out at once and counted.
         if self.chunk_bytes > CHUNK_SIZE {
@@ -272,7 +334,7 @@ impl Recorder {
         self.chunk_bytes += MESSAGE_RECORD + data.len() as u64;
         let ch = &mut self.channels[index];
         let header = MessageHeader {
-            channel_id: ch.id,
+            channel_id,
             sequence: ch.sequence,
             log_time: log_time_ns,
             publish_time: publish_time_ns,
@@ -284,9 +346,11 @@ impl Recorder {
         Ok(())
     }
 
-    /// Whether a channel of `topic` is declared.
+    /// Whether a channel of `topic` is declared in the file.
     pub fn has_topic(&self, topic: &str) -> bool {
-        self.channels.iter().any(|c| c.topic == topic)
+        self.channels
+            .iter()
+            .any(|c| c.id.is_some() && c.topic == topic)
     }
 
     /// Records a message already encoded for the channel of `topic` — one copied from an
@@ -301,7 +365,7 @@ impl Recorder {
         let index = self
             .channels
             .iter()
-            .position(|c| c.topic == topic)
+            .position(|c| c.id.is_some() && c.topic == topic)
             .ok_or_else(|| anyhow!("the recording has no topic {topic}"))?;
         self.put(index, log_time_ns, publish_time_ns, data)
     }

@@ -20,7 +20,19 @@ fn entries() -> BTreeMap<String, String> {
 
 /// A small fixed recording: two channels, an attachment, metadata.
 fn record(path: &Path) {
+    record_to(path, None);
+}
+
+/// [`record`]'s recording; with a tap, a channel of the tap's only written between.
+fn record_to(path: &Path, tap: Option<Kept>) {
     let mut r = Recorder::create(path).unwrap();
+    let tapped = tap.is_some();
+    if let Some(tap) = tap {
+        r.set_tap(Box::new(tap));
+    }
+    let live = r
+        .live_channel("/live", "Live", &[Field::number("v")])
+        .unwrap();
     let mut meas = vec![Field::integer("seq"), Field::number("reward")];
     meas.extend(Field::array("x", 2, FieldKind::Number));
     let m = r
@@ -48,6 +60,9 @@ fn record(path: &Path) {
             ],
         )
         .unwrap();
+        if tapped {
+            r.write(live, t, t, &[Value::Num(1.0)]).unwrap();
+        }
         r.write(
             a,
             t + 5,
@@ -381,4 +396,78 @@ fn a_crash_keeps_every_message_recorded_before_the_last_flush() {
         .count();
     assert_eq!(read as u64, before_flush);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A tap that keeps what it is handed.
+#[derive(Clone, Default)]
+struct Kept(std::sync::Arc<std::sync::Mutex<(Vec<Declared>, Vec<Tapped>)>>);
+
+/// A channel declared to a tap: topic, schema name, schema.
+type Declared = (String, String, Vec<u8>);
+
+/// A message handed to a tap: channel index, log time, data.
+type Tapped = (usize, u64, Vec<u8>);
+
+impl Tap for Kept {
+    fn channel(&mut self, topic: &str, schema_name: &str, schema: &[u8]) {
+        let mut k = self.0.lock().unwrap();
+        k.0.push((topic.into(), schema_name.into(), schema.to_vec()));
+    }
+
+    fn message(&mut self, index: usize, log_time_ns: u64, data: &[u8]) {
+        self.0
+            .lock()
+            .unwrap()
+            .1
+            .push((index, log_time_ns, data.to_vec()));
+    }
+}
+
+#[test]
+fn a_tap_gets_the_files_channels_and_messages_and_its_own_and_the_file_stays_the_same() {
+    let dir = tmpdir("tap");
+    let (plain, tapped) = (dir.join("plain.mcap"), dir.join("tapped.mcap"));
+    record(&plain);
+    let kept = Kept::default();
+    let mut r = Recorder::create(&tapped).unwrap();
+    let seq = [Field::integer("seq")];
+    // Declared before the tap: handed on when it is set.
+    let before = r.channel("/before", "Seq", &seq).unwrap();
+    r.set_tap(Box::new(kept.clone()));
+    let live = r
+        .live_channel("/live", "Live", &[Field::number("v")])
+        .unwrap();
+    assert!(r.has_topic("/before") && !r.has_topic("/live"));
+    r.write(before, 5, 5, &[Value::Int(7)]).unwrap();
+    r.write(live, 6, 6, &[Value::Num(f64::NAN)]).unwrap();
+    r.finish().unwrap();
+    let (channels, messages) = kept.0.lock().unwrap().clone();
+    let names: Vec<_> = channels.iter().map(|c| (&c.0[..], &c.1[..])).collect();
+    assert_eq!(names, [("/before", "Seq"), ("/live", "Live")]);
+    assert_eq!(channels[0].2, json_schema(&seq));
+    assert_eq!(
+        messages,
+        [
+            (0, 5, br#"{"seq":7}"#.to_vec()),
+            (1, 6, br#"{"v":null}"#.to_vec())
+        ]
+    );
+    // The file has the file's channel and message only.
+    let bytes = std::fs::read(&tapped).unwrap();
+    let in_file: Vec<_> = MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| m.unwrap().channel.topic.clone())
+        .collect();
+    assert_eq!(in_file, ["/before"]);
+
+    // A tap, and messages on a channel of its own between the file's, leave the bytes of
+    // a recording as they are.
+    let again = dir.join("again.mcap");
+    let kept = Kept::default();
+    record_to(&again, Some(kept.clone()));
+    assert_eq!(kept.0.lock().unwrap().1.len(), 15);
+    assert_eq!(
+        std::fs::read(&again).unwrap(),
+        std::fs::read(&plain).unwrap()
+    );
 }

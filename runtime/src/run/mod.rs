@@ -19,6 +19,8 @@
 //!   which no other process reads), records it as `/plant/truth`, and takes a finite
 //!   horizon's terminal reward `τ_N(x_N)` of the true state, as `rig learn` does.
 //! * The output folder is this run's while it lasts ([`crate::lock`]).
+//! * [`run_with`] hands every message recorded to a [`Tap`] too — a live view — in the
+//!   recording's encoding, with the trials' returns and the loop's latency besides.
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -33,6 +35,7 @@ use crate::experiment::TrialRecord;
 use crate::lock::FolderLock;
 use crate::output::{progress_bar, write_atomic};
 use crate::process::{Layout, Scheduling, Spin};
+use crate::record::Tap;
 use crate::resume;
 
 mod gaps;
@@ -103,6 +106,16 @@ pub struct RunSummary {
 
 /// Runs experiment `cfg` (one run) as three processes and writes the outputs.
 pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
+    run_with(cfg, opts, None)
+}
+
+/// [`run`], handing every message recorded to `tap` too, and the channels `/returns` and
+/// `/latency` besides (a live view: `rig run --live`; the recording stays as it is).
+pub fn run_with(
+    cfg: &ExperimentConfig,
+    opts: &RunOptions,
+    tap: Option<Box<dyn Tap>>,
+) -> Result<RunSummary> {
     opts.clock.check(cfg, opts.waiting)?;
     let mut cfg = cfg.clone();
     cfg.run.runs = 1;
@@ -167,7 +180,10 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
         driver_reward: driver_info.is_some_and(|i| i.provides_reward()),
         point: point.as_ref(),
     };
-    let recording = Recording::open(&opts.out, &about)?;
+    let mut recording = Recording::open(&opts.out, &about)?;
+    if let Some(tap) = tap {
+        recording.live(tap)?;
+    }
     let returns = Returns::create(
         &opts.out.join("returns.csv"),
         &cfg,

@@ -21,7 +21,8 @@ const LINK_INTS: [&str; 7] = [
 use wire::{Action, Estimate, Header, Measurement, Truth};
 
 use crate::config::ExperimentConfig;
-use crate::record::{ChannelId, Field, FieldKind, Recorder, Value};
+use crate::experiment::TrialRecord;
+use crate::record::{ChannelId, Field, FieldKind, Recorder, Tap, Value};
 use crate::resume::ResumePoint;
 
 /// The MCAP recording: one channel per topic, and one `/timing/...` channel per topic
@@ -46,6 +47,10 @@ pub(super) struct Recording {
     pub(super) realtime: bool,
     /// The current sample's plant sample time (monotonic ns).
     pub(super) t_sample_ns: u64,
+    /// `/returns` and `/latency`, for a live view only ([`Recording::live`]).
+    pub(super) live: Option<(ChannelId, ChannelId)>,
+    /// The log time of the last message of the loop recorded.
+    pub(super) log_time_ns: u64,
 }
 
 /// The recording's metadata `run`.
@@ -236,7 +241,64 @@ impl Recording {
             values: Vec::new(),
             realtime: false,
             t_sample_ns: 0,
+            live: None,
+            log_time_ns: 0,
         })
+    }
+
+    /// Hands every message to `tap` too (a live view), and declares the channels only it
+    /// receives: `/returns`, a row of `returns.csv` per trial ([`Self::trial`]), and
+    /// `/latency`, per action the time from the sample to the action and the agent's
+    /// share of it, in µs.
+    pub(super) fn live(&mut self, tap: Box<dyn Tap>) -> Result<()> {
+        self.rec.set_tap(tap);
+        let returns = [
+            Field::integer("trial"),
+            Field::number("return"),
+            Field::number("greedy"),
+            Field::number("sim_time_s"),
+        ];
+        let returns = self.rec.live_channel("/returns", "rig.Returns", &returns)?;
+        let latency = [
+            Field::integer("seq"),
+            Field::number("sample_to_action_us"),
+            Field::number("agent_us"),
+        ];
+        let latency = self.rec.live_channel("/latency", "rig.Latency", &latency)?;
+        self.live = Some((returns, latency));
+        Ok(())
+    }
+
+    /// A trial's row of `returns.csv` on `/returns` (live view only); its greedy return
+    /// `null` when it had no evaluation.
+    pub(super) fn trial(&mut self, r: &TrialRecord) -> Result<()> {
+        let Some((ch, _)) = self.live else {
+            return Ok(());
+        };
+        self.values.clear();
+        self.values.extend([
+            Value::Int(r.trial.into()),
+            Value::Num(r.ret),
+            Value::Num(r.greedy.unwrap_or(f64::NAN)),
+            Value::Num(r.sim_time_s),
+        ]);
+        let t = self.log_time_ns;
+        self.rec.write(ch, t, t, &self.values)
+    }
+
+    /// An action's latency on `/latency` (live view only).
+    fn latency(&mut self, msg: &Action, t: u64) -> Result<()> {
+        let Some((_, ch)) = self.live else {
+            return Ok(());
+        };
+        let us = |from: u64, to: u64| (to as f64 - from as f64) / 1e3;
+        self.values.clear();
+        self.values.extend([
+            Value::Int(msg.header.seq),
+            Value::Num(us(msg.t_sample_ns, msg.t_publish_ns)),
+            Value::Num(us(msg.t_received_ns, msg.t_publish_ns)),
+        ]);
+        self.rec.write(ch, t, t, &self.values)
     }
 
     /// Starts a message with the header fields; returns its log time (simulated, ns).
@@ -268,6 +330,7 @@ impl Recording {
         self.values.clear();
         self.values.push(Value::Int(seq));
         self.values.extend(stamps.iter().map(|&s| Value::Int(s)));
+        self.log_time_ns = t;
         self.rec.write(timing, t, t, &self.values)
     }
 
@@ -411,6 +474,7 @@ impl Recording {
             self.t_action,
             msg.header.seq,
             &[msg.t_sample_ns, msg.t_received_ns, msg.t_publish_ns],
-        )
+        )?;
+        self.latency(msg, t)
     }
 }

@@ -102,6 +102,8 @@ pub(super) struct Supervisor {
     pub(super) retention: Retention,
     /// The flags beside `--resume DIR` that continue this run (an external driver's).
     pub(super) resume_flags: String,
+    /// The rows of `returns.csv` handed to the live view so far.
+    pub(super) live_rows: usize,
 }
 
 impl Supervisor {
@@ -143,6 +145,7 @@ impl Supervisor {
             grace,
             retention: Retention::new(crate::resume::checkpoint_dir(out)),
             resume_flags: String::new(),
+            live_rows: 0,
         })
     }
 
@@ -154,6 +157,10 @@ impl Supervisor {
             rows: self.returns.ends.len(),
         };
         let done = self.record_waiting(bar)?;
+        for r in &self.returns.records[self.live_rows..] {
+            self.recording.trial(r)?;
+        }
+        self.live_rows = self.returns.records.len();
         self.retention
             .after_drain(before, self.recording.rec.flushes(), &self.returns.ends);
         Ok(done)

@@ -1,0 +1,277 @@
+//! The live view, `rig run --live [ADDR]`: the run's channels served over the Foxglove
+//! WebSocket protocol (the official `foxglove` crate's server) as they are recorded.
+//!
+//! The recorder hands every channel and message to a [`Feed`] ([`runtime::record::Tap`]),
+//! in the recording's own JSON encoding and schemas, so that one layout serves the
+//! recording and the live view. The feed only copies the message into a bounded queue
+//! and returns: when the queue is full (the view's thread is behind) the message is
+//! dropped and counted, never waited for, so the loop never waits for a viewer. The
+//! view's thread logs each message on its Foxglove channel; the server's queue per client
+//! (of [`BACKLOG`] messages) drops its oldest when a viewer reads too slowly. Besides the
+//! recording's channels: `/returns` and `/latency` (from the recorder) and `/scene`, the
+//! system drawn from its state ([`picture`]) at most [`PICTURES_PER_SECOND`] times a
+//! second.
+
+use std::collections::HashMap;
+use std::net::SocketAddr;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context as _, Result, anyhow};
+use foxglove::schemas::SceneUpdate;
+use foxglove::{
+    Channel, ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, WebSocketServer,
+    WebSocketServerHandle,
+};
+use runtime::record::Tap;
+
+pub mod picture;
+
+use picture::Body;
+
+/// The messages waiting between the recorder and the view's thread; beyond them, a
+/// message is dropped.
+pub const QUEUE: usize = 4096;
+/// The messages the server holds per viewer; beyond them, it drops the oldest.
+pub const BACKLOG: usize = 4096;
+/// How often at most the system is drawn, per second of wall-clock time.
+pub const PICTURES_PER_SECOND: u32 = 30;
+/// How long the server stays up after the run for its last messages to go out.
+const LINGER: Duration = Duration::from_millis(300);
+/// How long the server's stop may take at most.
+const STOP: Duration = Duration::from_secs(2);
+
+/// What the recorder hands on: a channel declared or a message.
+enum Event {
+    Channel {
+        topic: String,
+        schema_name: String,
+        schema: Vec<u8>,
+    },
+    Message {
+        index: usize,
+        log_time_ns: u64,
+        data: Vec<u8>,
+    },
+}
+
+/// The recorder's end of the live view: a [`Tap`] that never waits.
+pub struct Feed {
+    queue: SyncSender<Event>,
+    dropped: Arc<AtomicU64>,
+}
+
+impl Tap for Feed {
+    fn channel(&mut self, topic: &str, schema_name: &str, schema: &[u8]) {
+        // Channels are declared before the loop starts: waiting here holds nothing back.
+        let _ = self.queue.send(Event::Channel {
+            topic: topic.to_owned(),
+            schema_name: schema_name.to_owned(),
+            schema: schema.to_vec(),
+        });
+    }
+
+    fn message(&mut self, index: usize, log_time_ns: u64, data: &[u8]) {
+        let event = Event::Message {
+            index,
+            log_time_ns,
+            data: data.to_vec(),
+        };
+        if let Err(TrySendError::Full(_)) = self.queue.try_send(event) {
+            self.dropped.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+}
+
+/// What the live view did, for the run's summary.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Served {
+    /// Messages logged to the server (a viewer subscribed to their channel gets them).
+    pub messages: u64,
+    /// Messages dropped because the view's thread was behind.
+    pub dropped: u64,
+    /// Pictures of the system drawn.
+    pub pictures: u64,
+}
+
+impl std::fmt::Display for Served {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "live view: {} messages served, {} dropped (the view behind the run), {} pictures of the system",
+            self.messages, self.dropped, self.pictures
+        )
+    }
+}
+
+/// The server and the thread that feeds it.
+pub struct LiveView {
+    server: WebSocketServerHandle,
+    thread: JoinHandle<Served>,
+    dropped: Arc<AtomicU64>,
+    addr: SocketAddr,
+}
+
+impl LiveView {
+    /// Starts the server on `addr` for a run of `task`; returns it and the feed to give
+    /// the recorder ([`runtime::run::run_with`]).
+    pub fn start(addr: SocketAddr, task: &plant::Task) -> Result<(LiveView, Box<dyn Tap>)> {
+        let ctx = Context::new();
+        let server = WebSocketServer::new()
+            .name(format!("rig {}", task.name))
+            .bind(addr.ip().to_string(), addr.port())
+            .message_backlog_size(BACKLOG)
+            .context(&ctx)
+            .start_blocking()
+            .map_err(|e| anyhow!("--live {addr}: cannot serve the live view: {e}"))?;
+        let (queue, events) = sync_channel(QUEUE);
+        let dropped = Arc::new(AtomicU64::new(0));
+        let view = View::new(ctx, Body::of(task));
+        let thread = std::thread::Builder::new()
+            .name("live view".into())
+            .spawn(move || view.serve(&events))
+            .context("cannot start the live view's thread")?;
+        let addr = SocketAddr::new(addr.ip(), server.port());
+        let feed = Feed {
+            queue,
+            dropped: dropped.clone(),
+        };
+        let live = LiveView {
+            server,
+            thread,
+            dropped,
+            addr,
+        };
+        Ok((live, Box::new(feed)))
+    }
+
+    /// Where it listens.
+    pub fn addr(&self) -> SocketAddr {
+        self.addr
+    }
+
+    /// After the run (the feed dropped with the recorder): serves what is left, stops the
+    /// server and says what it did.
+    pub fn close(self) -> Served {
+        let mut served = self.thread.join().unwrap_or_default();
+        served.dropped = self.dropped.load(Ordering::Relaxed);
+        if self.server.client_count() > 0 {
+            std::thread::sleep(LINGER);
+        }
+        // A viewer that stopped reading may never close: wait for so long only.
+        let stopping = self.server.stop();
+        let (stopped, wait) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            stopping.wait_blocking();
+            let _ = stopped.send(());
+        });
+        let _ = wait.recv_timeout(STOP);
+        served
+    }
+}
+
+/// The view's thread: the channels, and the system's picture.
+struct View {
+    ctx: Arc<Context>,
+    channels: Vec<Arc<RawChannel>>,
+    scene: Channel<SceneUpdate>,
+    body: Body,
+    /// The channel the picture's state comes from, and its fields' prefix: the plant's
+    /// ground truth if recorded, else its measurement.
+    state: Option<(usize, &'static str)>,
+    /// The last state's message not drawn yet.
+    latest: Option<(u64, Vec<u8>)>,
+    drawn: Option<Instant>,
+    served: Served,
+}
+
+impl View {
+    fn new(ctx: Arc<Context>, body: Body) -> View {
+        let scene = ChannelBuilder::new("/scene")
+            .context(&ctx)
+            .build::<SceneUpdate>();
+        View {
+            ctx,
+            channels: Vec::new(),
+            scene,
+            body,
+            state: None,
+            latest: None,
+            drawn: None,
+            served: Served::default(),
+        }
+    }
+
+    fn serve(mut self, events: &Receiver<Event>) -> Served {
+        while let Ok(event) = events.recv() {
+            match event {
+                Event::Channel {
+                    topic,
+                    schema_name,
+                    schema,
+                } => self.channel(&topic, schema_name, schema),
+                Event::Message {
+                    index,
+                    log_time_ns,
+                    data,
+                } => self.message(index, log_time_ns, data),
+            }
+        }
+        self.draw();
+        self.served
+    }
+
+    fn channel(&mut self, topic: &str, schema_name: String, schema: Vec<u8>) {
+        let index = self.channels.len();
+        match topic {
+            "/plant/truth" => self.state = Some((index, "x_")),
+            "/plant/measurement" if self.state.is_none() => self.state = Some((index, "y_")),
+            _ => {}
+        }
+        let channel = ChannelBuilder::new(topic)
+            .message_encoding("json")
+            .schema(Schema::new(schema_name, "jsonschema", schema))
+            .context(&self.ctx)
+            .build_raw()
+            .expect("a topic is declared once");
+        self.channels.push(channel);
+    }
+
+    fn message(&mut self, index: usize, log_time_ns: u64, data: Vec<u8>) {
+        let Some(channel) = self.channels.get(index) else {
+            return;
+        };
+        channel.log_with_meta(&data, PartialMetadata::with_log_time(log_time_ns));
+        self.served.messages += 1;
+        if self.state.is_some_and(|(i, _)| i == index) {
+            self.latest = Some((log_time_ns, data));
+            let period = Duration::from_secs(1) / PICTURES_PER_SECOND;
+            if self.drawn.is_none_or(|t| t.elapsed() >= period) {
+                self.draw();
+            }
+        }
+    }
+
+    /// Draws the latest state, if any is new.
+    fn draw(&mut self) {
+        let (Some((log_time_ns, data)), Some((_, prefix))) = (self.latest.take(), self.state)
+        else {
+            return;
+        };
+        let Ok(fields) = serde_json::from_slice::<HashMap<String, Option<f64>>>(&data) else {
+            return;
+        };
+        let x: Vec<f64> = (0..)
+            .map_while(|i| fields.get(&format!("{prefix}{i}")))
+            .map(|v| v.unwrap_or(f64::NAN))
+            .collect();
+        let update = self.body.draw(&x, log_time_ns);
+        self.scene
+            .log_with_meta(&update, PartialMetadata::with_log_time(log_time_ns));
+        self.served.pictures += 1;
+        self.drawn = Some(Instant::now());
+    }
+}
