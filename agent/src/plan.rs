@@ -80,7 +80,9 @@ impl Planner {
     /// The random stream for planning in `x`: the run seed and the state's bits.
     fn rng(&self, x: &[f64]) -> ChaCha8Rng {
         let key = x.iter().fold(self.seed, |h, v| {
-            (h ^ v.to_bits()).rotate_left(23).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            (h ^ v.to_bits())
+                .rotate_left(23)
+                .wrapping_mul(0x9E37_79B9_7F4A_7C15)
         });
         let mut rng = ChaCha8Rng::seed_from_u64(key);
         rng.set_stream(STREAM);

@@ -43,19 +43,27 @@ fn the_shipped_furuta_learners_run_and_repeat() {
     let dir = common::tmp("furuta", "shipped");
     let pairs = [
         ("furuta-balance.toml", "mlac-llr.toml", "4"),
-        ("furuta-swing-balance.toml", "mlac-plan.toml", "2"),
+        ("furuta.toml", "mlac-plan.toml", "2"),
         ("furuta-balance.toml", "mlac-plan.toml", "2"),
     ];
     for (k, (task, config, trials)) in pairs.into_iter().enumerate() {
         let task = furuta().join(task);
         let config = furuta().join(config);
         let t = task.to_str().unwrap();
-        let d = Driver::script(&python, "examples/furuta/driver.py", "furuta", &["--task", t]);
+        let d = Driver::script(
+            &python,
+            "examples/furuta/driver.py",
+            "furuta",
+            &["--task", t],
+        );
         let a = run(&d.id, &task, &config, trials, &dir.join(format!("{k}-a")));
         let b = run(&d.id, &task, &config, trials, &dir.join(format!("{k}-b")));
         drop(d);
         assert_eq!(a, b, "{task:?} with {config:?}");
         let greedy = a.lines().skip(1).filter(|l| !l.ends_with(',')).count();
-        assert!(greedy >= 1, "{task:?} with {config:?}: a greedy evaluation: {a}");
+        assert!(
+            greedy >= 1,
+            "{task:?} with {config:?}: a greedy evaluation: {a}"
+        );
     }
 }

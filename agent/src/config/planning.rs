@@ -23,7 +23,12 @@ impl PlanningConfig {
     pub fn validate(&self) -> Result<(), ConfigError> {
         check_int("planning.horizon", self.horizon.into(), 1, 200)?;
         check_int("planning.samples", self.samples.into(), 2, 10_000)?;
-        check_int("planning.elites", self.elites.into(), 1, self.samples.into())?;
+        check_int(
+            "planning.elites",
+            self.elites.into(),
+            1,
+            self.samples.into(),
+        )?;
         check_int("planning.iterations", self.iterations.into(), 1, 100)
     }
 }
