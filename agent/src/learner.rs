@@ -4,7 +4,7 @@
 //! names the key that is wrong); [`crate::build()`] builds the agent from it.
 
 use crate::config::{HorizonKind, LearningConfig, LlrConfig, LstdConfig, RbfConfig};
-use crate::config::{SarsaConfig, TilesConfig, VgbpConfig};
+use crate::config::{PlanningConfig, SarsaConfig, TilesConfig, VgbpConfig};
 
 /// An approximator with a gradient (§3.5): what a process model, an MLAC or RMAC actor
 /// and their critics are.
@@ -100,6 +100,8 @@ pub struct Learner {
     pub learning: LearningConfig,
     /// Infinite or finite horizon (only SAC, MLAC, RMAC have a finite one).
     pub horizon: HorizonKind,
+    /// MLAC's actions planned with its learned model ([`crate::plan`]), if given.
+    pub planning: Option<PlanningConfig>,
 }
 
 impl Smooth {

@@ -9,7 +9,8 @@
 //!   [`mlac`], [`rmac`], [`vgbp`] — what each algorithm does differently; [`critic`] —
 //!   the critic and its learning rule, TD(λ) or [`lstd`]; [`model`] — the learned
 //!   process model; [`explore`] — Gaussian exploration; [`sarsa`] — the discrete-action
-//!   baseline.
+//!   baseline; [`plan`] — MLAC's actions planned with its learned model (beyond the
+//!   thesis, chosen by `[planning]`).
 //! * [`horizon`] — infinite or finite horizon (Chapter 4: time as an input, terminal
 //!   reward; SAC-FH, MLAC-FH, RMAC-FH are the shared step with a finite horizon).
 //! * [`config`] — the agent's part of the configuration, [`preset`] — the thesis's
@@ -32,6 +33,7 @@ pub mod learner;
 pub mod lstd;
 pub mod mlac;
 pub mod model;
+pub mod plan;
 pub mod preset;
 pub mod rmac;
 pub mod sac;

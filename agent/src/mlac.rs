@@ -56,6 +56,21 @@ impl Mlac {
         }
     }
 
+    /// What the learner knows of the task.
+    pub fn info(&self) -> &TaskInfo {
+        &self.info
+    }
+
+    /// The actor `π`.
+    pub fn actor(&self) -> &dyn Approximator {
+        self.actor.as_ref()
+    }
+
+    /// The process model `f̂`.
+    pub fn model(&self) -> &ProcessModel {
+        &self.model
+    }
+
     fn saturated(&self, u: &[f64]) -> bool {
         let m = self.saturation_margin;
         m > 0.0

@@ -9,7 +9,8 @@
 #
 # PYTHON (default python3) must import iceoryx2 0.10.0; RIG (default the release build)
 # is the rig; TASK (default furuta.toml next to this script) the task file; DAMPING
-# (default the driver's, gym-brt) the model's damping set (furuta.py).
+# (default the driver's, gym-brt) the model's damping set (furuta.py); SEEDS (default
+# 1..RUNS) the seeds to run, so that several experiment.sh can share the seeds of one.
 set -euo pipefail
 out=$1 runs=$2 trials=$3
 shift 3
@@ -20,7 +21,7 @@ task=${TASK:-$here/furuta.toml}
 mkdir -p "$out"
 echo "run,trial,sim_time_s,return,greedy_return" > "$out/runs.csv"
 echo "seed,wall_s" > "$out/wall.csv"
-for seed in $(seq 1 "$runs"); do
+for seed in ${SEEDS:-$(seq 1 "$runs")}; do
   id="furuta-$$-$seed"
   "$python" "$here/driver.py" --driver-id "$id" --task "$task" ${DAMPING:+--damping "$DAMPING"} &
   driver=$!

@@ -19,6 +19,7 @@
 mod component;
 mod learner;
 mod learning;
+mod planning;
 mod sarsa;
 mod vgbp;
 
@@ -28,6 +29,7 @@ pub use component::{
 pub(crate) use learner::finite_horizon_unsupported;
 pub use learner::{Algo, ApproxKind, HorizonKind};
 pub use learning::LearningConfig;
+pub use planning::PlanningConfig;
 pub use sarsa::SarsaConfig;
 pub use vgbp::VgbpConfig;
 
@@ -59,6 +61,9 @@ pub struct AgentConfig {
     pub vgbp: Option<VgbpConfig>,
     /// SARSA's action set and ε-greedy schedule.
     pub sarsa: Option<SarsaConfig>,
+    /// MLAC's actions planned with its learned model ([`crate::plan`]); absent: the
+    /// actor's, as the thesis has it.
+    pub planning: Option<PlanningConfig>,
 }
 
 impl AgentConfig {
@@ -83,6 +88,7 @@ impl AgentConfig {
             algorithm: self.algorithm(task)?,
             learning: self.learning.clone(),
             horizon: self.horizon,
+            planning: self.planning_section()?,
         })
     }
 
@@ -212,6 +218,24 @@ impl AgentConfig {
             ));
         }
         Ok(v.clone())
+    }
+
+    /// `[planning]`, checked: MLAC's, with an infinite horizon.
+    fn planning_section(&self) -> Result<Option<PlanningConfig>, ConfigError> {
+        let Some(p) = &self.planning else {
+            return Ok(None);
+        };
+        if self.algo != Algo::Mlac || self.horizon != HorizonKind::Infinite {
+            return Err(ConfigError::new(
+                "planning",
+                format!(
+                    "plans with MLAC's process model and an infinite horizon; {} with a {} horizon has none: remove the [planning] section",
+                    self.algo, self.horizon
+                ),
+            ));
+        }
+        p.validate()?;
+        Ok(Some(p.clone()))
     }
 
     /// `[sarsa]`, checked.

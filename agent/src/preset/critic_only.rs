@@ -126,6 +126,7 @@ pub(super) fn critic_only(system: SystemName, algo: Algo, approx: ApproxKind) ->
             epsilon_decay: 0.96,
             epsilon_min: 0.1,
         }),
+        planning: None,
     };
     // One greedy evaluation per sequence of the four start states (§6.4.2).
     let eval_every = if arm_6_4 { 4 } else { 5 };

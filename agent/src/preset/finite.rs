@@ -88,6 +88,7 @@ pub fn finite_horizon(
         model,
         vgbp: None,
         sarsa: None,
+        planning: None,
     };
     Ok(Preset {
         agent,

@@ -157,6 +157,7 @@ pub fn preset(
         model,
         vgbp: None,
         sarsa: None,
+        planning: None,
     };
     let run = if arm {
         run_section(600, 20, 10)

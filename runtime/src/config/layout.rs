@@ -5,7 +5,8 @@
 //! every configuration file and `config.toml` has.
 
 use agent::config::{
-    AgentConfig, Algo, ApproxKind, Component, HorizonKind, LearningConfig, SarsaConfig, VgbpConfig,
+    AgentConfig, Algo, ApproxKind, Component, HorizonKind, LearningConfig, PlanningConfig,
+    SarsaConfig, VgbpConfig,
 };
 use observer::config::ObserverConfig;
 use plant::config::RunConfig;
@@ -41,6 +42,8 @@ pub(super) struct Layout {
     vgbp: Option<VgbpConfig>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     sarsa: Option<SarsaConfig>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    planning: Option<PlanningConfig>,
     /// Absent: full state, pass-through.
     #[serde(default, skip_serializing_if = "ObserverConfig::is_default")]
     observer: ObserverConfig,
@@ -80,6 +83,7 @@ impl TryFrom<Layout> for ExperimentConfig {
                 model: l.model,
                 vgbp: l.vgbp,
                 sarsa: l.sarsa,
+                planning: l.planning,
             },
             run: l.run,
             observer: l.observer,
@@ -103,6 +107,7 @@ impl From<ExperimentConfig> for Layout {
             model: a.model,
             vgbp: a.vgbp,
             sarsa: a.sarsa,
+            planning: a.planning,
             observer: c.observer,
             task: c.task,
         }

@@ -44,6 +44,23 @@ pub(super) fn choose<T: Choice>(
     }
 }
 
+/// Sections no preset has, which a user may add whole: `[planning]` (MLAC's actions
+/// planned with its learned model). Their keys are checked when the configuration is read.
+const OPTIONAL_SECTIONS: [&str; 1] = ["planning"];
+
+/// Moves each optional section `user` has and `base` lacks into `base` whole (its keys
+/// are checked when the configuration is read, not against a preset's).
+pub(super) fn add_optional_sections(base: &mut toml::Table, user: &mut toml::Table) {
+    for section in OPTIONAL_SECTIONS {
+        if base.contains_key(section) {
+            continue;
+        }
+        if let Some(t) = user.remove(section) {
+            base.insert(section.into(), t);
+        }
+    }
+}
+
 /// Overlays `user` on `base`, rejecting keys `base` does not have.
 pub(super) fn merge(
     base: &mut toml::Table,

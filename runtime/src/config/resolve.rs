@@ -8,7 +8,7 @@ use plant::config::ConfigError;
 use plant::{SystemName, TaskFile};
 
 use super::ExperimentConfig;
-use super::merge::{check_choice, choose, merge};
+use super::merge::{add_optional_sections, check_choice, choose, merge};
 
 /// Command-line choices and overrides, applied over preset and file: the experiment
 /// flags of `rig learn`, `rig run` and `rig config`.
@@ -298,6 +298,7 @@ pub fn resolve(
     let task = task_file(&mut user, o, path.as_deref()).map_err(with_file)?;
     let choice = PresetChoice::of(&user, o, task.as_ref()).map_err(with_file)?;
     let mut merged = choice.table().map_err(with_file)?;
+    add_optional_sections(&mut merged, &mut user);
     merge(&mut merged, user, "").map_err(with_file)?;
     check_choices(&merged).map_err(with_file)?;
     let cfg: ExperimentConfig = toml::Value::Table(merged)

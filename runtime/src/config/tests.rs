@@ -351,3 +351,35 @@ fn help_lists_the_choices() {
     );
     assert!(Cli::try_parse_from(["rig", "--algo", "ddpg"]).is_err());
 }
+
+/// `[planning]`, which no preset has: a file adds it whole, it round-trips, and a wrong
+/// key, value or algorithm is named.
+#[test]
+fn a_planning_section_is_added_checked_and_round_trips() {
+    let plan = "[planning]\nhorizon = 15\nsamples = 64\nelites = 8\niterations = 3\n";
+    let c = resolve_str(plan).unwrap();
+    let p = c.agent.planning.as_ref().unwrap();
+    assert_eq!(
+        (p.horizon, p.samples, p.elites, p.iterations),
+        (15, 64, 8, 3)
+    );
+    assert_eq!(resolve_str(&c.to_toml()).unwrap(), c);
+    assert!(
+        resolve(None, &Overrides::default())
+            .unwrap()
+            .agent
+            .planning
+            .is_none()
+    );
+    let e = resolve_str(&plan.replace("elites = 8", "elites = 80")).unwrap_err();
+    assert_eq!(e.key, "planning.elites", "{e}");
+    assert!(
+        e.message.contains("2..=64") || e.message.contains("1..=64"),
+        "{e}"
+    );
+    let e = resolve_str(&plan.replace("horizon", "horizn")).unwrap_err();
+    assert!(e.to_string().contains("horizn"), "{e}");
+    let e = resolve_str(&format!("algo = \"sac\"\n{plan}")).unwrap_err();
+    assert_eq!(e.key, "planning", "{e}");
+    assert!(e.message.contains("remove the [planning] section"), "{e}");
+}

@@ -1,0 +1,69 @@
+//! The Furuta pendulum's shipped learners (examples/furuta/): each configuration file on
+//! its task file, a few trials against the Python driver in lockstep — it runs, and a
+//! second run repeats the first's returns byte for byte. What they learn in full runs is
+//! examples/furuta/benchmark.sh's (docs/results/furuta.md).
+//!
+//! The test needs `iceoryx2==0.10.0` importable by `$RIG_PYTHON` (default `python3`);
+//! without it it prints why and passes — CI installs it, so it runs there.
+
+use std::path::{Path, PathBuf};
+
+mod common;
+use common::drivers::{Driver, python};
+use common::{ok, rig};
+
+/// The example's directory.
+fn furuta() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/furuta")
+}
+
+/// `rig run --plant external` of `config` on `task` against driver `id`, `trials`
+/// trials, a greedy evaluation every second: its returns.csv.
+fn run(id: &str, task: &Path, config: &Path, trials: &str, dir: &Path) -> String {
+    ok(rig()
+        .args(["run", "--plant", "external", "--driver", id, "--quiet"])
+        .arg("--task")
+        .arg(task)
+        .arg("--config")
+        .arg(config)
+        .args(["--trials", trials, "--eval-every", "2", "--out"])
+        .arg(dir)
+        .output()
+        .unwrap());
+    std::fs::read_to_string(dir.join("returns.csv")).unwrap()
+}
+
+/// Each shipped pair of a task and a configuration (the planner's too) runs against the
+/// Python driver, and repeats its returns on a second run.
+#[test]
+fn the_shipped_furuta_learners_run_and_repeat() {
+    let Some(python) = python() else {
+        return;
+    };
+    let dir = common::tmp("furuta", "shipped");
+    let pairs = [
+        ("furuta-balance.toml", "mlac-llr.toml", "4"),
+        ("furuta.toml", "mlac-plan.toml", "2"),
+        ("furuta-balance.toml", "mlac-plan.toml", "2"),
+    ];
+    for (k, (task, config, trials)) in pairs.into_iter().enumerate() {
+        let task = furuta().join(task);
+        let config = furuta().join(config);
+        let t = task.to_str().unwrap();
+        let d = Driver::script(
+            &python,
+            "examples/furuta/driver.py",
+            "furuta",
+            &["--task", t],
+        );
+        let a = run(&d.id, &task, &config, trials, &dir.join(format!("{k}-a")));
+        let b = run(&d.id, &task, &config, trials, &dir.join(format!("{k}-b")));
+        drop(d);
+        assert_eq!(a, b, "{task:?} with {config:?}");
+        let greedy = a.lines().skip(1).filter(|l| !l.ends_with(',')).count();
+        assert!(
+            greedy >= 1,
+            "{task:?} with {config:?}: a greedy evaluation: {a}"
+        );
+    }
+}
