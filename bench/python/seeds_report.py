@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """The per-seed table of an experiment written by examples/python_driver/seeds.sh: for
 each seed, the greedy return at the last evaluation, whether it succeeds, the simulated
-seconds of learning until the first evaluation that succeeds, and the run's wall time.
+seconds of learning until the first evaluation that succeeds, the mean return of its
+last 100 learning trials (with exploration, from the learning trials' starts) and the
+run's wall time.
 
     python3 bench/python/seeds_report.py OUT --return-at-least 90
     python3 bench/python/seeds_report.py OUT --upright 0.3 --hold 1.5
@@ -78,6 +80,13 @@ def evaluations(run_dir: Path):
         ]
 
 
+def last_learning_mean(run_dir: Path, count: int = 100) -> float:
+    """The mean return of the run's last `count` learning trials."""
+    with open(run_dir / "returns.csv") as f:
+        returns = [float(r["return"]) for r in csv.DictReader(f)]
+    return statistics.mean(returns[-count:])
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("out", type=Path, help="the experiment's folder (seeds.sh's OUT)")
@@ -89,8 +98,11 @@ def main():
         p.error("give one of --return-at-least and --upright")
     with open(args.out / "wall.csv") as f:
         walls = {int(r["seed"]): float(r["wall_s"]) for r in csv.DictReader(f)}
-    print("| seed | trials | greedy return at the last evaluation | succeeds | simulated s to first success | wall time |")
-    print("|---:|---:|---:|---|---:|---:|")
+    print(
+        "| seed | trials | greedy return at the last evaluation | succeeds | simulated s to first success "
+        "| mean return, last 100 learning trials | wall time |"
+    )
+    print("|---:|---:|---:|---|---:|---:|---:|")
     won, finals = 0, []
     for seed in sorted(walls):
         run = args.out / f"seed-{seed}"
@@ -109,7 +121,7 @@ def main():
         finals.append(evals[-1][2])
         print(
             f"| {seed} | {evals[-1][0]} | {evals[-1][2]:.2f} | {'yes' if good[-1] else 'no'} "
-            f"| {'never' if first is None else f'{first:.0f}'} | {walls[seed]:.1f} s |"
+            f"| {'never' if first is None else f'{first:.0f}'} | {last_learning_mean(run):.2f} | {walls[seed]:.1f} s |"
         )
     print(f"\n{won} of {len(walls)} seeds succeed at the last evaluation; "
           f"greedy return there: median {statistics.median(finals):.2f}, min {min(finals):.2f}")

@@ -476,12 +476,22 @@ fn the_acrobot_is_a_task_file_and_a_python_driver() {
         .arg(root().join("examples/acrobot/check_model.py"))
         .output()
         .unwrap();
-    assert!(model.status.success(), "{}{}", stdout(&model), stderr(&model));
+    assert!(
+        model.status.success(),
+        "{}{}",
+        stdout(&model),
+        stderr(&model)
+    );
     let dir = tmp("acrobot");
     for (name, trials) in [("acrobot", "4"), ("acrobot-balance", "8")] {
         let task = root().join(format!("examples/acrobot/{name}.toml"));
         let task = task.to_str().unwrap();
-        let d = Driver::script(&python, "examples/acrobot/driver.py", name, &["--task", task]);
+        let d = Driver::script(
+            &python,
+            "examples/acrobot/driver.py",
+            name,
+            &["--task", task],
+        );
         let out = check(&d.id, &["--task", task]);
         assert!(out.status.success(), "{}{}", stdout(&out), stderr(&out));
         let args = ["--task", task, "--trials", trials, "--eval-every", "2"];
