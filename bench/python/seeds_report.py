@@ -70,6 +70,14 @@ def upright_at_end(trial, ts, length, angles, tol, hold) -> bool:
     )
 
 
+def upright_times(trial, ts, angles, tol):
+    """(the first time [s] every angle is within `tol` of 0, or None; the share of the
+    trial's samples where they are)."""
+    up = [all(abs(wrap(x[i])) < tol for i in angles) for x in trial]
+    first = next((k * ts for k, u in enumerate(up) if u), None)
+    return first, sum(up) / len(up)
+
+
 def evaluations(run_dir: Path):
     """[(trial, simulated seconds of learning so far, greedy return)] of a run."""
     with open(run_dir / "returns.csv") as f:
@@ -103,7 +111,7 @@ def main():
         "| mean return, last 100 learning trials | wall time |"
     )
     print("|---:|---:|---:|---|---:|---:|---:|")
-    won, finals = 0, []
+    won, finals, notes = 0, [], []
     for seed in sorted(walls):
         run = args.out / f"seed-{seed}"
         evals = evaluations(run)
@@ -117,12 +125,22 @@ def main():
                 for e in evals
             ]
         first = next((e[1] for e, g in zip(evals, good) if g), None)
+        if args.upright is not None:
+            for k, trial in enumerate(greedy[evals[-1][0]]):
+                at, share = upright_times(trial, ts, angles, args.upright)
+                notes.append(
+                    f"seed {seed}, last greedy trial from start state {k}: "
+                    + ("never upright" if at is None else f"first upright at {at:.2f} s, upright {100 * share:.0f} % of it")
+                )
         won += good[-1]
         finals.append(evals[-1][2])
         print(
             f"| {seed} | {evals[-1][0]} | {evals[-1][2]:.2f} | {'yes' if good[-1] else 'no'} "
             f"| {'never' if first is None else f'{first:.0f}'} | {last_learning_mean(run):.2f} | {walls[seed]:.1f} s |"
         )
+    if notes:
+        print(f"\nUpright: every angle within {args.upright} rad of 0.")
+        print("\n".join(f"- {n}" for n in notes))
     print(f"\n{won} of {len(walls)} seeds succeed at the last evaluation; "
           f"greedy return there: median {statistics.median(finals):.2f}, min {min(finals):.2f}")
     return 0
