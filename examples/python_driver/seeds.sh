@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# One `rig run --plant external` per seed, seeds 1..RUNS, each against a lockstep Python
-# driver of its own, started as `PYTHON DRIVER DRIVER_ARGS... --task TASK --driver-id ID`
+# One `rig run --plant external` per seed, seeds FIRST..FIRST+RUNS-1, each against a
+# lockstep Python driver of its own, started as
+# `PYTHON DRIVER DRIVER_ARGS... --task TASK --driver-id ID`
 # (examples/acrobot/driver.py, examples/gymnasium/adapter.py --mapping M, ...). Writes
 # OUT/seed-K/ (each run's directory), OUT/runs.csv (all returns, `run` = seed - 1, as
 # `rig learn` writes them) and OUT/wall.csv (each run's wall time).
@@ -10,10 +11,11 @@
 #     examples/acrobot/driver.py -- --algo mlac
 #
 # PYTHON (default python3) must import iceoryx2 0.10.0 (and what the driver needs); RIG
-# (default the release build) is the rig.
+# (default the release build) is the rig; FIRST (default 1) the first seed. OUT's
+# runs.csv and wall.csv are appended to when they exist.
 set -euo pipefail
 if [ $# -lt 5 ]; then
-  sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//' >&2
+  sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//' >&2
   exit 2
 fi
 out=$1 runs=$2 trials=$3 task=$4
@@ -25,9 +27,10 @@ here=$(cd "$(dirname "$0")" && pwd)
 python=${PYTHON:-python3}
 rig=${RIG:-$here/../../target/release/rig}
 mkdir -p "$out"
-echo "run,trial,sim_time_s,return,greedy_return" > "$out/runs.csv"
-echo "seed,wall_s" > "$out/wall.csv"
-for seed in $(seq 1 "$runs"); do
+[ -f "$out/runs.csv" ] || echo "run,trial,sim_time_s,return,greedy_return" > "$out/runs.csv"
+[ -f "$out/wall.csv" ] || echo "seed,wall_s" > "$out/wall.csv"
+first=${FIRST:-1}
+for seed in $(seq "$first" $((first + runs - 1))); do
   id="seeds-$$-$seed"
   "$python" "${driver[@]}" --task "$task" --driver-id "$id" &
   pid=$!
