@@ -43,8 +43,8 @@ def wrap(a: float) -> float:
     return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
-def derivative(s, tau: float):
-    """s' = f(s, tau) for s = [q_1, q_2, q_1', q_2'] (q_1 from hanging)."""
+def terms(s):
+    """The equations' d_1, d_2, phi_1 and phi_2 at s = [q_1, q_2, q_1', q_2']."""
     q1, q2, dq1, dq2 = s
     d1 = M1 * LC1**2 + M2 * (L1**2 + LC2**2 + 2.0 * L1 * LC2 * math.cos(q2)) + I1 + I2
     d2 = M2 * (LC2**2 + L1 * LC2 * math.cos(q2)) + I2
@@ -55,6 +55,25 @@ def derivative(s, tau: float):
         + (M1 * LC1 + M2 * L1) * G * math.cos(q1 - math.pi / 2.0)
         + phi2
     )
+    return d1, d2, phi1, phi2
+
+
+def elbow_drift(s):
+    """The torque-free part of q_2'' = (tau + elbow_drift(s)) / elbow_inertia(s)."""
+    d1, d2, phi1, phi2 = terms(s)
+    return d2 / d1 * phi1 - M2 * L1 * LC2 * s[2] ** 2 * math.sin(s[1]) - phi2
+
+
+def elbow_inertia(s):
+    """m_2 l_c2^2 + I_2 - d_2^2 / d_1: how hard the elbow is to turn at s."""
+    d1, d2, _, _ = terms(s)
+    return M2 * LC2**2 + I2 - d2**2 / d1
+
+
+def derivative(s, tau: float):
+    """s' = f(s, tau) for s = [q_1, q_2, q_1', q_2'] (q_1 from hanging)."""
+    d1, d2, phi1, phi2 = terms(s)
+    _, q2, dq1, dq2 = s
     ddq2 = (tau + d2 / d1 * phi1 - M2 * L1 * LC2 * dq1**2 * math.sin(q2) - phi2) / (
         M2 * LC2**2 + I2 - d2**2 / d1
     )
@@ -102,8 +121,7 @@ class Acrobot:
     def energy(self) -> float:
         """Kinetic plus potential energy (zero hanging at rest), for the model's test."""
         q1, q2, dq1, dq2 = self.s
-        d1 = M1 * LC1**2 + M2 * (L1**2 + LC2**2 + 2.0 * L1 * LC2 * math.cos(q2)) + I1 + I2
-        d2 = M2 * (LC2**2 + L1 * LC2 * math.cos(q2)) + I2
+        d1, d2, _, _ = terms(self.s)
         d22 = M2 * LC2**2 + I2
         kinetic = 0.5 * (d1 * dq1 * dq1 + 2.0 * d2 * dq1 * dq2 + d22 * dq2 * dq2)
         h1 = -LC1 * math.cos(q1)

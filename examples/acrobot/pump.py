@@ -19,24 +19,14 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from acrobot import G, I1, I2, L1, LC1, LC2, M1, M2, Acrobot  # noqa: E402
+from acrobot import Acrobot, elbow_drift, elbow_inertia  # noqa: E402
 
 TS, SECONDS = 0.05, 10.0
 
 
 def torque(s, v: float) -> float:
     """The elbow torque that gives q2'' = v (partial feedback linearisation)."""
-    q1, q2, dq1, dq2 = s
-    d1 = M1 * LC1**2 + M2 * (L1**2 + LC2**2 + 2.0 * L1 * LC2 * math.cos(q2)) + I1 + I2
-    d2 = M2 * (LC2**2 + L1 * LC2 * math.cos(q2)) + I2
-    phi2 = M2 * LC2 * G * math.cos(q1 + q2 - math.pi / 2.0)
-    phi1 = (
-        -M2 * L1 * LC2 * dq2**2 * math.sin(q2)
-        - 2.0 * M2 * L1 * LC2 * dq2 * dq1 * math.sin(q2)
-        + (M1 * LC1 + M2 * L1) * G * math.cos(q1 - math.pi / 2.0)
-        + phi2
-    )
-    return v * (M2 * LC2**2 + I2 - d2**2 / d1) - (d2 / d1 * phi1 - M2 * L1 * LC2 * dq1**2 * math.sin(q2) - phi2)
+    return v * elbow_inertia(s) - elbow_drift(s)
 
 
 def swing_up(bound: float, alpha: float, kp: float, kd: float):
