@@ -354,17 +354,9 @@ fn the_furuta_pendulum_is_a_task_file_and_a_python_driver() {
 /// gymnasium.
 #[test]
 fn gymnasium_pendulum_v1_is_served_by_the_adapter() {
-    let Some(python) = common::drivers::python() else {
+    let Some(python) = python_with_gymnasium() else {
         return;
     };
-    let probe = std::process::Command::new(&python)
-        .args(["-c", "import gymnasium"])
-        .output()
-        .unwrap();
-    if !probe.status.success() {
-        println!("skipped: {python} cannot import gymnasium (pip install gymnasium)");
-        return;
-    }
     let dir = tmp("gym");
     let task = root().join("examples/gymnasium/pendulum-v1.toml");
     let task = task.to_str().unwrap();
@@ -412,6 +404,103 @@ fn gymnasium_pendulum_v1_is_served_by_the_adapter() {
     );
     ok(run(&d.id, &args, &dir.join("c")));
     assert_eq!(reward_from(&dir.join("c")), Some(false));
+}
+
+/// The Python of the driver tests if it imports gymnasium; `None`, with the reason
+/// printed, if it does not (or there is none).
+fn python_with_gymnasium() -> Option<String> {
+    let python = common::drivers::python()?;
+    let probe = std::process::Command::new(&python)
+        .args(["-c", "import gymnasium"])
+        .output()
+        .unwrap();
+    if !probe.status.success() {
+        println!("skipped: {python} cannot import gymnasium (pip install gymnasium)");
+        return None;
+    }
+    Some(python)
+}
+
+/// The greedy returns of the run in `dir`, in trial order.
+fn greedy_returns(dir: &Path) -> Vec<f64> {
+    returns(dir)
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.rsplit(',').next().filter(|g| !g.is_empty()))
+        .map(|g| g.parse().unwrap())
+        .collect()
+}
+
+/// A Gymnasium goal task through the adapter (examples/gymnasium/): MountainCarContinuous-v0
+/// with its own reward and endings passes `rig check-driver --task`, and MLAC/LLR with the
+/// rules' preset (its discount from the task's time scale) drives the car to the goal in
+/// the greedy trials after 10 learning trials: their mean return, the environment's, is
+/// above Gymnasium's threshold of 90 (doing nothing returns 0).
+#[test]
+fn gymnasium_mountain_car_reaches_its_goal_through_the_adapter() {
+    let Some(python) = python_with_gymnasium() else {
+        return;
+    };
+    let dir = tmp("mountain-car");
+    let task = root().join("examples/gymnasium/mountain-car-continuous.toml");
+    let task = task.to_str().unwrap();
+    let mapping = root().join("examples/gymnasium/mountain_car_continuous.py");
+    let d = Driver::script(
+        &python,
+        "examples/gymnasium/adapter.py",
+        "car",
+        &["--mapping", mapping.to_str().unwrap()],
+    );
+    let out = check(&d.id, &["--task", task]);
+    assert!(out.status.success(), "{}{}", stdout(&out), stderr(&out));
+    ok(run(
+        &d.id,
+        &["--task", task, "--trials", "10", "--eval-every", "10"],
+        &dir,
+    ));
+    assert_eq!(reward_from(&dir), Some(true));
+    let greedy = greedy_returns(&dir);
+    assert!(greedy.len() == 1 && greedy[0] >= 90.0, "{greedy:?}");
+}
+
+/// The acrobot (examples/acrobot/: Spong's acrobot with Acrobot-v1's parameters, a Python
+/// driver in lockstep, two task files): its model keeps its energy and is Acrobot-v1's
+/// (check_model.py); its driver passes `rig check-driver` for both tasks, and a few trials
+/// of MLAC/LLR repeat their returns on a second run.
+#[test]
+fn the_acrobot_is_a_task_file_and_a_python_driver() {
+    let Some(python) = common::drivers::python() else {
+        return;
+    };
+    let model = std::process::Command::new(&python)
+        .arg(root().join("examples/acrobot/check_model.py"))
+        .output()
+        .unwrap();
+    assert!(
+        model.status.success(),
+        "{}{}",
+        stdout(&model),
+        stderr(&model)
+    );
+    let dir = tmp("acrobot");
+    for (name, trials) in [("acrobot", "4"), ("acrobot-balance", "8")] {
+        let task = root().join(format!("examples/acrobot/{name}.toml"));
+        let task = task.to_str().unwrap();
+        let d = Driver::script(
+            &python,
+            "examples/acrobot/driver.py",
+            name,
+            &["--task", task],
+        );
+        let out = check(&d.id, &["--task", task]);
+        assert!(out.status.success(), "{}{}", stdout(&out), stderr(&out));
+        let args = ["--task", task, "--trials", trials, "--eval-every", "2"];
+        ok(run(&d.id, &args, &dir.join(format!("{name}-a"))));
+        ok(run(&d.id, &args, &dir.join(format!("{name}-b"))));
+        let a = returns(&dir.join(format!("{name}-a")));
+        assert_eq!(a, returns(&dir.join(format!("{name}-b"))));
+        assert_eq!(a.lines().count(), trials.parse::<usize>().unwrap() + 1);
+    }
 }
 
 /// Whether the run in `dir` learned the driver's rewards: every measurement flagged

@@ -1,0 +1,150 @@
+#!/usr/bin/env python3
+"""The per-seed table of an experiment written by examples/python_driver/seeds.sh: for
+each seed, the greedy return at the last evaluation, whether it succeeds, the simulated
+seconds of learning until the first evaluation that succeeds, the mean return of its
+last 100 learning trials (with exploration, from the learning trials' starts) and the
+run's wall time.
+
+    python3 bench/python/seeds_report.py OUT --return-at-least 90
+    python3 bench/python/seeds_report.py OUT --upright 0.3 --hold 1.5
+
+An evaluation succeeds
+  --return-at-least R   if its greedy return (the mean over the task's start states) is
+                        at least R;
+  --upright A --hold S  if every greedy trial of it (one per start state, read from the
+                        run's recording, run.mcap) runs its full length and its last S
+                        seconds keep every angle state within A rad of 0 (upright).
+Prints a Markdown table and a line "K of N seeds succeed at the last evaluation".
+Needs mcap (the official reader) for --upright.
+"""
+
+import argparse
+import csv
+import json
+import math
+import statistics
+import sys
+from pathlib import Path
+
+FLAG_GREEDY = 4
+
+
+def wrap(a: float) -> float:
+    """Angle to [-pi, pi)."""
+    return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def task_of(run_dir: Path):
+    """(sampling time, trial seconds, indices of the angle states) from config.toml."""
+    import tomllib
+
+    with open(run_dir / "config.toml", "rb") as f:
+        task = tomllib.load(f)["task"]
+    angles = [i for i, s in enumerate(task["state"]) if s.get("angle")]
+    return task["sampling_time"], task["trial_seconds"], angles
+
+
+def greedy_trials(mcap_path: Path):
+    """evaluation (the learning trial it follows) -> [[state per step] per greedy trial]."""
+    from mcap.reader import make_reader
+
+    evals = {}
+    with open(mcap_path, "rb") as f:
+        for _, _, msg in make_reader(f).iter_messages(topics=["/plant/measurement"]):
+            m = json.loads(msg.data)
+            if m["flags"] & FLAG_GREEDY:
+                trials = evals.setdefault(m["trial"], [])
+                if m["step"] == 0 or not trials:
+                    trials.append([])
+                trials[-1].append([v for k, v in sorted(m.items()) if k.startswith("y_")])
+    return evals
+
+
+def upright_at_end(trial, ts, length, angles, tol, hold) -> bool:
+    """Whether `trial` runs `length` seconds and its last `hold` seconds keep every angle
+    within `tol` of 0."""
+    samples = round(length / ts) + 1
+    tail = round(hold / ts) + 1
+    return len(trial) >= samples and all(
+        abs(wrap(x[i])) < tol for x in trial[-tail:] for i in angles
+    )
+
+
+def upright_times(trial, ts, angles, tol):
+    """(the first time [s] every angle is within `tol` of 0, or None; the share of the
+    trial's samples where they are)."""
+    up = [all(abs(wrap(x[i])) < tol for i in angles) for x in trial]
+    first = next((k * ts for k, u in enumerate(up) if u), None)
+    return first, sum(up) / len(up)
+
+
+def evaluations(run_dir: Path):
+    """[(trial, simulated seconds of learning so far, greedy return)] of a run."""
+    with open(run_dir / "returns.csv") as f:
+        return [
+            (int(r["trial"]), float(r["sim_time_s"]), float(r["greedy_return"]))
+            for r in csv.DictReader(f)
+            if r["greedy_return"]
+        ]
+
+
+def last_learning_mean(run_dir: Path, count: int = 100) -> float:
+    """The mean return of the run's last `count` learning trials."""
+    with open(run_dir / "returns.csv") as f:
+        returns = [float(r["return"]) for r in csv.DictReader(f)]
+    return statistics.mean(returns[-count:])
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("out", type=Path, help="the experiment's folder (seeds.sh's OUT)")
+    p.add_argument("--return-at-least", type=float, metavar="R", help="success: greedy return >= R")
+    p.add_argument("--upright", type=float, metavar="A", help="success: angles within A rad of upright")
+    p.add_argument("--hold", type=float, default=1.5, metavar="S", help="for --upright: the last S seconds [default: 1.5]")
+    args = p.parse_args()
+    if (args.return_at_least is None) == (args.upright is None):
+        p.error("give one of --return-at-least and --upright")
+    with open(args.out / "wall.csv") as f:
+        walls = {int(r["seed"]): float(r["wall_s"]) for r in csv.DictReader(f)}
+    print(
+        "| seed | trials | greedy return at the last evaluation | succeeds | simulated s to first success "
+        "| mean return, last 100 learning trials | wall time |"
+    )
+    print("|---:|---:|---:|---|---:|---:|---:|")
+    won, finals, notes = 0, [], []
+    for seed in sorted(walls):
+        run = args.out / f"seed-{seed}"
+        evals = evaluations(run)
+        if args.upright is None:
+            good = [e[2] >= args.return_at_least for e in evals]
+        else:
+            ts, length, angles = task_of(run)
+            greedy = greedy_trials(run / "run.mcap")
+            good = [
+                all(upright_at_end(t, ts, length, angles, args.upright, args.hold) for t in greedy[e[0]])
+                for e in evals
+            ]
+        first = next((e[1] for e, g in zip(evals, good) if g), None)
+        if args.upright is not None:
+            for k, trial in enumerate(greedy[evals[-1][0]]):
+                at, share = upright_times(trial, ts, angles, args.upright)
+                notes.append(
+                    f"seed {seed}, last greedy trial from start state {k}: "
+                    + ("never upright" if at is None else f"first upright at {at:.2f} s, upright {100 * share:.0f} % of it")
+                )
+        won += good[-1]
+        finals.append(evals[-1][2])
+        print(
+            f"| {seed} | {evals[-1][0]} | {evals[-1][2]:.2f} | {'yes' if good[-1] else 'no'} "
+            f"| {'never' if first is None else f'{first:.0f}'} | {last_learning_mean(run):.2f} | {walls[seed]:.1f} s |"
+        )
+    if notes:
+        print(f"\nUpright: every angle within {args.upright} rad of 0.")
+        print("\n".join(f"- {n}" for n in notes))
+    print(f"\n{won} of {len(walls)} seeds succeed at the last evaluation; "
+          f"greedy return there: median {statistics.median(finals):.2f}, min {min(finals):.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

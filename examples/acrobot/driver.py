@@ -1,0 +1,23 @@
+#!/usr/bin/env python3
+"""A driver for the rig (docs/driver.md) that simulates the acrobot (acrobot.py) in
+lockstep: a system the rig does not contain, served through the official iceoryx2
+bindings with the task file acrobot.toml (or acrobot-balance.toml).
+
+    python3 examples/acrobot/driver.py [--driver-id ID] [--task FILE] [--verbose]
+    rig run --plant external --task examples/acrobot/acrobot.toml
+
+The driver id defaults to the task's name, the one `rig run --task` looks for. Stop it
+with Ctrl-C or SIGTERM.
+"""
+
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "python_driver"))  # the contract's modules
+
+from acrobot import Acrobot  # noqa: E402
+from model_driver import run  # noqa: E402
+
+if __name__ == "__main__":
+    sys.exit(run(__doc__, Acrobot(), default_task=HERE / "acrobot.toml", shape=(4, 1), what="acrobot"))
