@@ -266,11 +266,16 @@ mod with_the_view {
     #[test]
     fn a_viewer_that_stops_reading_changes_nothing_of_the_run() {
         let Some(node) = node() else { return };
-        let flags = ["run", "--cpus", "shared", "--quiet", "--trials", "6"];
+        // Long enough (about 150 000 messages) for the viewer to connect, subscribe and stop
+        // reading while the run goes on, and to fill the server's queue for it.
+        let flags = ["run", "--cpus", "shared", "--quiet", "--trials", "200"];
         let plain = tmp("plain");
         ok(rig().args(flags).arg("--out").arg(&plain).output().unwrap());
         let dir = tmp("stalled");
         let port = free_port();
+        // The viewer first (it retries until the view serves): a lockstep run would end
+        // before a viewer started after it had connected.
+        let client = viewer(&node, port, &dir.join("received.jsonl"), true);
         let run = rig()
             .args(flags)
             .arg("--live")
@@ -279,7 +284,6 @@ mod with_the_view {
             .arg(&dir)
             .spawn()
             .unwrap();
-        let client = viewer(&node, port, &dir.join("received.jsonl"), true);
         finish(run, "the run with a stalled viewer");
         finish(client, "the stalled client");
         let read = |d: &Path| std::fs::read(d.join("returns.csv")).unwrap();
