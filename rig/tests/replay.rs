@@ -327,7 +327,8 @@ fn an_old_or_foreign_recording_is_refused_in_one_line() {
 }
 
 /// `--observer KIND` over an encoder run: a table of errors per state against the
-/// recorded estimates and the truth, and its CSV. The recorded observer itself has no
+/// recorded estimates and the truth, beside the recorded observer's own error against
+/// the truth, and its CSV. The recorded observer itself has no
 /// error against the recorded estimates; another has.
 #[test]
 fn another_observer_is_compared_on_the_recorded_data() {
@@ -359,7 +360,9 @@ fn another_observer_is_compared_on_the_recorded_data() {
         let mut lines = csv.lines();
         assert_eq!(
             lines.next(),
-            Some("state,rms_vs_recorded,max_vs_recorded,rms_vs_truth,max_vs_truth,samples")
+            Some(
+                "state,rms_vs_recorded,max_vs_recorded,rms_vs_truth,max_vs_truth,rms_recorded_vs_truth,max_recorded_vs_truth,samples"
+            )
         );
         lines
             .map(|l| l.split(',').map(str::to_string).collect())
@@ -375,7 +378,7 @@ fn another_observer_is_compared_on_the_recorded_data() {
             ("phi", "phi_dot")
         );
         // Every non-start sample of 4 learning trials and 2 greedy ones against the truth.
-        assert_eq!(num(&rows[1][5]), 6.0 * 100.0);
+        assert_eq!(num(&rows[1][7]), 6.0 * 100.0);
         // The encoder's quantisation: the angle is within half a count of the truth.
         assert!(
             num(&rows[0][4]) < 2.0 * std::f64::consts::PI / 4096.0,
@@ -385,4 +388,11 @@ fn another_observer_is_compared_on_the_recorded_data() {
     assert_eq!((num(&same[1][1]), num(&same[1][2])), (0.0, 0.0));
     assert!(num(&other[1][1]) > 1e-3, "{other:?}");
     assert!(num(&same[1][3]) > 0.0 && num(&other[1][3]) > 0.0);
+    // The baseline: the recorded observer's own error against the truth, the same
+    // whichever observer is compared; the recorded one run again has exactly it.
+    for (s, o) in same.iter().zip(&other) {
+        assert_eq!((&s[3], &s[4]), (&s[5], &s[6]), "{same:?}");
+        assert_eq!((&o[5], &o[6]), (&s[5], &s[6]), "{other:?}");
+    }
+    assert_ne!(other[1][3], other[1][5], "{other:?}");
 }

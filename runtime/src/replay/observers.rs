@@ -9,7 +9,8 @@
 //!   from the recorded one;
 //! - *against the truth*: the new observer's `x̂_k` and the true `x_k` — `/plant/truth`
 //!   with a sensor that does not measure the full state, the measurement itself with one
-//!   that does.
+//!   that does — beside the recorded observer's own `x̂_k` against the same truth (run
+//!   again over the same measurements: replay reproduces it bit for bit).
 //!
 //! Trial starts (the state is known there) and the run's end are left out; angle errors
 //! are wrapped to [−π, π).
@@ -58,6 +59,8 @@ pub struct StateErrors {
     pub vs_recorded: Errors,
     /// Against the true state.
     pub vs_truth: Errors,
+    /// The recorded observer's `x̂_k` against the true state: the baseline.
+    pub recorded_vs_truth: Errors,
 }
 
 /// The errors per state of observer `kind` over `rec`'s measurements, with the run's
@@ -71,6 +74,8 @@ pub fn compare(rec: &Recording, kind: ObserverKind) -> Result<Vec<StateErrors>, 
     let n = task.state_dim();
     let mut front: Front = crate::experiment::front(&task, &cfg);
     let mut bare = ::observer::build(task.clone(), &cfg.observer, cfg.agent.model.as_ref());
+    let recorded = &rec.cfg.observer;
+    let mut baseline = ::observer::build(task.clone(), recorded, cfg.agent.model.as_ref());
     let mut rows: Vec<StateErrors> = task
         .state_names
         .iter()
@@ -78,6 +83,7 @@ pub fn compare(rec: &Recording, kind: ObserverKind) -> Result<Vec<StateErrors>, 
             state: name.clone(),
             vs_recorded: Errors::default(),
             vs_truth: Errors::default(),
+            recorded_vs_truth: Errors::default(),
         })
         .collect();
     let error = |i: usize, a: f64, b: f64| {
@@ -94,6 +100,7 @@ pub fn compare(rec: &Recording, kind: ObserverKind) -> Result<Vec<StateErrors>, 
         if f & (flags::SHUTDOWN | flags::START) != 0 {
             if f & flags::START != 0 {
                 bare.reset(&x.y[..n]);
+                baseline.reset(&x.y[..n]);
             }
             continue;
         }
@@ -105,12 +112,15 @@ pub fn compare(rec: &Recording, kind: ObserverKind) -> Result<Vec<StateErrors>, 
         if f & flags::PRIMED != 0 {
             continue;
         }
-        let x_hat = bare.update(&x.y[..n], &x.u_applied[..task.action_dim()]);
+        let u = &x.u_applied[..task.action_dim()];
+        let x_hat = bare.update(&x.y[..n], u);
+        let x_rec = baseline.update(&x.y[..n], u);
         let Some(truth) = true_state(rec, x, full) else {
             continue;
         };
         for (i, row) in rows.iter_mut().enumerate() {
             row.vs_truth.add(error(i, x_hat[i], truth[i]));
+            row.recorded_vs_truth.add(error(i, x_rec[i], truth[i]));
         }
     }
     Ok(rows)
@@ -127,12 +137,14 @@ fn true_state<'a>(rec: &'a Recording, x: &'a Measurement, full: bool) -> Option<
 }
 
 /// The CSV header of [`write_csv`].
-pub const CSV_HEADER: [&str; 6] = [
+pub const CSV_HEADER: [&str; 8] = [
     "state",
     "rms_vs_recorded",
     "max_vs_recorded",
     "rms_vs_truth",
     "max_vs_truth",
+    "rms_recorded_vs_truth",
+    "max_recorded_vs_truth",
     "samples",
 ];
 
@@ -151,6 +163,8 @@ pub fn write_csv(path: &Path, rows: &[StateErrors]) -> Result<(), ReplayError> {
             r.vs_recorded.max.to_string(),
             r.vs_truth.rms().to_string(),
             r.vs_truth.max.to_string(),
+            r.recorded_vs_truth.rms().to_string(),
+            r.recorded_vs_truth.max.to_string(),
             r.vs_truth.samples.to_string(),
         ])
         .map_err(io)?;
