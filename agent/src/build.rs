@@ -234,7 +234,7 @@ pub fn build(task: &Task, learner: &Learner, run_seed: u64) -> Box<dyn Agent> {
         },
         critic,
         improver,
-        Exploration::new(l.sigma, l.explore_every, run_seed).with_decay(l.sigma_decay),
+        Exploration::new(l.sigma, l.explore_every, run_seed),
     ))
 }
 

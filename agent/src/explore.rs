@@ -27,13 +27,9 @@ pub mod stream {
     pub const ALL: [u64; 6] = [EXPLORATION, SENSOR_NOISE, DELAYS, SARSA, STARTS, PLANNING];
 }
 
-/// Gaussian exploration, every `every`-th step of a trial; learning trial `t` (1-based)
-/// explores with `σ · decay^(t−1)` (decay 1: the thesis's constant `σ`).
+/// Gaussian exploration, every `every`-th step of a trial.
 pub struct Exploration {
     sigma: f64,
-    sigma0: f64,
-    decay: f64,
-    trials: u64,
     every: u32,
     step: u32,
     rng: ChaCha8Rng,
@@ -47,30 +43,15 @@ impl Exploration {
         rng.set_stream(stream::EXPLORATION);
         Self {
             sigma,
-            sigma0: sigma,
-            decay: 1.0,
-            trials: 0,
             every: every.max(1),
             step: 0,
             rng,
         }
     }
 
-    /// The same exploration with `σ` multiplied by `decay` from one learning trial to
-    /// the next (`[learning] sigma_decay`).
-    pub fn with_decay(mut self, decay: f64) -> Self {
-        self.decay = decay;
-        self
-    }
-
-    /// Restarts the every-n-th-step count at a learning trial's start and sets that
-    /// trial's `σ`.
+    /// Restarts the every-n-th-step count at a trial start.
     pub fn start_trial(&mut self) {
         self.step = 0;
-        if self.decay != 1.0 {
-            self.sigma = self.sigma0 * self.decay.powf(self.trials as f64);
-        }
-        self.trials += 1;
     }
 
     /// Writes the next `Δu` (zero on non-exploring steps) into `du`.
@@ -87,17 +68,12 @@ impl Exploration {
     }
 }
 
-/// The random stream's position, the step count and, with a decay, the learning trials
-/// so far.
+/// The random stream's position and the step count.
 impl crate::checkpoint::Persist for Exploration {
     fn save(&self, s: &mut crate::checkpoint::Snapshot) {
         s.scope("exploration", |s| {
             s.rng("rng", &self.rng);
-            if self.decay == 1.0 {
-                s.u64s("step", &[u64::from(self.step)]);
-            } else {
-                s.u64s("step", &[u64::from(self.step), self.trials]);
-            }
+            s.u64s("step", &[u64::from(self.step)]);
         });
     }
     fn restore(
@@ -106,12 +82,7 @@ impl crate::checkpoint::Persist for Exploration {
     ) -> Result<(), crate::checkpoint::CheckpointError> {
         r.scope("exploration", |r| {
             self.rng = r.rng("rng")?;
-            let counts = r.u64s("step")?;
-            self.step = counts.first().copied().unwrap_or(0) as u32;
-            self.trials = counts.get(1).copied().unwrap_or(0);
-            if self.decay != 1.0 {
-                self.sigma = self.sigma0 * self.decay.powf(self.trials.saturating_sub(1) as f64);
-            }
+            self.step = r.u64s("step")?.first().copied().unwrap_or(0) as u32;
             Ok(())
         })
     }
@@ -129,33 +100,6 @@ mod tests {
         assert_eq!(ids.len(), stream::ALL.len(), "{:?}", stream::ALL);
         assert!(stream::ALL.contains(&crate::sarsa::STREAM));
         assert!(stream::ALL.contains(&crate::plan::STREAM));
-    }
-
-    #[test]
-    fn sigma_decays_per_learning_trial_and_resumes_from_a_checkpoint() {
-        use crate::checkpoint::{Persist, Snapshot};
-        let mut e = Exploration::new(2.0, 1, 9).with_decay(0.5);
-        let mut du = [0.0];
-        let mut sigmas = Vec::new();
-        for _ in 0..3 {
-            e.start_trial();
-            sigmas.push(e.sigma);
-            e.draw(&mut du);
-        }
-        assert_eq!(sigmas, [2.0, 1.0, 0.5]);
-        let mut s = Snapshot::default();
-        e.save(&mut s);
-        let mut resumed = Exploration::new(2.0, 1, 9).with_decay(0.5);
-        resumed.restore(&mut s.reader()).unwrap();
-        assert_eq!(resumed.sigma, 0.5);
-        e.start_trial();
-        resumed.start_trial();
-        assert_eq!((e.sigma, resumed.sigma), (0.25, 0.25));
-        let mut constant = Exploration::new(2.0, 1, 9);
-        for _ in 0..3 {
-            constant.start_trial();
-        }
-        assert_eq!(constant.sigma, 2.0);
     }
 
     #[test]

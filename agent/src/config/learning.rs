@@ -17,11 +17,6 @@ pub struct LearningConfig {
     pub lambda: f64,
     /// Exploration standard deviation `σ`.
     pub sigma: f64,
-    /// Learning trial `t` (1-based) explores with `σ · sigma_decay^(t−1)`: 1 (the
-    /// default, the thesis's constant `σ`) keeps `σ`; not in the thesis. Written only
-    /// when set.
-    #[serde(default = "one", skip_serializing_if = "is_one")]
-    pub sigma_decay: f64,
     /// Explore on every this-many-th step (1: every step, §3.6; 3: §6.4.1).
     pub explore_every: u32,
     /// MLAC: `∇_u f̂` is taken as zero within this distance of an action bound (§3.5.1).
@@ -36,14 +31,6 @@ pub struct LearningConfig {
 
 fn yes() -> bool {
     true
-}
-
-fn one() -> f64 {
-    1.0
-}
-
-fn is_one(v: &f64) -> bool {
-    *v == 1.0
 }
 
 impl LearningConfig {
@@ -62,15 +49,6 @@ impl LearningConfig {
         }
         check_float("learning.lambda", self.lambda, 0.0, 1.0, false)?;
         check_float("learning.sigma", self.sigma, 0.0, 1e3, false)?;
-        if !(self.sigma_decay > 0.0 && self.sigma_decay <= 1.0) {
-            return Err(ConfigError::new(
-                "learning.sigma_decay",
-                format!(
-                    "{} is out of range: must be a number in (0, 1] (1: a constant σ)",
-                    self.sigma_decay
-                ),
-            ));
-        }
         check_int(
             "learning.explore_every",
             self.explore_every.into(),
@@ -97,7 +75,6 @@ mod tests {
             gamma: 1.0,
             lambda: 0.65,
             sigma: 1.0,
-            sigma_decay: 1.0,
             explore_every: 1,
             saturation_margin: 0.0,
             bounded_actor: true,
@@ -110,34 +87,5 @@ mod tests {
             .validate(HorizonKind::Finite)
             .unwrap_err();
         assert!(e.message.contains("(0, 1]"), "{e}");
-    }
-
-    #[test]
-    fn sigma_decay_is_a_factor_in_0_1() {
-        let l = LearningConfig {
-            gamma: 0.97,
-            lambda: 0.65,
-            sigma: 1.0,
-            sigma_decay: 1.0,
-            explore_every: 1,
-            saturation_margin: 0.0,
-            bounded_actor: true,
-        };
-        assert!(is_one(&l.sigma_decay));
-        LearningConfig {
-            sigma_decay: 0.99,
-            ..l.clone()
-        }
-        .validate(HorizonKind::Infinite)
-        .unwrap();
-        for bad in [0.0, 1.5, f64::NAN] {
-            let e = LearningConfig {
-                sigma_decay: bad,
-                ..l.clone()
-            }
-            .validate(HorizonKind::Infinite)
-            .unwrap_err();
-            assert_eq!(e.key, "learning.sigma_decay", "{bad}");
-        }
     }
 }

@@ -98,7 +98,6 @@ pub(super) fn critic_only(system: SystemName, algo: Algo, approx: ApproxKind) ->
                 (true, false) => 1.0,
                 (true, true) => 0.05,
             },
-            sigma_decay: 1.0,
             explore_every: if vgbp { 3 } else { 1 },
             saturation_margin: 0.0,
             bounded_actor: true,

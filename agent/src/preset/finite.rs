@@ -79,7 +79,6 @@ pub fn finite_horizon(
             gamma: 1.0,
             lambda: 0.65,
             sigma: 1.0,
-            sigma_decay: 1.0,
             explore_every: 1,
             saturation_margin: 0.1,
             bounded_actor: true,

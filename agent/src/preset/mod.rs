@@ -148,7 +148,6 @@ pub fn preset(
             gamma: 0.97,
             lambda: 0.65,
             sigma: 1.0,
-            sigma_decay: 1.0,
             explore_every: 1,
             saturation_margin: if approx == ApproxKind::Rbf { 0.1 } else { 0.0 },
             bounded_actor: true,

@@ -204,12 +204,6 @@ impl PresetChoice {
                     .or_insert_with(|| toml::Value::String(String::new()));
             }
         }
-        // And the exploration's decay.
-        if let Some(toml::Value::Table(learning)) = table.get_mut("learning") {
-            learning
-                .entry("sigma_decay")
-                .or_insert_with(|| toml::Value::Float(1.0));
-        }
         // And an LSTD critic's prior.
         if let Some(toml::Value::Table(critic)) = table.get_mut("critic")
             && critic.contains_key("initial_a")

@@ -144,20 +144,6 @@ fn observer_keys_resolve_and_round_trip() {
 }
 
 #[test]
-fn sigma_decay_is_written_only_when_set_and_checked() {
-    let none = Overrides::default();
-    let file = |text: &str| resolve(Some((Path::new("d.toml"), text)), &none);
-    let decay = |c: &ExperimentConfig| c.agent.learning.sigma_decay;
-    assert_eq!(decay(&file("").unwrap()), 1.0);
-    assert!(!file("").unwrap().to_toml().contains("sigma_decay"));
-    let c = file("[learning]\nsigma_decay = 0.99\n").unwrap();
-    assert_eq!(decay(&c), 0.99);
-    assert_eq!(decay(&file(&c.to_toml()).unwrap()), 0.99);
-    let e = file("[learning]\nsigma_decay = 1.5\n").unwrap_err().to_string();
-    assert!(e.contains("d.toml: `learning.sigma_decay`: 1.5 is out of range"), "{e}");
-}
-
-#[test]
 fn lstd_prior_choices_and_errors() {
     let vgbp = "algo = \"vgbp\"\napprox = \"lstd\"\n";
     let none = Overrides::default();
