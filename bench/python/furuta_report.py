@@ -10,8 +10,8 @@ seed, read from each run's recording with seeds_report.py's reader.
 Writes OUT/curves.png, OUT/curves.svg, OUT/response-<LEARNER>.png/.svg (the run with the
 best last greedy return; with several start states, the greedy trial from the last) and
 prints a Markdown table per learner: for each seed its last greedy return, how long each
-last greedy trial (one per start state) ends within 0.3 rad of upright, the verdict and
-the wall time. A seed is *upright at the end* if every greedy trial of its last
+last greedy trial (one per start state) ends within 0.3 rad of upright, the verdict, how
+many of the evaluations in the run's last quarter meet it, and the wall time. A seed is *upright at the end* if every greedy trial of its last
 evaluation runs its full length and its last max(1.5 s, a third of the trial) keep the
 pendulum within 0.3 rad of upright. Needs matplotlib and mcap (the official reader).
 """
@@ -44,13 +44,23 @@ def held_at_end(trial, ts: float, length: float) -> float:
 
 def verdict(run: Path):
     """(the last evaluation's trial, its greedy return, [held_at_end per start state],
-    whether the seed is upright at the end)."""
+    whether the seed is upright at the end, (how many, of the evaluations in the last
+    quarter of the run, are upright at the end, how many there are))."""
     ts, length, angles = task_of(run)
-    last, _, ret = evaluations(run)[-1]
-    trials = [[states(m) for m in t] for t in greedy_measurements(run / "run.mcap")[last]]
+    evals = evaluations(run)
+    last, _, ret = evals[-1]
+    greedy = {
+        e: [[states(m) for m in t] for t in trials]
+        for e, trials in greedy_measurements(run / "run.mcap").items()
+    }
     hold = max(1.5, length / 3.0)
-    ok = all(upright_at_end(t, ts, length, angles, UPRIGHT, hold) for t in trials)
-    return last, ret, [held_at_end(t, ts, length) for t in trials], ok
+
+    def upright(e):
+        return all(upright_at_end(t, ts, length, angles, UPRIGHT, hold) for t in greedy[e])
+
+    late = [e for e, _, _ in evals if e > 0.75 * last]
+    held = [held_at_end(t, ts, length) for t in greedy[last]]
+    return last, ret, held, upright(last), (sum(upright(e) for e in late), len(late))
 
 
 def greedy_curves(runs_csv: Path):
@@ -94,15 +104,21 @@ def report(name: str, d: Path) -> list:
     with open(d / "wall.csv") as f:
         walls = {int(r["seed"]): float(r["wall_s"]) for r in csv.DictReader(f)}
     print(f"\n{name} ({d}):\n")
-    print("| seed | trials | greedy return at the last trial | within 0.3 rad of upright at the end, per start state | upright at the end | wall time |")
-    print("|---:|---:|---:|---|---|---:|")
+    print(
+        "| seed | trials | greedy return at the last trial | within 0.3 rad of upright at the end, "
+        "per start state | upright at the end | evaluations upright at the end, last quarter | wall time |"
+    )
+    print("|---:|---:|---:|---|---|---:|---:|")
     won, finals = 0, {}
     for seed in sorted(walls):
-        last, ret, held, ok = verdict(d / f"seed-{seed}")
+        last, ret, held, ok, (late_ok, late) = verdict(d / f"seed-{seed}")
         won += ok
         finals[seed] = ret
         ends = ", ".join(f"{h:.2f} s" for h in held)
-        print(f"| {seed} | {last} | {ret:.0f} | {ends} | {'yes' if ok else 'no'} | {walls[seed]:.1f} s |")
+        print(
+            f"| {seed} | {last} | {ret:.0f} | {ends} | {'yes' if ok else 'no'} "
+            f"| {late_ok} of {late} | {walls[seed]:.1f} s |"
+        )
     print(
         f"\n{name}: {won} of {len(walls)} seeds upright at the end; last greedy return mean "
         f"{statistics.mean(finals.values()):.0f} [{min(finals.values()):.0f}, {max(finals.values()):.0f}], "
