@@ -106,5 +106,9 @@ fn a_failed_run_stops_its_driver() {
     if alive {
         let _ = Command::new("kill").arg(pid.trim()).status();
     }
-    assert!(!alive, "driver {} still runs after the failed run", pid.trim());
+    assert!(
+        !alive,
+        "driver {} still runs after the failed run",
+        pid.trim()
+    );
 }
