@@ -21,8 +21,10 @@ pub mod stream {
     pub const SARSA: u64 = 4;
     /// The learning trials' start states drawn from a task's start distribution.
     pub const STARTS: u64 = plant::start::STREAM;
+    /// The planner's candidate action sequences (`crate::plan`).
+    pub const PLANNING: u64 = 6;
     /// All of them.
-    pub const ALL: [u64; 5] = [EXPLORATION, SENSOR_NOISE, DELAYS, SARSA, STARTS];
+    pub const ALL: [u64; 6] = [EXPLORATION, SENSOR_NOISE, DELAYS, SARSA, STARTS, PLANNING];
 }
 
 /// Gaussian exploration, every `every`-th step of a trial.
@@ -97,6 +99,7 @@ mod tests {
         ids.dedup();
         assert_eq!(ids.len(), stream::ALL.len(), "{:?}", stream::ALL);
         assert!(stream::ALL.contains(&crate::sarsa::STREAM));
+        assert!(stream::ALL.contains(&crate::plan::STREAM));
     }
 
     #[test]

@@ -41,8 +41,8 @@ use crate::config::PlanningConfig;
 use crate::mlac::Mlac;
 use crate::model::ProcessModel;
 
-/// The random stream of the planner's draws (beside [`crate::explore::stream`]'s).
-pub const STREAM: u64 = 6;
+/// The random stream of the planner's draws ([`crate::explore::stream::PLANNING`]).
+pub const STREAM: u64 = crate::explore::stream::PLANNING;
 
 /// MLAC whose actions are planned with its own process model and critic.
 pub struct Planner {

@@ -44,8 +44,9 @@ def task_of(run_dir: Path):
     return task["sampling_time"], task["trial_seconds"], angles
 
 
-def greedy_trials(mcap_path: Path):
-    """evaluation (the learning trial it follows) -> [[state per step] per greedy trial]."""
+def greedy_measurements(mcap_path: Path):
+    """evaluation (the learning trial it follows) -> [[measurement message per step] per
+    greedy trial], from a run's recording."""
     from mcap.reader import make_reader
 
     evals = {}
@@ -56,8 +57,21 @@ def greedy_trials(mcap_path: Path):
                 trials = evals.setdefault(m["trial"], [])
                 if m["step"] == 0 or not trials:
                     trials.append([])
-                trials[-1].append([v for k, v in sorted(m.items()) if k.startswith("y_")])
+                trials[-1].append(m)
     return evals
+
+
+def states(measurement) -> list:
+    """The measured state `[y_0, y_1, ...]` of one measurement message."""
+    return [measurement[f"y_{i}"] for i in range(sum(k.startswith("y_") for k in measurement))]
+
+
+def greedy_trials(mcap_path: Path):
+    """evaluation (the learning trial it follows) -> [[state per step] per greedy trial]."""
+    return {
+        e: [[states(m) for m in trial] for trial in trials]
+        for e, trials in greedy_measurements(mcap_path).items()
+    }
 
 
 def upright_at_end(trial, ts, length, angles, tol, hold) -> bool:

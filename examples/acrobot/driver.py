@@ -20,4 +20,4 @@ from acrobot import Acrobot  # noqa: E402
 from model_driver import run  # noqa: E402
 
 if __name__ == "__main__":
-    sys.exit(run(__doc__, Acrobot(), default_task=HERE / "acrobot.toml", shape=(4, 1), what="acrobot"))
+    sys.exit(run(__doc__, lambda _: Acrobot(), default_task=HERE / "acrobot.toml", shape=(4, 1), what="acrobot"))

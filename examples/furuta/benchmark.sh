@@ -1,29 +1,31 @@
 #!/usr/bin/env bash
-# Reproduces the tables of docs/results/furuta.md's "Planning with the learned model"
-# section in one command: each learner on each Furuta task, RUNS seeds (default 5)
-# against drivers of their own (experiment.sh), then bench/python/furuta_report.py's
-# tables and per-run verdicts ("swings up and balances") into OUT/report.md.
+# Reproduces the tables of docs/results/furuta.md's "Balance, 5 seeds per configuration"
+# in one command: MLAC/LLR on furuta-balance.toml with mlac-llr.toml and two variants of
+# it (learning rates halved; and exploration sigma 1 V), RUNS seeds each (default 5),
+# each seed against a driver of its own (experiment.sh), 800 trials; then
+# bench/python/furuta_report.py's per-seed tables and verdicts into OUT/report.md.
 #
 #   examples/furuta/benchmark.sh OUT [RUNS]
 #
 # PYTHON (default python3) must import iceoryx2 0.10.0, mcap and matplotlib; RIG
 # (default the release build) is the rig.
 set -euo pipefail
-out=$1 runs=${2:-5}
+out=${1:?usage: benchmark.sh OUT [RUNS]} runs=${2:-5}
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 python=${PYTHON:-python3}
 e=$here/experiment.sh
 mkdir -p "$out"
+# The variants: mlac-llr.toml with the values named.
+halved=$out/mlac-llr-halved.toml sigma1=$out/mlac-llr-halved-sigma1.toml
+sed -e 's/^alpha = 0.02$/alpha = 0.01/' -e 's/^alpha = 0.15$/alpha = 0.1/' "$here/mlac-llr.toml" > "$halved"
+sed -e 's/^gamma = 0.99$/gamma = 0.99\nsigma = 1.0/' "$halved" > "$sigma1"
 bal=$here/furuta-balance.toml
-swing=$here/furuta.toml
-TASK=$bal "$e" "$out/bal-mlac" "$runs" 800 --config "$here/mlac-llr.toml"
-TASK=$bal "$e" "$out/bal-plan" "$runs" 60 --config "$here/mlac-plan.toml"
-TASK=$swing "$e" "$out/swing-plan" "$runs" 150 --config "$here/mlac-plan.toml"
+TASK=$bal "$e" "$out/bal-mlac-llr" "$runs" 800 --config "$here/mlac-llr.toml"
+TASK=$bal "$e" "$out/bal-halved" "$runs" 800 --config "$halved"
+TASK=$bal "$e" "$out/bal-halved-sigma1" "$runs" 800 --config "$sigma1"
 {
   echo "## balance (furuta-balance.toml)"
-  "$python" "$root/bench/python/furuta_report.py" "$out/bal" \
-    mlac-llr="$out/bal-mlac" mlac-plan="$out/bal-plan"
-  echo "## swing-up and balance (furuta.toml)"
-  "$python" "$root/bench/python/furuta_report.py" "$out/swing" mlac-plan="$out/swing-plan"
+  "$python" "$root/bench/python/furuta_report.py" "$out/bal" mlac-llr="$out/bal-mlac-llr" \
+    halved="$out/bal-halved" halved-sigma1="$out/bal-halved-sigma1"
 } | tee "$out/report.md"

@@ -1,9 +1,9 @@
-"""The command line of a lockstep driver for one simulated model (examples/acrobot/): the
-driver id, the task file (checked for the model's shape) and --verbose, then
-lockstep.serve_until_signalled.
+"""The command line of a lockstep driver for one simulated model (examples/acrobot/,
+examples/furuta/): the driver id, the task file (checked for the model's shape),
+--verbose and the model's own options, then lockstep.serve_until_signalled.
 
     from model_driver import run
-    run(__doc__, Acrobot(), default_task=HERE / "acrobot.toml", shape=(4, 1), what="acrobot")
+    run(__doc__, lambda args: Acrobot(), default_task=HERE / "acrobot.toml", shape=(4, 1), what="acrobot")
 """
 
 import argparse
@@ -13,9 +13,12 @@ from lockstep import Services, serve_until_signalled
 from task import Task, TaskError
 
 
-def run(doc: str, simulation, default_task, shape, what: str) -> int:
-    """Parses the command line described by `doc` and serves `simulation` (n states and
-    m actions, `shape`) for the task file given, until a signal."""
+def run(doc: str, simulation, default_task, shape, what, options=()) -> int:
+    """Parses the command line described by `doc` and serves the model `simulation(args)`
+    makes from the parsed arguments (n states and m actions, `shape`) for the task file
+    given, until a signal. `options` are the model's own flags, `(flag, keywords of
+    argparse's add_argument)` pairs; `what` names the model, a string or a function of
+    the parsed arguments."""
     p = argparse.ArgumentParser(description=" ".join(doc.split("\n\n")[0].split()))
     p.add_argument(
         "--driver-id",
@@ -26,6 +29,8 @@ def run(doc: str, simulation, default_task, shape, what: str) -> int:
         default=str(default_task),
         help=f"the task file served: {shape[0]} states and {shape[1]} action(s) [default: {default_task.name} next to the driver]",
     )
+    for flag, keywords in options:
+        p.add_argument(flag, **keywords)
     p.add_argument("--verbose", action="store_true", help="log resets to stderr")
     args = p.parse_args()
     try:
@@ -35,10 +40,11 @@ def run(doc: str, simulation, default_task, shape, what: str) -> int:
     if (task.n, task.m) != tuple(shape):
         p.error(f"--task {args.task}: {task.n} states and {task.m} actions, not {shape[0]} and {shape[1]}")
     driver_id = args.driver_id or task.name.replace(".", "-")
+    name = what(args) if callable(what) else what
     print(
-        f"driver {driver_id!r}: task {task.name} ({what}), Ts {task.ts * 1e3:g} ms, lockstep",
+        f"driver {driver_id!r}: task {task.name} ({name}), Ts {task.ts * 1e3:g} ms, lockstep",
         file=sys.stderr,
         flush=True,
     )
-    serve_until_signalled(Services(driver_id), task, simulation, "driver", args.verbose)
+    serve_until_signalled(Services(driver_id), task, simulation(args), "driver", args.verbose)
     return 0

@@ -12,10 +12,11 @@
 #
 # PYTHON (default python3) must import iceoryx2 0.10.0 (and what the driver needs); RIG
 # (default the release build) is the rig; FIRST (default 1) the first seed. OUT's
-# runs.csv and wall.csv are appended to when they exist.
+# runs.csv and wall.csv are appended to when they exist. A run that fails stops the
+# script, and its driver with it.
 set -euo pipefail
 if [ $# -lt 5 ]; then
-  sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//' >&2
+  sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//' >&2
   exit 2
 fi
 out=$1 runs=$2 trials=$3 task=$4
@@ -30,6 +31,8 @@ mkdir -p "$out"
 [ -f "$out/runs.csv" ] || echo "run,trial,sim_time_s,return,greedy_return" > "$out/runs.csv"
 [ -f "$out/wall.csv" ] || echo "seed,wall_s" > "$out/wall.csv"
 first=${FIRST:-1}
+pid=
+trap '[ -z "$pid" ] || { kill "$pid"; wait "$pid"; } 2>/dev/null || true' EXIT
 for seed in $(seq "$first" $((first + runs - 1))); do
   id="seeds-$$-$seed"
   "$python" "${driver[@]}" --task "$task" --driver-id "$id" &
@@ -39,6 +42,7 @@ for seed in $(seq "$first" $((first + runs - 1))); do
     --trials "$trials" --quiet --out "$out/seed-$seed" "$@"
   end=$(date +%s%N)
   kill "$pid"; wait "$pid" || true
+  pid=
   echo "$seed,$(( (end - start) / 1000000 ))e-3" >> "$out/wall.csv"
   tail -n +2 "$out/seed-$seed/returns.csv" | sed "s/^0,/$((seed - 1)),/" >> "$out/runs.csv"
   echo "seed $seed: $(tail -n 1 "$out/seed-$seed/returns.csv")"

@@ -7,6 +7,7 @@
 //! without it it prints why and passes — CI installs it, so it runs there.
 
 use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
 
 mod common;
 use common::drivers::{Driver, python};
@@ -66,4 +67,48 @@ fn the_shipped_furuta_learners_run_and_repeat() {
             "{task:?} with {config:?}: a greedy evaluation: {a}"
         );
     }
+}
+
+/// A run that fails stops `seeds.sh` (which `experiment.sh` runs its seeds with) and the
+/// driver it started: here the driver never serves, the rig gives up waiting for it after
+/// a second, and no driver is left running.
+#[test]
+fn a_failed_run_stops_its_driver() {
+    let dir = common::tmp("furuta", "failed-run");
+    let pid_file = dir.join("driver.pid");
+    let driver = dir.join("driver.sh");
+    std::fs::write(
+        &driver,
+        format!("echo $$ > {}\nexec sleep 60\n", pid_file.display()),
+    )
+    .unwrap();
+    let seeds = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/python_driver/seeds.sh");
+    let status = Command::new("bash")
+        .arg(seeds)
+        .arg(dir.join("out"))
+        .args(["1", "1"])
+        .arg(furuta().join("furuta-balance.toml"))
+        .arg(&driver)
+        .args(["--", "--driver-timeout", "1"])
+        .env("PYTHON", "bash")
+        .env("RIG", env!("CARGO_BIN_EXE_rig"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .unwrap();
+    assert!(!status.success(), "the run should have failed");
+    let pid = std::fs::read_to_string(&pid_file).unwrap();
+    let alive = Command::new("kill")
+        .args(["-0", pid.trim()])
+        .status()
+        .unwrap()
+        .success();
+    if alive {
+        let _ = Command::new("kill").arg(pid.trim()).status();
+    }
+    assert!(
+        !alive,
+        "driver {} still runs after the failed run",
+        pid.trim()
+    );
 }
