@@ -48,6 +48,17 @@ impl<T> AtFile<T> for csv::Result<T> {
     }
 }
 
+impl<T> AtFile<T> for mcap::McapResult<T> {
+    fn at(self, action: &'static str, path: &Path) -> Result<T, FileError> {
+        self.map_err(|e| FileError {
+            action,
+            path: path.to_path_buf(),
+            // Its message and sources unchanged: an I/O error of another kind shows them.
+            source: io::Error::other(e),
+        })
+    }
+}
+
 /// `error` and each of its sources, joined by ": " (as anyhow's `{:#}` prints them).
 pub fn chain(error: &dyn std::error::Error) -> String {
     let mut text = error.to_string();
