@@ -84,7 +84,7 @@ impl Lstd {
 }
 
 impl Critic for Lstd {
-    fn function(&self) -> &dyn Differentiable {
+    fn function(&self) -> &(dyn Differentiable + 'static) {
         &self.v
     }
 

@@ -81,11 +81,17 @@ impl Mlac {
 }
 
 impl Improver for Mlac {
-    fn act(&self, x: &[f64], _u_prev: &[f64], _critic: &dyn Differentiable, u: &mut [f64]) {
+    fn act(
+        &self,
+        x: &[f64],
+        _u_prev: &[f64],
+        _critic: &(dyn Differentiable + 'static),
+        u: &mut [f64],
+    ) {
         self.actor.value(x, u);
     }
 
-    fn improve(&mut self, t: &Transition, critic: &dyn Differentiable) {
+    fn improve(&mut self, t: &Transition, critic: &(dyn Differentiable + 'static)) {
         let (n, m, d) = (self.info.n(), self.info.m(), self.info.input_dim());
         // ũ_k = π_ϑk(x_k), x̃_{k+1} = f̂(x_k, ũ_k)                      (Eq. 3.4–3.5)
         let mut u_tilde = [0.0; MAX_ACTION];

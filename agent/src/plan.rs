@@ -192,12 +192,18 @@ fn refit(elites: &[Scored], mean: &mut [f64], spread: &mut [f64]) {
 }
 
 impl Improver for Planner {
-    fn act(&self, x: &[f64], _u_prev: &[f64], critic: &dyn Differentiable, u: &mut [f64]) {
+    fn act(
+        &self,
+        x: &[f64],
+        _u_prev: &[f64],
+        critic: &(dyn Differentiable + 'static),
+        u: &mut [f64],
+    ) {
         let m = self.info().m();
         u.copy_from_slice(&self.plan(x, critic).seq[..m]);
     }
 
-    fn improve(&mut self, t: &Transition, critic: &dyn Differentiable) {
+    fn improve(&mut self, t: &Transition, critic: &(dyn Differentiable + 'static)) {
         self.mlac.improve(t, critic);
     }
 
