@@ -87,4 +87,16 @@ mod tests {
         );
         assert_eq!(text, format!("{:#}", anyhow::Error::new(e)));
     }
+
+    #[test]
+    fn an_mcap_error_keeps_its_message_and_its_sources() {
+        let e: mcap::McapResult<()> = Err(mcap::McapError::Io(io::Error::other("disk full")));
+        let e = e
+            .at("cannot write", Path::new("run.mcap.part"))
+            .unwrap_err();
+        assert_eq!(
+            chain(&e),
+            "cannot write run.mcap.part: I/O error from writing, or reading a compression stream: disk full"
+        );
+    }
 }

@@ -168,3 +168,27 @@ pub enum RunError {
         log: String,
     },
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_stopped_run_names_the_cause_with_its_reasons_then_how_to_go_on() {
+        let cause = RunError::File(FileError {
+            action: "cannot write",
+            path: "out/returns.csv".into(),
+            source: std::io::Error::other("No space left on device"),
+        });
+        let e = RunError::Stopped {
+            cause: Box::new(cause),
+            hint: "2 completed trials are in returns.csv".into(),
+        };
+        assert_eq!(
+            e.to_string(),
+            "cannot write out/returns.csv: No space left on device; 2 completed trials are in returns.csv"
+        );
+        // One message: the cause's reasons are in it, not after it again.
+        assert!(std::error::Error::source(&e).is_none());
+    }
+}
