@@ -92,7 +92,7 @@ pub enum LoopError {
         log: PathBuf,
         /// What the wait saw.
         #[source]
-        source: driver::Error,
+        source: Box<driver::Error>,
     },
     /// The Gymnasium yardstick needs a Python.
     #[error("no Python")]

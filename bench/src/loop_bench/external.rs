@@ -172,7 +172,7 @@ fn served(id: &str, log: &Path) -> Result<(), LoopError> {
         LoopError::NotServed {
             id: id.to_owned(),
             log: log.to_owned(),
-            source,
+            source: Box::new(source),
         }
     })?;
     Ok(())
