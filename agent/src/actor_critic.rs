@@ -53,8 +53,8 @@
 use plant::Reward;
 
 use crate::Agent;
-use crate::approx::{Approximator, Differentiable, scalar};
-use crate::critic::{Critic, Next};
+use crate::approx::{Approximator, scalar};
+use crate::critic::{Critic, Next, ValueWithGradient};
 use crate::explore::Exploration;
 use crate::horizon::{Horizon, Input};
 
@@ -135,7 +135,7 @@ impl TaskInfo {
 /// how the policy improves given the critic `V`.
 /// `F` is what it reads of the critic's value function: `V(x)` with its gradient (the
 /// default), or `V(x)` only ([`crate::critic::Critic`]).
-pub trait Improver<F: ?Sized = dyn Differentiable>: Send + crate::checkpoint::Persist {
+pub trait Improver<F: ?Sized = ValueWithGradient>: Send + crate::checkpoint::Persist {
     /// The policy's action `π(x)` (without exploration) into `u`; `u_prev` is the action
     /// applied in the previous sample (RMAC and VGBP linearise their model around it).
     /// With a finite horizon `x` is `(x_k, k)`.
@@ -164,7 +164,7 @@ pub struct Learning {
 
 /// An actor-critic agent: critic + improver + exploration; the improver reads the
 /// critic's value function as an `F` (with its gradient, or SAC's: values only).
-pub struct ActorCritic<F: ?Sized = dyn Differentiable> {
+pub struct ActorCritic<F: ?Sized = ValueWithGradient> {
     info: TaskInfo,
     learning: Learning,
     critic: Box<dyn Critic<F>>,

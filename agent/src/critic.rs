@@ -29,9 +29,13 @@ pub enum Next<'a> {
     Terminal(f64),
 }
 
+/// A value function with its gradient `∇_x V`, as a critic hands it to a policy improvement
+/// that needs the gradient (MLAC's, RMAC's, VGBP's); SAC's reads `dyn Approximator`.
+pub type ValueWithGradient = dyn Differentiable;
+
 /// A critic and its learning rule; `F` is what the policy improvement reads of its value
 /// function: `V(x)` with its gradient (the default), or `V(x)` only (SAC's).
-pub trait Critic<F: ?Sized = dyn Differentiable>: Send + crate::checkpoint::Persist {
+pub trait Critic<F: ?Sized = ValueWithGradient>: Send + crate::checkpoint::Persist {
     /// The value function `V(x)`, as the policy improvement reads it.
     fn function(&self) -> &F;
     /// Clears the eligibility traces at the start of a trial.
@@ -80,8 +84,8 @@ pub trait ReadAs<F: ?Sized> {
     fn read_as(&self) -> &F;
 }
 
-impl ReadAs<dyn Differentiable> for dyn ValueFunction {
-    fn read_as(&self) -> &(dyn Differentiable + 'static) {
+impl ReadAs<ValueWithGradient> for dyn ValueFunction {
+    fn read_as(&self) -> &ValueWithGradient {
         self
     }
 }
