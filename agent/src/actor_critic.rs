@@ -53,8 +53,8 @@
 use plant::Reward;
 
 use crate::Agent;
-use crate::approx::{Differentiable, scalar};
-use crate::critic::{Critic, Next};
+use crate::approx::{Approximator, scalar};
+use crate::critic::{Critic, Next, ValueWithGradient};
 use crate::explore::Exploration;
 use crate::horizon::{Horizon, Input};
 
@@ -133,13 +133,15 @@ impl TaskInfo {
 
 /// The algorithm-specific half of an actor-critic learner: how actions are chosen and
 /// how the policy improves given the critic `V`.
-pub trait Improver: Send + crate::checkpoint::Persist {
+/// `F` is what it reads of the critic's value function: `V(x)` with its gradient (the
+/// default), or `V(x)` only ([`crate::critic::Critic`]).
+pub trait Improver<F: ?Sized = ValueWithGradient>: Send + crate::checkpoint::Persist {
     /// The policy's action `π(x)` (without exploration) into `u`; `u_prev` is the action
     /// applied in the previous sample (RMAC and VGBP linearise their model around it).
     /// With a finite horizon `x` is `(x_k, k)`.
-    fn act(&self, x: &[f64], u_prev: &[f64], critic: &dyn Differentiable, u: &mut [f64]);
+    fn act(&self, x: &[f64], u_prev: &[f64], critic: &F, u: &mut [f64]);
     /// Improves the policy and learns any models from transition `t`.
-    fn improve(&mut self, t: &Transition, critic: &dyn Differentiable);
+    fn improve(&mut self, t: &Transition, critic: &F);
     /// Whether the next action is chosen after the critic and model updates of this
     /// sample (Algorithm 7) rather than before them (Algorithms 1–3, line 9).
     fn acts_after_update(&self) -> bool {
@@ -160,12 +162,13 @@ pub struct Learning {
     pub lambda: f64,
 }
 
-/// An actor-critic agent: critic + improver + exploration.
-pub struct ActorCritic {
+/// An actor-critic agent: critic + improver + exploration; the improver reads the
+/// critic's value function as an `F` (with its gradient, or SAC's: values only).
+pub struct ActorCritic<F: ?Sized = ValueWithGradient> {
     info: TaskInfo,
     learning: Learning,
-    critic: Box<dyn Critic>,
-    improver: Box<dyn Improver>,
+    critic: Box<dyn Critic<F>>,
+    improver: Box<dyn Improver<F>>,
     exploration: Exploration,
     /// `x_k`, as the actor and critic read it: `(x_k, k)` for a finite horizon.
     x: Input,
@@ -176,13 +179,13 @@ pub struct ActorCritic {
     du: Vec<f64>,
 }
 
-impl ActorCritic {
+impl<F: Approximator + ?Sized> ActorCritic<F> {
     /// Assembles an agent.
     pub fn new(
         info: TaskInfo,
         learning: Learning,
-        critic: Box<dyn Critic>,
-        improver: Box<dyn Improver>,
+        critic: Box<dyn Critic<F>>,
+        improver: Box<dyn Improver<F>>,
         exploration: Exploration,
     ) -> Self {
         let (n, m) = (info.n(), info.m());
@@ -271,7 +274,7 @@ impl ActorCritic {
     }
 }
 
-impl Agent for ActorCritic {
+impl<F: Approximator + ?Sized> Agent for ActorCritic<F> {
     fn start_trial(&mut self, x0: &[f64], u: &mut [f64]) {
         self.critic.start_trial();
         self.exploration.start_trial();
@@ -307,7 +310,7 @@ impl Agent for ActorCritic {
 
 /// The critic, the improver (actor, reference model, process model) and the exploration
 /// stream; the per-sample state is set again by the next trial's start.
-impl crate::checkpoint::Persist for ActorCritic {
+impl<F: ?Sized> crate::checkpoint::Persist for ActorCritic<F> {
     fn save(&self, s: &mut crate::checkpoint::Snapshot) {
         s.scope("critic", |s| self.critic.save(s));
         s.scope("improver", |s| self.improver.save(s));

@@ -7,7 +7,7 @@ use crate::actor_critic::{ActorCritic, Improver, Learning, TaskInfo};
 use crate::approx::llr::{Eviction, Llr, LlrParams, Search};
 use crate::approx::rbf::{Rbf, RbfParams};
 use crate::approx::tiles::{Tiles, TilesParams};
-use crate::approx::{Approximator, Differentiable, ValueFunction};
+use crate::approx::{Approximator, Differentiable, Traced, ValueFunction};
 use crate::config::{EvictionRule, LearningConfig, LstdPrior, TilesConfig};
 use crate::critic::{Critic, TdLambda};
 use crate::explore::Exploration;
@@ -102,65 +102,12 @@ fn plain_actor(c: &Plain, s: &Space) -> Box<dyn Approximator> {
     }
 }
 
-/// SAC's critic: any approximator; tile coding is its value without a gradient.
-fn plain_critic(c: &Plain, s: &Space) -> Box<dyn ValueFunction> {
+/// SAC's critic: any approximator; tile coding, without a gradient, too (SAC reads only
+/// its values).
+fn plain_critic(c: &Plain, s: &Space) -> Box<dyn Traced> {
     match c {
         Plain::Smooth(c) => smooth(c, s).value_function(),
-        Plain::Tiles(t) => Box::new(GradientFree(tiles(t, s))),
-    }
-}
-
-/// A tile-coding critic for SAC: SAC never asks the critic for a gradient.
-struct GradientFree(Tiles);
-
-impl Approximator for GradientFree {
-    fn input_dim(&self) -> usize {
-        self.0.input_dim()
-    }
-    fn output_dim(&self) -> usize {
-        self.0.output_dim()
-    }
-    fn value(&self, x: &[f64], y: &mut [f64]) {
-        self.0.value(x, y)
-    }
-    fn shift(&mut self, x: &[f64], step: &[f64]) {
-        self.0.shift(x, step)
-    }
-    fn fit(&mut self, x: &[f64], target: &[f64], rate: f64) {
-        self.0.fit(x, target, rate)
-    }
-}
-
-impl crate::checkpoint::Persist for GradientFree {
-    fn save(&self, s: &mut crate::checkpoint::Snapshot) {
-        self.0.save(s)
-    }
-    fn restore(
-        &mut self,
-        r: &mut crate::checkpoint::Reader,
-    ) -> Result<(), crate::checkpoint::CheckpointError> {
-        self.0.restore(r)
-    }
-}
-
-impl Differentiable for GradientFree {
-    fn value_and_jacobian(&self, _: &[f64], _: &mut [f64], _: &mut [f64]) {
-        unreachable!("tile coding has no gradient; validation allows it for SAC only")
-    }
-}
-
-impl crate::approx::Traced for GradientFree {
-    fn visit(&mut self, x: &[f64], decay: f64) {
-        self.0.visit(x, decay)
-    }
-    fn visit_value(&mut self, x: &[f64], decay: f64) -> f64 {
-        self.0.visit_value(x, decay)
-    }
-    fn apply_td(&mut self, step: f64) {
-        self.0.apply_td(step)
-    }
-    fn clear_traces(&mut self) {
-        self.0.clear_traces()
+        Plain::Tiles(t) => Box::new(tiles(t, s)),
     }
 }
 
@@ -181,10 +128,11 @@ pub fn build(task: &Task, learner: &Learner, run_seed: u64) -> Box<dyn Agent> {
         Algorithm::Sac(p) => {
             let actor = plain_actor(&p.actor, &spaces.actor(l));
             let critic = plain_critic(&p.critic, &spaces.state(1, None));
-            (
-                Box::new(TdLambda::new(critic, p.critic.alpha())),
-                Box::new(Sac::new(actor, p.actor.alpha())),
-            )
+            let critic: Box<dyn Critic<dyn Approximator>> =
+                Box::new(TdLambda::values_only(critic, p.critic.alpha()));
+            let sac: Box<dyn Improver<dyn Approximator>> =
+                Box::new(Sac::new(actor, p.actor.alpha()));
+            return actor_critic(info, l, run_seed, critic, sac);
         }
         Algorithm::Mlac(p) => {
             let actor = smooth(&p.actor, &spaces.actor(l)).differentiable();
@@ -226,6 +174,17 @@ pub fn build(task: &Task, learner: &Learner, run_seed: u64) -> Box<dyn Agent> {
             (vgbp_critic(&spaces, &p.critic, l.gamma), Box::new(vgbp))
         }
     };
+    actor_critic(info, l, run_seed, critic, improver)
+}
+
+/// The actor-critic of `critic` and `improver`, learning as `l` says.
+fn actor_critic<F: Approximator + ?Sized + 'static>(
+    info: TaskInfo,
+    l: &LearningConfig,
+    run_seed: u64,
+    critic: Box<dyn Critic<F>>,
+    improver: Box<dyn Improver<F>>,
+) -> Box<dyn Agent> {
     Box::new(ActorCritic::new(
         info,
         Learning {

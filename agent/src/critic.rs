@@ -16,7 +16,7 @@
 //! `next` is the state `x_{k+1}`, whose value the critic estimates, or — at the end of a
 //! finite horizon — the known terminal value `τ_N(x_N)` (Eq. 4.3, [`Next::Terminal`]).
 
-use crate::approx::{Differentiable, ValueFunction, scalar};
+use crate::approx::{Approximator, Differentiable, Traced, ValueFunction, scalar};
 
 /// What follows `x_k` in the target of the temporal difference.
 #[derive(Clone, Copy, Debug)]
@@ -29,10 +29,15 @@ pub enum Next<'a> {
     Terminal(f64),
 }
 
-/// A critic and its learning rule.
-pub trait Critic: Send + crate::checkpoint::Persist {
-    /// The value function `V(x)` with its gradient.
-    fn function(&self) -> &dyn Differentiable;
+/// A value function with its gradient `∇_x V`, as a critic hands it to a policy improvement
+/// that needs the gradient (MLAC's, RMAC's, VGBP's); SAC's reads `dyn Approximator`.
+pub type ValueWithGradient = dyn Differentiable;
+
+/// A critic and its learning rule; `F` is what the policy improvement reads of its value
+/// function: `V(x)` with its gradient (the default), or `V(x)` only (SAC's).
+pub trait Critic<F: ?Sized = ValueWithGradient>: Send + crate::checkpoint::Persist {
+    /// The value function `V(x)`, as the policy improvement reads it.
+    fn function(&self) -> &F;
     /// Clears the eligibility traces at the start of a trial.
     fn start_trial(&mut self);
     /// Visits `x_k` (traces, Eq. 2.19b / 6.16) and returns the temporal difference
@@ -51,9 +56,10 @@ pub trait Critic: Send + crate::checkpoint::Persist {
 }
 
 /// TD(λ) with accumulating eligibility traces, Template 2.1: any traced approximator
-/// (RBF, LLR, tile coding) with learning rate `α_c`.
-pub struct TdLambda {
-    f: Box<dyn ValueFunction>,
+/// (RBF, LLR, tile coding) with learning rate `α_c`. `V` is its kind of value function: one
+/// with a gradient (the default), or without (`dyn Traced`: tile coding, SAC's).
+pub struct TdLambda<V: ?Sized = dyn ValueFunction> {
+    f: Box<V>,
     alpha: f64,
 }
 
@@ -64,9 +70,35 @@ impl TdLambda {
     }
 }
 
-impl Critic for TdLambda {
-    fn function(&self) -> &dyn Differentiable {
-        self.f.as_ref()
+impl TdLambda<dyn Traced> {
+    /// A TD(λ) critic learning `f` with rate `α_c`, read for its values only: the critic
+    /// of an improver that never asks for `∇_x V` (SAC's; tile coding has none).
+    pub fn values_only(f: Box<dyn Traced>, alpha: f64) -> Self {
+        Self { f, alpha }
+    }
+}
+
+/// A value function read as an `F` ([`Critic::function`]).
+pub trait ReadAs<F: ?Sized> {
+    /// `self` as an `F`.
+    fn read_as(&self) -> &F;
+}
+
+impl ReadAs<ValueWithGradient> for dyn ValueFunction {
+    fn read_as(&self) -> &ValueWithGradient {
+        self
+    }
+}
+
+impl ReadAs<dyn Approximator> for dyn Traced {
+    fn read_as(&self) -> &(dyn Approximator + 'static) {
+        self
+    }
+}
+
+impl<V: Traced + ReadAs<F> + ?Sized, F: ?Sized> Critic<F> for TdLambda<V> {
+    fn function(&self) -> &F {
+        self.f.read_as()
     }
 
     fn start_trial(&mut self) {
@@ -93,7 +125,7 @@ impl Critic for TdLambda {
     }
 }
 
-impl crate::checkpoint::Persist for TdLambda {
+impl<V: Traced + ?Sized> crate::checkpoint::Persist for TdLambda<V> {
     fn save(&self, s: &mut crate::checkpoint::Snapshot) {
         self.f.save(s);
     }

@@ -22,9 +22,8 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::approx::Differentiable;
 use crate::approx::rbf::Rbf;
-use crate::critic::{Critic, Next};
+use crate::critic::{Critic, Next, ValueWithGradient};
 
 /// An LSTD(λ) critic on a scalar RBF approximator.
 pub struct Lstd {
@@ -84,7 +83,7 @@ impl Lstd {
 }
 
 impl Critic for Lstd {
-    fn function(&self) -> &dyn Differentiable {
+    fn function(&self) -> &ValueWithGradient {
         &self.v
     }
 

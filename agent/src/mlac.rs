@@ -22,7 +22,8 @@
 //! At `k = N − 1` the critic is read at `k + 1 = N`, as line 15 of Algorithm 5 prints it.
 
 use crate::actor_critic::{Improver, TaskInfo, Transition};
-use crate::approx::{Approximator, Differentiable};
+use crate::approx::Approximator;
+use crate::critic::ValueWithGradient;
 use crate::model::ProcessModel;
 use plant::{MAX_ACTION, MAX_STATE};
 
@@ -81,11 +82,11 @@ impl Mlac {
 }
 
 impl Improver for Mlac {
-    fn act(&self, x: &[f64], _u_prev: &[f64], _critic: &dyn Differentiable, u: &mut [f64]) {
+    fn act(&self, x: &[f64], _u_prev: &[f64], _critic: &ValueWithGradient, u: &mut [f64]) {
         self.actor.value(x, u);
     }
 
-    fn improve(&mut self, t: &Transition, critic: &dyn Differentiable) {
+    fn improve(&mut self, t: &Transition, critic: &ValueWithGradient) {
         let (n, m, d) = (self.info.n(), self.info.m(), self.info.input_dim());
         // ũ_k = π_ϑk(x_k), x̃_{k+1} = f̂(x_k, ũ_k)                      (Eq. 3.4–3.5)
         let mut u_tilde = [0.0; MAX_ACTION];

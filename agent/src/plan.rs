@@ -38,6 +38,7 @@ use rand_distr::{Distribution, StandardNormal};
 use crate::actor_critic::{Improver, TaskInfo, Transition};
 use crate::approx::{Differentiable, scalar};
 use crate::config::PlanningConfig;
+use crate::critic::ValueWithGradient;
 use crate::mlac::Mlac;
 use crate::model::ProcessModel;
 
@@ -192,12 +193,12 @@ fn refit(elites: &[Scored], mean: &mut [f64], spread: &mut [f64]) {
 }
 
 impl Improver for Planner {
-    fn act(&self, x: &[f64], _u_prev: &[f64], critic: &dyn Differentiable, u: &mut [f64]) {
+    fn act(&self, x: &[f64], _u_prev: &[f64], critic: &ValueWithGradient, u: &mut [f64]) {
         let m = self.info().m();
         u.copy_from_slice(&self.plan(x, critic).seq[..m]);
     }
 
-    fn improve(&mut self, t: &Transition, critic: &dyn Differentiable) {
+    fn improve(&mut self, t: &Transition, critic: &ValueWithGradient) {
         self.mlac.improve(t, critic);
     }
 

@@ -22,7 +22,8 @@
 
 use crate::actor_critic::{Improver, TaskInfo, Transition};
 use crate::approx::solve::cholesky_solve;
-use crate::approx::{Approximator, Differentiable, scalar};
+use crate::approx::{Approximator, scalar};
+use crate::critic::ValueWithGradient;
 use crate::model::{ProcessModel, increment};
 use plant::{MAX_ACTION, MAX_STATE};
 
@@ -71,7 +72,7 @@ impl Rmac {
 }
 
 impl Improver for Rmac {
-    fn act(&self, x: &[f64], u_prev: &[f64], _critic: &dyn Differentiable, u: &mut [f64]) {
+    fn act(&self, x: &[f64], u_prev: &[f64], _critic: &ValueWithGradient, u: &mut [f64]) {
         let (n, m) = (self.info.n(), self.info.m());
         // x̂_{k+2} − x_{k+1} = R(x_{k+1})                                  (line 9)
         let mut want = [0.0; MAX_STATE];
@@ -98,7 +99,7 @@ impl Improver for Rmac {
         self.info.saturate(u);
     }
 
-    fn improve(&mut self, t: &Transition, critic: &dyn Differentiable) {
+    fn improve(&mut self, t: &Transition, critic: &ValueWithGradient) {
         let (n, d) = (self.info.n(), self.info.input_dim());
         // x_r = argmax_{x' ∈ R̂_x} V(x'),  R̂_x = { f̂(x_k, u) : u ∈ U_e }   (line 11)
         let mut best = (f64::NEG_INFINITY, [0.0; MAX_STATE]);

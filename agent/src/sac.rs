@@ -8,7 +8,7 @@
 //! exploration actually applied, `sat(π(x_k) + Δu) − π(x_k)`.
 
 use crate::actor_critic::{Improver, Transition};
-use crate::approx::{Approximator, Differentiable};
+use crate::approx::Approximator;
 
 /// The SAC actor.
 pub struct Sac {
@@ -23,12 +23,13 @@ impl Sac {
     }
 }
 
-impl Improver for Sac {
-    fn act(&self, x: &[f64], _u_prev: &[f64], _critic: &dyn Differentiable, u: &mut [f64]) {
+/// SAC reads nothing of the critic but the temporal difference: any critic will do.
+impl<F: ?Sized> Improver<F> for Sac {
+    fn act(&self, x: &[f64], _u_prev: &[f64], _critic: &F, u: &mut [f64]) {
         self.actor.value(x, u);
     }
 
-    fn improve(&mut self, t: &Transition, _critic: &dyn Differentiable) {
+    fn improve(&mut self, t: &Transition, _critic: &F) {
         // Eq. 3.1
         let step: Vec<f64> = t.du.iter().map(|du| self.alpha * t.td * du).collect();
         self.actor.shift(t.x, &step);

@@ -54,6 +54,7 @@
 
 use crate::actor_critic::{Improver, TaskInfo, Transition};
 use crate::approx::{Differentiable, scalar};
+use crate::critic::ValueWithGradient;
 use crate::model::{Prediction, ProcessModel};
 use plant::angle::wrap;
 use plant::{MAX_ACTION, MAX_STATE};
@@ -229,7 +230,7 @@ impl Vgbp {
 }
 
 impl Improver for Vgbp {
-    fn act(&self, x: &[f64], _u_prev: &[f64], critic: &dyn Differentiable, u: &mut [f64]) {
+    fn act(&self, x: &[f64], _u_prev: &[f64], critic: &ValueWithGradient, u: &mut [f64]) {
         let m = self.info.m();
         // Lines 12–14: β^P from the model's neighbours of x_{k+1}; Eq. 6.21.
         self.greedy_step(x, &[0.0; MAX_ACTION][..m], false, critic, u);
@@ -241,7 +242,7 @@ impl Improver for Vgbp {
         }
     }
 
-    fn improve(&mut self, t: &Transition, _critic: &dyn Differentiable) {
+    fn improve(&mut self, t: &Transition, _critic: &ValueWithGradient) {
         self.model.learn(t.x, t.u, t.x_next); //                          (line 10)
     }
 

@@ -34,7 +34,6 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use agent::config::{Algo, ApproxKind};
-use anyhow::{Result, anyhow};
 use observer::config::{ObserverKind, ObserverMode, ObserverModel, SensorKind};
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
@@ -44,6 +43,29 @@ use runtime::output::runs::{LAST_EVALUATIONS, final_greedy};
 use runtime::output::{progress_bar, write_atomic};
 use runtime::report::plot::{PointSeries, plot_points};
 use runtime::report::{CurvePoint, Series, SeriesStyle, curve, plot_curves};
+
+/// Why the delay study stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum DelayStudyError {
+    /// A cell's configuration.
+    #[error(transparent)]
+    Config(#[from] plant::config::ConfigError),
+    /// A cell could not be learned.
+    #[error(transparent)]
+    Learn(#[from] runtime::learn::LearnError),
+    /// A cell's final greedy returns could not be summarised.
+    #[error(transparent)]
+    Curve(#[from] runtime::report::CurveError),
+    /// An output could not be written.
+    #[error(transparent)]
+    File(#[from] runtime::error::FileError),
+    /// A figure could not be drawn.
+    #[error(transparent)]
+    Plot(#[from] runtime::report::PlotError),
+    /// The output folder could not be created.
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+}
 
 /// The learners of the study.
 pub const LEARNERS: [(Algo, ApproxKind); 2] = [
@@ -93,7 +115,7 @@ pub struct Stats {
 
 impl Stats {
     /// Of `v` (non-empty, finite).
-    pub fn of(v: &[f64]) -> Result<Self> {
+    pub fn of(v: &[f64]) -> Result<Self, runtime::report::CurveError> {
         let p = &curve(&[0], &[0.0], &[v.to_vec()])?[0];
         let n = v.len();
         let sd = if n > 1 {
@@ -163,7 +185,7 @@ fn ms(d: f64) -> String {
 }
 
 /// Runs the study; see the module documentation.
-pub fn delay_study(opts: &DelayStudyOptions) -> Result<Vec<Cell>> {
+pub fn delay_study(opts: &DelayStudyOptions) -> Result<Vec<Cell>, DelayStudyError> {
     std::fs::create_dir_all(&opts.out)?;
     let mut cells = Vec::new();
     // One bar for the whole study, grown by each cell's trials as it starts.
@@ -200,7 +222,7 @@ pub fn delay_study(opts: &DelayStudyOptions) -> Result<Vec<Cell>> {
                     delay_ms: Some(run_delay),
                     ..Overrides::default()
                 };
-                let mut cfg = resolve(None, &o).map_err(|e| anyhow!("{e}"))?;
+                let mut cfg = resolve(None, &o)?;
                 cfg.observer.model = opts.model;
                 let dir = opts.out.join(format!("{algo}-{approx}")).join(dir);
                 bar.inc_length(u64::from(cfg.run.runs) * u64::from(cfg.run.trials));
@@ -253,7 +275,7 @@ pub fn delay_study(opts: &DelayStudyOptions) -> Result<Vec<Cell>> {
 }
 
 /// `cells.csv`, the plots and `summary.txt`.
-fn write_outputs(opts: &DelayStudyOptions, cells: &[Cell]) -> Result<()> {
+fn write_outputs(opts: &DelayStudyOptions, cells: &[Cell]) -> Result<(), DelayStudyError> {
     let mut csv =
         String::from("algo,approx,mode,delay_ms,runs,mean,sd,ci_low,ci_high,velocity_error\n");
     for c in cells {

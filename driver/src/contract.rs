@@ -34,6 +34,8 @@ pub use crate::serving::how_to_serve;
 // A task's states and actions fit the messages: the plant's bounds are the wire's (a
 // build fails where they part).
 const _: () = assert!(plant::MAX_STATE == MAX_X && plant::MAX_ACTION == MAX_U);
+// A task's name fits [`DriverInfo::task`] (32 bytes) with a NUL after it.
+const _: () = assert!(plant::task::file::MAX_NAME < 32);
 
 /// The protocol version in [`DriverInfo::version`].
 pub const VERSION: u64 = 3;
@@ -294,7 +296,11 @@ impl DriverNotice {
 impl DriverInfo {
     /// The task's name as text (up to the first NUL).
     pub fn task_name(&self) -> String {
-        let end = self.task.iter().position(|&b| b == 0).unwrap_or(32);
+        let end = self
+            .task
+            .iter()
+            .position(|&b| b == 0)
+            .unwrap_or(self.task.len());
         String::from_utf8_lossy(&self.task[..end]).into_owned()
     }
 

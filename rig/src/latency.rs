@@ -70,7 +70,8 @@ pub fn main(args: &Args) -> ExitCode {
             .map(Clock::External)
             .map_err(anyhow::Error::from),
         None => bench::latency::period(args.period_ms.unwrap_or(30.0))
-            .map(|period| Clock::Realtime { period }),
+            .map(|period| Clock::Realtime { period })
+            .map_err(anyhow::Error::from),
     };
     let clock = match clock {
         Ok(c) => c,

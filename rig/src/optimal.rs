@@ -41,7 +41,7 @@ pub fn main(args: &Args) -> ExitCode {
     let csv = args.out.join("optimal.csv");
     let written = std::fs::create_dir_all(&args.out)
         .map_err(anyhow::Error::from)
-        .and_then(|()| write_trajectory(&csv, &o.trajectory));
+        .and_then(|()| write_trajectory(&csv, &o.trajectory).map_err(anyhow::Error::from));
     if let Err(e) = written {
         eprintln!("error: {}: {e:#}", csv.display());
         return ExitCode::FAILURE;

@@ -48,6 +48,17 @@ impl<T> AtFile<T> for csv::Result<T> {
     }
 }
 
+impl<T> AtFile<T> for mcap::McapResult<T> {
+    fn at(self, action: &'static str, path: &Path) -> Result<T, FileError> {
+        self.map_err(|e| FileError {
+            action,
+            path: path.to_path_buf(),
+            // Its message and sources unchanged: an I/O error of another kind shows them.
+            source: io::Error::other(e),
+        })
+    }
+}
+
 /// `error` and each of its sources, joined by ": " (as anyhow's `{:#}` prints them).
 pub fn chain(error: &dyn std::error::Error) -> String {
     let mut text = error.to_string();
@@ -75,5 +86,17 @@ mod tests {
             "{text}"
         );
         assert_eq!(text, format!("{:#}", anyhow::Error::new(e)));
+    }
+
+    #[test]
+    fn an_mcap_error_keeps_its_message_and_its_sources() {
+        let e: mcap::McapResult<()> = Err(mcap::McapError::Io(io::Error::other("disk full")));
+        let e = e
+            .at("cannot write", Path::new("run.mcap.part"))
+            .unwrap_err();
+        assert_eq!(
+            chain(&e),
+            "cannot write run.mcap.part: I/O error from writing, or reading a compression stream: disk full"
+        );
     }
 }

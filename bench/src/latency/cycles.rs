@@ -6,7 +6,9 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow, bail};
+use runtime::error::AtFile;
+
+use super::error::LatencyError;
 
 use super::{STAGES, STAMPS};
 
@@ -65,19 +67,25 @@ impl Cycles {
 pub(super) type Messages = BTreeMap<String, Vec<Vec<u8>>>;
 
 /// The messages of `topic`, parsed.
-pub(super) fn json(msgs: &Messages, topic: &str) -> Result<Vec<serde_json::Value>> {
+pub(super) fn json(msgs: &Messages, topic: &str) -> Result<Vec<serde_json::Value>, LatencyError> {
     msgs.get(topic)
-        .ok_or_else(|| anyhow!("the recording has no {topic}"))?
+        .ok_or_else(|| LatencyError::NoTopic(topic.to_owned()))?
         .iter()
-        .map(|d| serde_json::from_slice(d).map_err(|e| anyhow!("{topic}: {e}")))
+        .map(|d| {
+            serde_json::from_slice(d).map_err(|error| LatencyError::Json {
+                topic: topic.to_owned(),
+                error,
+            })
+        })
         .collect()
 }
 
 /// Field `key` of a message of `topic`, an unsigned integer.
-pub(super) fn int(v: &serde_json::Value, key: &str, topic: &str) -> Result<u64> {
-    v[key]
-        .as_u64()
-        .ok_or_else(|| anyhow!("{topic}: a message without {key}"))
+pub(super) fn int(v: &serde_json::Value, key: &str, topic: &str) -> Result<u64, LatencyError> {
+    v[key].as_u64().ok_or_else(|| LatencyError::NoKey {
+        topic: topic.to_owned(),
+        key: key.to_owned(),
+    })
 }
 
 /// Per-sequence-number stamps of a `/timing/...` channel (0 where a key is missing).
@@ -85,7 +93,7 @@ pub(super) fn timing(
     msgs: &Messages,
     topic: &str,
     keys: &[&str],
-) -> Result<BTreeMap<u64, Vec<u64>>> {
+) -> Result<BTreeMap<u64, Vec<u64>>, LatencyError> {
     json(msgs, topic)?
         .iter()
         .map(|v| {
@@ -96,9 +104,9 @@ pub(super) fn timing(
 }
 
 /// The `/timing/...` and `/driver/...` messages of `DIR/run.mcap`, per topic.
-pub(super) fn messages(run_dir: &Path) -> Result<Messages> {
+pub(super) fn messages(run_dir: &Path) -> Result<Messages, LatencyError> {
     let path = run_dir.join("run.mcap");
-    let bytes = std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
+    let bytes = std::fs::read(&path).at("cannot read", &path)?;
     let mut msgs = Messages::new();
     for m in mcap::MessageStream::new(&bytes)? {
         let m = m?;
@@ -114,7 +122,11 @@ pub(super) fn messages(run_dir: &Path) -> Result<Messages> {
 
 /// The cycles of the run recorded in `run_dir`, whose plant wrote `cycles_path`, at
 /// period `period_ns`.
-pub(super) fn read(run_dir: &Path, cycles_path: &Path, period_ns: u64) -> Result<Cycles> {
+pub(super) fn read(
+    run_dir: &Path,
+    cycles_path: &Path,
+    period_ns: u64,
+) -> Result<Cycles, LatencyError> {
     let msgs = messages(run_dir)?;
     let meas = timing(&msgs, "/timing/plant/measurement", &["t_publish_ns"])?;
     let est = timing(
@@ -127,17 +139,16 @@ pub(super) fn read(run_dir: &Path, cycles_path: &Path, period_ns: u64) -> Result
         "/timing/agent/action",
         &["t_received_ns", "t_publish_ns"],
     )?;
-    let text = std::fs::read_to_string(cycles_path)
-        .with_context(|| format!("cannot read {}", cycles_path.display()))?;
+    let text = std::fs::read_to_string(cycles_path).at("cannot read", cycles_path)?;
     let mut c = Cycles::new(&STAMPS, &STAGES);
     for line in text.lines().skip(1) {
         let v: Vec<u64> = line
             .split(',')
             .map(|v| v.parse())
             .collect::<Result<_, _>>()
-            .with_context(|| format!("{}: bad line {line:?}", cycles_path.display()))?;
+            .map_err(|e| bad_line(cycles_path, line, Some(e)))?;
         let [seq, t_k, woke, t_action] = v[..] else {
-            bail!("{}: bad line {line:?}", cycles_path.display());
+            return Err(bad_line(cycles_path, line, None));
         };
         let get = |m: &BTreeMap<u64, Vec<u64>>, i: usize| m.get(&seq).map_or(0, |v| v[i]);
         let stamps = [
@@ -154,7 +165,7 @@ pub(super) fn read(run_dir: &Path, cycles_path: &Path, period_ns: u64) -> Result
         c.add(seq, stamps);
     }
     if c.cycles == 0 {
-        bail!("{}: no cycles were recorded", cycles_path.display());
+        return Err(LatencyError::NoCycles(cycles_path.to_owned()));
     }
     Ok(c)
 }
@@ -182,5 +193,14 @@ impl Cycles {
             ]
         };
         self.push(seq, &stamps, &stages, missed);
+    }
+}
+
+/// A line of the cycles' file at `path` that is not four integers.
+fn bad_line(path: &Path, line: &str, source: Option<std::num::ParseIntError>) -> LatencyError {
+    LatencyError::BadLine {
+        path: path.to_owned(),
+        line: line.to_owned(),
+        source,
     }
 }

@@ -12,7 +12,7 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use anyhow::{Result, bail};
+use super::error::LatencyError;
 use driver::contract::kind;
 
 use super::cycles::{Cycles, Messages, int, json, timing};
@@ -91,7 +91,7 @@ struct LinkTiming {
 
 /// Reads the cycles of the run recorded in `msgs`, with the driver's period
 /// `period_ns`; returns them and how the samples reached the rig.
-pub(super) fn read(msgs: &Messages, period_ns: u64) -> Result<(Cycles, Reach)> {
+pub(super) fn read(msgs: &Messages, period_ns: u64) -> Result<(Cycles, Reach), LatencyError> {
     let samples = samples(msgs)?;
     let (link, reach) = link(msgs)?;
     // The measurement built from a driver sample carries its t_k.
@@ -150,7 +150,7 @@ pub(super) fn read(msgs: &Messages, period_ns: u64) -> Result<(Cycles, Reach)> {
         c.misses += usize::from(!applied);
     }
     if c.cycles == 0 {
-        bail!("the recording has no action commands to the driver");
+        return Err(LatencyError::NoCommands);
     }
     Ok((c, reach))
 }
@@ -214,7 +214,7 @@ struct Command {
 }
 
 /// The ACTION commands of `/driver/command`, in order.
-fn commands(msgs: &Messages) -> Result<Vec<Command>> {
+fn commands(msgs: &Messages) -> Result<Vec<Command>, LatencyError> {
     let mut out = Vec::new();
     for v in json(msgs, "/driver/command")? {
         if v["kind"].as_u64() == Some(kind::ACTION) {
@@ -229,7 +229,7 @@ fn commands(msgs: &Messages) -> Result<Vec<Command>> {
 }
 
 /// The driver samples of `/driver/sample`, by sequence number.
-fn samples(msgs: &Messages) -> Result<BTreeMap<u64, Sample>> {
+fn samples(msgs: &Messages) -> Result<BTreeMap<u64, Sample>, LatencyError> {
     json(msgs, "/driver/sample")?
         .iter()
         .map(|v| {
@@ -247,7 +247,7 @@ fn samples(msgs: &Messages) -> Result<BTreeMap<u64, Sample>> {
 
 /// The link's timing per sample (`/driver/link`; none with a driver on this host) and
 /// how the samples reached the rig.
-fn link(msgs: &Messages) -> Result<(BTreeMap<u64, LinkTiming>, Reach)> {
+fn link(msgs: &Messages) -> Result<(BTreeMap<u64, LinkTiming>, Reach), LatencyError> {
     if !msgs.contains_key("/driver/link") {
         return Ok((BTreeMap::new(), Reach::Local));
     }

@@ -49,12 +49,15 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use anyhow::{Context, Result, anyhow, bail};
 use observer::config::{ObserverKind, ObserverMode, SensorKind};
+use runtime::error::AtFile;
 
 use crate::loop_bench::{Stats, raw_round_trips};
 
+pub use error::LatencyError;
+
 mod cycles;
+mod error;
 mod external;
 mod machine;
 mod sweep;
@@ -249,11 +252,10 @@ impl LatencyReport {
 }
 
 /// Runs the baseline and the rig, writes the outputs and returns what was measured.
-pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
+pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport, LatencyError> {
     validate(opts)?;
-    std::fs::create_dir_all(&opts.out)
-        .with_context(|| format!("cannot create {}", opts.out.display()))?;
-    let exe = std::env::current_exe().context("cannot find the rig executable")?;
+    std::fs::create_dir_all(&opts.out).at("cannot create", &opts.out)?;
+    let exe = std::env::current_exe().map_err(LatencyError::Executable)?;
     // The baseline under the same policy: the ping-pong's partner process inherits it.
     runtime::process::set_rt_priority(opts.scheduling.rt_priority)?;
     let _wakeup = opts.wakeup.hold()?;
@@ -319,38 +321,35 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport> {
 
 /// The simulated plant's period of `--period-ms`, refused out of [0.1, 1000] ms in one
 /// line.
-pub fn period(period_ms: f64) -> Result<Duration> {
+pub fn period(period_ms: f64) -> Result<Duration, LatencyError> {
     if !(period_ms.is_finite() && (0.1..=1000.0).contains(&period_ms)) {
-        bail!("`--period-ms` {period_ms} is out of range: must be a number in [0.1, 1000]");
+        return Err(LatencyError::Period(period_ms));
     }
     Ok(Duration::from_secs_f64(period_ms * 1e-3))
 }
 
 /// Refuses options out of range, in one line naming the flag.
-fn validate(opts: &LatencyOptions) -> Result<()> {
+fn validate(opts: &LatencyOptions) -> Result<(), LatencyError> {
     match &opts.clock {
         Clock::Lockstep => {
-            bail!("`rig latency` measures real time: a lockstep clock has no period")
+            return Err(LatencyError::Lockstep);
         }
         Clock::Realtime { period: p } => {
             period(p.as_nanos() as f64 * 1e-6)?;
         }
-        Clock::External(_) if opts.mode == ObserverMode::Predictive => bail!(
-            "`--observer-mode predictive` needs the simulated plant: an external driver applies each action as it arrives (`--observer-mode direct`, the default with `--driver`)"
-        ),
+        Clock::External(_) if opts.mode == ObserverMode::Predictive => {
+            return Err(LatencyError::PredictiveDriver);
+        }
         Clock::External(_) => {}
     }
     if opts.cycles == 0 {
-        bail!("`--cycles` must be at least 1");
+        return Err(LatencyError::NoCyclesAsked);
     }
     if let Some(layout) = opts.scheduling.layout() {
         layout.check()?;
     }
     if opts.mode == ObserverMode::Predictive && opts.observer != ObserverKind::Predictive {
-        bail!(
-            "`--observer-mode predictive` (rig latency's default) needs `--observer predictive` (its process model predicts x̂_(k+1|k)); with `--observer {}` add `--observer-mode direct`",
-            opts.observer
-        );
+        return Err(LatencyError::PredictiveObserver(opts.observer));
     }
     Ok(())
 }
@@ -363,7 +362,7 @@ fn run_realtime(
     opts: &LatencyOptions,
     run_dir: &Path,
     cycles_path: &Path,
-) -> Result<(u64, Option<MachineLoad>)> {
+) -> Result<(u64, Option<MachineLoad>), LatencyError> {
     let mode = opts.mode;
     let mut cfg = runtime::config::resolve(
         None,
@@ -375,8 +374,7 @@ fn run_realtime(
             eval_every: Some(0),
             ..Default::default()
         },
-    )
-    .map_err(|e| anyhow!("{e}"))?;
+    )?;
     let task = cfg.task();
     let per_trial = task.steps_per_trial() + 1;
     cfg.run.trials = opts.cycles.div_ceil(per_trial) as u32;
@@ -420,7 +418,7 @@ fn plot_stages(
     report: &LatencyReport,
     names: &[&'static str],
     stage_ns: &[Vec<u64>],
-) -> Result<()> {
+) -> Result<(), LatencyError> {
     let shown: Vec<&str> = names
         .iter()
         .copied()

@@ -2,7 +2,9 @@
 
 use std::fmt::Write as _;
 
-use anyhow::{Context, Result, bail};
+use runtime::error::AtFile;
+
+use super::error::LatencyError;
 use runtime::output::write_atomic;
 
 use runtime::clock::Clock;
@@ -23,15 +25,14 @@ pub struct SweepPoint {
 /// `factor` each (each into `DIR/period-<ms>/`), until a period misses a deadline or the
 /// period would go below 0.1 ms. Writes `DIR/sweep.csv` (one row per period) and
 /// returns the periods measured; the fastest sustained is the last without misses.
-pub fn sweep(opts: &LatencyOptions, factor: f64) -> Result<Vec<SweepPoint>> {
+pub fn sweep(opts: &LatencyOptions, factor: f64) -> Result<Vec<SweepPoint>, LatencyError> {
     if !(factor.is_finite() && factor > 1.0) {
-        bail!("sweep factor {factor} must be > 1");
+        return Err(LatencyError::SweepFactor(factor));
     }
     let Some(first) = opts.clock.period() else {
-        bail!("`--sweep` needs the simulated plant: an external driver keeps its own period");
+        return Err(LatencyError::SweepDriver);
     };
-    std::fs::create_dir_all(&opts.out)
-        .with_context(|| format!("cannot create {}", opts.out.display()))?;
+    std::fs::create_dir_all(&opts.out).at("cannot create", &opts.out)?;
     let mut points = Vec::new();
     let mut csv = String::from(
         "period_ms,cycles,deadline_misses,jitter_p999_us,sample_to_actuation_p50_us,sample_to_actuation_p99_us,sample_to_actuation_p999_us,sample_to_actuation_max_us,raw_hop_p50_us\n",

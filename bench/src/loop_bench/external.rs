@@ -8,11 +8,10 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use anyhow::{Context, Result, anyhow, bail};
 use runtime::config::{Overrides, resolve};
 
 use super::runs::{Timed, timed};
-use super::{Kill, median, samples_per_run, spawn};
+use super::{Kill, LoopError, median, samples_per_run, spawn};
 
 /// Where the external drivers come from.
 #[derive(Clone, Debug)]
@@ -119,7 +118,7 @@ pub fn external_cases(
     repetitions: usize,
     o: &ExternalOptions,
     progress: &dyn Fn(&str),
-) -> Result<Vec<ExternalCase>> {
+) -> Result<Vec<ExternalCase>, LoopError> {
     let mut cases = Vec::new();
     for (i, kind) in kinds(exe, o).into_iter().enumerate() {
         progress(kind.name);
@@ -136,8 +135,7 @@ pub fn external_cases(
                 task: kind.task.clone(),
                 ..Default::default()
             },
-        )
-        .map_err(|e| anyhow!("{e}"))?;
+        )?;
         let samples = samples_per_run(&cfg, trials);
         let t = trials.to_string();
         let (mut runs, mut yardstick) = (Vec::new(), Vec::new());
@@ -166,35 +164,40 @@ pub fn external_cases(
 
 /// Waits until driver `id` publishes its info (started, its imports done), so that the
 /// runs' times leave its start out; `log` is its output.
-fn served(id: &str, log: &Path) -> Result<()> {
+fn served(id: &str, log: &Path) -> Result<(), LoopError> {
     let bus = wire::Bus::join(&format!("benchwait{}", std::process::id()), "rig")?;
     let watch = driver::contract::DriverWatch::open(&bus, id)?;
     let timeout = std::time::Duration::from_secs(60);
-    driver::contract::wait_info(&bus, &watch.info, id, timeout, false, "")
-        .with_context(|| format!("driver {id:?} did not start; see {}", log.display()))?;
+    driver::contract::wait_info(&bus, &watch.info, id, timeout, false, "").map_err(|source| {
+        LoopError::NotServed {
+            id: id.to_owned(),
+            log: log.to_owned(),
+            source: Box::new(source),
+        }
+    })?;
     Ok(())
 }
 
 /// `bench/scripts/env_step.py`'s time per step of Pendulum-v1 over (at least) `samples`
 /// steps in trials of `trial_steps` \[µs\].
-fn env_step_us(o: &ExternalOptions, trial_steps: usize, samples: usize) -> Result<f64> {
-    let py = o.python.as_ref().context("no Python")?;
+fn env_step_us(o: &ExternalOptions, trial_steps: usize, samples: usize) -> Result<f64, LoopError> {
+    let py = o.python.as_ref().ok_or(LoopError::NoPython)?;
     let trials = samples.div_ceil(trial_steps);
     let out = Command::new(py)
         .arg(o.root.join("bench/scripts/env_step.py"))
         .args(["--trials", &trials.to_string()])
         .args(["--trial-steps", &trial_steps.to_string()])
         .output()
-        .context("cannot start bench/scripts/env_step.py")?;
+        .map_err(LoopError::YardstickStart)?;
     let text = String::from_utf8_lossy(&out.stdout);
     if !out.status.success() {
-        bail!(
-            "bench/scripts/env_step.py failed: {text}{}",
+        return Err(LoopError::YardstickFailed(format!(
+            "{text}{}",
             String::from_utf8_lossy(&out.stderr)
-        );
+        )));
     }
     text.split(", ")
         .find_map(|part| part.strip_suffix(" us per step\n"))
         .and_then(|v| v.parse().ok())
-        .with_context(|| format!("bench/scripts/env_step.py printed {text:?}"))
+        .ok_or_else(|| LoopError::YardstickPrinted(text.into_owned()))
 }

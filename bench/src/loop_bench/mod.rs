@@ -21,15 +21,17 @@
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 
-use anyhow::{Context, Result};
+use runtime::error::AtFile;
 use runtime::output::write_atomic;
 use runtime::process::Layout;
 use wire::{FOREVER, Waiting};
 
+mod error;
 pub mod external;
 mod raw;
 mod runs;
 
+pub use error::LoopError;
 pub use external::{ExternalCase, ExternalOptions};
 pub use raw::{pong, raw_round_trips};
 pub use runs::Timed;
@@ -86,16 +88,18 @@ impl Drop for Kill {
     }
 }
 
-fn spawn(exe: &Path, args: &[&str], log: &Path) -> Result<Child> {
-    let f =
-        std::fs::File::create(log).with_context(|| format!("cannot create {}", log.display()))?;
+fn spawn(exe: &Path, args: &[&str], log: &Path) -> Result<Child, LoopError> {
+    let f = std::fs::File::create(log).at("cannot create", log)?;
     Command::new(exe)
         .args(args)
         .stdin(Stdio::null())
         .stdout(f.try_clone()?)
         .stderr(f)
         .spawn()
-        .with_context(|| format!("cannot start {}", args[0]))
+        .map_err(|source| LoopError::Start {
+            program: args[0].to_owned(),
+            source,
+        })
 }
 
 /// What to measure.
@@ -277,10 +281,10 @@ impl LoopReport {
 
 /// Runs every measurement and writes `DIR/loop.csv` and `DIR/summary.txt`; `progress`
 /// is told what runs.
-pub fn bench_loop(opts: &LoopOptions, progress: &dyn Fn(&str)) -> Result<LoopReport> {
+pub fn bench_loop(opts: &LoopOptions, progress: &dyn Fn(&str)) -> Result<LoopReport, LoopError> {
     let out = &opts.out;
-    std::fs::create_dir_all(out).with_context(|| format!("cannot create {}", out.display()))?;
-    let exe = std::env::current_exe().context("cannot find the rig executable")?;
+    std::fs::create_dir_all(out).at("cannot create", out)?;
+    let exe = std::env::current_exe().map_err(LoopError::Executable)?;
     let (mut in_process, mut three, mut unrecorded) = (Vec::new(), Vec::new(), Vec::new());
     let (mut steps, mut identical) = (Vec::new(), true);
     for i in 0..opts.repetitions.max(1) {
@@ -310,7 +314,7 @@ pub fn bench_loop(opts: &LoopOptions, progress: &dyn Fn(&str)) -> Result<LoopRep
         identical &= same_file(&learn.join("runs.csv"), &run.join("returns.csv"));
     }
     progress("ping-pong");
-    let raw = |w: Waiting| -> Result<Stats> {
+    let raw = |w: Waiting| -> Result<Stats, LoopError> {
         Ok(Stats::of(&mut raw_round_trips(
             &exe,
             out,
@@ -319,8 +323,7 @@ pub fn bench_loop(opts: &LoopOptions, progress: &dyn Fn(&str)) -> Result<LoopRep
             w,
         )?))
     };
-    let cfg =
-        runtime::config::resolve(None, &Default::default()).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let cfg = runtime::config::resolve(None, &Default::default())?;
     let samples_per_run = samples_per_run(&cfg, opts.trials);
     let external = match &opts.external {
         Some(o) => external::external_cases(&exe, out, opts.trials, opts.repetitions, o, progress)?,

@@ -4,11 +4,11 @@
 use std::path::Path;
 use std::time::Duration;
 
-use anyhow::{Context, Result, bail};
+use runtime::error::AtFile;
 use runtime::process::{CpuSet, Wait};
 use wire::{Bus, Measurement, Waiting, now_ns};
 
-use super::{Kill, spawn};
+use super::{Kill, LoopError, spawn};
 
 /// Round trips before the timed ones.
 const WARM_UP: usize = 1000;
@@ -23,7 +23,7 @@ pub fn pong(
     pin_cpus: bool,
     waiting: Waiting,
     ping: Option<(usize, &Path)>,
-) -> Result<()> {
+) -> Result<(), LoopError> {
     if pin_cpus {
         runtime::process::cpus::pin(if ping.is_some() {
             CpuSet::Others
@@ -59,7 +59,10 @@ pub fn pong(
         let back = rx.recv(&bus, Duration::from_secs(10))?;
         let dt = now_ns() - t0;
         if back.header.seq != i as u64 {
-            bail!("ping-pong out of step: sent {i}, got {}", back.header.seq);
+            return Err(LoopError::OutOfStep {
+                sent: i,
+                got: back.header.seq,
+            });
         }
         if i >= WARM_UP {
             rtt.push(dt.to_string());
@@ -68,7 +71,7 @@ pub fn pong(
     m.header.seq = u64::MAX;
     tx.send(m)?;
     let _ = rx.recv(&bus, Duration::from_secs(10));
-    std::fs::write(file, rtt.join("\n")).with_context(|| format!("cannot write {}", file.display()))
+    Ok(std::fs::write(file, rtt.join("\n")).at("cannot write", file)?)
 }
 
 /// `samples` round trips \[ns\] between two `rig pong` processes waiting as `waiting`
@@ -80,7 +83,7 @@ pub fn raw_round_trips(
     samples: usize,
     pin_cpus: bool,
     waiting: Waiting,
-) -> Result<Vec<u64>> {
+) -> Result<Vec<u64>, LoopError> {
     let run_id = format!("raw{}-{}", std::process::id(), now_ns() % 1_000_000);
     let tag = Wait::process_args(waiting).join("").replace("--", "-");
     let file = out.join(format!("pong{tag}.txt"));
@@ -105,19 +108,22 @@ pub fn raw_round_trips(
     for (c, name) in kids.0.iter_mut().zip(["echo", "ping"]) {
         let status = c.wait()?;
         if !status.success() {
-            bail!(
-                "the ping-pong's {name} process failed ({status}); see its log in {}",
-                out.display()
-            );
+            return Err(LoopError::PingPong {
+                name,
+                status,
+                dir: out.to_owned(),
+            });
         }
     }
     kids.0.clear();
-    let text = std::fs::read_to_string(&file)
-        .with_context(|| format!("cannot read {}", file.display()))?;
+    let text = std::fs::read_to_string(&file).at("cannot read", &file)?;
     text.lines()
         .map(|l| {
-            l.parse()
-                .with_context(|| format!("{}: bad line {l:?}", file.display()))
+            l.parse().map_err(|source| LoopError::BadLine {
+                path: file.clone(),
+                line: l.to_owned(),
+                source,
+            })
         })
         .collect()
 }

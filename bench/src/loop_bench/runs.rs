@@ -5,14 +5,14 @@ use std::path::Path;
 
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result, anyhow, bail};
+use runtime::error::AtFile;
 use runtime::output::write_atomic;
 use runtime::process::{
     AgentConfig, Layout, NodeConfig, ObserverConfig, PlantConfig, Scheduling, Settings, Wait,
 };
 use wire::Waiting;
 
-use super::{Kill, spawn};
+use super::{Kill, LoopError, spawn};
 
 /// Wall-clock and CPU time of one run.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,11 +43,15 @@ fn wait_all(
     t0: Instant,
     cpu0: Duration,
     log: &Path,
-) -> Result<Timed> {
+) -> Result<Timed, LoopError> {
     for (c, name) in kids.0.iter_mut().zip(names) {
         let status = c.wait()?;
         if !status.success() {
-            bail!("{name} failed ({status}); see {}", log.display());
+            return Err(LoopError::Failed {
+                name: name.to_string(),
+                status,
+                log: log.to_owned(),
+            });
         }
     }
     let wall = t0.elapsed();
@@ -59,7 +63,7 @@ fn wait_all(
 }
 
 /// One `exe args…` to completion, its output in `log`.
-pub(super) fn timed(exe: &Path, args: &[&str], log: &Path) -> Result<Timed> {
+pub(super) fn timed(exe: &Path, args: &[&str], log: &Path) -> Result<Timed, LoopError> {
     let (cpu0, t0) = (children_cpu(), Instant::now());
     let kids = Kill(vec![spawn(exe, args, log)?]);
     wait_all(kids, &[args[0]], t0, cpu0, log)
@@ -67,7 +71,7 @@ pub(super) fn timed(exe: &Path, args: &[&str], log: &Path) -> Result<Timed> {
 
 /// `rig learn --runs 1 --threads 1` of the default experiment with `trials` trials into
 /// `dir`.
-pub fn in_process(exe: &Path, dir: &Path, trials: u32) -> Result<Timed> {
+pub fn in_process(exe: &Path, dir: &Path, trials: u32) -> Result<Timed, LoopError> {
     let t = trials.to_string();
     let d = dir.to_string_lossy();
     let args = [
@@ -93,7 +97,7 @@ pub fn three_processes(
     trials: u32,
     waiting: Waiting,
     layout: Layout,
-) -> Result<Timed> {
+) -> Result<Timed, LoopError> {
     let t = trials.to_string();
     let d = dir.to_string_lossy();
     let wait = Wait::process_args(waiting);
@@ -113,10 +117,9 @@ pub fn unrecorded(
     trials: u32,
     waiting: Waiting,
     layout: Layout,
-) -> Result<(Timed, Vec<u64>)> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let mut cfg =
-        runtime::config::resolve(None, &Default::default()).map_err(|e| anyhow!("{e}"))?;
+) -> Result<(Timed, Vec<u64>), LoopError> {
+    std::fs::create_dir_all(dir).at("cannot create", dir)?;
+    let mut cfg = runtime::config::resolve(None, &Default::default())?;
     cfg.run.trials = trials;
     let config = dir.join("config.toml");
     write_atomic(&config, &cfg.to_toml())?;
@@ -143,8 +146,7 @@ pub fn unrecorded(
         kids.0.push(spawn(exe, &[role, "--node", &file], &log)?);
     }
     let timed = wait_all(kids, &["agent", "observer", "plant"], t0, cpu0, dir)?;
-    let text = std::fs::read_to_string(&steps)
-        .with_context(|| format!("cannot read {}", steps.display()))?;
+    let text = std::fs::read_to_string(&steps).at("cannot read", &steps)?;
     let mut ns: Vec<u64> = text.lines().filter_map(|l| l.parse().ok()).collect();
     let per_trial = cfg.task().steps_per_trial() + 1;
     ns.drain(..per_trial.min(ns.len()));

@@ -4,12 +4,13 @@
 use std::collections::BTreeMap;
 use std::time::Duration;
 
-use anyhow::{Context, Result};
 use plant::SystemName;
 
 use runtime::config::ExperimentConfig;
 use runtime::learn::LearnSummary;
 use runtime::report::{self};
+
+use super::ReproduceError;
 
 /// What was measured for one curve.
 #[derive(Clone, Debug)]
@@ -86,7 +87,7 @@ pub(super) fn measure(
     label: &str,
     cfg: &ExperimentConfig,
     summary: &LearnSummary,
-) -> Result<Measured> {
+) -> Result<Measured, ReproduceError> {
     let (records, runs, trials) = (
         &summary.records,
         cfg.run.runs as usize,
@@ -108,8 +109,12 @@ pub(super) fn measure(
         e.1 += r.sim_time_s;
         e.2 += 1;
     }
-    let finals = runtime::output::runs::final_greedy(records, runs as u32)
-        .with_context(|| label.to_string())?;
+    let finals = runtime::output::runs::final_greedy(records, runs as u32).map_err(|source| {
+        ReproduceError::Measure {
+            label: label.to_string(),
+            source,
+        }
+    })?;
     let n = finals.len() as f64;
     let final_greedy = finals.iter().sum::<f64>() / n;
     let final_greedy_sd = if finals.len() > 1 {

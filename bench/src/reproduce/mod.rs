@@ -28,9 +28,9 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use agent::config::HorizonKind;
-use anyhow::{Context, Result, anyhow, bail};
 use indicatif::ProgressBar;
 use plant::SystemName;
+use runtime::error::AtFile;
 
 use runtime::config::ExperimentConfig;
 use runtime::experiment::TrialRecord;
@@ -39,11 +39,13 @@ use runtime::output::{progress_bar, write_atomic};
 use runtime::report::{CurvePoint, Series, SeriesStyle};
 
 mod claims;
+mod error;
 mod figures;
 mod measures;
 mod report;
 mod sensitivity;
 
+pub use error::ReproduceError;
 use figures::figures;
 use measures::{Measured, measure};
 use report::{write_report, write_summary};
@@ -106,22 +108,20 @@ pub struct FigureResult {
 }
 
 /// Regenerates the figures and writes `REPORT.md`.
-pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>> {
+pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>, ReproduceError> {
     for id in &opts.only {
         if !FIGURES.contains(&id.as_str()) {
-            bail!(
-                "`--only` {id:?}: not a figure this command regenerates; one of {}",
-                FIGURES.join(", ")
-            );
+            return Err(ReproduceError::NoFigure {
+                id: id.clone(),
+                figures: FIGURES.join(", "),
+            });
         }
     }
-    std::fs::create_dir_all(&opts.out)
-        .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
+    std::fs::create_dir_all(&opts.out).at("cannot create output directory", &opts.out)?;
     let optimum = crate::optimal::pendulum_optimum(&crate::optimal::OptimumOptions {
         grid: 201,
         actions: 61,
-    })
-    .map_err(|e| anyhow!(e))?
+    })?
     .simulated_return;
     let mut runner = Runner {
         opts,
@@ -284,7 +284,7 @@ impl Runner<'_> {
         label: &str,
         cfg: &ExperimentConfig,
         runs: Option<u32>,
-    ) -> Result<(Measured, LearnSummary)> {
+    ) -> Result<(Measured, LearnSummary), ReproduceError> {
         let cfg = self.as_run(cfg, runs);
         let key = cfg.to_toml();
         let out = dir.join(slug(label));

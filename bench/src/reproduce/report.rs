@@ -6,17 +6,20 @@ use std::path::Path;
 use std::time::Duration;
 
 use agent::config::HorizonKind;
-use anyhow::Result;
 use plant::SystemName;
 
 use runtime::output::write_atomic;
 
-use super::FigureResult;
 use super::figures::Figure;
 use super::measures::Measured;
 use super::sensitivity::{FACTORS, Sensitivity};
+use super::{FigureResult, ReproduceError};
 
-pub(super) fn write_summary(path: &Path, m: &[Measured], optimum: Option<f64>) -> Result<()> {
+pub(super) fn write_summary(
+    path: &Path,
+    m: &[Measured],
+    optimum: Option<f64>,
+) -> Result<(), ReproduceError> {
     let mut s = String::from(
         "curve,runs,trials,final_greedy_mean,final_greedy_sd,final_greedy_median,final_greedy_worst,final_level,t90_min,percent_of_optimal,wall_s\n",
     );
@@ -49,7 +52,7 @@ pub(super) fn write_report(
     sensitivity: Option<&Sensitivity>,
     optimum: f64,
     wall: Duration,
-) -> Result<()> {
+) -> Result<(), ReproduceError> {
     let mut s = String::new();
     let _ = writeln!(
         s,

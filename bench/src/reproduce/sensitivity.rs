@@ -5,15 +5,14 @@ use std::fmt::Write as _;
 use std::time::Duration;
 
 use agent::config::Component;
-use anyhow::Result;
 use plant::SystemName;
 
 use runtime::config::ExperimentConfig;
 use runtime::output::write_atomic;
 
-use super::Runner;
 use super::figures::preset;
 use super::measures::Measured;
+use super::{ReproduceError, Runner};
 
 /// The parameters the sensitivity analysis varies, and how.
 /// Scales a parameter of a configuration by a factor.
@@ -93,7 +92,7 @@ pub(super) fn varied(base: &ExperimentConfig, apply: Scale, f: f64) -> Option<Ex
     (cfg != *base && cfg.validate().is_ok()).then_some(cfg)
 }
 
-pub(super) fn sensitivity(runner: &mut Runner) -> Result<Sensitivity> {
+pub(super) fn sensitivity(runner: &mut Runner) -> Result<Sensitivity, ReproduceError> {
     use agent::config::{Algo::*, ApproxKind::Llr, HorizonKind::Infinite};
     let spent = runner.spent;
     let runs = runner.opts.runs.unwrap_or(10);

@@ -12,28 +12,29 @@ use super::merge::{add_optional_sections, check_choice, choose, merge};
 
 /// Command-line choices and overrides, applied over preset and file: the experiment
 /// flags of `rig learn`, `rig run` and `rig config`.
-#[derive(Clone, Debug, Default, clap::Args)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+#[derive(Clone, Debug, Default)]
 pub struct Overrides {
     /// System to learn on: pendulum (§3.6, §6.4.1), arm-vertical (Case I, §5.3),
     /// arm-horizontal (Case II, §5.4), arm-6.4 (the manipulator of §6.4.2: ±0.1 N m,
     /// ±1.2 rad operating range, four start states) or double-integrator (LQR check)
     /// [default: pendulum].
-    #[arg(long, value_enum)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum))]
     pub system: Option<SystemName>,
     /// A task file: the system as the rig needs to know it — states, actions and their
     /// bounds, sampling time, trial, start states, reward, operating range (see
     /// docs/tasks.md; the built-in systems' files are in plant/tasks/). Its
     /// `[simulation]` names the built-in system it runs on and whose learner presets it
     /// takes (the configuration's `task` key).
-    #[arg(long, value_name = "FILE")]
+    #[cfg_attr(feature = "cli", arg(long, value_name = "FILE"))]
     pub task: Option<std::path::PathBuf>,
     /// Algorithm: sac (Algorithm 1), mlac (Algorithm 2), rmac (Algorithm 3), vgbp
     /// (Algorithm 7) or sarsa (§6.2) [default: mlac].
-    #[arg(long, value_enum)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum))]
     pub algo: Option<Algo>,
     /// Function approximator: llr, rbf, tiles (sac only) or lstd (vgbp only: an LSTD
     /// critic on RBFs with an LLR process model); sarsa uses rbf [default: llr].
-    #[arg(long, value_enum)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum))]
     pub approx: Option<ApproxKind>,
     /// Horizon of the cost function. `infinite`: discounted rewards without end
     /// (Chapters 3, 5, 6). `finite`: a trial is the horizon — its return is the rewards
@@ -41,58 +42,64 @@ pub struct Overrides {
     /// time as an extra input (Chapter 4, Eq. 4.6; sac, mlac, rmac with rbf: SAC-FH,
     /// MLAC-FH, RMAC-FH, Algorithms 4–6, with the parameters of §4.4) [default:
     /// infinite].
-    #[arg(long, value_enum)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum))]
     pub horizon: Option<HorizonKind>,
     /// Trials per run [preset: 400 for the pendulum (vgbp, sarsa: 200; finite horizon:
     /// 600), 600 for the arms (vgbp, sarsa: 200)].
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub trials: Option<u32>,
     /// Independent runs [preset: 30 for the pendulum (vgbp, sarsa, finite horizon: 20),
     /// 20 for the arm].
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub runs: Option<u32>,
     /// Seed of every random stream of every run [preset: 1].
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub seed: Option<u64>,
     /// A greedy evaluation trial (no exploration, no learning) after every N trials; 0
     /// disables [preset: 10; vgbp, sarsa: 5; vgbp on arm-6.4: 4]. With several start
     /// states (arm-6.4) the evaluation runs from each and reports the mean.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub eval_every: Option<u32>,
     /// What the plant's sensor measures: full (the state) or angle (an encoder: angles
     /// quantised to `observer.counts_per_rev`, default 4096, plus optional Gaussian noise
     /// `observer.noise_std`; velocities must be estimated) [default: full].
-    #[arg(long, value_enum)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum))]
     pub sensor: Option<SensorKind>,
     /// State observer: pass-through (full sensor only), finite-difference (backward
     /// difference, low-pass `observer.filter`) or predictive (model prediction corrected by
     /// the measured angle; `observer.model` = learned (LLR) or known (RK4 of the plant),
     /// velocity gain `observer.gain`) [default: pass-through].
-    #[arg(long, value_enum)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum))]
     pub observer: Option<ObserverKind>,
     /// Sample-to-actuation delay [ms], in [0, Ts): over each sample period the previous
     /// action stays in effect this long, then the new one — deterministic, for delay
     /// studies (`run.delay_ms`; lockstep only) [default: 0].
-    #[arg(long, value_name = "MS", conflicts_with = "delay_from")]
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "MS", conflicts_with = "delay_from")
+    )]
     pub delay_ms: Option<f64>,
     /// A recorded distribution of sample-to-actuation delays: a CSV file (header row, one
     /// delay per row) — e.g. `rig latency`'s latency.csv or a real driver's recording.
     /// Each sample's delay is drawn from it with the run seed (its own stream) and applied
     /// as `--delay-ms` is; every value must be in [0, Ts) (`run.delay_from`; lockstep
     /// only; exclusive with `--delay-ms`).
-    #[arg(long, value_name = "FILE")]
+    #[cfg_attr(feature = "cli", arg(long, value_name = "FILE"))]
     pub delay_from: Option<String>,
     /// The column of `--delay-from` holding the delays; the unit is the name's suffix
     /// (_s, _ms, _us, _ns; latency.csv's sample_to_actuation is ns) (`run.delay_column`)
     /// [default: delay_ms, else sample_to_actuation].
-    #[arg(long, value_name = "NAME", requires = "delay_from")]
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_name = "NAME", requires = "delay_from")
+    )]
     pub delay_column: Option<String>,
     /// Timing: direct (the agent acts on x̂_k; its action takes effect within the interval,
     /// after the delay) or predictive (the agent acts on the observer's prediction
     /// x̂_{k+1|k}; its action is applied at the next sample instant, so a delay below Ts
     /// does not reach the plant; needs `--observer predictive`) (`observer.mode`)
     /// [default: direct].
-    #[arg(long, value_enum)]
+    #[cfg_attr(feature = "cli", arg(long, value_enum))]
     pub observer_mode: Option<ObserverMode>,
 }
 

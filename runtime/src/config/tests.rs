@@ -321,6 +321,8 @@ fn the_learner_is_the_algorithm_with_its_components() {
     );
 }
 
+/// The command line's flags: with the feature `cli` (on in `rig`'s build).
+#[cfg(feature = "cli")]
 #[test]
 fn help_lists_the_choices() {
     use clap::{CommandFactory, Parser};

@@ -4,7 +4,6 @@
 use std::time::Duration;
 
 use super::SystemError;
-use clap::Args;
 use serde::{Deserialize, Serialize};
 use wire::{FOREVER, Waiting};
 
@@ -16,19 +15,20 @@ pub const SPIN_US: u64 = 100;
 
 /// How a node is scheduled by the operating system: flags of `rig run` and `rig
 /// latency`, and a setting of each node (`scheduling`, [`super::node`]).
-#[derive(Args, Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Scheduling {
     /// Run the processes under the real-time scheduling policy SCHED_FIFO at this
     /// priority (1–99; the plant, the clock, one above the observer and the agent), ahead
     /// of all ordinary work on the machine, their memory locked (mlockall); needs root,
     /// CAP_SYS_NICE and CAP_IPC_LOCK, or rtprio and memlock limits.
-    #[arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99))]
+    #[cfg_attr(feature = "cli", arg(long, value_name = "PRIORITY", value_parser = clap::value_parser!(u8).range(1..=99)))]
     pub rt_priority: Option<u8>,
     /// Pin the plant (the clock) alone on the last CPU and the observer, the agent and
     /// the recorder on the others, so that the rig's own work does not disturb the
     /// sampling instants (the same as `--cpus plant-alone`).
-    #[arg(long, conflicts_with = "cpus")]
+    #[cfg_attr(feature = "cli", arg(long, conflicts_with = "cpus"))]
     pub pin_cpus: bool,
     /// Where the processes run (sched_setaffinity; the layouts that set a CPU apart need
     /// at least two): `shared` wherever the operating system puts them; `plant-alone` the
@@ -36,7 +36,7 @@ pub struct Scheduling {
     /// checkpoint writer alone on the last CPU and the loop on the others [rig run's
     /// default: recorder-alone in lockstep when the processes poll without end on a
     /// machine of 2 or 3 CPUs, otherwise shared; a node's: shared].
-    #[arg(long, value_enum, value_name = "LAYOUT")]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, value_name = "LAYOUT"))]
     pub cpus: Option<Layout>,
 }
 
@@ -66,13 +66,14 @@ impl Scheduling {
 
 /// How the realtime plant waits for a sampling instant: a flag of `rig run` and
 /// `rig latency`, and a setting of the plant node.
-#[derive(Args, Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Spin {
     /// Realtime: the plant spins (a busy core) instead of sleeping for the last this many
     /// µs before each sampling instant, so that the instant does not depend on the
     /// operating system's wake-up latency; larger values trade CPU for less jitter.
-    #[arg(long, value_name = "US", default_value_t = SPIN_US)]
+    #[cfg_attr(feature = "cli", arg(long, value_name = "US", default_value_t = SPIN_US))]
     pub spin_us: u64,
 }
 
@@ -97,7 +98,8 @@ plant::choice! {
 
 /// How a process waits for its next message: a flag of `rig run` and a setting of
 /// each node.
-#[derive(Args, Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Wait {
     /// How each process waits for its next message: `block` sleeps until woken (no CPU
@@ -106,11 +108,11 @@ pub struct Wait {
     /// other processes between polls. Polling lasts `--wait-us`, then blocks [rig run's
     /// default: yield in lockstep, with the simulated plant or a driver that keeps the
     /// lockstep clock; block in real time; a node's: block].
-    #[arg(long, value_enum, value_name = "HOW")]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, value_name = "HOW"))]
     pub wait: Option<WaitKind>,
     /// With `--wait spin` or `yield`: how long to poll before blocking [µs; default:
     /// poll without end, and senders do not wake their receivers].
-    #[arg(long, value_name = "US")]
+    #[cfg_attr(feature = "cli", arg(long, value_name = "US"))]
     pub wait_us: Option<u64>,
 }
 

@@ -12,7 +12,6 @@ use std::io::{Read, Write};
 use std::path::Path;
 
 use super::SystemError;
-use clap::Args;
 
 /// The PM QoS device of the CPU wake-up latency limit.
 pub const DEVICE: &str = "/dev/cpu_dma_latency";
@@ -21,7 +20,8 @@ pub const DEVICE: &str = "/dev/cpu_dma_latency";
 const MAX_US: u32 = i32::MAX as u32;
 
 /// The flag of `rig run`, `rig latency` and `rig sim-driver`.
-#[derive(Args, Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Wakeup {
     /// Hold the machine's CPU wake-up latency limit at this many µs while the command
     /// runs (Linux PM QoS, /dev/cpu_dma_latency; needs root): idle CPUs then use only
@@ -29,7 +29,7 @@ pub struct Wakeup {
     /// plant's sampling timer and each message's wake-up do not wait for a CPU to leave
     /// a deep idle state. A polling idle CPU is a busy one: more power, and on a virtual
     /// machine time the host counts as used [default: the operating system's choice].
-    #[arg(long, value_name = "US", value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_US)))]
+    #[cfg_attr(feature = "cli", arg(long, value_name = "US", value_parser = clap::value_parser!(u32).range(0..=i64::from(MAX_US))))]
     pub cpu_wakeup_us: Option<u32>,
 }
 

@@ -59,9 +59,10 @@ use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow, bail, ensure};
 use mcap::records::MessageHeader;
 use serde_json::ser::{CompactFormatter, Formatter};
+
+use crate::error::AtFile;
 
 /// Message encoding of every channel.
 const MESSAGE_ENCODING: &str = "json";
@@ -76,11 +77,13 @@ const CHUNK_SIZE: u64 = 1024 * 1024;
 /// log and publish time.
 const MESSAGE_RECORD: u64 = 1 + 8 + 2 + 4 + 8 + 8;
 
+mod error;
 mod schema;
 mod tap;
 #[cfg(test)]
 mod tests;
 
+pub use error::RecordError;
 pub use schema::{Field, FieldKind, Value};
 use schema::{json_schema, json_string};
 pub use tap::Tap;
@@ -125,12 +128,11 @@ pub struct Recorder {
 impl Recorder {
     /// Starts an MCAP file that [`finish`](Self::finish) will move to `path`; until then
     /// it is written as `path` with `.part` appended (replacing any file of that name).
-    pub fn create(path: &Path) -> Result<Recorder> {
+    pub fn create(path: &Path) -> Result<Recorder, RecordError> {
         let mut part = OsString::from(path.as_os_str());
         part.push(".part");
         let part = PathBuf::from(part);
-        let file =
-            File::create(&part).with_context(|| format!("cannot create {}", part.display()))?;
+        let file = File::create(&part).at("cannot create", &part)?;
         // Set every option that shapes the bytes explicitly: one compression thread (the
         // same bytes whatever the machine; no thread beside the loop's processes).
         let options = mcap::WriteOptions::new()
@@ -143,7 +145,7 @@ impl Recorder {
             .use_chunks(true);
         let writer = options
             .create(BufWriter::with_capacity(1 << 16, file))
-            .with_context(|| format!("cannot write {}", part.display()))?;
+            .at("cannot write", &part)?;
         Ok(Recorder {
             writer,
             channels: Vec::new(),
@@ -165,7 +167,7 @@ impl Recorder {
         topic: &str,
         schema_name: &str,
         fields: &[Field],
-    ) -> Result<ChannelId> {
+    ) -> Result<ChannelId, RecordError> {
         self.declare(topic, schema_name, fields, true)
     }
 
@@ -177,7 +179,7 @@ impl Recorder {
         topic: &str,
         schema_name: &str,
         fields: &[Field],
-    ) -> Result<ChannelId> {
+    ) -> Result<ChannelId, RecordError> {
         self.declare(topic, schema_name, fields, false)
     }
 
@@ -197,24 +199,26 @@ impl Recorder {
         schema_name: &str,
         fields: &[Field],
         in_file: bool,
-    ) -> Result<ChannelId> {
-        ensure!(
-            self.channels.iter().all(|c| c.topic != topic),
-            "topic {topic} is declared twice"
-        );
+    ) -> Result<ChannelId, RecordError> {
+        if self.channels.iter().any(|c| c.topic == topic) {
+            return Err(RecordError::TopicTwice(topic.to_owned()));
+        }
         let mut seen = HashSet::new();
         for f in fields {
-            ensure!(!f.name.is_empty(), "topic {topic}: empty field name");
-            ensure!(
-                seen.insert(f.name.as_str()),
-                "topic {topic}: field {} appears twice",
-                f.name
-            );
+            if f.name.is_empty() {
+                return Err(RecordError::EmptyField(topic.to_owned()));
+            }
+            if !seen.insert(f.name.as_str()) {
+                return Err(RecordError::FieldTwice {
+                    topic: topic.to_owned(),
+                    field: f.name.clone(),
+                });
+            }
         }
         let schema = json_schema(fields);
         match self.schemas.get(schema_name) {
             Some(existing) if *existing != schema => {
-                bail!("schema {schema_name} is declared twice with different fields")
+                return Err(RecordError::SchemaTwice(schema_name.to_owned()));
             }
             Some(_) => {}
             None => {
@@ -271,18 +275,17 @@ impl Recorder {
         log_time_ns: u64,
         publish_time_ns: u64,
         values: &[Value],
-    ) -> Result<()> {
+    ) -> Result<(), RecordError> {
         let ch = self
             .channels
             .get_mut(channel.0)
-            .ok_or_else(|| anyhow!("unknown channel {channel:?}"))?;
+            .ok_or(RecordError::UnknownChannel(channel))?;
         if values.len() != ch.fields.len() {
-            bail!(
-                "topic {}: {} values for {} fields",
-                ch.topic,
-                values.len(),
-                ch.fields.len()
-            );
+            return Err(RecordError::Values {
+                topic: ch.topic.clone(),
+                values: values.len(),
+                fields: ch.fields.len(),
+            });
         }
         let buf = &mut self.buf;
         buf.clear();
@@ -296,11 +299,12 @@ impl Recorder {
                 }
                 (FieldKind::Number, Value::Num(_)) => buf.extend_from_slice(b"null"),
                 (FieldKind::Integer, Value::Num(x)) => {
-                    let name = String::from_utf8_lossy(&key[usize::from(key[0] == b',')..]);
-                    bail!(
-                        "topic {}: integer field {name} given the number {x}",
-                        ch.topic
-                    )
+                    let field = String::from_utf8_lossy(&key[usize::from(key[0] == b',')..]);
+                    return Err(RecordError::NotInteger {
+                        topic: ch.topic.clone(),
+                        field: field.into_owned(),
+                        x,
+                    });
                 }
             }
         }
@@ -319,7 +323,7 @@ impl Recorder {
         log_time_ns: u64,
         publish_time_ns: u64,
         data: &[u8],
-    ) -> Result<()> {
+    ) -> Result<(), RecordError> {
         if let Some(tap) = &mut self.tap {
             tap.message(index, log_time_ns, data);
         }
@@ -341,7 +345,7 @@ impl Recorder {
         };
         self.writer
             .write_to_known_channel(&header, data)
-            .with_context(|| format!("cannot write {}", self.part.display()))?;
+            .at("cannot write", &self.part)?;
         ch.sequence = ch.sequence.wrapping_add(1);
         Ok(())
     }
@@ -361,18 +365,18 @@ impl Recorder {
         log_time_ns: u64,
         publish_time_ns: u64,
         data: &[u8],
-    ) -> Result<()> {
+    ) -> Result<(), RecordError> {
         let index = self
             .channels
             .iter()
             .position(|c| c.id.is_some() && c.topic == topic)
-            .ok_or_else(|| anyhow!("the recording has no topic {topic}"))?;
+            .ok_or_else(|| RecordError::NoTopic(topic.to_owned()))?;
         self.put(index, log_time_ns, publish_time_ns, data)
     }
 
     /// Stores a file in the recording (e.g. the resolved `config.toml`, `text/x-toml`), with
     /// log and create times 0. Closes the current chunk.
-    pub fn attach(&mut self, name: &str, media_type: &str, data: &[u8]) -> Result<()> {
+    pub fn attach(&mut self, name: &str, media_type: &str, data: &[u8]) -> Result<(), RecordError> {
         // The low-level calls avoid copying `data` into an `mcap::Attachment`.
         let header = mcap::records::AttachmentHeader {
             log_time: 0,
@@ -389,7 +393,11 @@ impl Recorder {
 
     /// Stores a named set of key–value strings (seed, versions, run id) as an MCAP metadata
     /// record. Closes the current chunk.
-    pub fn metadata(&mut self, name: &str, entries: &BTreeMap<String, String>) -> Result<()> {
+    pub fn metadata(
+        &mut self,
+        name: &str,
+        entries: &BTreeMap<String, String>,
+    ) -> Result<(), RecordError> {
         let metadata = mcap::records::Metadata {
             name: name.to_owned(),
             metadata: entries.clone(),
@@ -403,10 +411,8 @@ impl Recorder {
     /// system, so that a crash after this point loses nothing before it (see the module
     /// documentation). Calling it often makes smaller chunks; the summary is still written
     /// only by [`finish`](Self::finish).
-    pub fn flush(&mut self) -> Result<()> {
-        self.writer
-            .flush()
-            .with_context(|| format!("cannot write {}", self.part.display()))?;
+    pub fn flush(&mut self) -> Result<(), RecordError> {
+        self.writer.flush().at("cannot write", &self.part)?;
         self.chunk_bytes = 0;
         self.flushes += 1;
         Ok(())
@@ -421,25 +427,25 @@ impl Recorder {
 
     /// Writes the summary section and footer, syncs the file to disk and renames it to the
     /// path given to [`create`](Self::create).
-    pub fn finish(self) -> Result<()> {
+    pub fn finish(self) -> Result<(), RecordError> {
         let Recorder {
             mut writer,
             part,
             path,
             ..
         } = self;
-        writer
-            .finish()
-            .with_context(|| format!("cannot finish {}", part.display()))?;
+        writer.finish().at("cannot finish", &part)?;
         let file = writer
             .into_inner()
             .into_inner()
             .map_err(|e| e.into_error())
-            .with_context(|| format!("cannot write {}", part.display()))?;
-        file.sync_all()
-            .with_context(|| format!("cannot sync {}", part.display()))?;
+            .at("cannot write", &part)?;
+        file.sync_all().at("cannot sync", &part)?;
         drop(file);
-        std::fs::rename(&part, &path)
-            .with_context(|| format!("cannot rename {} to {}", part.display(), path.display()))
+        std::fs::rename(&part, &path).map_err(|source| RecordError::Rename {
+            from: part,
+            to: path,
+            source,
+        })
     }
 }

@@ -288,7 +288,7 @@ mod tests {
     fn non_finite_and_malformed_input_rejected() {
         let err = curve(&[1, 2], &[3.0, 6.0], &[vec![1.0, 2.0], vec![1.0, f64::NAN]]).unwrap_err();
         // As the commands print it: the error and its sources.
-        let msg = format!("{:#}", anyhow::Error::new(err));
+        let msg = crate::error::chain(&err);
         assert!(msg.contains("trial 2") && msg.contains("run 1"), "{msg}");
         assert!(curve(&[1], &[3.0], &[vec![f64::INFINITY]]).is_err());
         assert!(curve(&[1], &[f64::NAN], &[vec![1.0]]).is_err());

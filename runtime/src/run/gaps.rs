@@ -9,7 +9,8 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use super::error::Result;
+use crate::error::AtFile;
 use wire::{Measurement, flags};
 
 use crate::resume::ResumePoint;
@@ -41,12 +42,12 @@ impl Gaps {
             .write(true)
             .truncate(!resumed)
             .open(path)
-            .with_context(|| format!("cannot create {}", path.display()))?;
+            .at("cannot create", path)?;
         let mut out = BufWriter::new(file);
         if !resumed {
             writeln!(out, "{GAPS_HEADER}")
                 .and_then(|()| out.flush())
-                .with_context(|| format!("cannot write {}", path.display()))?;
+                .at("cannot write", path)?;
         }
         Ok(Self {
             out,
@@ -73,7 +74,7 @@ impl Gaps {
                 ms(m.t_publish_ns.saturating_sub(m.t_sample_ns))
             )
             .and_then(|()| self.out.flush())
-            .with_context(|| format!("cannot write {}", self.path.display()))?;
+            .at("cannot write", &self.path)?;
             self.now += 1;
         }
         self.previous_ns = m.t_sample_ns;

@@ -11,7 +11,8 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result};
+use super::error::Result;
+use crate::error::AtFile;
 
 /// The lines of a log kept in memory.
 const TAIL: usize = 5;
@@ -68,10 +69,8 @@ impl Log {
     /// Creates the log file `path` and the pipe into it: returns the log and the pipe's
     /// writing end, for the process's standard output and error.
     pub(super) fn open(path: &Path) -> Result<(Self, PipeWriter)> {
-        let file =
-            File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-        let (reader, writer) = std::io::pipe()
-            .with_context(|| format!("cannot make a pipe for {}", path.display()))?;
+        let file = File::create(path).at("cannot create", path)?;
+        let (reader, writer) = std::io::pipe().at("cannot make a pipe for", path)?;
         let relayed = Arc::new(Mutex::new(Relayed::default()));
         let thread = {
             let (relayed, path) = (relayed.clone(), path.to_owned());

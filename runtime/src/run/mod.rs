@@ -25,12 +25,12 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result, anyhow, bail};
 use driver::contract::{DriverInfo, DriverWatch};
 use wire::{Bus, Waiting};
 
 use crate::clock::{Clock, ClockError, ExternalDriver};
 use crate::config::ExperimentConfig;
+use crate::error::AtFile;
 use crate::experiment::TrialRecord;
 use crate::lock::FolderLock;
 use crate::output::{progress_bar, write_atomic};
@@ -38,6 +38,7 @@ use crate::process::{Layout, Scheduling, Spin};
 use crate::record::Tap;
 use crate::resume;
 
+mod error;
 mod gaps;
 mod logs;
 mod recording;
@@ -46,6 +47,8 @@ mod returns;
 mod spawn;
 mod supervisor;
 
+use error::Result;
+pub use error::RunError;
 pub use gaps::GAPS_HEADER;
 use recording::{About, Recording};
 use returns::Returns;
@@ -124,8 +127,7 @@ pub fn run_with(
     // writes anything.
     let created = !opts.resume && !opts.out.exists();
     if !opts.resume {
-        std::fs::create_dir_all(&opts.out)
-            .with_context(|| format!("cannot create output directory {}", opts.out.display()))?;
+        std::fs::create_dir_all(&opts.out).at("cannot create output directory", &opts.out)?;
     }
     let _folder = FolderLock::acquire(&opts.out)?;
     let checkpoints = resume::checkpoint_dir(&opts.out);
@@ -257,13 +259,11 @@ fn free_run_id(opts: &RunOptions) -> Result<String> {
         .unwrap_or_else(|| format!("{}-{}", std::process::id(), wire::now_ns() % 1_000_000_000));
     let busy = Bus::live_roles(&run_id);
     if !busy.is_empty() {
-        return Err(anyhow!(
-            "run id {run_id:?} is in use by a run that is going on (its {} running); choose another --run-id",
-            match busy.as_slice() {
-                [one] => format!("{one} process is"),
-                many => format!("{} processes are", many.join(", ")),
-            }
-        ));
+        let running = match busy.as_slice() {
+            [one] => format!("{one} process is"),
+            many => format!("{} processes are", many.join(", ")),
+        };
+        return Err(RunError::RunIdInUse { run_id, running });
     }
     Ok(run_id)
 }
@@ -291,10 +291,11 @@ fn driver_options(opts: &RunOptions, info: &DriverInfo) -> Result<RunOptions, Cl
 fn check_reward_source(cfg: &ExperimentConfig, id: &str, info: &DriverInfo) -> Result<()> {
     let algo = cfg.agent.algo;
     if info.provides_reward() && algo.needs_reward_gradient() {
-        bail!(
-            "--algo {algo} needs the reward's gradient ∂ρ/∂u, but driver {id:?} (task {:?}) provides its own reward as numbers: use an actor-critic (--algo sac, mlac or rmac) or serve the task's reward (the Gymnasium adapter's --task-reward)",
-            info.task_name()
-        );
+        return Err(RunError::RewardGradient {
+            algo,
+            id: id.to_owned(),
+            task: info.task_name().to_string(),
+        });
     }
     Ok(())
 }

@@ -4,7 +4,8 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use super::error::{Result, RunError};
+use crate::error::AtFile;
 use driver::contract::{DriverCommand, DriverSample, LinkSample};
 
 /// The integer fields of `/driver/link`, in [`LinkSample`]'s order (the offset, signed,
@@ -22,7 +23,7 @@ use wire::{Action, Estimate, Header, Measurement, Truth};
 
 use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
-use crate::record::{ChannelId, Field, FieldKind, Recorder, Tap, Value};
+use crate::record::{ChannelId, Field, FieldKind, RecordError, Recorder, Tap, Value};
 use crate::resume::ResumePoint;
 
 /// The MCAP recording: one channel per topic, and one `/timing/...` channel per topic
@@ -168,22 +169,19 @@ impl Recording {
         for m in &p.messages {
             self.rec
                 .write_encoded(&m.topic, m.log_time, m.publish_time, &m.data)
-                .with_context(|| {
-                    format!(
-                        "cannot keep the recorded trials: {} was recorded with another channel layout",
-                        old.display()
-                    )
+                .map_err(|source| RunError::Layout {
+                    path: old.to_owned(),
+                    source,
                 })?;
         }
         self.rec.flush()?;
         if old.exists() {
-            std::fs::remove_file(old)
-                .with_context(|| format!("cannot remove {}", old.display()))?;
+            std::fs::remove_file(old).at("cannot remove", old)?;
         }
         Ok(())
     }
 
-    pub(super) fn create(path: &Path, n: usize, m: usize) -> Result<Self> {
+    pub(super) fn create(path: &Path, n: usize, m: usize) -> Result<Self, RecordError> {
         let mut rec = Recorder::create(path)?;
         let state = |name| {
             vec![
@@ -250,7 +248,7 @@ impl Recording {
     /// receives: `/returns`, a row of `returns.csv` per trial ([`Self::trial`]), and
     /// `/latency`, per action the time from the sample to the action and the agent's
     /// share of it, in µs.
-    pub(super) fn live(&mut self, tap: Box<dyn Tap>) -> Result<()> {
+    pub(super) fn live(&mut self, tap: Box<dyn Tap>) -> Result<(), RecordError> {
         self.rec.set_tap(tap);
         let returns = [
             Field::integer("trial"),
@@ -271,7 +269,7 @@ impl Recording {
 
     /// A trial's row of `returns.csv` on `/returns` (live view only); its greedy return
     /// `null` when it had no evaluation.
-    pub(super) fn trial(&mut self, r: &TrialRecord) -> Result<()> {
+    pub(super) fn trial(&mut self, r: &TrialRecord) -> Result<(), RecordError> {
         let Some((ch, _)) = self.live else {
             return Ok(());
         };
@@ -287,7 +285,7 @@ impl Recording {
     }
 
     /// An action's latency on `/latency` (live view only).
-    fn latency(&mut self, msg: &Action, t: u64) -> Result<()> {
+    fn latency(&mut self, msg: &Action, t: u64) -> Result<(), RecordError> {
         let Some((_, ch)) = self.live else {
             return Ok(());
         };
@@ -325,7 +323,7 @@ impl Recording {
         timing: ChannelId,
         seq: u64,
         stamps: &[u64],
-    ) -> Result<()> {
+    ) -> Result<(), RecordError> {
         self.rec.write(ch, t, t, &self.values)?;
         self.values.clear();
         self.values.push(Value::Int(seq));
@@ -338,7 +336,7 @@ impl Recording {
         self.values.extend(v.iter().map(|&x| Value::Num(x)));
     }
 
-    pub(super) fn measurement(&mut self, msg: &Measurement) -> Result<()> {
+    pub(super) fn measurement(&mut self, msg: &Measurement) -> Result<(), RecordError> {
         self.t_sample_ns = msg.t_sample_ns;
         let t = self.header(&msg.header);
         self.nums(&[msg.reward]);
@@ -356,14 +354,14 @@ impl Recording {
     }
 
     /// Adds the channel of the plant's ground truth.
-    pub(super) fn add_truth(&mut self) -> Result<()> {
+    pub(super) fn add_truth(&mut self) -> Result<(), RecordError> {
         let fields = header_fields(vec![Field::array("x", self.n, FieldKind::Number)]);
         self.truth = Some(self.rec.channel("/plant/truth", "rig.Truth", &fields)?);
         Ok(())
     }
 
     /// Records the ground truth of a sample, with the log time of its measurement.
-    pub(super) fn truth(&mut self, msg: &Truth) -> Result<()> {
+    pub(super) fn truth(&mut self, msg: &Truth) -> Result<(), RecordError> {
         let Some(ch) = self.truth else {
             return Ok(());
         };
@@ -373,7 +371,7 @@ impl Recording {
         self.rec.write(ch, t, t, &self.values)
     }
 
-    pub(super) fn estimate(&mut self, msg: &Estimate) -> Result<()> {
+    pub(super) fn estimate(&mut self, msg: &Estimate) -> Result<(), RecordError> {
         self.t_sample_ns = msg.t_sample_ns;
         let t = self.header(&msg.header);
         self.nums(&[msg.reward]);
@@ -389,7 +387,7 @@ impl Recording {
     }
 
     /// Adds the channels of an external driver's samples and commands.
-    pub(super) fn add_driver(&mut self) -> Result<()> {
+    pub(super) fn add_driver(&mut self) -> Result<(), RecordError> {
         let (n, m) = (self.n, self.m);
         let ints =
             |names: &[&str]| -> Vec<Field> { names.iter().map(|f| Field::integer(f)).collect() };
@@ -414,7 +412,7 @@ impl Recording {
     }
 
     /// The link's timing of one driver sample (across hosts).
-    pub(super) fn driver_link(&mut self, l: &LinkSample) -> Result<()> {
+    pub(super) fn driver_link(&mut self, l: &LinkSample) -> Result<(), RecordError> {
         let Some((_, _, ch)) = self.driver else {
             return Ok(());
         };
@@ -436,7 +434,7 @@ impl Recording {
             .write(ch, l.t_received_ns, l.t_received_ns, &self.values)
     }
 
-    pub(super) fn driver_sample(&mut self, s: &DriverSample) -> Result<()> {
+    pub(super) fn driver_sample(&mut self, s: &DriverSample) -> Result<(), RecordError> {
         let Some((ch, _, _)) = self.driver else {
             return Ok(());
         };
@@ -451,7 +449,7 @@ impl Recording {
             .write(ch, s.t_sample_ns, s.t_sample_ns, &self.values)
     }
 
-    pub(super) fn driver_command(&mut self, c: &DriverCommand) -> Result<()> {
+    pub(super) fn driver_command(&mut self, c: &DriverCommand) -> Result<(), RecordError> {
         let Some((_, ch, _)) = self.driver else {
             return Ok(());
         };
@@ -464,7 +462,7 @@ impl Recording {
             .write(ch, c.t_publish_ns, c.t_publish_ns, &self.values)
     }
 
-    pub(super) fn action(&mut self, msg: &Action) -> Result<()> {
+    pub(super) fn action(&mut self, msg: &Action) -> Result<(), RecordError> {
         self.t_sample_ns = msg.t_sample_ns;
         let t = self.header(&msg.header);
         self.nums(&msg.u[..self.m]);

@@ -7,8 +7,9 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use super::error::{Result, RunError};
+use crate::error::AtFile;
 use ::agent::horizon::Horizon;
-use anyhow::{Context, Result, anyhow};
 use wire::flags;
 
 use crate::config::ExperimentConfig;
@@ -55,14 +56,12 @@ impl Returns {
         task: Arc<plant::Task>,
         point: Option<&ResumePoint>,
     ) -> Result<Self> {
-        let mut out = BufWriter::new(
-            File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
-        );
+        let mut out = BufWriter::new(File::create(path).at("cannot create", path)?);
         let kept = point.map_or(&[][..], |p| &p.records[..]);
         writeln!(out, "{RUNS_HEADER}")
             .and_then(|()| kept.iter().try_for_each(|r| write_row(&mut out, r)))
             .and_then(|()| out.flush())
-            .with_context(|| format!("cannot write {}", path.display()))?;
+            .at("cannot write", path)?;
         let (after, sim_time) = point.map_or((0, 0.0), |p| (p.trial, p.sim_time_s));
         Ok(Self {
             out,
@@ -121,10 +120,7 @@ impl Returns {
             }
             return Ok(());
         }
-        let pending = self
-            .pending
-            .as_mut()
-            .ok_or_else(|| anyhow!("a sample arrived before any trial started"))?;
+        let pending = self.pending.as_mut().ok_or(RunError::OutsideTrial)?;
         let end = f & flags::END != 0;
         let final_reward = if end {
             self.horizon.final_reward(&self.reward, x)
@@ -158,7 +154,7 @@ impl Returns {
         if let Some(r) = self.pending.take() {
             write_row(&mut self.out, &r)
                 .and_then(|()| self.out.flush())
-                .with_context(|| format!("cannot write {}", self.path.display()))?;
+                .at("cannot write", &self.path)?;
             self.ends.push((r.trial, self.seq));
             self.records.push(r);
         }

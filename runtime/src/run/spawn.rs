@@ -5,7 +5,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use anyhow::{Context, Result};
+use super::error::{Result, RunError};
+use crate::error::AtFile;
 
 use crate::process::node::Continuation;
 use crate::process::{AgentConfig, NodeConfig, ObserverConfig, PlantConfig, Settings};
@@ -69,8 +70,7 @@ impl Nodes {
     /// Writes each process's settings into `out/nodes/`; returns the files by role.
     fn write(&self, out: &Path) -> Result<[(&'static str, PathBuf); 3]> {
         let dir = out.join("nodes");
-        std::fs::create_dir_all(&dir)
-            .with_context(|| format!("cannot create {}", dir.display()))?;
+        std::fs::create_dir_all(&dir).at("cannot create", &dir)?;
         let file = |role: &str| dir.join(format!("{role}.toml"));
         self.agent.write(&file("agent"))?;
         self.observer.write(&file("observer"))?;
@@ -82,7 +82,7 @@ impl Nodes {
 /// Starts the three processes with settings `nodes` (written to `out/nodes/`), their
 /// output to `out/<process>.log` ([`Logs`]).
 pub(super) fn processes(out: &Path, nodes: &Nodes) -> Result<(Children, Logs)> {
-    let exe = std::env::current_exe().context("cannot find the rig executable")?;
+    let exe = std::env::current_exe().map_err(RunError::Executable)?;
     let mut children = Children(Vec::new());
     let mut logs = Logs::default();
     for (role, settings) in nodes.write(out)? {
@@ -98,7 +98,7 @@ pub(super) fn processes(out: &Path, nodes: &Nodes) -> Result<(Children, Logs)> {
             .stdout(pipe.try_clone()?)
             .stderr(pipe)
             .spawn()
-            .with_context(|| format!("cannot start the {role} process"))?;
+            .map_err(|source| RunError::Start { role, source })?;
         // The command, dropped, closes this process's copy of the pipe's writing end:
         // the log's relay ends when the process does.
         drop(command);

@@ -6,13 +6,13 @@ use std::path::{Path, PathBuf};
 use std::process::Child;
 use std::time::{Duration, Instant};
 
-use anyhow::{Result, anyhow, bail};
 use driver::contract::DriverWatch;
 use indicatif::ProgressBar;
 use wire::{Action, Bus, Estimate, Measurement, Truth, flags, topic};
 
 use crate::experiment::TrialRecord;
 
+use super::error::{Result, RunError};
 use super::gaps::Gaps;
 use super::logs::Logs;
 use super::recording::Recording;
@@ -30,12 +30,13 @@ pub(super) struct Continuity {
 }
 
 impl Continuity {
-    pub(super) fn check(&mut self, topic: &str, seq: u64) -> Result<()> {
+    pub(super) fn check(&mut self, topic: &'static str, seq: u64) -> Result<()> {
         if seq != self.next {
-            bail!(
-                "the recorder lost messages on {topic}: expected sample {}, got {seq}",
-                self.next
-            );
+            return Err(RunError::Lost {
+                topic,
+                expected: self.next,
+                got: seq,
+            });
         }
         self.next = seq + 1;
         Ok(())
@@ -205,11 +206,10 @@ impl Supervisor {
                     .pop_front()
                     .filter(|t| t.header == m.header);
                 let Some(t) = t else {
-                    bail!(
-                        "the recorder lost messages on {}: no ground truth for sample {}",
-                        topic::TRUTH,
-                        m.header.seq
-                    );
+                    return Err(RunError::NoTruth {
+                        topic: topic::TRUTH,
+                        seq: m.header.seq,
+                    });
                 };
                 self.recording.truth(&t)?;
                 if !estimated {
@@ -275,7 +275,7 @@ impl Supervisor {
                 first.get_or_insert(found);
             }
         }
-        first.ok_or_else(|| anyhow!("a process exited and could not be found again"))
+        first.ok_or(RunError::Vanished)
     }
 
     /// Waits for every process to exit after the end of the run.
@@ -285,15 +285,16 @@ impl Supervisor {
             loop {
                 if let Some(status) = child.try_wait()? {
                     if !status.success() {
-                        bail!(
-                            "the {role} process failed ({status}); {}",
-                            self.logs.last_lines(role)
-                        );
+                        return Err(RunError::Failed {
+                            role,
+                            status,
+                            log: self.logs.last_lines(role),
+                        });
                     }
                     break;
                 }
                 if Instant::now() > deadline {
-                    bail!("the {role} process did not exit after the end of the run");
+                    return Err(RunError::Lingered { role });
                 }
                 std::thread::sleep(Duration::from_millis(5));
             }
@@ -347,14 +348,18 @@ impl Supervisor {
             match self.drain(bar) {
                 Ok(true) => break,
                 Ok(false) => {}
-                Err(e) => bail!("{e:#}; {}", self.resume_hint()),
+                Err(e) => {
+                    return Err(RunError::Stopped {
+                        cause: Box::new(e),
+                        hint: self.resume_hint(),
+                    });
+                }
             }
             if self.bus.interrupted() {
                 self.record_the_rest(bar);
-                bail!(
-                    "interrupted: stopped the plant, observer and agent processes; {}",
-                    self.resume_hint()
-                );
+                return Err(RunError::Interrupted {
+                    hint: self.resume_hint(),
+                });
             }
             if let Some((_, status)) = self.exited()? {
                 // A process that ends cleanly after its last message can be seen to exit
@@ -382,14 +387,18 @@ impl Supervisor {
                     break;
                 }
                 let (role, status) = self.cause()?;
-                bail!(
-                    "the {role} process exited ({status}) before the run finished; {}; {}",
-                    self.resume_hint(),
-                    self.logs.last_lines(role)
-                );
+                return Err(RunError::Exited {
+                    role,
+                    status,
+                    hint: self.resume_hint(),
+                    log: self.logs.last_lines(role),
+                });
             }
             if let Some(e) = self.logs.error() {
-                bail!("{}; {e}", self.resume_hint());
+                return Err(RunError::Log {
+                    hint: self.resume_hint(),
+                    log: e,
+                });
             }
         }
         // Everything is read: the processes, waiting for this, may exit.
