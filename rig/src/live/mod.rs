@@ -3,8 +3,9 @@
 //!
 //! The recorder hands every channel and message to a [`Feed`] ([`runtime::record::Tap`]),
 //! in the recording's own JSON encoding and schemas, so that one layout serves the
-//! recording and the live view. The feed only copies the message into a bounded queue
-//! and returns: when the queue is full (the view's thread is behind) the message is
+//! recording and the live view. The feed copies a message only when a viewer subscribes
+//! to its channel ([`watched`]: a run served to nobody costs next to nothing), into a
+//! bounded queue, and returns: when the queue is full (the view's thread is behind) the message is
 //! dropped and counted, never waited for, so the loop never waits for a viewer. The
 //! view's thread logs each message on its Foxglove channel; the server's queue per client
 //! (of [`BACKLOG`] messages) drops its oldest when a viewer reads too slowly. Besides the
@@ -16,7 +17,7 @@ use std::collections::HashMap;
 use std::net::SocketAddr;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::mpsc::{Receiver, SyncSender, TrySendError, sync_channel};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender, TrySendError, sync_channel};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -29,8 +30,10 @@ use foxglove::{
 use runtime::record::Tap;
 
 pub mod picture;
+pub mod watched;
 
 use picture::Body;
+use watched::{REFRESH, Watched};
 
 /// The messages waiting between the recorder and the view's thread; beyond them, a
 /// message is dropped.
@@ -62,6 +65,7 @@ enum Event {
 pub struct Feed {
     queue: SyncSender<Event>,
     dropped: Arc<AtomicU64>,
+    watched: Arc<Watched>,
 }
 
 impl Tap for Feed {
@@ -75,6 +79,9 @@ impl Tap for Feed {
     }
 
     fn message(&mut self, index: usize, log_time_ns: u64, data: &[u8]) {
+        if !self.watched.wants(index) {
+            return;
+        }
         let event = Event::Message {
             index,
             log_time_ns,
@@ -89,7 +96,7 @@ impl Tap for Feed {
 /// What the live view did, for the run's summary.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Served {
-    /// Messages logged to the server (a viewer subscribed to their channel gets them).
+    /// Messages logged to the server: those of the channels a viewer subscribed to.
     pub messages: u64,
     /// Messages dropped because the view's thread was behind.
     pub dropped: u64,
@@ -129,7 +136,8 @@ impl LiveView {
             .map_err(|e| anyhow!("--live {addr}: cannot serve the live view: {e}"))?;
         let (queue, events) = sync_channel(QUEUE);
         let dropped = Arc::new(AtomicU64::new(0));
-        let view = View::new(ctx, Body::of(task));
+        let watched = Arc::new(Watched::default());
+        let view = View::new(ctx, Body::of(task), watched.clone());
         let thread = std::thread::Builder::new()
             .name("live view".into())
             .spawn(move || view.serve(&events))
@@ -138,6 +146,7 @@ impl LiveView {
         let feed = Feed {
             queue,
             dropped: dropped.clone(),
+            watched,
         };
         let live = LiveView {
             server,
@@ -186,10 +195,12 @@ struct View {
     latest: Option<(u64, Vec<u8>)>,
     drawn: Option<Instant>,
     served: Served,
+    /// The feed's flags, set from the server's subscriptions.
+    watched: Arc<Watched>,
 }
 
 impl View {
-    fn new(ctx: Arc<Context>, body: Body) -> View {
+    fn new(ctx: Arc<Context>, body: Body, watched: Arc<Watched>) -> View {
         let scene = ChannelBuilder::new("/scene")
             .context(&ctx)
             .build::<SceneUpdate>();
@@ -202,11 +213,22 @@ impl View {
             latest: None,
             drawn: None,
             served: Served::default(),
+            watched,
         }
     }
 
     fn serve(mut self, events: &Receiver<Event>) -> Served {
-        while let Ok(event) = events.recv() {
+        let mut refreshed = Instant::now();
+        loop {
+            if refreshed.elapsed() >= REFRESH {
+                self.refresh();
+                refreshed = Instant::now();
+            }
+            let event = match events.recv_timeout(REFRESH) {
+                Ok(event) => event,
+                Err(RecvTimeoutError::Timeout) => continue,
+                Err(RecvTimeoutError::Disconnected) => break,
+            };
             match event {
                 Event::Channel {
                     topic,
@@ -238,6 +260,18 @@ impl View {
             .build_raw()
             .expect("a topic is declared once");
         self.channels.push(channel);
+        self.refresh();
+    }
+
+    /// Sets the feed's flags from the server's subscriptions: a channel is wanted when a
+    /// viewer subscribes to it, the picture's state channel also when one subscribes to
+    /// the picture.
+    fn refresh(&self) {
+        let scene = self.scene.has_sinks();
+        for (i, channel) in self.channels.iter().enumerate() {
+            let drawn = scene && self.state.is_some_and(|(s, _)| s == i);
+            self.watched.set(i, channel.has_sinks() || drawn);
+        }
     }
 
     fn message(&mut self, index: usize, log_time_ns: u64, data: Vec<u8>) {
