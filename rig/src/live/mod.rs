@@ -5,8 +5,8 @@
 //! in the recording's own JSON encoding and schemas, so that one layout serves the
 //! recording and the live view. The feed copies a message only when a viewer subscribes
 //! to its channel ([`watched`]: a run served to nobody costs next to nothing), into a
-//! bounded queue, and returns: when the queue is full (the view's thread is behind) the message is
-//! dropped and counted, never waited for, so the loop never waits for a viewer. The
+//! bounded queue, and returns: when the queue is full (the view's thread is behind) the
+//! message is dropped and counted, never waited for, so the loop never waits for a viewer. The
 //! view's thread logs each message on its Foxglove channel; the server's queue per client
 //! (of [`BACKLOG`] messages) drops its oldest when a viewer reads too slowly. Besides the
 //! recording's channels: `/returns` and `/latency` (from the recorder) and `/scene`, the
