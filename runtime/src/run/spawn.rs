@@ -17,7 +17,9 @@ use super::logs::{Log, Logs};
 use super::supervisor::Children;
 
 /// The processes in the order they start: the plant last, once its receivers are up.
-const ROLES: [&str; 3] = ["agent", "observer", "plant"];
+const ROLES: [&str; 3] = ["agent", "observer", PLANT];
+/// The plant's role: the process that starts each sample.
+pub(super) const PLANT: &str = "plant";
 
 /// The three processes' settings, of run `run_id` on configuration `config`; each waits
 /// for two receivers (the next process and the recorder).

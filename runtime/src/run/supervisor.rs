@@ -18,10 +18,15 @@ use super::logs::Logs;
 use super::recording::Recording;
 use super::retention::{Progress, Retention};
 use super::returns::Returns;
+use super::spawn::PLANT;
 
 /// How long the supervisor watches after a process exits early, to see which process
 /// caused the stop (the others follow within milliseconds).
 pub(super) const CAUSE_WINDOW: Duration = Duration::from_millis(100);
+
+/// How long the observer and the agent are given, after Ctrl-C, to answer the samples
+/// the stopped plant sent.
+const ANSWER_WINDOW: Duration = Duration::from_secs(1);
 
 /// Checks that a topic's sequence numbers arrive without gaps.
 #[derive(Default)]
@@ -50,7 +55,12 @@ impl Children {
     /// Stops every process where it is (SIGSTOP): nothing more is sent, and what they
     /// sent stays readable (it would be gone with a process that exits).
     pub(super) fn freeze(&self) {
-        for (_, c) in &self.0 {
+        self.freeze_where(|_| true);
+    }
+
+    /// Stops the processes of the roles `which` picks (SIGSTOP).
+    fn freeze_where(&self, which: impl Fn(&str) -> bool) {
+        for (_, c) in self.0.iter().filter(|(role, _)| which(role)) {
             // SAFETY: `kill` sends a signal to the child's pid; it touches no memory.
             unsafe {
                 libc::kill(c.id() as libc::pid_t, libc::SIGSTOP);
@@ -331,8 +341,17 @@ impl Supervisor {
     }
 
     /// After Ctrl-C: stops the processes and records what they sent, so that every
-    /// trial in `returns.csv` is complete in the recording too.
+    /// trial in `returns.csv` is complete in the recording too. The plant stops first;
+    /// the observer and the agent answer the samples it sent (a trial's last sample
+    /// without its action would leave that trial incomplete), then stop.
     fn record_the_rest(&mut self, bar: &ProgressBar) {
+        self.children.freeze_where(|role| role == PLANT);
+        let deadline = Instant::now() + ANSWER_WINDOW;
+        while !self.answered() && Instant::now() < deadline {
+            if !matches!(self.drain(bar), Ok(false)) {
+                break;
+            }
+        }
         self.children.freeze();
         loop {
             let before = self.messages;
@@ -341,6 +360,12 @@ impl Supervisor {
                 break;
             }
         }
+    }
+
+    /// Whether every measurement recorded has its estimate and its action recorded.
+    fn answered(&self) -> bool {
+        let [m, e, a] = &self.continuity;
+        e.next == m.next && a.next == m.next
     }
 
     pub(super) fn supervise(&mut self, bar: &ProgressBar) -> Result<()> {
