@@ -109,6 +109,52 @@ def last_learning_mean(run_dir: Path, count: int = 100) -> float:
     return statistics.mean(returns[-count:])
 
 
+def seed_results(out: Path, return_at_least=None, upright=None, hold=1.5):
+    """Per seed of experiment folder `out` (seeds.sh's OUT), in seed order: a dict of
+    `seed`, `trials`, `final` (the greedy return at the last evaluation), `succeeds`
+    (there), `first_success_s` (simulated seconds of learning until the first evaluation
+    that succeeds, or None), `learning_mean` (the last 100 learning trials), `wall_s`,
+    `curve` ([(simulated s, greedy return)] of every evaluation) and `notes` (with
+    `upright`: when each last greedy trial is upright). Success as `main` says: give one
+    of `return_at_least` and `upright`."""
+    with open(out / "wall.csv") as f:
+        walls = {int(r["seed"]): float(r["wall_s"]) for r in csv.DictReader(f)}
+    results = []
+    for seed in sorted(walls):
+        run = out / f"seed-{seed}"
+        evals = evaluations(run)
+        if not evals:
+            sys.exit(f"{run}: no greedy evaluation in returns.csv (learn more trials than eval_every)")
+        notes = []
+        if upright is None:
+            good = [e[2] >= return_at_least for e in evals]
+        else:
+            ts, length, angles = task_of(run)
+            greedy = greedy_trials(run / "run.mcap")
+            good = [
+                all(upright_at_end(t, ts, length, angles, upright, hold) for t in greedy[e[0]])
+                for e in evals
+            ]
+            for k, trial in enumerate(greedy[evals[-1][0]]):
+                at, share = upright_times(trial, ts, angles, upright)
+                notes.append(
+                    f"seed {seed}, last greedy trial from start state {k}: "
+                    + ("never upright" if at is None else f"first upright at {at:.2f} s, upright {100 * share:.0f} % of it")
+                )
+        results.append({
+            "seed": seed,
+            "trials": evals[-1][0],
+            "final": evals[-1][2],
+            "succeeds": good[-1],
+            "first_success_s": next((e[1] for e, g in zip(evals, good) if g), None),
+            "learning_mean": last_learning_mean(run),
+            "wall_s": walls[seed],
+            "curve": [(e[1], e[2]) for e in evals],
+            "notes": notes,
+        })
+    return results
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("out", type=Path, help="the experiment's folder (seeds.sh's OUT)")
@@ -118,44 +164,25 @@ def main():
     args = p.parse_args()
     if (args.return_at_least is None) == (args.upright is None):
         p.error("give one of --return-at-least and --upright")
-    with open(args.out / "wall.csv") as f:
-        walls = {int(r["seed"]): float(r["wall_s"]) for r in csv.DictReader(f)}
+    results = seed_results(args.out, args.return_at_least, args.upright, args.hold)
     print(
         "| seed | trials | greedy return at the last evaluation | succeeds | simulated s to first success "
         "| mean return, last 100 learning trials | wall time |"
     )
     print("|---:|---:|---:|---|---:|---:|---:|")
-    won, finals, notes = 0, [], []
-    for seed in sorted(walls):
-        run = args.out / f"seed-{seed}"
-        evals = evaluations(run)
-        if args.upright is None:
-            good = [e[2] >= args.return_at_least for e in evals]
-        else:
-            ts, length, angles = task_of(run)
-            greedy = greedy_trials(run / "run.mcap")
-            good = [
-                all(upright_at_end(t, ts, length, angles, args.upright, args.hold) for t in greedy[e[0]])
-                for e in evals
-            ]
-        first = next((e[1] for e, g in zip(evals, good) if g), None)
-        if args.upright is not None:
-            for k, trial in enumerate(greedy[evals[-1][0]]):
-                at, share = upright_times(trial, ts, angles, args.upright)
-                notes.append(
-                    f"seed {seed}, last greedy trial from start state {k}: "
-                    + ("never upright" if at is None else f"first upright at {at:.2f} s, upright {100 * share:.0f} % of it")
-                )
-        won += good[-1]
-        finals.append(evals[-1][2])
+    for r in results:
+        first = r["first_success_s"]
         print(
-            f"| {seed} | {evals[-1][0]} | {evals[-1][2]:.2f} | {'yes' if good[-1] else 'no'} "
-            f"| {'never' if first is None else f'{first:.0f}'} | {last_learning_mean(run):.2f} | {walls[seed]:.1f} s |"
+            f"| {r['seed']} | {r['trials']} | {r['final']:.2f} | {'yes' if r['succeeds'] else 'no'} "
+            f"| {'never' if first is None else f'{first:.0f}'} | {r['learning_mean']:.2f} | {r['wall_s']:.1f} s |"
         )
+    notes = [n for r in results for n in r["notes"]]
     if notes:
         print(f"\nUpright: every angle within {args.upright} rad of 0.")
         print("\n".join(f"- {n}" for n in notes))
-    print(f"\n{won} of {len(walls)} seeds succeed at the last evaluation; "
+    finals = [r["final"] for r in results]
+    won = sum(r["succeeds"] for r in results)
+    print(f"\n{won} of {len(results)} seeds succeed at the last evaluation; "
           f"greedy return there: median {statistics.median(finals):.2f}, min {min(finals):.2f}")
     return 0
 
