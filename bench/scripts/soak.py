@@ -30,6 +30,7 @@ DIR/figures.json:
   than 1.5 periods apart.
 """
 import argparse
+import bisect
 import json
 import os
 import random
@@ -46,6 +47,9 @@ from mcap.reader import make_reader
 DRIVER = "soak"
 PORT = 7447
 GAP, START, END, GREEDY, SHUTDOWN = 512, 1, 2, 4, 8
+# A rig numbers a session's commands on from its clock at the session's start [ns], one
+# by one: numbers within this span after one of a session's are that session's.
+OWN_SESSION_SPAN = 10**6
 
 
 def sh(*args, check=True):
@@ -258,7 +262,7 @@ class Soak:
         last_growth = min((t for t, r in self.rows if r == self.rows[-1][1]), default=0)
         gaps = read_csv(self.run_dir / "gaps.csv")
         trials = {int(r["trial"]) for r in read_csv(self.run_dir / "returns.csv")}
-        foreign, gap_trials, checked = recorded(self.run_dir / "run.mcap", self.attempts,
+        foreign, gap_trials, checked = recorded(self.run_dir / "run.mcap",
                                                 self.args.period_ms * 1e6 / self.args.speed,
                                                 trials)
         return {
@@ -321,12 +325,11 @@ def read_csv(path):
         return []
 
 
-def recorded(path, attempts, period_ns, trials):
-    """From the recording: commands applied by the driver that the run never sent (counted
-    from each attempt's first sample showing one of its own), and the learning trials of
-    `trials` (those in returns.csv) whose recorded attempt has a gap; and how many of
-    `trials` the recording holds."""
-    sent, applied, measured, timing = set(), [], {}, {}
+def recorded(path, period_ns, trials):
+    """From the recording: commands of another session that the driver applied while the
+    run held it, and the learning trials of `trials` (those in returns.csv) whose
+    recorded attempt has a gap; and how many of `trials` the recording holds."""
+    sent, applied, measured, timing = {}, [], {}, {}
     if not Path(path).exists():
         return None, None, 0
     with open(path, "rb") as f:
@@ -337,23 +340,14 @@ def recorded(path, attempts, period_ns, trials):
                 continue
             m = json.loads(message.data)
             if topic == "/driver/command":
-                sent.add(m["seq"])
+                sent[m["seq"]] = m["t_publish_ns"]
             elif topic == "/driver/sample":
                 applied.append((m["t_sample_ns"], m["last_command"]))
             elif topic == "/plant/measurement":
                 measured[m["seq"]] = (m["trial"], m["flags"])
             else:
                 timing[m["seq"]] = m["t_sample_ns"]
-    foreign = set()
-    starts = [a["start_ns"] for a in attempts] + [float("inf")]
-    for begin, end in zip(starts, starts[1:]):
-        ours = False
-        for t, c in applied:
-            if not begin <= t < end or c == 0:
-                continue
-            ours = ours or c in sent
-            if ours and c not in sent:
-                foreign.add(c)
+    foreign = foreign_commands(sent, applied, lease_ns(period_ns))
     # The last attempt of each learning trial is the one in returns.csv.
     attempt, last = [], {}
     for seq in sorted(measured):
@@ -375,6 +369,44 @@ def recorded(path, attempts, period_ns, trials):
         if flagged or any(s > 1.5 * period_ns for s in spans):
             bad += 1
     return len(foreign), bad, len(last)
+
+
+def lease_ns(period_ns):
+    """A session's lease at the driver's bridge (docs/across-hosts.md): 10 periods, at
+    least 250 ms."""
+    return max(10 * period_ns, 250e6)
+
+
+def foreign_commands(sent, applied, lease):
+    """The commands of another session the driver applied while the run held it.
+    `sent`: the run's commands, number -> when it published them; `applied`: the driver's
+    samples' `(t_sample_ns, last_command)`. The run holds the driver from a sample showing
+    a command it published within `lease` before, until it falls silent for longer than
+    `lease` (its lease lapses: the driver is free for anyone). The run's own commands that
+    a resume dropped from the recording (numbers following one it kept, within its
+    session) are not another session's."""
+    kept = sorted(sent)
+    published = sorted(sent.values())
+
+    def own(c):
+        i = bisect.bisect_right(kept, c)
+        return i > 0 and c - kept[i - 1] < OWN_SESSION_SPAN
+
+    def heard_throughout(since, t):
+        """Whether the run published at least once a lease from `since` to `t`."""
+        i = max(bisect.bisect_right(published, since) - 1, 0)
+        times = published[i:bisect.bisect_right(published, t)] + [t]
+        return times[0] <= since and all(b - a <= lease for a, b in zip(times, times[1:]))
+
+    foreign, holding, before = set(), False, None
+    for t, c in sorted(applied):
+        holding = holding and heard_throughout(before, t)
+        before = t
+        if c == 0 or own(c):
+            holding = holding or (c in sent and t - sent[c] <= lease)
+        elif holding:
+            foreign.add(c)
+    return foreign
 
 
 def main():

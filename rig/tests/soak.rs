@@ -73,3 +73,26 @@ fn a_short_soak_finishes_with_no_foreign_command_and_no_gap_learned() {
     );
     assert!(run.status.success(), "{said}");
 }
+
+/// The soak's must-be-0 count of a second session's commands, on made-up samples
+/// (bench/scripts/test_soak_figures.py): it counts a command of another session applied
+/// while the run held the driver, and none applied after the run's lease lapsed, at a
+/// resumed run's start, or of the run's own that a resume dropped from the recording.
+#[test]
+fn the_soak_counts_a_second_sessions_command_only_while_the_run_held_the_driver() {
+    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
+    let has_mcap = Command::new(&python).args(["-c", "import mcap"]).output();
+    if !has_mcap.is_ok_and(|o| o.status.success()) {
+        println!("skipped: {python} cannot import mcap (pip install mcap==1.6.0)");
+        return;
+    }
+    let script =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../bench/scripts/test_soak_figures.py");
+    let out = Command::new(&python).arg(script).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
