@@ -171,11 +171,11 @@ pub enum Gaps {
 /// The experiment and how to run it, from the flags (and, resuming, the run's
 /// directory); an error is a usage error.
 fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
-    let mut cfg = match &args.resume {
+    let cfg = match &args.resume {
         Some(dir) => resume_selection(dir, &args.selection),
         None => resolve_selection(&args.selection),
-    }?;
-    cfg.run.runs = 1;
+    }?
+    .one_run();
     let driver = match args.plant {
         PlantSource::External => Some(args.driver.flags()),
         PlantSource::Simulated if args.driver.driver.is_some() => {
@@ -188,8 +188,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         (cfg.task().ts, &cfg.task_name()),
         driver,
     )?;
-    let lockstep = clock.is_lockstep();
-    let clock_is_external = clock.driver().is_some();
+    let (lockstep, external) = (clock.is_lockstep(), clock.is_external());
     let waiting = args.wait.waiting(if lockstep {
         LOCKSTEP_WAIT
     } else {
@@ -213,7 +212,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         spin: args.spin,
         waiting,
         // Known once the driver's info says which clock it keeps.
-        lockstep_waiting: clock_is_external.then(|| args.wait.waiting(LOCKSTEP_WAIT)),
+        lockstep_waiting: external.then(|| args.wait.waiting(LOCKSTEP_WAIT)),
         learn_across_gaps: args.gaps == Gaps::Learn,
     };
     Ok((cfg, opts))
@@ -233,8 +232,8 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
     println!(
         "{} {}/{} over three processes: {trials} in {:.1} s wall ({:.1} µs per sample)",
         cfg.task_name(),
-        cfg.agent.algo,
-        cfg.agent.approx,
+        cfg.agent().algo,
+        cfg.agent().approx,
         s.wall.as_secs_f64(),
         s.wall.as_secs_f64() * 1e6 / steps
     );
@@ -254,7 +253,7 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
                 "  rewards and trial endings: the driver's own (returns.csv sums them; run.mcap metadata reward_from = driver)"
             );
         }
-    } else if opts.clock.period().is_some() {
+    } else if opts.clock.is_realtime() {
         println!(
             "  deadline misses: {} of {} samples",
             s.deadline_misses,

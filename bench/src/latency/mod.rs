@@ -279,12 +279,11 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport, LatencyError> {
     let run_dir = opts.out.join("run");
     let cycles_path = run_dir.join("plant_cycles.csv");
     let (period_ns, machine) = run_realtime(opts, &run_dir, &cycles_path)?;
-    let (mut c, reach) = match opts.clock.driver() {
-        None => (cycles::read(&run_dir, &cycles_path, period_ns)?, None),
-        Some(_) => {
-            let (c, reach) = external::read(&cycles::messages(&run_dir)?, period_ns)?;
-            (c, Some(reach))
-        }
+    let (mut c, reach) = if opts.clock.is_external() {
+        let (c, reach) = external::read(&cycles::messages(&run_dir)?, period_ns)?;
+        (c, Some(reach))
+    } else {
+        (cycles::read(&run_dir, &cycles_path, period_ns)?, None)
     };
     write_atomic(&opts.out.join("latency.csv"), &c.csv)?;
     let stages: Vec<(&'static str, Stats)> = c
@@ -377,7 +376,7 @@ fn run_realtime(
     )?;
     let task = cfg.task();
     let per_trial = task.steps_per_trial() + 1;
-    cfg.run.trials = opts.cycles.div_ceil(per_trial) as u32;
+    cfg.change_run(|r| r.trials = opts.cycles.div_ceil(per_trial) as u32)?;
     let period = opts.clock.period();
     let before = Counters::read();
     let summary = run(
@@ -388,7 +387,7 @@ fn run_realtime(
             progress: false,
             clock: opts.clock.clone(),
             resume: false,
-            cycles_out: period.map(|_| cycles_path.to_owned()),
+            cycles_out: opts.clock.is_realtime().then(|| cycles_path.to_owned()),
             scheduling: opts.scheduling,
             spin: opts.spin,
             waiting: opts.waiting,

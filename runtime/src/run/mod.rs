@@ -120,8 +120,7 @@ pub fn run_with(
     tap: Option<Box<dyn Tap>>,
 ) -> Result<RunSummary> {
     opts.clock.check(cfg, opts.waiting)?;
-    let mut cfg = cfg.clone();
-    cfg.run.runs = 1;
+    let cfg = cfg.one_run();
     let run_id = free_run_id(opts)?;
     // A folder this run creates is removed again if the run is refused before it
     // writes anything.
@@ -137,11 +136,7 @@ pub fn run_with(
     }
     // Where a resumed run continues; checked before anything is written.
     let point = match opts.resume {
-        true => Some(resume::prepare(
-            &opts.out,
-            &cfg,
-            opts.clock.driver().is_some(),
-        )?),
+        true => Some(resume::prepare(&opts.out, &cfg, opts.clock.is_external())?),
         false => None,
     };
     for note in point.iter().flat_map(|p| &p.notes) {
@@ -178,7 +173,7 @@ pub fn run_with(
         run_id: &run_id,
         timing: opts.clock.describe(task.ts, driver_info.as_ref()),
         realtime: !opts.clock.is_lockstep(),
-        driver: opts.clock.driver().is_some(),
+        driver: opts.clock.is_external(),
         driver_reward: driver_info.is_some_and(|i| i.provides_reward()),
         point: point.as_ref(),
     };
@@ -224,9 +219,9 @@ pub fn run_with(
     }
 
     let after = point.as_ref().map_or(0, |p| p.trial);
-    let evals = |trials: u32| trials.checked_div(cfg.run.eval_every).unwrap_or(0);
+    let evals = |trials: u32| trials.checked_div(cfg.run().eval_every).unwrap_or(0);
     let bar = progress_bar(
-        u64::from(cfg.run.trials + evals(cfg.run.trials)),
+        u64::from(cfg.run().trials + evals(cfg.run().trials)),
         opts.progress,
         "rig run",
     );
@@ -289,7 +284,7 @@ fn driver_options(opts: &RunOptions, info: &DriverInfo) -> Result<RunOptions, Cl
 /// Refuses a learner that needs the reward's gradient with a driver that provides the
 /// reward as numbers only.
 fn check_reward_source(cfg: &ExperimentConfig, id: &str, info: &DriverInfo) -> Result<()> {
-    let algo = cfg.agent.algo;
+    let algo = cfg.agent().algo;
     if info.provides_reward() && algo.needs_reward_gradient() {
         return Err(RunError::RewardGradient {
             algo,

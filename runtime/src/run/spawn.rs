@@ -44,7 +44,7 @@ impl Nodes {
             clock: opts.clock.clone(),
             spin: opts.spin,
             learn_across_gaps: opts.learn_across_gaps,
-            cycles_out: opts.clock.period().and(opts.cycles_out.clone()),
+            cycles_out: opts.cycles_out.clone().filter(|_| opts.clock.is_realtime()),
             resume: point.map(|p| Continuation {
                 after_trial: p.trial,
                 sim_time: p.sim_time_s,
