@@ -5,12 +5,12 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Result, anyhow};
+use anyhow::{Context, Result, anyhow};
 use clap::Args as Flags;
 use runtime::clock::{Clock, Timing};
 use runtime::config::ExperimentConfig;
 use runtime::process::{Layout, WaitKind};
-use runtime::run::{RunOptions, RunSummary, run_with};
+use runtime::run::{NodeCommand, RunOptions, RunSummary, run_with};
 
 use crate::external::DriverArgs;
 use crate::live::LiveView;
@@ -168,6 +168,19 @@ pub enum Gaps {
     Learn,
 }
 
+/// How `rig run` (and `rig latency`) starts the run's processes: this executable's
+/// subcommands, `rig plant|observer|agent --node FILE`.
+pub fn node_command() -> Result<NodeCommand> {
+    let program = std::env::current_exe().context("cannot find the rig executable")?;
+    let args = |role: &str| vec![role.into(), "--node".into()];
+    Ok(NodeCommand {
+        program,
+        plant: args("plant"),
+        observer: args("observer"),
+        agent: args("agent"),
+    })
+}
+
 /// The experiment and how to run it, from the flags (and, resuming, the run's
 /// directory); an error is a usage error.
 fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
@@ -207,6 +220,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         run_id: args.run_id.clone(),
         progress: !args.quiet,
         clock,
+        nodes: node_command()?,
         cycles_out: None,
         scheduling,
         spin: args.spin,
@@ -281,6 +295,19 @@ mod tests {
     struct Cli {
         #[command(flatten)]
         args: Args,
+    }
+
+    #[test]
+    fn the_nodes_are_this_executables_subcommands() {
+        let nodes = node_command().unwrap();
+        assert_eq!(nodes.program, std::env::current_exe().unwrap());
+        for (args, role) in [
+            (&nodes.plant, "plant"),
+            (&nodes.observer, "observer"),
+            (&nodes.agent, "agent"),
+        ] {
+            assert_eq!(args, &[role, "--node"].map(std::ffi::OsString::from));
+        }
     }
 
     fn parse(flags: &[&str]) -> Result<Args, clap::Error> {

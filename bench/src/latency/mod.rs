@@ -70,7 +70,7 @@ use runtime::config::Overrides;
 use runtime::output::write_atomic;
 use runtime::process::{CpuSet, Layout, Scheduling, Spin, Wakeup};
 use runtime::report::plot::{Histogram, plot_histograms};
-use runtime::run::{RunOptions, run};
+use runtime::run::{NodeCommand, RunOptions, run};
 pub use sweep::{SweepPoint, sweep};
 
 /// What `rig latency` runs.
@@ -82,6 +82,8 @@ pub struct LatencyOptions {
     /// [`period`]), or an external driver at its own, with its stamps and, across hosts,
     /// the link's ([`DRIVER_STAGES`]).
     pub clock: Clock,
+    /// How the run's processes are started (`rig`'s subcommands).
+    pub nodes: NodeCommand,
     /// A task file in place of the pendulum (the driver's task).
     pub task: Option<PathBuf>,
     /// Output directory.
@@ -386,6 +388,7 @@ fn run_realtime(
             run_id: None,
             progress: false,
             clock: opts.clock.clone(),
+            nodes: opts.nodes.clone(),
             resume: false,
             cycles_out: opts.clock.is_realtime().then(|| cycles_path.to_owned()),
             scheduling: opts.scheduling,

@@ -286,7 +286,10 @@ fn a_checkpoint_origin_fingerprints_the_learning_parameters() {
 #[test]
 fn the_learner_is_resolved_once_and_again_on_each_change() {
     let mut c = resolve(None, &Overrides::default()).unwrap();
-    assert!(std::ptr::eq(c.learner(), c.clone().learner()), "copies share it");
+    assert!(
+        std::ptr::eq(c.learner(), c.clone().learner()),
+        "copies share it"
+    );
     assert_eq!(c.learner(), &c.agent().resolve(&c.task()).unwrap());
     c.change_agent(|a| a.learning.gamma = 0.9).unwrap();
     assert_eq!(c.learner().learning.gamma, 0.9);

@@ -38,6 +38,7 @@ use crate::process::{Layout, Scheduling, Spin};
 use crate::record::Tap;
 use crate::resume;
 
+mod command;
 mod error;
 mod gaps;
 mod logs;
@@ -47,6 +48,7 @@ mod returns;
 mod spawn;
 mod supervisor;
 
+pub use command::NodeCommand;
 use error::Result;
 pub use error::RunError;
 pub use gaps::GAPS_HEADER;
@@ -65,6 +67,8 @@ pub struct RunOptions {
     pub progress: bool,
     /// What moves the run from one sample to the next.
     pub clock: Clock,
+    /// How each of the three processes is started: the application's program.
+    pub nodes: NodeCommand,
     /// Continue the run in `out` from its last complete trial ([`crate::resume`]).
     pub resume: bool,
     /// Realtime, simulated plant: the plant writes every sample's timing to this file
@@ -207,7 +211,7 @@ pub fn run_with(
     }
 
     let nodes = spawn::Nodes::new((&run_id, &config_path), opts, point.as_ref(), &checkpoints);
-    (sup.children, sup.logs) = spawn::processes(&opts.out, &nodes)?;
+    (sup.children, sup.logs) = spawn::processes(&opts.out, &nodes, &opts.nodes)?;
     // Placed after the processes started: they place themselves, from anywhere.
     opts.scheduling.place(crate::process::Part::Recorder)?;
     let lockstep = match &opts.clock {
@@ -327,6 +331,12 @@ mod tests {
                 timeout: Duration::from_secs(1),
                 reset_timeout: Duration::from_secs(1),
             }),
+            nodes: NodeCommand {
+                program: "node".into(),
+                plant: vec![],
+                observer: vec![],
+                agent: vec![],
+            },
             resume: false,
             cycles_out: None,
             scheduling: Scheduling {
