@@ -223,9 +223,9 @@ pub fn delay_study(opts: &DelayStudyOptions) -> Result<Vec<Cell>, DelayStudyErro
                     ..Overrides::default()
                 };
                 let mut cfg = resolve(None, &o)?;
-                cfg.observer.model = opts.model;
+                cfg.change_observer(|o| o.model = opts.model)?;
                 let dir = opts.out.join(format!("{algo}-{approx}")).join(dir);
-                bar.inc_length(u64::from(cfg.run.runs) * u64::from(cfg.run.trials));
+                bar.inc_length(u64::from(cfg.run().runs) * u64::from(cfg.run().trials));
                 let s = learn(
                     &cfg,
                     &LearnOptions {
@@ -234,7 +234,7 @@ pub fn delay_study(opts: &DelayStudyOptions) -> Result<Vec<Cell>, DelayStudyErro
                         progress: Progress::Shared(bar.clone()),
                     },
                 )?;
-                let finals = final_greedy(&s.records, cfg.run.runs)?;
+                let finals = final_greedy(&s.records, cfg.run().runs)?;
                 let stats = Stats::of(&finals)?;
                 let velocity_error = velocity_error(&s.acted_on_rmse);
                 if opts.verbose {
@@ -247,8 +247,8 @@ pub fn delay_study(opts: &DelayStudyOptions) -> Result<Vec<Cell>, DelayStudyErro
                         stats.mean,
                         stats.ci.0,
                         stats.ci.1,
-                        cfg.run.runs,
-                        cfg.run.trials,
+                        cfg.run().runs,
+                        cfg.run().trials,
                         s.wall.as_secs_f64()
                     ));
                 }

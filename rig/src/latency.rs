@@ -84,9 +84,17 @@ pub fn main(args: &Args) -> ExitCode {
         Clock::External(_) => ObserverMode::Direct,
         _ => ObserverMode::Predictive,
     });
+    let nodes = match crate::run::node_command() {
+        Ok(n) => n,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            return ExitCode::FAILURE;
+        }
+    };
     let opts = bench::latency::LatencyOptions {
         cycles: args.cycles,
         clock,
+        nodes,
         task: args.task.clone(),
         out: args.out.clone(),
         observer: args.observer,

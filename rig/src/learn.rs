@@ -66,10 +66,10 @@ fn print_summary(cfg: &ExperimentConfig, s: &runtime::learn::LearnSummary, out: 
     println!(
         "{} {}/{}: {} runs × {} trials in {:.1} s wall ({:.2} µs per learning step, all threads)",
         cfg.task_name(),
-        cfg.agent.algo,
-        cfg.agent.approx,
-        cfg.run.runs,
-        cfg.run.trials,
+        cfg.agent().algo,
+        cfg.agent().approx,
+        cfg.run().runs,
+        cfg.run().trials,
         s.wall.as_secs_f64(),
         s.wall.as_secs_f64() * 1e6 / steps
     );

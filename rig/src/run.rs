@@ -5,12 +5,12 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Result, anyhow};
+use anyhow::{Context, Result, anyhow};
 use clap::Args as Flags;
 use runtime::clock::{Clock, Timing};
 use runtime::config::ExperimentConfig;
 use runtime::process::{Layout, WaitKind};
-use runtime::run::{RunOptions, RunSummary, run_with};
+use runtime::run::{NodeCommand, RunOptions, RunSummary, run_with};
 
 use crate::external::DriverArgs;
 use crate::live::LiveView;
@@ -168,14 +168,27 @@ pub enum Gaps {
     Learn,
 }
 
+/// How `rig run` (and `rig latency`) starts the run's processes: this executable's
+/// subcommands, `rig plant|observer|agent --node FILE`.
+pub fn node_command() -> Result<NodeCommand> {
+    let program = std::env::current_exe().context("cannot find the rig executable")?;
+    let args = |role: &str| vec![role.into(), "--node".into()];
+    Ok(NodeCommand {
+        program,
+        plant: args("plant"),
+        observer: args("observer"),
+        agent: args("agent"),
+    })
+}
+
 /// The experiment and how to run it, from the flags (and, resuming, the run's
 /// directory); an error is a usage error.
 fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
-    let mut cfg = match &args.resume {
+    let cfg = match &args.resume {
         Some(dir) => resume_selection(dir, &args.selection),
         None => resolve_selection(&args.selection),
-    }?;
-    cfg.run.runs = 1;
+    }?
+    .one_run();
     let driver = match args.plant {
         PlantSource::External => Some(args.driver.flags()),
         PlantSource::Simulated if args.driver.driver.is_some() => {
@@ -188,8 +201,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         (cfg.task().ts, &cfg.task_name()),
         driver,
     )?;
-    let lockstep = clock.is_lockstep();
-    let clock_is_external = clock.driver().is_some();
+    let (lockstep, external) = (clock.is_lockstep(), clock.is_external());
     let waiting = args.wait.waiting(if lockstep {
         LOCKSTEP_WAIT
     } else {
@@ -208,12 +220,13 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         run_id: args.run_id.clone(),
         progress: !args.quiet,
         clock,
+        nodes: node_command()?,
         cycles_out: None,
         scheduling,
         spin: args.spin,
         waiting,
         // Known once the driver's info says which clock it keeps.
-        lockstep_waiting: clock_is_external.then(|| args.wait.waiting(LOCKSTEP_WAIT)),
+        lockstep_waiting: external.then(|| args.wait.waiting(LOCKSTEP_WAIT)),
         learn_across_gaps: args.gaps == Gaps::Learn,
     };
     Ok((cfg, opts))
@@ -233,8 +246,8 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
     println!(
         "{} {}/{} over three processes: {trials} in {:.1} s wall ({:.1} µs per sample)",
         cfg.task_name(),
-        cfg.agent.algo,
-        cfg.agent.approx,
+        cfg.agent().algo,
+        cfg.agent().approx,
         s.wall.as_secs_f64(),
         s.wall.as_secs_f64() * 1e6 / steps
     );
@@ -254,7 +267,7 @@ fn print_summary(cfg: &ExperimentConfig, opts: &RunOptions, s: &RunSummary) {
                 "  rewards and trial endings: the driver's own (returns.csv sums them; run.mcap metadata reward_from = driver)"
             );
         }
-    } else if opts.clock.period().is_some() {
+    } else if opts.clock.is_realtime() {
         println!(
             "  deadline misses: {} of {} samples",
             s.deadline_misses,
@@ -282,6 +295,19 @@ mod tests {
     struct Cli {
         #[command(flatten)]
         args: Args,
+    }
+
+    #[test]
+    fn the_nodes_are_this_executables_subcommands() {
+        let nodes = node_command().unwrap();
+        assert_eq!(nodes.program, std::env::current_exe().unwrap());
+        for (args, role) in [
+            (&nodes.plant, "plant"),
+            (&nodes.observer, "observer"),
+            (&nodes.agent, "agent"),
+        ] {
+            assert_eq!(args, &[role, "--node"].map(std::ffi::OsString::from));
+        }
     }
 
     fn parse(flags: &[&str]) -> Result<Args, clap::Error> {

@@ -120,7 +120,7 @@ fn no_learner_beats_the_optimum() {
         let out = std::env::temp_dir().join(format!(
             "rig-optimal-{}-{}",
             std::process::id(),
-            cfg.agent.algo
+            cfg.agent().algo
         ));
         let s = learn(
             &cfg,
@@ -135,18 +135,21 @@ fn no_learner_beats_the_optimum() {
         let best = greedy.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         eprintln!(
             "{}/llr: {} greedy returns ({} runs × {} trials), best {best:.2}; bound {bound:.2}",
-            cfg.agent.algo,
+            cfg.agent().algo,
             greedy.len(),
-            cfg.run.runs,
-            cfg.run.trials
+            cfg.run().runs,
+            cfg.run().trials
         );
-        assert_eq!(greedy.len() as u32, 3 * cfg.run.trials / cfg.run.eval_every);
-        assert!(best <= bound, "{}: {best} > {bound}", cfg.agent.algo);
+        assert_eq!(
+            greedy.len() as u32,
+            3 * cfg.run().trials / cfg.run().eval_every
+        );
+        assert!(best <= bound, "{}: {best} > {bound}", cfg.agent().algo);
         // And they do swing up: the best is within 20 % of the optimum.
         assert!(
             best > 1.2 * o.simulated_return,
             "{}: {best}",
-            cfg.agent.algo
+            cfg.agent().algo
         );
         let _ = std::fs::remove_dir_all(out);
     }

@@ -17,7 +17,7 @@ fn main() {
         },
     )
     .expect("the default preset resolves");
-    let mut exp = Experiment::new(&cfg, 0).expect("the preset fits its task");
+    let mut exp = Experiment::new(&cfg, 0);
     while let Some(r) = exp.next_trial() {
         if let Some(g) = r.greedy {
             println!(

@@ -180,6 +180,17 @@ impl Clock {
         matches!(self, Self::Lockstep)
     }
 
+    /// Whether the simulated plant keeps real time, sampled every period of the
+    /// monotonic clock.
+    pub fn is_realtime(&self) -> bool {
+        matches!(self, Self::Realtime { .. })
+    }
+
+    /// Whether an external driver is the plant, and the clock.
+    pub fn is_external(&self) -> bool {
+        matches!(self, Self::External(_))
+    }
+
     /// The external driver, if the plant is one.
     pub fn driver(&self) -> Option<&ExternalDriver> {
         match self {
@@ -209,10 +220,12 @@ impl Clock {
     /// without end needs lockstep (with an external driver, its own: checked once its
     /// info is read, [`Clock::check_driver_waiting`]).
     pub fn check(&self, cfg: &ExperimentConfig, waiting: Waiting) -> Result<(), ClockError> {
-        if self.period() == Some(Duration::ZERO) {
+        if let Self::Realtime { period } = self
+            && period.is_zero()
+        {
             return Err(ClockError::ZeroPeriod);
         }
-        let delayed = cfg.run.delay_ms != 0.0 || !cfg.run.delay_from.is_empty();
+        let delayed = cfg.run().delay_ms != 0.0 || !cfg.run().delay_from.is_empty();
         if delayed && !self.is_lockstep() {
             return Err(ClockError::Delayed);
         }
@@ -222,7 +235,7 @@ impl Clock {
                 if d.timeout.is_zero() || d.reset_timeout.is_zero() {
                     return Err(ClockError::ZeroTimeout);
                 }
-                if cfg.observer.mode == ::observer::config::ObserverMode::Predictive {
+                if cfg.observer().mode == ::observer::config::ObserverMode::Predictive {
                     return Err(ClockError::Predictive);
                 }
             }

@@ -36,7 +36,6 @@ use agent::checkpoint::{Checkpoint, CheckpointError, Origin, Snapshot};
 use agent::horizon::Horizon;
 use observer::config::{ObserverConfig, ObserverMode, SensorKind};
 use observer::timing::{Front, Sample as AtSample, act};
-use plant::config::ConfigError;
 use plant::delay::Actuator;
 use plant::episode::{Episode, Step};
 use plant::schedule::{Schedule, Trial};
@@ -125,28 +124,31 @@ impl ActedOnError {
 
 impl Experiment {
     /// Run `run` of the experiment `cfg` describes (all random streams derived from
-    /// `cfg.run.seed` and `run`).
-    ///
-    /// The error names the key of the agent's configuration that does not fit the task.
-    pub fn new(cfg: &ExperimentConfig, run: u32) -> Result<Self, ConfigError> {
+    /// `cfg.run.seed` and `run`), its agent built from the configuration's learner.
+    pub fn new(cfg: &ExperimentConfig, run: u32) -> Self {
         let task = cfg.task();
-        let run_seed = agent::seed::run_seed(cfg.run.seed, run);
-        let agent = agent::build(&task, &cfg.learner()?, run_seed);
-        let o = &cfg.observer;
+        let run_seed = agent::seed::run_seed(cfg.run().seed, run);
+        let agent = agent::build(&task, cfg.learner(), run_seed);
+        let o = cfg.observer();
         let sensor = sensor(&task, o, run_seed);
-        Ok(Self {
+        Self {
             episode: Episode::new(Plant::new(task.clone()), actuator(&task, cfg, run_seed)),
             sensor,
             y: vec![0.0; task.state_dim()],
             front: front(&task, cfg),
-            horizon: cfg.agent.horizon.of(&task),
+            horizon: cfg.agent().horizon.of(&task),
             origin: cfg.origin(run),
-            schedule: Schedule::new(task.clone(), cfg.run.trials, cfg.run.eval_every, run_seed),
+            schedule: Schedule::new(
+                task.clone(),
+                cfg.run().trials,
+                cfg.run().eval_every,
+                run_seed,
+            ),
             task,
             agent,
             run,
             acted_on_error: ActedOnError::default(),
-        })
+        }
     }
 
     /// The agent's learned state after the last completed trial.
@@ -165,11 +167,11 @@ impl Experiment {
     /// at. The checkpoint holds the agent's state only: the observer must be stateless
     /// across trials (the default sensor and observer).
     pub fn resume(cfg: &ExperimentConfig, run: u32, c: &Checkpoint) -> Result<Self, ResumeError> {
-        if !cfg.observer.is_default() {
+        if !cfg.observer().is_default() {
             return Err(ResumeError::Observer);
         }
         resumable_delays(cfg)?;
-        let mut e = Self::new(cfg, run)?;
+        let mut e = Self::new(cfg, run);
         c.restore(&cfg.origin(run), e.agent.as_mut())?;
         e.schedule.resume(c.trial, c.sim_time_s);
         Ok(e)
@@ -352,10 +354,10 @@ fn start_sample(
 
 /// The observer `cfg` asks for on `task`, in the configured timing.
 pub fn front(task: &Arc<Task>, cfg: &ExperimentConfig) -> Front {
-    let o = &cfg.observer;
+    let o = cfg.observer();
     Front::new(
         task.clone(),
-        observer::build(task.clone(), o, cfg.agent.model.as_ref()),
+        observer::build(task.clone(), o, cfg.agent().model.as_ref()),
         o.mode == ObserverMode::Predictive,
     )
 }
@@ -364,12 +366,12 @@ pub fn front(task: &Arc<Task>, cfg: &ExperimentConfig) -> Front {
 /// configuration's delay file has been read once already).
 pub fn actuator(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Actuator {
     let delays = cfg
-        .run
+        .run()
         .delays_for_run(task, run_seed)
         .unwrap_or_else(|e| panic!("run.delay_from: {e}"));
     Actuator::new(
         task.action_dim(),
-        cfg.observer.mode == ObserverMode::Predictive,
+        cfg.observer().mode == ObserverMode::Predictive,
         delays,
     )
 }
@@ -377,10 +379,10 @@ pub fn actuator(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Actuator 
 /// A run with delays drawn from `run.delay_from` cannot be resumed: a checkpoint does not
 /// hold where the delay stream stands.
 pub fn resumable_delays(cfg: &ExperimentConfig) -> Result<(), ResumeError> {
-    if cfg.run.delay_from.is_empty() {
+    if cfg.run().delay_from.is_empty() {
         Ok(())
     } else {
-        Err(ResumeError::DelayStream(cfg.run.delay_from.clone()))
+        Err(ResumeError::DelayStream(cfg.run().delay_from.clone()))
     }
 }
 
@@ -401,9 +403,6 @@ pub enum ResumeError {
     /// A checkpoint that cannot be read or does not fit the run.
     #[error(transparent)]
     Checkpoint(#[from] CheckpointError),
-    /// A configuration whose learner does not fit its task.
-    #[error(transparent)]
-    Config(#[from] ConfigError),
 }
 
 /// One sample of a time response.
@@ -448,7 +447,7 @@ mod tests {
     fn the_agent_sees_encoder_angles_only() {
         for o in [ObserverKind::FiniteDifference, ObserverKind::Predictive] {
             let cfg = angle_config(o, "0.0");
-            let mut e = Experiment::new(&cfg, 0).unwrap();
+            let mut e = Experiment::new(&cfg, 0);
             while e.next_trial().is_some() {}
             let q = std::f64::consts::TAU / 4096.0;
             let traj = e.greedy_trajectory(&[std::f64::consts::PI, 0.0]);
@@ -458,7 +457,7 @@ mod tests {
                 assert!(s.x.iter().all(|v| v.is_finite()));
             }
             let noisy = |run| {
-                let mut e = Experiment::new(&angle_config(o, "0.003"), run).unwrap();
+                let mut e = Experiment::new(&angle_config(o, "0.003"), run);
                 (0..3)
                     .map(|_| e.next_trial().unwrap().ret)
                     .collect::<Vec<_>>()

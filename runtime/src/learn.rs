@@ -120,7 +120,7 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
     writeln!(out, "{RUNS_HEADER}").at("cannot write", &runs_path)?;
     let writer = Mutex::new(OrderedWriter::new(out));
 
-    let (runs, trials) = (cfg.run.runs, cfg.run.trials);
+    let (runs, trials) = (cfg.run().runs, cfg.run().trials);
     let bar = match &opts.progress {
         Progress::Shared(bar) => bar.clone(),
         own => progress_bar(
@@ -139,7 +139,7 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
         (0..runs)
             .into_par_iter()
             .map(|run| {
-                let mut exp = Experiment::new(cfg, run)?;
+                let mut exp = Experiment::new(cfg, run);
                 let mut records = Vec::with_capacity(trials as usize);
                 while let Some(r) = exp.next_trial() {
                     bar.inc(1);
@@ -166,7 +166,7 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
         .into_values()
         .unzip();
     write_responses(&opts.out.join("responses.csv"), &responses)?;
-    if !cfg.observer.is_default() {
+    if !cfg.observer().is_default() {
         write_acted_on(&opts.out.join("observer.csv"), &acted_on_rmse)?;
     }
     let wall = t0.elapsed();
@@ -199,9 +199,9 @@ fn write_curves(
     let title = format!(
         "{} {}/{} — {} runs",
         cfg.task_name(),
-        cfg.agent.algo.as_str().to_uppercase(),
-        cfg.agent.approx.as_str().to_uppercase(),
-        cfg.run.runs
+        cfg.agent().algo.as_str().to_uppercase(),
+        cfg.agent().approx.as_str().to_uppercase(),
+        cfg.run().runs
     );
     let mut series = vec![Series {
         label: "learning (with exploration)".into(),

@@ -146,7 +146,7 @@ fn mutated_configuration_files_are_errors_or_run_but_never_panic() {
             }
             Ok(cfg) => {
                 // Accepted: it must build and learn a few samples within the limits.
-                learns_within_the_limits(cfg.task(), &cfg.agent);
+                learns_within_the_limits(cfg.task(), cfg.agent());
                 true
             }
         });
@@ -199,7 +199,7 @@ fn mutated_task_files_are_errors_or_run_but_never_panic() {
                 system: Some(sim),
                 ..Default::default()
             };
-            learns_within_the_limits(task, &resolve(None, &o).unwrap().agent);
+            learns_within_the_limits(task, resolve(None, &o).unwrap().agent());
             true
         });
         match outcome {

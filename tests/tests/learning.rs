@@ -221,9 +221,7 @@ fn the_arm_and_the_linear_system_learn_with_their_presets() {
             )),
             Some(_) => {}
             None => {
-                let untrained = runtime::experiment::Experiment::new(&cfg, 0)
-                    .unwrap()
-                    .greedy_return();
+                let untrained = runtime::experiment::Experiment::new(&cfg, 0).greedy_return();
                 let changed = summary
                     .greedy_curve
                     .iter()
@@ -350,7 +348,7 @@ fn finite_horizon_learners_learn_and_count_the_terminal_reward() {
     let mut failed = Vec::new();
     for algo in [Algo::Sac, Algo::Mlac, Algo::Rmac] {
         let cfg = config_with(HorizonKind::Finite, algo, ApproxKind::Rbf, 1, 15, 1);
-        let mut exp = runtime::experiment::Experiment::new(&cfg, 0).unwrap();
+        let mut exp = runtime::experiment::Experiment::new(&cfg, 0);
         let mut best = f64::NEG_INFINITY;
         while let Some(r) = exp.next_trial() {
             assert!(r.ret.is_finite(), "{algo}: {r:?}");

@@ -70,7 +70,7 @@ use runtime::config::Overrides;
 use runtime::output::write_atomic;
 use runtime::process::{CpuSet, Layout, Scheduling, Spin, Wakeup};
 use runtime::report::plot::{Histogram, plot_histograms};
-use runtime::run::{RunOptions, run};
+use runtime::run::{NodeCommand, RunOptions, run};
 pub use sweep::{SweepPoint, sweep};
 
 /// What `rig latency` runs.
@@ -82,6 +82,8 @@ pub struct LatencyOptions {
     /// [`period`]), or an external driver at its own, with its stamps and, across hosts,
     /// the link's ([`DRIVER_STAGES`]).
     pub clock: Clock,
+    /// How the run's processes are started (`rig`'s subcommands).
+    pub nodes: NodeCommand,
     /// A task file in place of the pendulum (the driver's task).
     pub task: Option<PathBuf>,
     /// Output directory.
@@ -279,12 +281,11 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport, LatencyError> {
     let run_dir = opts.out.join("run");
     let cycles_path = run_dir.join("plant_cycles.csv");
     let (period_ns, machine) = run_realtime(opts, &run_dir, &cycles_path)?;
-    let (mut c, reach) = match opts.clock.driver() {
-        None => (cycles::read(&run_dir, &cycles_path, period_ns)?, None),
-        Some(_) => {
-            let (c, reach) = external::read(&cycles::messages(&run_dir)?, period_ns)?;
-            (c, Some(reach))
-        }
+    let (mut c, reach) = if opts.clock.is_external() {
+        let (c, reach) = external::read(&cycles::messages(&run_dir)?, period_ns)?;
+        (c, Some(reach))
+    } else {
+        (cycles::read(&run_dir, &cycles_path, period_ns)?, None)
     };
     write_atomic(&opts.out.join("latency.csv"), &c.csv)?;
     let stages: Vec<(&'static str, Stats)> = c
@@ -377,7 +378,7 @@ fn run_realtime(
     )?;
     let task = cfg.task();
     let per_trial = task.steps_per_trial() + 1;
-    cfg.run.trials = opts.cycles.div_ceil(per_trial) as u32;
+    cfg.change_run(|r| r.trials = opts.cycles.div_ceil(per_trial) as u32)?;
     let period = opts.clock.period();
     let before = Counters::read();
     let summary = run(
@@ -387,8 +388,9 @@ fn run_realtime(
             run_id: None,
             progress: false,
             clock: opts.clock.clone(),
+            nodes: opts.nodes.clone(),
             resume: false,
-            cycles_out: period.map(|_| cycles_path.to_owned()),
+            cycles_out: opts.clock.is_realtime().then(|| cycles_path.to_owned()),
             scheduling: opts.scheduling,
             spin: opts.spin,
             waiting: opts.waiting,

@@ -352,7 +352,7 @@ pub fn bench_loop(opts: &LoopOptions, progress: &dyn Fn(&str)) -> Result<LoopRep
 fn samples_per_run(cfg: &runtime::config::ExperimentConfig, trials: u32) -> usize {
     let task = cfg.task();
     let evals =
-        trials.checked_div(cfg.run.eval_every).unwrap_or(0) as usize * task.initial_states.len();
+        trials.checked_div(cfg.run().eval_every).unwrap_or(0) as usize * task.initial_states.len();
     (trials as usize + evals) * (task.steps_per_trial() + 1)
 }
 

@@ -120,7 +120,7 @@ pub fn unrecorded(
 ) -> Result<(Timed, Vec<u64>), LoopError> {
     std::fs::create_dir_all(dir).at("cannot create", dir)?;
     let mut cfg = runtime::config::resolve(None, &Default::default())?;
-    cfg.run.trials = trials;
+    cfg.change_run(|r| r.trials = trials)?;
     let config = dir.join("config.toml");
     write_atomic(&config, &cfg.to_toml())?;
     let steps = dir.join("steps_ns.txt");

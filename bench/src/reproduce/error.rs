@@ -1,5 +1,6 @@
 //! Why `rig reproduce` could not regenerate a figure.
 
+use plant::config::ConfigError;
 use runtime::error::FileError;
 use runtime::learn::LearnError;
 use runtime::report::{CurveError, PlotError};
@@ -23,6 +24,9 @@ pub enum ReproduceError {
     /// An experiment could not be learned.
     #[error(transparent)]
     Learn(#[from] LearnError),
+    /// `--runs` or `--trials` out of the range of `[run]`.
+    #[error("`--runs`/`--trials`: {0}")]
+    RunCount(#[from] ConfigError),
     /// An output could not be written.
     #[error(transparent)]
     File(#[from] FileError),

@@ -63,9 +63,12 @@ fn vgbp_lstd_eq_6_21() -> ExperimentConfig {
         ApproxKind::Lstd,
         HorizonKind::Infinite,
     );
-    let v = cfg.agent.vgbp.as_mut().expect("VGBP has a [vgbp] section");
-    v.lookahead = 0;
-    v.grid = 0;
+    cfg.change_agent(|a| {
+        let v = a.vgbp.as_mut().expect("VGBP has a [vgbp] section");
+        v.lookahead = 0;
+        v.grid = 0;
+    })
+    .expect("Eq. 6.21's selection is a valid [vgbp]");
     cfg
 }
 
@@ -82,8 +85,11 @@ pub(super) fn mlac_chapter6() -> ExperimentConfig {
 /// A curve with §3.7's input saturation ignored: the actor's outputs unbounded and
 /// MLAC's `∇_u f̂` not cut at the bounds (the plant still saturates).
 pub(super) fn saturation_ignored(mut cfg: ExperimentConfig) -> ExperimentConfig {
-    cfg.agent.learning.bounded_actor = false;
-    cfg.agent.learning.saturation_margin = 0.0;
+    cfg.change_agent(|a| {
+        a.learning.bounded_actor = false;
+        a.learning.saturation_margin = 0.0;
+    })
+    .expect("an unbounded actor is a valid [learning]");
     cfg
 }
 
@@ -513,11 +519,12 @@ mod tests {
         let f = figures().into_iter().find(|f| f.id == "6.1").unwrap();
         let cfg = |label| &f.curves.iter().find(|c| c.label == label).unwrap().cfg;
         let (thesis, ours) = (cfg(EQ_6_21), cfg(SEARCH));
-        let v = thesis.agent.vgbp.as_ref().unwrap();
+        let v = thesis.agent().vgbp.as_ref().unwrap();
         assert_eq!((v.lookahead, v.grid), (0, 0));
-        assert!(ours.agent.vgbp.as_ref().unwrap().grid > 0);
+        assert!(ours.agent().vgbp.as_ref().unwrap().grid > 0);
         let mut same = ours.clone();
-        same.agent.vgbp = thesis.agent.vgbp.clone();
+        same.change_agent(|a| a.vgbp = thesis.agent().vgbp.clone())
+            .unwrap();
         assert_eq!(&same, thesis);
         let said: Vec<&str> = f.thesis.iter().map(|(label, _)| *label).collect();
         assert!(said.contains(&EQ_6_21) && said.contains(&SEARCH));

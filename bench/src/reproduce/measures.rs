@@ -90,8 +90,8 @@ pub(super) fn measure(
 ) -> Result<Measured, ReproduceError> {
     let (records, runs, trials) = (
         &summary.records,
-        cfg.run.runs as usize,
-        cfg.run.trials as usize,
+        cfg.run().runs as usize,
+        cfg.run().trials as usize,
     );
     let task = cfg.task();
     let mut ended_early = 0;

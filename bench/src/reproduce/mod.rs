@@ -30,6 +30,7 @@ use std::time::{Duration, Instant};
 use agent::config::HorizonKind;
 use indicatif::ProgressBar;
 use plant::SystemName;
+use plant::config::ConfigError;
 use runtime::error::AtFile;
 
 use runtime::config::ExperimentConfig;
@@ -184,7 +185,7 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>, Reproduce
             })
             .collect();
         let pendulum = fig.curves[0].cfg.system() == SystemName::Pendulum
-            && fig.curves[0].cfg.agent.horizon == HorizonKind::Infinite;
+            && fig.curves[0].cfg.agent().horizon == HorizonKind::Infinite;
         runtime::report::plot_curves(
             &dir.join("figure.png"),
             &dir.join("figure.svg"),
@@ -254,25 +255,30 @@ impl Runner<'_> {
     ) {
         let len = cfgs
             .into_iter()
-            .map(|c| {
-                let c = self.as_run(c, runs);
-                u64::from(c.run.runs) * u64::from(c.run.trials)
-            })
+            // One that cannot be run is refused when it is to run.
+            .filter_map(|c| self.as_run(c, runs).ok())
+            .map(|c| u64::from(c.run().runs) * u64::from(c.run().trials))
             .sum();
         self.bar.finish_and_clear();
         self.bar = progress_bar(len, self.opts.progress, id);
     }
 
     /// `cfg` as it is run: with the options' runs and trials, or `runs` if given.
-    fn as_run(&self, cfg: &ExperimentConfig, runs: Option<u32>) -> ExperimentConfig {
+    fn as_run(
+        &self,
+        cfg: &ExperimentConfig,
+        runs: Option<u32>,
+    ) -> Result<ExperimentConfig, ConfigError> {
         let mut cfg = cfg.clone();
-        if let Some(r) = runs.or(self.opts.runs) {
-            cfg.run.runs = r;
-        }
-        if let Some(t) = self.opts.trials {
-            cfg.run.trials = t;
-        }
-        cfg
+        cfg.change_run(|run| {
+            if let Some(r) = runs.or(self.opts.runs) {
+                run.runs = r;
+            }
+            if let Some(t) = self.opts.trials {
+                run.trials = t;
+            }
+        })?;
+        Ok(cfg)
     }
 
     /// Runs `cfg` ([`Self::as_run`]) into `dir/<label>`, unless an identical experiment
@@ -285,7 +291,7 @@ impl Runner<'_> {
         cfg: &ExperimentConfig,
         runs: Option<u32>,
     ) -> Result<(Measured, LearnSummary), ReproduceError> {
-        let cfg = self.as_run(cfg, runs);
+        let cfg = self.as_run(cfg, runs)?;
         let key = cfg.to_toml();
         let out = dir.join(slug(label));
         if !self.done.contains_key(&key)
@@ -301,13 +307,14 @@ impl Runner<'_> {
         let summary = match self.done.get(&key) {
             Some(s) => {
                 self.bar
-                    .inc(u64::from(cfg.run.runs) * u64::from(cfg.run.trials));
+                    .inc(u64::from(cfg.run().runs) * u64::from(cfg.run().trials));
                 s.clone()
             }
             None => {
                 self.say(format!(
                     "{id} {label}: {} runs × {} trials",
-                    cfg.run.runs, cfg.run.trials
+                    cfg.run().runs,
+                    cfg.run().trials
                 ));
                 let s = learn(
                     &cfg,
@@ -373,7 +380,7 @@ fn load_finished(dir: &Path, cfg: &ExperimentConfig) -> Option<LearnSummary> {
             greedy: num(4),
         });
     }
-    let (runs, trials) = (cfg.run.runs as usize, cfg.run.trials as usize);
+    let (runs, trials) = (cfg.run().runs as usize, cfg.run().trials as usize);
     if records.len() != runs * trials {
         return None;
     }

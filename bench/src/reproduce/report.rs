@@ -90,7 +90,7 @@ pub(super) fn write_report(
             "| curve | runs × trials | final greedy | median [worst] | final level | t₉₀ [min] | % of optimal | thesis says |\n|---|---|---|---|---|---|---|---|"
         );
         let pendulum = fig.curves[0].cfg.system() == SystemName::Pendulum
-            && fig.curves[0].cfg.agent.horizon == HorizonKind::Infinite;
+            && fig.curves[0].cfg.agent().horizon == HorizonKind::Infinite;
         for m in &r.measured {
             let says = fig
                 .thesis

@@ -4,7 +4,7 @@
 use std::fmt::Write as _;
 use std::time::Duration;
 
-use agent::config::Component;
+use agent::config::{AgentConfig, Component};
 use plant::SystemName;
 
 use runtime::config::ExperimentConfig;
@@ -16,17 +16,17 @@ use super::{ReproduceError, Runner};
 
 /// The parameters the sensitivity analysis varies, and how.
 /// Scales a parameter of a configuration by a factor.
-pub(super) type Scale = fn(&mut ExperimentConfig, f64);
+pub(super) type Scale = fn(&mut AgentConfig, f64);
 
 /// `(name, short name for directories, how)` of each parameter.
 pub(super) const PARAMETERS: [(&str, &str, Scale); 5] = [
     ("α_a (actor rate)", "alpha_a", |c, f| {
-        if let Some(Component::Llr(l)) = &mut c.agent.actor {
+        if let Some(Component::Llr(l)) = &mut c.actor {
             l.alpha *= f;
         }
     }),
     ("α_c (critic rate)", "alpha_c", |c, f| {
-        if let Component::Llr(l) = &mut c.agent.critic {
+        if let Component::Llr(l) = &mut c.critic {
             l.alpha *= f;
         }
     }),
@@ -40,19 +40,13 @@ pub(super) const PARAMETERS: [(&str, &str, Scale); 5] = [
             l.memory = ((l.memory as f64 * f).round() as usize).max(10)
         })
     }),
-    ("σ (exploration)", "sigma", |c, f| {
-        c.agent.learning.sigma *= f
-    }),
+    ("σ (exploration)", "sigma", |c, f| c.learning.sigma *= f),
 ];
 
 /// Factors applied to each parameter (the preset is factor 1).
 pub const FACTORS: [f64; 4] = [0.25, 0.5, 2.0, 4.0];
 
-pub(super) fn for_each_llr(
-    c: &mut ExperimentConfig,
-    mut f: impl FnMut(&mut agent::config::LlrConfig),
-) {
-    let a = &mut c.agent;
+pub(super) fn for_each_llr(a: &mut AgentConfig, mut f: impl FnMut(&mut agent::config::LlrConfig)) {
     for comp in [a.actor.as_mut(), Some(&mut a.critic), a.model.as_mut()]
         .into_iter()
         .flatten()
@@ -88,8 +82,8 @@ pub struct Sensitivity {
 /// rounded K) or makes an invalid configuration.
 pub(super) fn varied(base: &ExperimentConfig, apply: Scale, f: f64) -> Option<ExperimentConfig> {
     let mut cfg = base.clone();
-    apply(&mut cfg, f);
-    (cfg != *base && cfg.validate().is_ok()).then_some(cfg)
+    cfg.change_agent(|a| apply(a, f)).ok()?;
+    (cfg != *base).then_some(cfg)
 }
 
 pub(super) fn sensitivity(runner: &mut Runner) -> Result<Sensitivity, ReproduceError> {

@@ -36,6 +36,16 @@ fn a_speed_is_turned_into_the_period_once() {
 }
 
 #[test]
+fn the_clock_says_which_it_is() {
+    let realtime = Clock::realtime(0.03, 10.0).unwrap();
+    let external = Clock::External(driver());
+    let kinds = |c: &Clock| (c.is_lockstep(), c.is_realtime(), c.is_external());
+    assert_eq!(kinds(&Clock::Lockstep), (true, false, false));
+    assert_eq!(kinds(&realtime), (false, true, false));
+    assert_eq!(kinds(&external), (false, false, true));
+}
+
+#[test]
 fn the_flags_choose_one_clock_and_refuse_what_does_not_combine() {
     let flags = DriverFlags {
         id: None,

@@ -10,12 +10,10 @@ use agent::config::{
 };
 use observer::config::ObserverConfig;
 use plant::config::RunConfig;
-use std::sync::Arc;
-
-use plant::{SystemName, Task, TaskFile};
+use plant::{SystemName, TaskFile};
 use serde::{Deserialize, Serialize};
 
-use super::ExperimentConfig;
+use super::{ExperimentConfig, Sections};
 
 /// The top level of an experiment file, in the order it is written.
 #[derive(Serialize, Deserialize)]
@@ -25,13 +23,13 @@ pub(super) struct Layout {
     /// Absent for a task without a simulation (its presets are the pendulum's, by rules:
     /// [`ExperimentConfig::to_toml`] says so in a comment); otherwise the system simulated.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    system: Option<SystemName>,
-    algo: Algo,
-    approx: ApproxKind,
+    pub(super) system: Option<SystemName>,
+    pub(super) algo: Algo,
+    pub(super) approx: ApproxKind,
     /// Absent: infinite.
     #[serde(default)]
-    horizon: HorizonKind,
-    run: RunConfig,
+    pub(super) horizon: HorizonKind,
+    pub(super) run: RunConfig,
     learning: LearningConfig,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     actor: Option<Component>,
@@ -46,10 +44,10 @@ pub(super) struct Layout {
     planning: Option<PlanningConfig>,
     /// Absent: full state, pass-through.
     #[serde(default, skip_serializing_if = "ObserverConfig::is_default")]
-    observer: ObserverConfig,
+    pub(super) observer: ObserverConfig,
     /// Absent: the system's shipped task.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    task: Option<TaskFile>,
+    pub(super) task: Option<TaskFile>,
 }
 
 impl TryFrom<Layout> for ExperimentConfig {
@@ -65,14 +63,7 @@ impl TryFrom<Layout> for ExperimentConfig {
             None => SystemName::Pendulum,
         };
         let system = l.system.unwrap_or(simulated);
-        let learned = match &l.task {
-            Some(file) => super::task_of(file)?,
-            None => Task::new(system),
-        };
-        Ok(Self {
-            system,
-            task: l.task,
-            learned: super::Learned(Arc::new(learned)),
+        let sections = Sections {
             agent: AgentConfig {
                 algo: l.algo,
                 approx: l.approx,
@@ -87,20 +78,41 @@ impl TryFrom<Layout> for ExperimentConfig {
             },
             run: l.run,
             observer: l.observer,
-        })
+        };
+        Self::made(system, l.task, sections)
     }
 }
 
 impl From<ExperimentConfig> for Layout {
     fn from(c: ExperimentConfig) -> Self {
-        let a = c.agent;
         let driven = c.task.as_ref().is_some_and(|t| t.simulation.is_none());
+        let sections = Sections {
+            agent: c.agent,
+            run: c.run,
+            observer: c.observer,
+        };
+        Self::new((!driven).then_some(c.system), sections, c.task)
+    }
+}
+
+impl Layout {
+    /// The file of `sections` on `system` (absent: a task without a simulation) and
+    /// `task` (absent: the system's shipped one).
+    pub(super) fn new(
+        system: Option<SystemName>,
+        Sections {
+            agent: a,
+            run,
+            observer,
+        }: Sections,
+        task: Option<TaskFile>,
+    ) -> Self {
         Self {
-            system: (!driven).then_some(c.system),
+            system,
             algo: a.algo,
             approx: a.approx,
             horizon: a.horizon,
-            run: c.run,
+            run,
             learning: a.learning,
             actor: a.actor,
             critic: a.critic,
@@ -108,8 +120,8 @@ impl From<ExperimentConfig> for Layout {
             vgbp: a.vgbp,
             sarsa: a.sarsa,
             planning: a.planning,
-            observer: c.observer,
-            task: c.task,
+            observer,
+            task,
         }
     }
 }

@@ -7,6 +7,10 @@
 //! algorithm, approximator) — the thesis's tuned values, see [`agent::preset`] — then a
 //! user's TOML file, then command-line [`Overrides`]. A key in the user's file that the
 //! preset does not have is an error naming the key and the keys that are allowed there.
+//!
+//! A configuration is checked whole when it is made and whenever a section changes
+//! ([`ExperimentConfig::change_agent`], `change_run`, `change_observer`): every
+//! configuration there is satisfies every rule, and its learner is resolved once.
 
 mod layout;
 mod merge;
@@ -32,9 +36,10 @@ use serde::{Deserialize, Serialize};
 /// `layout`): the system and the learner's choices at the top level, then `[run]`, the
 /// agent's sections and `[observer]` (written only when it is not the default).
 ///
-/// The task is read and checked once, when the configuration is made (from a preset,
-/// from TOML, or [`ExperimentConfig::on_task`]); [`ExperimentConfig::task`] hands out
-/// that one.
+/// The task is read and checked once, when the configuration is made (from a preset or
+/// from TOML); [`ExperimentConfig::task`] hands out that one. The sections are read
+/// through accessors and changed through methods that check the whole configuration
+/// again and resolve its learner ([`ExperimentConfig::learner`]) anew.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "layout::Layout", into = "layout::Layout")]
 pub struct ExperimentConfig {
@@ -44,19 +49,19 @@ pub struct ExperimentConfig {
     /// The task learned, when a task file gives it (`task = "FILE"` or `[task]`,
     /// `--task`); `None`: `system`'s shipped task file.
     task: Option<TaskFile>,
-    /// The task learned, checked: `task`'s, else `system`'s.
-    learned: Learned,
+    /// What the keys resolve to: the task and the learner, checked.
+    resolved: Resolved,
     /// The learner: algorithm, approximator, horizon and their sections.
-    pub agent: AgentConfig,
+    agent: AgentConfig,
     /// Trials, runs, seed, evaluation, delays.
-    pub run: RunConfig,
+    run: RunConfig,
     /// Sensor and state observer; the default: full state, pass-through.
-    pub observer: ObserverConfig,
+    observer: ObserverConfig,
 }
 
 impl ExperimentConfig {
     /// The preset for `(system, algo, approx)` with `horizon` ([`agent::preset`]), with
-    /// the default sensor and observer.
+    /// the default sensor and observer, checked.
     pub fn preset(
         system: SystemName,
         algo: Algo,
@@ -64,33 +69,42 @@ impl ExperimentConfig {
         horizon: HorizonKind,
     ) -> Result<Self, ConfigError> {
         let preset = agent::preset::preset(system, algo, approx, horizon)?;
-        Ok(Self::from_preset(system, preset))
-    }
-
-    /// `preset` on `system`'s task, with the default sensor and observer.
-    pub fn from_preset(system: SystemName, preset: agent::preset::Preset) -> Self {
-        Self {
-            system,
-            task: None,
-            learned: Learned(Arc::new(Task::new(system))),
+        let sections = Sections {
             agent: preset.agent,
             run: preset.run,
             observer: ObserverConfig::default(),
-        }
+        };
+        Self::made(system, None, sections)
     }
 
-    /// The configuration on `system` with the task `task` (`None`: `system`'s shipped
-    /// one), which is checked here; an error's key is prefixed with `task.`.
-    pub fn on_task(self, system: SystemName, task: Option<TaskFile>) -> Result<Self, ConfigError> {
-        let learned = match &task {
+    /// The configuration of `sections` on `system` with the task `task` (`None`:
+    /// `system`'s shipped one): the task read and checked (an error's key is prefixed
+    /// with `task.`), then the whole, and the learner resolved.
+    fn made(
+        system: SystemName,
+        task: Option<TaskFile>,
+        sections: Sections,
+    ) -> Result<Self, ConfigError> {
+        let learned = Arc::new(match &task {
             Some(file) => task_of(file)?,
             None => Task::new(system),
-        };
+        });
+        let learner = Arc::new(sections.check(&learned)?);
+        let Sections {
+            agent,
+            run,
+            observer,
+        } = sections;
         Ok(Self {
             system,
             task,
-            learned: Learned(Arc::new(learned)),
-            ..self
+            resolved: Resolved {
+                task: learned,
+                learner,
+            },
+            agent,
+            run,
+            observer,
         })
     }
 
@@ -104,41 +118,76 @@ impl ExperimentConfig {
         self.task.as_ref()
     }
 
-    /// Checks every value against its allowed range and the system's dimensions, section
-    /// by section, then what spans sections.
-    pub fn validate(&self) -> Result<(), ConfigError> {
-        let task = self.task();
-        self.run.validate(&task)?;
-        self.observer.validate()?;
-        if task.simulation.is_none() && self.observer.uses_known_model() {
-            return Err(ConfigError::new(
-                "observer.model",
-                format!(
-                    "\"known\" integrates the task's simulation, and task \"{}\" has none: use \"learned\"",
-                    task.name
-                ),
-            ));
-        }
-        if self.observer.mode == ObserverMode::Predictive
-            && self.agent.horizon == HorizonKind::Finite
-        {
-            return Err(ConfigError::new(
-                "observer.mode",
-                "\"predictive\" needs an infinite horizon (a finite-horizon agent's time index would be one sample off the plant's)",
-            ));
-        }
-        self.agent.validate(&task)
+    /// The learner's keys: algorithm, approximator, horizon and their sections.
+    pub fn agent(&self) -> &AgentConfig {
+        &self.agent
+    }
+
+    /// `[run]`: trials, runs, seed, evaluation, delays.
+    pub fn run(&self) -> &RunConfig {
+        &self.run
+    }
+
+    /// `[observer]`: sensor, state observer and timing.
+    pub fn observer(&self) -> &ObserverConfig {
+        &self.observer
+    }
+
+    /// Changes the learner's keys with `change`, then checks the whole configuration
+    /// and resolves its learner again; an error leaves the configuration as it was.
+    pub fn change_agent(
+        &mut self,
+        change: impl FnOnce(&mut AgentConfig),
+    ) -> Result<(), ConfigError> {
+        self.change(|s| change(&mut s.agent))
+    }
+
+    /// Changes `[run]` with `change`, then checks the whole configuration (the delays
+    /// against the task's sampling time); an error leaves it as it was.
+    pub fn change_run(&mut self, change: impl FnOnce(&mut RunConfig)) -> Result<(), ConfigError> {
+        self.change(|s| change(&mut s.run))
+    }
+
+    /// Changes `[observer]` with `change`, then checks the whole configuration (the
+    /// observer against the task and the agent's horizon); an error leaves it as it was.
+    pub fn change_observer(
+        &mut self,
+        change: impl FnOnce(&mut ObserverConfig),
+    ) -> Result<(), ConfigError> {
+        self.change(|s| change(&mut s.observer))
+    }
+
+    /// The configuration of one run of this experiment (`run.runs = 1`, as `rig run`
+    /// makes): a count always in range, so it needs no new check.
+    pub fn one_run(&self) -> Self {
+        let mut one = self.clone();
+        one.run.runs = 1;
+        one
+    }
+
+    /// Changes the sections with `change`, checked as when the configuration was made.
+    fn change(&mut self, change: impl FnOnce(&mut Sections)) -> Result<(), ConfigError> {
+        let mut sections = Sections {
+            agent: self.agent.clone(),
+            run: self.run.clone(),
+            observer: self.observer.clone(),
+        };
+        change(&mut sections);
+        self.resolved.learner = Arc::new(sections.check(&self.resolved.task)?);
+        (self.agent, self.run, self.observer) = (sections.agent, sections.run, sections.observer);
+        Ok(())
     }
 
     /// The task learned: `task`'s, else `system`'s shipped one, as read when the
     /// configuration was made.
     pub fn task(&self) -> Arc<Task> {
-        self.learned.0.clone()
+        self.resolved.task.clone()
     }
 
-    /// The learner the agent's keys describe for the task ([`AgentConfig::resolve`]).
-    pub fn learner(&self) -> Result<Learner, ConfigError> {
-        self.agent.resolve(&self.learned.0)
+    /// The learner the agent's keys describe for the task ([`AgentConfig::resolve`]),
+    /// as resolved when the configuration was made or last changed.
+    pub fn learner(&self) -> &Learner {
+        &self.resolved.learner
     }
 
     /// Checks that the rig can simulate the task (`rig learn`, the simulated plant); the
@@ -199,20 +248,59 @@ impl ExperimentConfig {
     }
 }
 
-/// The task learned, shared by the configuration's copies. It follows from `system` and
-/// `task`, so it takes no part in comparing configurations.
-#[derive(Clone)]
-struct Learned(Arc<Task>);
+/// The sections a configuration is made of besides its system and task, before they
+/// are checked together.
+struct Sections {
+    agent: AgentConfig,
+    run: RunConfig,
+    observer: ObserverConfig,
+}
 
-impl PartialEq for Learned {
+impl Sections {
+    /// Checks every value against its allowed range and `task`'s dimensions, section by
+    /// section, then what spans sections; the learner the agent's keys describe.
+    fn check(&self, task: &Task) -> Result<Learner, ConfigError> {
+        self.run.validate(task)?;
+        self.observer.validate()?;
+        if task.simulation.is_none() && self.observer.uses_known_model() {
+            return Err(ConfigError::new(
+                "observer.model",
+                format!(
+                    "\"known\" integrates the task's simulation, and task \"{}\" has none: use \"learned\"",
+                    task.name
+                ),
+            ));
+        }
+        if self.observer.mode == ObserverMode::Predictive
+            && self.agent.horizon == HorizonKind::Finite
+        {
+            return Err(ConfigError::new(
+                "observer.mode",
+                "\"predictive\" needs an infinite horizon (a finite-horizon agent's time index would be one sample off the plant's)",
+            ));
+        }
+        self.agent.resolve(task)
+    }
+}
+
+/// What a configuration's keys resolve to, shared by its copies: the task learned and
+/// the learner. It follows from the keys, so it takes no part in comparing
+/// configurations.
+#[derive(Clone)]
+struct Resolved {
+    task: Arc<Task>,
+    learner: Arc<Learner>,
+}
+
+impl PartialEq for Resolved {
     fn eq(&self, _: &Self) -> bool {
         true
     }
 }
 
-impl std::fmt::Debug for Learned {
+impl std::fmt::Debug for Resolved {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0.name)
+        f.write_str(&self.task.name)
     }
 }
 

@@ -4,11 +4,12 @@ use std::path::Path;
 
 use agent::config::{Algo, ApproxKind, EvictionRule, HorizonKind, LstdPrior};
 use observer::config::{ObserverConfig, ObserverKind, ObserverMode, ObserverModel, SensorKind};
-use plant::config::ConfigError;
+use plant::config::{ConfigError, RunConfig};
 use plant::{SystemName, TaskFile};
 
-use super::ExperimentConfig;
+use super::layout::Layout;
 use super::merge::{add_optional_sections, check_choice, choose, merge};
+use super::{ExperimentConfig, Sections};
 
 /// Command-line choices and overrides, applied over preset and file: the experiment
 /// flags of `rig learn`, `rig run` and `rig config`.
@@ -104,9 +105,9 @@ pub struct Overrides {
 }
 
 impl Overrides {
-    /// Sets the values given on the command line (all but the choices of preset).
-    fn apply(&self, cfg: &mut ExperimentConfig) {
-        let run = &mut cfg.run;
+    /// Sets the values given on the command line (all but the choices of preset) in the
+    /// sections they belong to.
+    fn apply(&self, run: &mut RunConfig, observer: &mut ObserverConfig) {
         if let Some(v) = self.trials {
             run.trials = v;
         }
@@ -128,7 +129,6 @@ impl Overrides {
         if let Some(v) = &self.delay_column {
             run.delay_column.clone_from(v);
         }
-        let observer = &mut cfg.observer;
         if let Some(v) = self.sensor {
             observer.sensor = v;
         }
@@ -189,14 +189,18 @@ impl PresetChoice {
     /// The preset as a TOML table with every key a user may set: also those it does not
     /// write when they have their default values.
     fn table(&self) -> Result<toml::Table, ConfigError> {
-        let cfg = match &self.driven {
-            None => ExperimentConfig::preset(self.system, self.algo, self.approx, self.horizon)?,
-            Some(task) => ExperimentConfig::from_preset(
-                self.system,
-                agent::preset::for_task(task, self.algo, self.approx, self.horizon)?,
-            ),
+        let (algo, approx, horizon) = (self.algo, self.approx, self.horizon);
+        let preset = match &self.driven {
+            None => agent::preset::preset(self.system, algo, approx, horizon)?,
+            Some(task) => agent::preset::for_task(task, algo, approx, horizon)?,
         };
-        let mut table = toml::Table::try_from(&cfg).expect("a preset always serialises");
+        let sections = Sections {
+            agent: preset.agent,
+            run: preset.run,
+            observer: ObserverConfig::default(),
+        };
+        let layout = Layout::new(Some(self.system), sections, None);
+        let mut table = toml::Table::try_from(&layout).expect("a preset always serialises");
         // The observer section is written only when it differs from the default; a user's
         // file may still set any of its keys.
         table.entry("observer").or_insert_with(|| {
@@ -308,16 +312,13 @@ pub fn resolve(
     add_optional_sections(&mut merged, &mut user);
     merge(&mut merged, user, "").map_err(with_file)?;
     check_choices(&merged).map_err(with_file)?;
-    let cfg: ExperimentConfig = toml::Value::Table(merged)
+    let mut layout: Layout = toml::Value::Table(merged)
         .try_into()
         .map_err(|e: toml::de::Error| with_file(ConfigError::new("", e.message())))?;
-    let mut cfg = cfg.on_task(choice.system, task).map_err(with_file)?;
-    cfg.agent.algo = choice.algo;
-    cfg.agent.approx = choice.approx;
-    cfg.agent.horizon = choice.horizon;
-    o.apply(&mut cfg);
-    cfg.validate().map_err(with_file)?;
-    Ok(cfg)
+    (layout.system, layout.task) = (Some(choice.system), task);
+    (layout.algo, layout.approx, layout.horizon) = (choice.algo, choice.approx, choice.horizon);
+    o.apply(&mut layout.run, &mut layout.observer);
+    ExperimentConfig::try_from(layout).map_err(with_file)
 }
 
 /// Checks the spellings of the choice keys in sections (`[observer]`, an LLR memory's

@@ -50,7 +50,7 @@ fn a_task_file_gives_the_task_and_its_simulation_the_presets() {
     assert_eq!(task.initial_states.len(), 2);
     // The learner is the pendulum's preset.
     let preset = resolve(None, &Overrides::default()).unwrap();
-    assert_eq!(cfg.agent, preset.agent);
+    assert_eq!(cfg.agent(), &preset.agent);
     // config.toml carries the task: it resolves to itself wherever it is read.
     let text = cfg.to_toml();
     assert!(text.contains("[task]\nname = \"heavy\""), "{text}");
@@ -130,8 +130,13 @@ fn a_task_without_a_simulation_takes_the_pendulum_presets_by_rules() {
     assert_eq!(cfg.system(), SystemName::Pendulum, "the presets' basis");
     let task = cfg.task();
     assert!(task.simulation.is_none());
-    let rules = agent::preset::for_task(&task, cfg.agent.algo, cfg.agent.approx, cfg.agent.horizon);
-    assert_eq!(cfg.agent, rules.unwrap().agent);
+    let rules = agent::preset::for_task(
+        &task,
+        cfg.agent().algo,
+        cfg.agent().approx,
+        cfg.agent().horizon,
+    );
+    assert_eq!(cfg.agent(), &rules.unwrap().agent);
     // Its config.toml resolves to itself.
     assert_eq!(
         resolve(

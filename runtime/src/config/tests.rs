@@ -17,10 +17,10 @@ fn resolve_str(text: &str) -> Result<ExperimentConfig, ConfigError> {
 fn default_is_pendulum_mlac_llr_with_table_3_2() {
     let c = resolve(None, &Overrides::default()).unwrap();
     assert_eq!(
-        (c.system, c.agent.algo, c.agent.approx),
+        (c.system, c.agent().algo, c.agent().approx),
         (SystemName::Pendulum, Algo::Mlac, ApproxKind::Llr)
     );
-    let Some(Component::Llr(actor)) = &c.agent.actor else {
+    let Some(Component::Llr(actor)) = &c.agent().actor else {
         panic!()
     };
     assert_eq!(
@@ -32,9 +32,9 @@ fn default_is_pendulum_mlac_llr_with_table_3_2() {
 #[test]
 fn file_overrides_and_round_trips() {
     let c = resolve_str("algo = \"sac\"\n[critic]\nneighbours = 12\n[run]\nruns = 3\n").unwrap();
-    assert_eq!(c.agent.algo, Algo::Sac);
-    assert_eq!(c.run.runs, 3);
-    let Component::Llr(critic) = &c.agent.critic else {
+    assert_eq!(c.agent().algo, Algo::Sac);
+    assert_eq!(c.run().runs, 3);
+    let Component::Llr(critic) = &c.agent().critic else {
         panic!()
     };
     assert_eq!(critic.neighbours, 12);
@@ -79,9 +79,10 @@ fn out_of_range_is_named_with_the_range() {
 #[test]
 fn finite_horizon_adds_time_to_actor_and_critic() {
     let c = resolve_str("horizon = \"finite\"\nalgo = \"sac\"\napprox = \"rbf\"\n").unwrap();
-    assert_eq!(c.agent.horizon, HorizonKind::Finite);
+    assert_eq!(c.agent().horizon, HorizonKind::Finite);
     assert_eq!(
-        c.agent.learning.gamma, 1.0,
+        c.agent().learning.gamma,
+        1.0,
         "Algorithms 4–6 do not discount"
     );
     assert_eq!(resolve_str(&c.to_toml()).unwrap(), c);
@@ -106,8 +107,13 @@ fn finite_horizon_adds_time_to_actor_and_critic() {
     assert_eq!(e.key, "approx");
     // Validation, for a configuration not made by `resolve`.
     let mut c = c;
-    c.agent.algo = Algo::Sarsa;
-    assert_eq!(c.validate().unwrap_err().key, "horizon");
+    let before = c.clone();
+    let e = c.change_agent(|a| a.algo = Algo::Sarsa).unwrap_err();
+    assert_eq!(e.key, "horizon");
+    assert_eq!(
+        c, before,
+        "a refused change leaves the configuration as it was"
+    );
 }
 
 #[test]
@@ -124,7 +130,7 @@ fn tile_coding_is_for_sac_only() {
 #[test]
 fn the_default_observer_section_is_not_written() {
     let c = resolve(None, &Overrides::default()).unwrap();
-    assert!(c.observer.is_default());
+    assert!(c.observer().is_default());
     assert!(!c.to_toml().contains("[observer]"));
 }
 
@@ -132,9 +138,9 @@ fn the_default_observer_section_is_not_written() {
 fn observer_keys_resolve_and_round_trip() {
     let text = "[observer]\nsensor = \"angle\"\ncounts_per_rev = 1024\nobserver = \"predictive\"\nmodel = \"known\"\n";
     let c = resolve(Some((Path::new("o.toml"), text)), &Overrides::default()).unwrap();
-    assert_eq!(c.observer.sensor, SensorKind::Angle);
-    assert_eq!(c.observer.counts_per_rev, 1024);
-    assert_eq!(c.observer.model, ObserverModel::Known);
+    assert_eq!(c.observer().sensor, SensorKind::Angle);
+    assert_eq!(c.observer().counts_per_rev, 1024);
+    assert_eq!(c.observer().model, ObserverModel::Known);
     let again = resolve(
         Some((Path::new("c.toml"), &c.to_toml())),
         &Overrides::default(),
@@ -148,7 +154,7 @@ fn lstd_prior_choices_and_errors() {
     let vgbp = "algo = \"vgbp\"\napprox = \"lstd\"\n";
     let none = Overrides::default();
     let file = |text: String| resolve(Some((Path::new("v.toml"), &text)), &none);
-    let prior = |c: &ExperimentConfig| match &c.agent.critic {
+    let prior = |c: &ExperimentConfig| match &c.agent().critic {
         Component::Lstd(l) => l.prior,
         other => panic!("not LSTD: {other:?}"),
     };
@@ -207,7 +213,7 @@ fn observer_errors_name_file_key_and_range() {
 fn timing_and_delay_keys_resolve_round_trip_and_are_checked() {
     let text = "[observer]\nsensor = \"angle\"\nobserver = \"predictive\"\nmode = \"predictive\"\n";
     let c = resolve(Some((Path::new("t.toml"), text)), &Overrides::default()).unwrap();
-    assert_eq!(c.observer.mode, ObserverMode::Predictive);
+    assert_eq!(c.observer().mode, ObserverMode::Predictive);
     let again = resolve(
         Some((Path::new("c.toml"), &c.to_toml())),
         &Overrides::default(),
@@ -261,16 +267,76 @@ fn a_checkpoint_origin_fingerprints_the_learning_parameters() {
     assert_eq!((vgbp.learner.as_str(), vgbp.run), ("vgbp/lstd/infinite", 3));
     assert_eq!((origin.system.as_str(), origin.seed), ("pendulum", 1));
     let mut longer = cfg.clone();
-    longer.run.trials += 10;
-    longer.run.runs += 1;
-    longer.run.eval_every = 0;
+    longer
+        .change_run(|r| {
+            r.trials += 10;
+            r.runs += 1;
+            r.eval_every = 0;
+        })
+        .unwrap();
     assert_eq!(longer.origin(0), origin, "more trials is the same learner");
     let mut tuned = cfg.clone();
-    tuned.agent.learning.gamma = 0.5;
+    tuned.change_agent(|a| a.learning.gamma = 0.5).unwrap();
     assert_ne!(tuned.origin(0).fingerprint, origin.fingerprint);
     let mut reseeded = cfg;
-    reseeded.run.seed = 2;
+    reseeded.change_run(|r| r.seed = 2).unwrap();
     assert_ne!(reseeded.origin(0).fingerprint, origin.fingerprint);
+}
+
+#[test]
+fn the_learner_is_resolved_once_and_again_on_each_change() {
+    let mut c = resolve(None, &Overrides::default()).unwrap();
+    assert!(
+        std::ptr::eq(c.learner(), c.clone().learner()),
+        "copies share it"
+    );
+    assert_eq!(c.learner(), &c.agent().resolve(&c.task()).unwrap());
+    c.change_agent(|a| a.learning.gamma = 0.9).unwrap();
+    assert_eq!(c.learner().learning.gamma, 0.9);
+    assert_eq!(c.learner(), &c.agent().resolve(&c.task()).unwrap());
+}
+
+#[test]
+fn a_change_that_breaks_a_rule_is_refused_and_changes_nothing() {
+    let fh = Overrides {
+        algo: Some(Algo::Sac),
+        approx: Some(ApproxKind::Rbf),
+        horizon: Some(HorizonKind::Finite),
+        ..Default::default()
+    };
+    let mut c = resolve(None, &fh).unwrap();
+    let before = c.clone();
+    // Across sections: predictive timing needs an infinite horizon.
+    let e = c
+        .change_observer(|o| {
+            o.sensor = SensorKind::Angle;
+            o.observer = observer::config::ObserverKind::Predictive;
+            o.mode = ObserverMode::Predictive;
+        })
+        .unwrap_err();
+    assert_eq!(e.key, "observer.mode");
+    // Against the task: a delay of a whole sample period.
+    let ts_ms = c.task().ts * 1e3;
+    let e = c.change_run(|r| r.delay_ms = ts_ms).unwrap_err();
+    assert_eq!(e.key, "run.delay_ms");
+    // Within the learner: SAC needs an actor.
+    let e = c.change_agent(|a| a.actor = None).unwrap_err();
+    assert_eq!(e.key, "actor");
+    let e = c.change_run(|r| r.runs = 0).unwrap_err();
+    assert_eq!(e.key, "run.runs");
+    assert_eq!(c, before);
+    assert_eq!(c.learner(), before.learner());
+    assert_eq!(c.to_toml(), before.to_toml());
+}
+
+#[test]
+fn one_run_changes_the_run_count_only() {
+    let c = resolve(None, &Overrides::default()).unwrap();
+    let one = c.one_run();
+    assert_eq!(one.run().runs, 1);
+    let mut back = one.clone();
+    back.change_run(|r| r.runs = c.run().runs).unwrap();
+    assert_eq!(back.to_toml(), c.to_toml());
 }
 
 #[test]
@@ -299,19 +365,18 @@ fn the_learner_is_the_algorithm_with_its_components() {
         ..Default::default()
     };
     let c = resolve(None, &o(Algo::Sac, ApproxKind::Tiles)).unwrap();
-    let Algorithm::Sac(sac) = c.learner().unwrap().algorithm else {
+    let Algorithm::Sac(sac) = &c.learner().algorithm else {
         panic!("not SAC")
     };
     assert!(matches!(sac.critic, Plain::Tiles(_)), "{sac:?}");
     let c = resolve(None, &o(Algo::Rmac, ApproxKind::Rbf)).unwrap();
-    let Algorithm::Rmac(rmac) = c.learner().unwrap().algorithm else {
+    let Algorithm::Rmac(rmac) = &c.learner().algorithm else {
         panic!("not RMAC")
     };
     assert!(matches!(rmac.model, Smooth::Rbf(_)), "{rmac:?}");
     // A component the algorithm cannot use is an error of the learner, naming its key.
     let mut bad = c.clone();
-    bad.agent.model = None;
-    let e = bad.learner().unwrap_err();
+    let e = bad.change_agent(|a| a.model = None).unwrap_err();
     assert_eq!(
         (e.key.as_str(), e.message.as_str()),
         (
@@ -360,7 +425,7 @@ fn help_lists_the_choices() {
 fn a_planning_section_is_added_checked_and_round_trips() {
     let plan = "[planning]\nhorizon = 15\nsamples = 64\nelites = 8\niterations = 3\n";
     let c = resolve_str(plan).unwrap();
-    let p = c.agent.planning.as_ref().unwrap();
+    let p = c.agent().planning.as_ref().unwrap();
     assert_eq!(
         (p.horizon, p.samples, p.elites, p.iterations),
         (15, 64, 8, 3)

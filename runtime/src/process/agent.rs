@@ -76,8 +76,8 @@ impl Learner {
         let task = cfg.task();
         let mut agent = ::agent::build(
             &task,
-            &cfg.learner()?,
-            ::agent::seed::run_seed(cfg.run.seed, run),
+            cfg.learner(),
+            ::agent::seed::run_seed(cfg.run().seed, run),
         );
         let origin = cfg.origin(run);
         // The first learning trial this process runs.
@@ -97,7 +97,7 @@ impl Learner {
             checkpoints,
             expect_trial,
             cut: false,
-            predictive: cfg.observer.mode == ObserverMode::Predictive,
+            predictive: cfg.observer().mode == ObserverMode::Predictive,
             m: task.action_dim(),
         })
     }

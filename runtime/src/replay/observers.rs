@@ -67,15 +67,14 @@ pub struct StateErrors {
 /// sensor, timing and observer settings otherwise.
 pub fn compare(rec: &Recording, kind: ObserverKind) -> Result<Vec<StateErrors>, ReplayError> {
     let mut cfg = rec.cfg.clone();
-    cfg.observer.observer = kind;
-    cfg.validate()
+    cfg.change_observer(|o| o.observer = kind)
         .map_err(|e| ReplayError::Config(format!("--observer {kind}: {e}")))?;
     let task = cfg.task();
     let n = task.state_dim();
     let mut front: Front = crate::experiment::front(&task, &cfg);
-    let mut bare = ::observer::build(task.clone(), &cfg.observer, cfg.agent.model.as_ref());
-    let recorded = &rec.cfg.observer;
-    let mut baseline = ::observer::build(task.clone(), recorded, cfg.agent.model.as_ref());
+    let mut bare = ::observer::build(task.clone(), cfg.observer(), cfg.agent().model.as_ref());
+    let recorded = rec.cfg.observer();
+    let mut baseline = ::observer::build(task.clone(), recorded, cfg.agent().model.as_ref());
     let mut rows: Vec<StateErrors> = task
         .state_names
         .iter()
@@ -93,7 +92,7 @@ pub fn compare(rec: &Recording, kind: ObserverKind) -> Result<Vec<StateErrors>, 
             a - b
         }
     };
-    let full = cfg.observer.sensor == SensorKind::Full;
+    let full = cfg.observer().sensor == SensorKind::Full;
     for x in &rec.measurements {
         let f = x.header.flags;
         let acted = estimate(&mut front, x);

@@ -76,10 +76,10 @@ pub fn prepare(
     let mut notes = Vec::new();
     let rows = read_returns(&out.join("returns.csv"), &mut notes)?;
     let done = rows.len() as u32;
-    if done >= cfg.run.trials {
+    if done >= cfg.run().trials {
         return Err(PrepareError::Done {
             dir: out.to_path_buf(),
-            trials: cfg.run.trials,
+            trials: cfg.run().trials,
             done,
         });
     }
@@ -121,11 +121,11 @@ pub fn prepare(
 /// other than the defaults, or delays that cannot continue mid-run.
 fn resumable(out: &Path, cfg: &ExperimentConfig) -> Result<(), PrepareError> {
     let config = out.join("config.toml");
-    if !cfg.observer.is_default() {
+    if !cfg.observer().is_default() {
         return Err(PrepareError::Observer {
             config,
-            sensor: cfg.observer.sensor.to_string(),
-            observer: cfg.observer.observer.to_string(),
+            sensor: cfg.observer().sensor.to_string(),
+            observer: cfg.observer().observer.to_string(),
         });
     }
     crate::experiment::resumable_delays(cfg).map_err(|why| PrepareError::Config { config, why })
@@ -142,7 +142,7 @@ fn last_complete_trial(
 ) -> Option<(u32, u64)> {
     let starts = cfg.task().initial_states.len();
     let evals = |t: u32| {
-        if cfg.run.eval_every > 0 && t.is_multiple_of(cfg.run.eval_every) {
+        if cfg.run().eval_every > 0 && t.is_multiple_of(cfg.run().eval_every) {
             starts
         } else {
             0

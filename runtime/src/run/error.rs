@@ -81,9 +81,6 @@ pub enum RunError {
         #[source]
         source: RecordError,
     },
-    /// The rig's own executable, which runs the processes, was not found.
-    #[error("cannot find the rig executable")]
-    Executable(#[source] std::io::Error),
     /// A process could not be started.
     #[error("cannot start the {role} process")]
     Start {

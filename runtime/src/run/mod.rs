@@ -38,6 +38,7 @@ use crate::process::{Layout, Scheduling, Spin};
 use crate::record::Tap;
 use crate::resume;
 
+mod command;
 mod error;
 mod gaps;
 mod logs;
@@ -47,6 +48,7 @@ mod returns;
 mod spawn;
 mod supervisor;
 
+pub use command::NodeCommand;
 use error::Result;
 pub use error::RunError;
 pub use gaps::GAPS_HEADER;
@@ -65,6 +67,8 @@ pub struct RunOptions {
     pub progress: bool,
     /// What moves the run from one sample to the next.
     pub clock: Clock,
+    /// How each of the three processes is started: the application's program.
+    pub nodes: NodeCommand,
     /// Continue the run in `out` from its last complete trial ([`crate::resume`]).
     pub resume: bool,
     /// Realtime, simulated plant: the plant writes every sample's timing to this file
@@ -120,8 +124,7 @@ pub fn run_with(
     tap: Option<Box<dyn Tap>>,
 ) -> Result<RunSummary> {
     opts.clock.check(cfg, opts.waiting)?;
-    let mut cfg = cfg.clone();
-    cfg.run.runs = 1;
+    let cfg = cfg.one_run();
     let run_id = free_run_id(opts)?;
     // A folder this run creates is removed again if the run is refused before it
     // writes anything.
@@ -137,11 +140,7 @@ pub fn run_with(
     }
     // Where a resumed run continues; checked before anything is written.
     let point = match opts.resume {
-        true => Some(resume::prepare(
-            &opts.out,
-            &cfg,
-            opts.clock.driver().is_some(),
-        )?),
+        true => Some(resume::prepare(&opts.out, &cfg, opts.clock.is_external())?),
         false => None,
     };
     for note in point.iter().flat_map(|p| &p.notes) {
@@ -178,7 +177,7 @@ pub fn run_with(
         run_id: &run_id,
         timing: opts.clock.describe(task.ts, driver_info.as_ref()),
         realtime: !opts.clock.is_lockstep(),
-        driver: opts.clock.driver().is_some(),
+        driver: opts.clock.is_external(),
         driver_reward: driver_info.is_some_and(|i| i.provides_reward()),
         point: point.as_ref(),
     };
@@ -212,7 +211,7 @@ pub fn run_with(
     }
 
     let nodes = spawn::Nodes::new((&run_id, &config_path), opts, point.as_ref(), &checkpoints);
-    (sup.children, sup.logs) = spawn::processes(&opts.out, &nodes)?;
+    (sup.children, sup.logs) = spawn::processes(&opts.out, &nodes, &opts.nodes)?;
     // Placed after the processes started: they place themselves, from anywhere.
     opts.scheduling.place(crate::process::Part::Recorder)?;
     let lockstep = match &opts.clock {
@@ -224,9 +223,9 @@ pub fn run_with(
     }
 
     let after = point.as_ref().map_or(0, |p| p.trial);
-    let evals = |trials: u32| trials.checked_div(cfg.run.eval_every).unwrap_or(0);
+    let evals = |trials: u32| trials.checked_div(cfg.run().eval_every).unwrap_or(0);
     let bar = progress_bar(
-        u64::from(cfg.run.trials + evals(cfg.run.trials)),
+        u64::from(cfg.run().trials + evals(cfg.run().trials)),
         opts.progress,
         "rig run",
     );
@@ -289,7 +288,7 @@ fn driver_options(opts: &RunOptions, info: &DriverInfo) -> Result<RunOptions, Cl
 /// Refuses a learner that needs the reward's gradient with a driver that provides the
 /// reward as numbers only.
 fn check_reward_source(cfg: &ExperimentConfig, id: &str, info: &DriverInfo) -> Result<()> {
-    let algo = cfg.agent.algo;
+    let algo = cfg.agent().algo;
     if info.provides_reward() && algo.needs_reward_gradient() {
         return Err(RunError::RewardGradient {
             algo,
@@ -332,6 +331,12 @@ mod tests {
                 timeout: Duration::from_secs(1),
                 reset_timeout: Duration::from_secs(1),
             }),
+            nodes: NodeCommand {
+                program: "node".into(),
+                plant: vec![],
+                observer: vec![],
+                agent: vec![],
+            },
             resume: false,
             cycles_out: None,
             scheduling: Scheduling {

@@ -59,12 +59,12 @@ fn metadata(about: &About) -> BTreeMap<String, String> {
     let (cfg, task) = (about.cfg, about.task);
     [
         ("run_id", about.run_id.to_string()),
-        ("seed", cfg.run.seed.to_string()),
+        ("seed", cfg.run().seed.to_string()),
         ("system", cfg.system().to_string()),
         ("task", cfg.task_name()),
-        ("algo", cfg.agent.algo.to_string()),
-        ("approx", cfg.agent.approx.to_string()),
-        ("horizon", cfg.agent.horizon.to_string()),
+        ("algo", cfg.agent().algo.to_string()),
+        ("approx", cfg.agent().approx.to_string()),
+        ("horizon", cfg.agent().horizon.to_string()),
         ("timing", about.timing.clone()),
         ("rig_version", env!("CARGO_PKG_VERSION").to_string()),
         // What `rig replay` reads: the channels' fields and what the observer and the
@@ -151,7 +151,7 @@ impl Recording {
         if about.driver {
             r.add_driver()?;
         }
-        if cfg.observer.sensor != ::observer::config::SensorKind::Full {
+        if cfg.observer().sensor != ::observer::config::SensorKind::Full {
             r.add_truth()?;
         }
         r.rec

@@ -1,10 +1,11 @@
 //! Starting the three processes: each one's settings (`DIR/nodes/<role>.toml`,
-//! [`crate::process::node`]), its command line (`rig plant|observer|agent --node FILE`),
-//! its output to `DIR/<process>.log`.
+//! [`crate::process::node`]), its command line (the run options' [`NodeCommand`]), its
+//! output to `DIR/<process>.log`.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
+use super::command::{NodeCommand, Role};
 use super::error::{Result, RunError};
 use crate::error::AtFile;
 
@@ -15,11 +16,6 @@ use crate::resume::ResumePoint;
 use super::RunOptions;
 use super::logs::{Log, Logs};
 use super::supervisor::Children;
-
-/// The processes in the order they start: the plant last, once its receivers are up.
-const ROLES: [&str; 3] = ["agent", "observer", PLANT];
-/// The plant's role: the process that starts each sample.
-pub(super) const PLANT: &str = "plant";
 
 /// The three processes' settings, of run `run_id` on configuration `config`; each waits
 /// for two receivers (the next process and the recorder).
@@ -46,7 +42,7 @@ impl Nodes {
             clock: opts.clock.clone(),
             spin: opts.spin,
             learn_across_gaps: opts.learn_across_gaps,
-            cycles_out: opts.clock.period().and(opts.cycles_out.clone()),
+            cycles_out: opts.cycles_out.clone().filter(|_| opts.clock.is_realtime()),
             resume: point.map(|p| Continuation {
                 after_trial: p.trial,
                 sim_time: p.sim_time_s,
@@ -69,42 +65,47 @@ impl Nodes {
         }
     }
 
-    /// Writes each process's settings into `out/nodes/`; returns the files by role.
-    fn write(&self, out: &Path) -> Result<[(&'static str, PathBuf); 3]> {
+    /// Writes each process's settings into `out/nodes/`; returns the files by role, in
+    /// the order the processes start.
+    fn write(&self, out: &Path) -> Result<[(Role, PathBuf); 3]> {
         let dir = out.join("nodes");
         std::fs::create_dir_all(&dir).at("cannot create", &dir)?;
-        let file = |role: &str| dir.join(format!("{role}.toml"));
-        self.agent.write(&file("agent"))?;
-        self.observer.write(&file("observer"))?;
-        self.plant.write(&file("plant"))?;
-        Ok(ROLES.map(|role| (role, file(role))))
+        let file = |role: Role| dir.join(format!("{}.toml", role.name()));
+        self.agent.write(&file(Role::Agent))?;
+        self.observer.write(&file(Role::Observer))?;
+        self.plant.write(&file(Role::Plant))?;
+        Ok(Role::START_ORDER.map(|role| (role, file(role))))
     }
 }
 
-/// Starts the three processes with settings `nodes` (written to `out/nodes/`), their
-/// output to `out/<process>.log` ([`Logs`]).
-pub(super) fn processes(out: &Path, nodes: &Nodes) -> Result<(Children, Logs)> {
-    let exe = std::env::current_exe().map_err(RunError::Executable)?;
+/// Starts the three processes as `command` says, with settings `nodes` (written to
+/// `out/nodes/`), their output to `out/<process>.log` ([`Logs`]).
+pub(super) fn processes(
+    out: &Path,
+    nodes: &Nodes,
+    command: &NodeCommand,
+) -> Result<(Children, Logs)> {
     let mut children = Children(Vec::new());
     let mut logs = Logs::default();
     for (role, settings) in nodes.write(out)? {
-        let (log, pipe) = Log::open(&out.join(format!("{role}.log")))?;
-        logs.0.push((role, log));
-        let mut command = Command::new(&exe);
+        let role_name = role.name();
+        let (log, pipe) = Log::open(&out.join(format!("{role_name}.log")))?;
+        logs.0.push((role_name, log));
+        let mut command = command.of(role, &settings);
         in_own_group(&mut command);
         let child = command
-            .arg(role)
-            .arg("--node")
-            .arg(&settings)
             .stdin(Stdio::null())
             .stdout(pipe.try_clone()?)
             .stderr(pipe)
             .spawn()
-            .map_err(|source| RunError::Start { role, source })?;
+            .map_err(|source| RunError::Start {
+                role: role_name,
+                source,
+            })?;
         // The command, dropped, closes this process's copy of the pipe's writing end:
         // the log's relay ends when the process does.
         drop(command);
-        children.0.push((role, child));
+        children.0.push((role_name, child));
     }
     Ok((children, logs))
 }

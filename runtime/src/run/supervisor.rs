@@ -18,7 +18,7 @@ use super::logs::Logs;
 use super::recording::Recording;
 use super::retention::{Progress, Retention};
 use super::returns::Returns;
-use super::spawn::PLANT;
+use super::command::Role;
 
 /// How long the supervisor watches after a process exits early, to see which process
 /// caused the stop (the others follow within milliseconds).
@@ -345,7 +345,7 @@ impl Supervisor {
     /// the observer and the agent answer the samples it sent (a trial's last sample
     /// without its action would leave that trial incomplete), then stop.
     fn record_the_rest(&mut self, bar: &ProgressBar) {
-        self.children.freeze_where(|role| role == PLANT);
+        self.children.freeze_where(|role| role == Role::Plant.name());
         let deadline = Instant::now() + ANSWER_WINDOW;
         while !self.answered() && Instant::now() < deadline {
             if !matches!(self.drain(bar), Ok(false)) {

@@ -56,8 +56,8 @@ pub fn run(args: &PlantConfig) -> Result<()> {
     let cfg = args.node.experiment()?;
     args.clock.check(&cfg, args.node.waiting())?;
     let task = cfg.task();
-    let run_seed = ::agent::seed::run_seed(cfg.run.seed, args.node.run_index);
-    let sensor = crate::experiment::sensor(&task, &cfg.observer, run_seed);
+    let run_seed = ::agent::seed::run_seed(cfg.run().seed, args.node.run_index);
+    let sensor = crate::experiment::sensor(&task, cfg.observer(), run_seed);
     let resume = args.resume.unwrap_or(Continuation {
         after_trial: 0,
         sim_time: 0.0,
@@ -71,7 +71,12 @@ pub fn run(args: &PlantConfig) -> Result<()> {
     )?;
     let linger = super::Linger::open(&link.bus, args.node.receivers)?;
     let mut runner = runner(link, args, &cfg, run_seed)?;
-    let mut schedule = Schedule::new(task.clone(), cfg.run.trials, cfg.run.eval_every, run_seed);
+    let mut schedule = Schedule::new(
+        task.clone(),
+        cfg.run().trials,
+        cfg.run().eval_every,
+        run_seed,
+    );
     // A resumed run continues after trial `after_trial`, whose simulated time tells how
     // many samples the trials before it skipped.
     schedule.resume(resume.after_trial, resume.sim_time);
@@ -84,7 +89,7 @@ pub fn run(args: &PlantConfig) -> Result<()> {
     eprintln!("safety: {}", runner.safety());
     let link = runner.link();
     // The end of the run, stamped with the run's final simulated time.
-    link.shutdown(task.sim_time(cfg.run.trials.into(), schedule.skipped_samples()))?;
+    link.shutdown(task.sim_time(cfg.run().trials.into(), schedule.skipped_samples()))?;
     write_timing(link, args)?;
     linger.wait(&link.bus)
 }
