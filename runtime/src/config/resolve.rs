@@ -8,7 +8,7 @@ use plant::config::ConfigError;
 use plant::{SystemName, TaskFile};
 
 use super::ExperimentConfig;
-use super::merge::{add_optional_sections, check_choice, choose, merge};
+use super::merge::{add_optional_sections, add_schedule_keys, check_choice, choose, merge};
 
 /// Command-line choices and overrides, applied over preset and file: the experiment
 /// flags of `rig learn`, `rig run` and `rig config`.
@@ -306,6 +306,7 @@ pub fn resolve(
     let choice = PresetChoice::of(&user, o, task.as_ref()).map_err(with_file)?;
     let mut merged = choice.table().map_err(with_file)?;
     add_optional_sections(&mut merged, &mut user);
+    add_schedule_keys(&mut merged, &mut user).map_err(with_file)?;
     merge(&mut merged, user, "").map_err(with_file)?;
     check_choices(&merged).map_err(with_file)?;
     let cfg: ExperimentConfig = toml::Value::Table(merged)
