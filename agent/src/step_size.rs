@@ -146,7 +146,11 @@ mod tests {
         resumed.restore(&mut r).unwrap();
         r.finish().unwrap();
         let next = rates(resumed, 5);
-        assert!((next[0] - 0.02 * 200.0 / 240.0).abs() < 1e-15, "{}", next[0]);
+        assert!(
+            (next[0] - 0.02 * 200.0 / 240.0).abs() < 1e-15,
+            "{}",
+            next[0]
+        );
         assert_eq!(next, rates(s, 5));
     }
 }

@@ -196,9 +196,14 @@ fn a_learning_rate_schedule_resumes_where_it_left_off() {
         let cfg = resolve(&format!("{learner}{actor}{critic}{run}"));
         let who = name(&cfg);
         let want = returns(&mut Experiment::new(&cfg, 1).unwrap());
-        let constant = returns(&mut Experiment::new(&resolve(&format!("{learner}{run}")), 1).unwrap());
+        let constant =
+            returns(&mut Experiment::new(&resolve(&format!("{learner}{run}")), 1).unwrap());
         assert_eq!(want[0], constant[0], "{who}: the first trial learns at α_0");
-        assert_ne!(want[3..], constant[3..], "{who}: the schedule changes nothing");
+        assert_ne!(
+            want[3..],
+            constant[3..],
+            "{who}: the schedule changes nothing"
+        );
 
         let mut first = Experiment::new(&cfg, 1).unwrap();
         for _ in 0..3 {

@@ -324,7 +324,10 @@ fn check_schedule(at: &Slot, trials: Option<f64>, power: Option<f64>) -> Result<
         (None, Some(_)) => {
             return Err(ConfigError::new(
                 &at.key("decay_power"),
-                format!("is the power of a decay: give `{}` too", at.key("decay_trials")),
+                format!(
+                    "is the power of a decay: give `{}` too",
+                    at.key("decay_trials")
+                ),
             ));
         }
         _ if at.section == "model" => {

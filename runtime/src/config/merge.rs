@@ -142,7 +142,10 @@ fn unknown_key(known: &toml::Table, key: &str, prefix: &str) -> ConfigError {
         format!("in [{prefix}]")
     };
     let schedule = if SCHEDULED_SECTIONS.contains(&prefix) && known.contains_key("alpha") {
-        format!("; and the learning rate's schedule: {}", SCHEDULE_KEYS.join(", "))
+        format!(
+            "; and the learning rate's schedule: {}",
+            SCHEDULE_KEYS.join(", ")
+        )
     } else {
         String::new()
     };
