@@ -389,6 +389,21 @@ mod tests {
         }
     }
 
+    /// An LLR memory of 10 samples on two inputs, `neighbours` of them read.
+    fn memory(neighbours: usize, decay_trials: Option<f64>) -> LlrConfig {
+        LlrConfig {
+            alpha: 0.1,
+            memory: 10,
+            neighbours,
+            weights: vec![1.0, 0.1],
+            eviction: EvictionRule::Oldest,
+            redundancy_radius: 0.0,
+            clip_to_neighbours: false,
+            decay_trials,
+            decay_power: None,
+        }
+    }
+
     #[test]
     fn grids_and_memories_are_checked_against_their_limits() {
         let lstd = |centres| {
@@ -410,18 +425,9 @@ mod tests {
             e.message,
             "has 1 entries; must have 2, one per state component"
         );
-        let llr = LlrConfig {
-            alpha: 0.1,
-            memory: 10,
-            neighbours: 11,
-            weights: vec![1.0, 0.1],
-            eviction: EvictionRule::Oldest,
-            redundancy_radius: 0.0,
-            clip_to_neighbours: false,
-            decay_trials: None,
-            decay_power: None,
-        };
-        let e = Component::Llr(llr).validate(&critic(2)).unwrap_err();
+        let e = Component::Llr(memory(11, None))
+            .validate(&critic(2))
+            .unwrap_err();
         assert_eq!(
             e.to_string(),
             "`critic.neighbours`: 11 is out of range: must be an integer in 1..=10"
@@ -445,17 +451,7 @@ mod tests {
     /// schedule there is refused, also when built in code rather than read from a file.
     #[test]
     fn a_process_model_takes_no_schedule() {
-        let llr = LlrConfig {
-            alpha: 0.0,
-            memory: 10,
-            neighbours: 3,
-            weights: vec![1.0, 1.0],
-            eviction: EvictionRule::Oldest,
-            redundancy_radius: 0.0,
-            clip_to_neighbours: false,
-            decay_trials: Some(100.0),
-            decay_power: None,
-        };
+        let llr = memory(3, Some(100.0));
         let model = Slot {
             section: "model",
             kinds: &[ApproxKind::Llr],
