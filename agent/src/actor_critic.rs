@@ -140,6 +140,8 @@ pub trait Improver<F: ?Sized = ValueWithGradient>: Send + crate::checkpoint::Per
     /// applied in the previous sample (RMAC and VGBP linearise their model around it).
     /// With a finite horizon `x` is `(x_k, k)`.
     fn act(&self, x: &[f64], u_prev: &[f64], critic: &F, u: &mut [f64]);
+    /// A learning trial begins (a learning rate on a schedule counts it).
+    fn start_trial(&mut self) {}
     /// Improves the policy and learns any models from transition `t`.
     fn improve(&mut self, t: &Transition, critic: &F);
     /// Whether the next action is chosen after the critic and model updates of this
@@ -277,6 +279,7 @@ impl<F: Approximator + ?Sized> ActorCritic<F> {
 impl<F: Approximator + ?Sized> Agent for ActorCritic<F> {
     fn start_trial(&mut self, x0: &[f64], u: &mut [f64]) {
         self.critic.start_trial();
+        self.improver.start_trial();
         self.exploration.start_trial();
         self.k = 0;
         self.x = self.info.horizon.input(x0, 0);

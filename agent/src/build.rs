@@ -129,9 +129,9 @@ pub fn build(task: &Task, learner: &Learner, run_seed: u64) -> Box<dyn Agent> {
             let actor = plain_actor(&p.actor, &spaces.actor(l));
             let critic = plain_critic(&p.critic, &spaces.state(1, None));
             let critic: Box<dyn Critic<dyn Approximator>> =
-                Box::new(TdLambda::values_only(critic, p.critic.alpha()));
+                Box::new(TdLambda::values_only(critic, p.critic.step_size()));
             let sac: Box<dyn Improver<dyn Approximator>> =
-                Box::new(Sac::new(actor, p.actor.alpha()));
+                Box::new(Sac::new(actor, p.actor.step_size()));
             return actor_critic(info, l, run_seed, critic, sac);
         }
         Algorithm::Mlac(p) => {
@@ -140,7 +140,7 @@ pub fn build(task: &Task, learner: &Learner, run_seed: u64) -> Box<dyn Agent> {
                 info.clone(),
                 actor,
                 spaces.process_model(&p.model),
-                p.actor.alpha(),
+                p.actor.step_size(),
                 l.gamma,
                 l.saturation_margin,
             );
@@ -157,7 +157,7 @@ pub fn build(task: &Task, learner: &Learner, run_seed: u64) -> Box<dyn Agent> {
                 info.clone(),
                 reference,
                 spaces.process_model(&p.model),
-                p.actor.alpha(),
+                p.actor.step_size(),
             );
             (td_critic(&spaces, &p.critic), Box::new(rmac))
         }
@@ -275,7 +275,7 @@ fn sarsa(spaces: &Spaces, p: &SarsaParts, l: &LearningConfig, run_seed: u64) -> 
     Box::new(Sarsa::new(
         q,
         actions,
-        p.q.alpha,
+        p.q.step_size(),
         l.gamma,
         l.lambda,
         Epsilon {
@@ -290,7 +290,7 @@ fn sarsa(spaces: &Spaces, p: &SarsaParts, l: &LearningConfig, run_seed: u64) -> 
 fn td_critic(spaces: &Spaces, c: &Smooth) -> Box<dyn Critic> {
     Box::new(TdLambda::new(
         smooth(c, &spaces.state(1, None)).value_function(),
-        c.alpha(),
+        c.step_size(),
     ))
 }
 

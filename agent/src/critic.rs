@@ -17,6 +17,7 @@
 //! finite horizon — the known terminal value `τ_N(x_N)` (Eq. 4.3, [`Next::Terminal`]).
 
 use crate::approx::{Approximator, Differentiable, Traced, ValueFunction, scalar};
+use crate::step_size::StepSize;
 
 /// What follows `x_k` in the target of the temporal difference.
 #[derive(Clone, Copy, Debug)]
@@ -56,25 +57,32 @@ pub trait Critic<F: ?Sized = ValueWithGradient>: Send + crate::checkpoint::Persi
 }
 
 /// TD(λ) with accumulating eligibility traces, Template 2.1: any traced approximator
-/// (RBF, LLR, tile coding) with learning rate `α_c`. `V` is its kind of value function: one
+/// (RBF, LLR, tile coding) with learning rate `α_c` (constant, or `α_{c,k}` on a
+/// [`StepSize`] schedule). `V` is its kind of value function: one
 /// with a gradient (the default), or without (`dyn Traced`: tile coding, SAC's).
 pub struct TdLambda<V: ?Sized = dyn ValueFunction> {
     f: Box<V>,
-    alpha: f64,
+    step: StepSize,
 }
 
 impl TdLambda {
     /// A TD(λ) critic learning `f` with rate `α_c`.
-    pub fn new(f: Box<dyn ValueFunction>, alpha: f64) -> Self {
-        Self { f, alpha }
+    pub fn new(f: Box<dyn ValueFunction>, alpha: impl Into<StepSize>) -> Self {
+        Self {
+            f,
+            step: alpha.into(),
+        }
     }
 }
 
 impl TdLambda<dyn Traced> {
     /// A TD(λ) critic learning `f` with rate `α_c`, read for its values only: the critic
     /// of an improver that never asks for `∇_x V` (SAC's; tile coding has none).
-    pub fn values_only(f: Box<dyn Traced>, alpha: f64) -> Self {
-        Self { f, alpha }
+    pub fn values_only(f: Box<dyn Traced>, alpha: impl Into<StepSize>) -> Self {
+        Self {
+            f,
+            step: alpha.into(),
+        }
     }
 }
 
@@ -103,6 +111,7 @@ impl<V: Traced + ReadAs<F> + ?Sized, F: ?Sized> Critic<F> for TdLambda<V> {
 
     fn start_trial(&mut self) {
         self.f.clear_traces();
+        self.step.start_trial();
     }
 
     fn observe(&mut self, x: &[f64], r: f64, next: Next, gamma: f64, lambda: f64) -> f64 {
@@ -117,7 +126,7 @@ impl<V: Traced + ReadAs<F> + ?Sized, F: ?Sized> Critic<F> for TdLambda<V> {
     }
 
     fn update(&mut self, td: f64) {
-        self.f.apply_td(self.alpha * td);
+        self.f.apply_td(self.step.alpha() * td);
     }
 
     fn fill(&self) -> Option<(usize, usize)> {
@@ -128,12 +137,14 @@ impl<V: Traced + ReadAs<F> + ?Sized, F: ?Sized> Critic<F> for TdLambda<V> {
 impl<V: Traced + ?Sized> crate::checkpoint::Persist for TdLambda<V> {
     fn save(&self, s: &mut crate::checkpoint::Snapshot) {
         self.f.save(s);
+        self.step.save(s);
     }
     fn restore(
         &mut self,
         r: &mut crate::checkpoint::Reader,
     ) -> Result<(), crate::checkpoint::CheckpointError> {
-        self.f.restore(r)
+        self.f.restore(r)?;
+        self.step.restore(r)
     }
 }
 

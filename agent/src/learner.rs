@@ -5,6 +5,7 @@
 
 use crate::config::{HorizonKind, LearningConfig, LlrConfig, LstdConfig, RbfConfig};
 use crate::config::{PlanningConfig, SarsaConfig, TilesConfig, VgbpConfig};
+use crate::step_size::StepSize;
 
 /// An approximator with a gradient (§3.5): what a process model, an MLAC or RMAC actor
 /// and their critics are.
@@ -112,6 +113,14 @@ impl Smooth {
             Smooth::Rbf(c) => c.alpha,
         }
     }
+
+    /// The learning rate with its schedule.
+    pub fn step_size(&self) -> StepSize {
+        match self {
+            Smooth::Llr(c) => c.step_size(),
+            Smooth::Rbf(c) => c.step_size(),
+        }
+    }
 }
 
 impl Plain {
@@ -120,6 +129,14 @@ impl Plain {
         match self {
             Plain::Smooth(c) => c.alpha(),
             Plain::Tiles(c) => c.alpha,
+        }
+    }
+
+    /// The learning rate with its schedule.
+    pub fn step_size(&self) -> StepSize {
+        match self {
+            Plain::Smooth(c) => c.step_size(),
+            Plain::Tiles(c) => c.step_size(),
         }
     }
 }

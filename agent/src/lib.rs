@@ -8,9 +8,10 @@
 //! * [`actor_critic`] — Template 2.1, the loop every algorithm shares; [`sac`],
 //!   [`mlac`], [`rmac`], [`vgbp`] — what each algorithm does differently; [`critic`] —
 //!   the critic and its learning rule, TD(λ) or [`lstd`]; [`model`] — the learned
-//!   process model; [`explore`] — Gaussian exploration; [`sarsa`] — the discrete-action
-//!   baseline; [`plan`] — MLAC's actions planned with its learned model (beyond the
-//!   thesis, chosen by `[planning]`).
+//!   process model; [`step_size`] — a learning rate's schedule over the trials
+//!   (constant, or decaying as Eq. 2.21–2.22 ask); [`explore`] — Gaussian
+//!   exploration; [`sarsa`] — the discrete-action baseline; [`plan`] — MLAC's actions
+//!   planned with its learned model (beyond the thesis, chosen by `[planning]`).
 //! * [`horizon`] — infinite or finite horizon (Chapter 4: time as an input, terminal
 //!   reward; SAC-FH, MLAC-FH, RMAC-FH are the shared step with a finite horizon).
 //! * [`config`] — the agent's part of the configuration, [`preset`] — the thesis's
@@ -39,6 +40,7 @@ pub mod rmac;
 pub mod sac;
 pub mod sarsa;
 pub mod seed;
+pub mod step_size;
 #[cfg(test)]
 mod testing;
 pub mod vgbp;

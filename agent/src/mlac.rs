@@ -25,6 +25,7 @@ use crate::actor_critic::{Improver, TaskInfo, Transition};
 use crate::approx::Approximator;
 use crate::critic::ValueWithGradient;
 use crate::model::ProcessModel;
+use crate::step_size::StepSize;
 use plant::{MAX_ACTION, MAX_STATE};
 
 /// The MLAC actor and process model.
@@ -32,18 +33,18 @@ pub struct Mlac {
     info: TaskInfo,
     actor: Box<dyn Approximator>,
     model: ProcessModel,
-    alpha: f64,
+    step: StepSize,
     gamma: f64,
     saturation_margin: f64,
 }
 
 impl Mlac {
-    /// An MLAC actor `π` (rate `α_a`) with process model `f̂`.
+    /// An MLAC actor `π` (rate `α_a`, constant or on a schedule) with process model `f̂`.
     pub fn new(
         info: TaskInfo,
         actor: Box<dyn Approximator>,
         model: ProcessModel,
-        alpha: f64,
+        alpha: impl Into<StepSize>,
         gamma: f64,
         saturation_margin: f64,
     ) -> Self {
@@ -51,7 +52,7 @@ impl Mlac {
             info,
             actor,
             model,
-            alpha,
+            step: alpha.into(),
             gamma,
             saturation_margin,
         }
@@ -86,6 +87,10 @@ impl Improver for Mlac {
         self.actor.value(x, u);
     }
 
+    fn start_trial(&mut self) {
+        self.step.start_trial();
+    }
+
     fn improve(&mut self, t: &Transition, critic: &ValueWithGradient) {
         let (n, m, d) = (self.info.n(), self.info.m(), self.info.input_dim());
         // ũ_k = π_ϑk(x_k), x̃_{k+1} = f̂(x_k, ũ_k)                      (Eq. 3.4–3.5)
@@ -100,12 +105,13 @@ impl Improver for Mlac {
         critic.value_and_jacobian(&p.x_next[..d], &mut v, &mut dv[..d]);
         // {∇_u ρ + γ ∇_x Vᵀ ∇_u f̂}                                    (Eq. 3.9)
         let mut g = [0.0; MAX_ACTION];
+        let alpha = self.step.alpha();
         self.info.reward.grad_u(&u_tilde[..m], &mut g[..m]);
         for j in 0..m {
             for i in 0..n {
                 g[j] += self.gamma * dv[i] * p.du[i * m + j];
             }
-            g[j] *= self.alpha;
+            g[j] *= alpha;
         }
         self.actor.shift(t.x, &g[..m]); //                                (line 10)
         self.model.learn(t.x, t.u, t.x_next); //                          (line 13)
@@ -122,11 +128,17 @@ use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
 
 impl Persist for Mlac {
     fn save(&self, s: &mut Snapshot) {
-        s.scope("actor", |s| self.actor.save(s));
+        s.scope("actor", |s| {
+            self.actor.save(s);
+            self.step.save(s);
+        });
         self.model.save(s);
     }
     fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
-        r.scope("actor", |r| self.actor.restore(r))?;
+        r.scope("actor", |r| {
+            self.actor.restore(r)?;
+            self.step.restore(r)
+        })?;
         self.model.restore(r)
     }
 }

@@ -198,6 +198,10 @@ impl Improver for Planner {
         u.copy_from_slice(&self.plan(x, critic).seq[..m]);
     }
 
+    fn start_trial(&mut self) {
+        self.mlac.start_trial();
+    }
+
     fn improve(&mut self, t: &Transition, critic: &ValueWithGradient) {
         self.mlac.improve(t, critic);
     }

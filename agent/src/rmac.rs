@@ -25,6 +25,7 @@ use crate::approx::solve::cholesky_solve;
 use crate::approx::{Approximator, scalar};
 use crate::critic::ValueWithGradient;
 use crate::model::{ProcessModel, increment};
+use crate::step_size::StepSize;
 use plant::{MAX_ACTION, MAX_STATE};
 
 /// Ridge on `β_uᵀβ_u` in the model inversion.
@@ -35,22 +36,23 @@ pub struct Rmac {
     info: TaskInfo,
     reference: Box<dyn Approximator>,
     model: ProcessModel,
-    alpha: f64,
+    step: StepSize,
 }
 
 impl Rmac {
-    /// An RMAC policy with reference model `R` (rate `α_r`) and process model `f̂`.
+    /// An RMAC policy with reference model `R` (rate `α_r`, constant or on a schedule)
+    /// and process model `f̂`.
     pub fn new(
         info: TaskInfo,
         reference: Box<dyn Approximator>,
         model: ProcessModel,
-        alpha: f64,
+        alpha: impl Into<StepSize>,
     ) -> Self {
         Self {
             info,
             reference,
             model,
-            alpha,
+            step: alpha.into(),
         }
     }
 
@@ -99,6 +101,10 @@ impl Improver for Rmac {
         self.info.saturate(u);
     }
 
+    fn start_trial(&mut self) {
+        self.step.start_trial();
+    }
+
     fn improve(&mut self, t: &Transition, critic: &ValueWithGradient) {
         let (n, d) = (self.info.n(), self.info.input_dim());
         // x_r = argmax_{x' ∈ R̂_x} V(x'),  R̂_x = { f̂(x_k, u) : u ∈ U_e }   (line 11)
@@ -113,7 +119,7 @@ impl Improver for Rmac {
         // η ← η + α_r (x_r − R(x_k)) ∇_η R(x_k)                           (Eq. 3.11)
         let mut target = [0.0; MAX_STATE];
         increment(&self.info.angle_mask, t.x, &best.1[..n], &mut target[..n]);
-        self.reference.fit(t.x, &target[..n], self.alpha);
+        self.reference.fit(t.x, &target[..n], self.step.alpha());
         self.model.learn(t.x, t.u, t.x_next); //                            (line 14)
     }
 }
@@ -122,11 +128,17 @@ use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
 
 impl Persist for Rmac {
     fn save(&self, s: &mut Snapshot) {
-        s.scope("reference", |s| self.reference.save(s));
+        s.scope("reference", |s| {
+            self.reference.save(s);
+            self.step.save(s);
+        });
         self.model.save(s);
     }
     fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
-        r.scope("reference", |r| self.reference.restore(r))?;
+        r.scope("reference", |r| {
+            self.reference.restore(r)?;
+            self.step.restore(r)
+        })?;
         self.model.restore(r)
     }
 }

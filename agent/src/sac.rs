@@ -9,17 +9,21 @@
 
 use crate::actor_critic::{Improver, Transition};
 use crate::approx::Approximator;
+use crate::step_size::StepSize;
 
 /// The SAC actor.
 pub struct Sac {
     actor: Box<dyn Approximator>,
-    alpha: f64,
+    step: StepSize,
 }
 
 impl Sac {
-    /// An actor `π` learning with rate `α_a`.
-    pub fn new(actor: Box<dyn Approximator>, alpha: f64) -> Self {
-        Self { actor, alpha }
+    /// An actor `π` learning with rate `α_a` (constant, or on a schedule).
+    pub fn new(actor: Box<dyn Approximator>, alpha: impl Into<StepSize>) -> Self {
+        Self {
+            actor,
+            step: alpha.into(),
+        }
     }
 }
 
@@ -29,9 +33,14 @@ impl<F: ?Sized> Improver<F> for Sac {
         self.actor.value(x, u);
     }
 
+    fn start_trial(&mut self) {
+        self.step.start_trial();
+    }
+
     fn improve(&mut self, t: &Transition, _critic: &F) {
         // Eq. 3.1
-        let step: Vec<f64> = t.du.iter().map(|du| self.alpha * t.td * du).collect();
+        let alpha = self.step.alpha();
+        let step: Vec<f64> = t.du.iter().map(|du| alpha * t.td * du).collect();
         self.actor.shift(t.x, &step);
     }
 }
@@ -40,10 +49,16 @@ use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
 
 impl Persist for Sac {
     fn save(&self, s: &mut Snapshot) {
-        s.scope("actor", |s| self.actor.save(s));
+        s.scope("actor", |s| {
+            self.actor.save(s);
+            self.step.save(s);
+        });
     }
     fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
-        r.scope("actor", |r| self.actor.restore(r))
+        r.scope("actor", |r| {
+            self.actor.restore(r)?;
+            self.step.restore(r)
+        })
     }
 }
 

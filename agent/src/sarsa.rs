@@ -24,6 +24,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::Agent;
 use crate::approx::Approximator;
 use crate::approx::rbf::Rbf;
+use crate::step_size::StepSize;
 
 /// Stream id of SARSA's ε-greedy draws.
 pub const STREAM: u64 = crate::explore::stream::SARSA;
@@ -51,7 +52,7 @@ impl Epsilon {
 pub struct Sarsa {
     q: Rbf,
     actions: Vec<Vec<f64>>,
-    alpha: f64,
+    step: StepSize,
     gamma: f64,
     lambda: f64,
     epsilon: Epsilon,
@@ -66,14 +67,14 @@ pub struct Sarsa {
 
 impl Sarsa {
     /// SARSA over `actions` (each a full action vector) with `q` an RBF approximator
-    /// with one output per action.
+    /// with one output per action, learning with rate `α` (constant or on a schedule).
     ///
     /// # Panics
     /// If `q`'s outputs do not match the action count (validated by the configuration).
     pub fn new(
         q: Rbf,
         actions: Vec<Vec<f64>>,
-        alpha: f64,
+        alpha: impl Into<StepSize>,
         gamma: f64,
         lambda: f64,
         epsilon: Epsilon,
@@ -92,7 +93,7 @@ impl Sarsa {
             a: 0,
             q,
             actions,
-            alpha,
+            step: alpha.into(),
             gamma,
             lambda,
             epsilon,
@@ -152,6 +153,7 @@ fn argmax(q: &[f64]) -> usize {
 impl Agent for Sarsa {
     fn start_trial(&mut self, x0: &[f64], u: &mut [f64]) {
         self.trial = self.trial.saturating_add(1);
+        self.step.start_trial();
         self.trace.fill(0.0);
         self.x.copy_from_slice(x0);
         self.a = self.choose(x0);
@@ -203,7 +205,7 @@ impl Sarsa {
             z[self.a] += phi;
         }
         // θ ← θ + α δ z                                                      (Eq. 6.5)
-        let step = self.alpha * td;
+        let step = self.step.alpha() * td;
         for (t, z) in self.q.parameters_mut().iter_mut().zip(&self.trace) {
             *t += step * z;
         }
@@ -216,7 +218,10 @@ impl Sarsa {
 impl crate::checkpoint::Persist for Sarsa {
     fn save(&self, s: &mut crate::checkpoint::Snapshot) {
         s.scope("sarsa", |s| {
-            s.scope("q", |s| self.q.save(s));
+            s.scope("q", |s| {
+                self.q.save(s);
+                self.step.save(s);
+            });
             s.rng("rng", &self.rng);
             s.u64s("trial", &[u64::from(self.trial), self.a as u64]);
             s.f64s("trace", &self.trace);
@@ -228,7 +233,10 @@ impl crate::checkpoint::Persist for Sarsa {
         r: &mut crate::checkpoint::Reader,
     ) -> Result<(), crate::checkpoint::CheckpointError> {
         r.scope("sarsa", |r| {
-            r.scope("q", |r| self.q.restore(r))?;
+            r.scope("q", |r| {
+                self.q.restore(r)?;
+                self.step.restore(r)
+            })?;
             self.rng = r.rng("rng")?;
             let t = r.u64s("trial")?;
             if t.len() != 2 || t[1] as usize >= self.actions.len() {

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Reproduces the tables of docs/results/furuta.md's "Balance, 5 seeds per configuration"
-# in one command: MLAC/LLR on furuta-balance.toml with mlac-llr.toml and two variants of
-# it (learning rates halved; and exploration sigma 1 V), RUNS seeds each (default 5),
+# in one command: MLAC/LLR on furuta-balance.toml with mlac-llr.toml, two variants of it
+# (learning rates halved; and exploration sigma 1 V) and mlac-llr-decay.toml (its rates
+# decaying over the trials), RUNS seeds each (default 5),
 # each seed against a driver of its own (experiment.sh), 800 trials; then
 # bench/python/furuta_report.py's per-seed tables and verdicts into OUT/report.md.
 #
@@ -24,8 +25,9 @@ bal=$here/furuta-balance.toml
 TASK=$bal "$e" "$out/bal-mlac-llr" "$runs" 800 --config "$here/mlac-llr.toml"
 TASK=$bal "$e" "$out/bal-halved" "$runs" 800 --config "$halved"
 TASK=$bal "$e" "$out/bal-halved-sigma1" "$runs" 800 --config "$sigma1"
+TASK=$bal "$e" "$out/bal-decay" "$runs" 800 --config "$here/mlac-llr-decay.toml"
 {
   echo "## balance (furuta-balance.toml)"
   "$python" "$root/bench/python/furuta_report.py" "$out/bal" mlac-llr="$out/bal-mlac-llr" \
-    halved="$out/bal-halved" halved-sigma1="$out/bal-halved-sigma1"
+    halved="$out/bal-halved" halved-sigma1="$out/bal-halved-sigma1" decay="$out/bal-decay"
 } | tee "$out/report.md"

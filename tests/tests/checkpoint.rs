@@ -159,3 +159,62 @@ fn a_checkpoint_does_not_restore_into_another_learner() {
     }
     assert_eq!((refused, alike), (all.len() - 2, 1));
 }
+
+/// A learning rate on a schedule (`[actor]`/`[critic]` `decay_trials`, `decay_power`)
+/// resumes where it left off: the checkpoint holds each schedule's trial count, and the
+/// resumed run's returns are the uninterrupted run's, bit for bit. The schedules change
+/// what is learned (the same learners at constant rates return otherwise), so a
+/// schedule that started over on resuming would show.
+#[test]
+fn a_learning_rate_schedule_resumes_where_it_left_off() {
+    let learners = [
+        "algo = \"mlac\"\napprox = \"llr\"\n",
+        "algo = \"sac\"\napprox = \"tiles\"\n",
+        "algo = \"rmac\"\napprox = \"rbf\"\n",
+        "algo = \"sarsa\"\napprox = \"rbf\"\n",
+    ];
+    let run = "[run]\ntrials = 6\neval_every = 1\n";
+    let resolve = |text: &str| {
+        runtime::config::resolve(
+            Some((std::path::Path::new("schedule.toml"), text)),
+            &runtime::config::Overrides::default(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let returns = |e: &mut Experiment| {
+        std::iter::from_fn(|| e.next_trial())
+            .map(|t| (t.ret.to_bits(), t.greedy.map(f64::to_bits)))
+            .collect::<Vec<_>>()
+    };
+    for learner in learners {
+        // SARSA has no actor.
+        let (actor, schedules) = match learner.contains("sarsa") {
+            true => ("", 1),
+            false => ("[actor]\ndecay_trials = 1\n", 2),
+        };
+        let critic = "[critic]\ndecay_trials = 2\ndecay_power = 0.6\n";
+        let cfg = resolve(&format!("{learner}{actor}{critic}{run}"));
+        let who = name(&cfg);
+        let want = returns(&mut Experiment::new(&cfg, 1));
+        let constant = returns(&mut Experiment::new(
+            &resolve(&format!("{learner}{run}")),
+            1,
+        ));
+        assert_eq!(want[0], constant[0], "{who}: the first trial learns at α_0");
+        assert_ne!(
+            want[3..],
+            constant[3..],
+            "{who}: the schedule changes nothing"
+        );
+
+        let mut first = Experiment::new(&cfg, 1);
+        for _ in 0..3 {
+            first.next_trial().unwrap();
+        }
+        let c = Checkpoint::from_bytes(&first.checkpoint().to_bytes()).unwrap();
+        let saved = format!("{:?}", c.state).matches("schedule.trials").count();
+        assert_eq!(saved, schedules, "{who}: {:?}", c.state);
+        let mut resumed = Experiment::resume(&cfg, 1, &c).unwrap();
+        assert_eq!(returns(&mut resumed), want[3..], "{who}");
+    }
+}

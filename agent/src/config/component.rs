@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{Algo, ApproxKind};
 use crate::learner::{Plain, Smooth, VgbpCritic};
+use crate::step_size::{Decay, StepSize};
 
 /// One approximator's parameters; which kind is given by the configuration's `approx`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -40,6 +41,13 @@ pub struct LlrConfig {
     pub redundancy_radius: f64,
     /// Limit predictions to the range of the neighbours' outputs (no extrapolation).
     pub clip_to_neighbours: bool,
+    /// The learning rate's decay `τ` in trials: `α_k = α · (τ / (τ + k))^p` after `k`
+    /// learning trials ([`crate::step_size`]); none (the thesis's constant rate) by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decay_trials: Option<f64>,
+    /// The decay's power `p` in `(1/2, 1]` (1 if not given); only with `decay_trials`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decay_power: Option<f64>,
 }
 
 plant::choice! {
@@ -64,6 +72,13 @@ pub struct RbfConfig {
     pub centres: Vec<usize>,
     /// Intersection height of neighbouring basis functions.
     pub intersection: f64,
+    /// The learning rate's decay `τ` in trials: `α_k = α · (τ / (τ + k))^p` after `k`
+    /// learning trials ([`crate::step_size`]); none (the thesis's constant rate) by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decay_trials: Option<f64>,
+    /// The decay's power `p` in `(1/2, 1]` (1 if not given); only with `decay_trials`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decay_power: Option<f64>,
 }
 
 /// Tile-coding parameters (§3.6.1).
@@ -76,6 +91,13 @@ pub struct TilesConfig {
     pub tilings: usize,
     /// Tiles along each input.
     pub tiles: Vec<usize>,
+    /// The learning rate's decay `τ` in trials: `α_k = α · (τ / (τ + k))^p` after `k`
+    /// learning trials ([`crate::step_size`]); none (the thesis's constant rate) by default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decay_trials: Option<f64>,
+    /// The decay's power `p` in `(1/2, 1]` (1 if not given); only with `decay_trials`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decay_power: Option<f64>,
 }
 
 /// LSTD critic parameters (§6.4.1, Table 6.4).
@@ -149,6 +171,16 @@ impl Component {
         }
     }
 
+    /// The learning rate with its schedule (constant for LSTD's 0).
+    pub fn step_size(&self) -> StepSize {
+        match self {
+            Component::Llr(c) => c.step_size(),
+            Component::Rbf(c) => c.step_size(),
+            Component::Tiles(c) => c.step_size(),
+            Component::Lstd(_) => StepSize::from(0.0),
+        }
+    }
+
     fn kind(&self) -> ApproxKind {
         match self {
             Component::Llr(_) => ApproxKind::Llr,
@@ -214,6 +246,13 @@ impl Component {
             return Err(self.misplaced(at));
         }
         check_float(&at.key("alpha"), self.alpha(), 0.0, 100.0, false)?;
+        let (trials, power) = match self {
+            Component::Llr(c) => (c.decay_trials, c.decay_power),
+            Component::Rbf(c) => (c.decay_trials, c.decay_power),
+            Component::Tiles(c) => (c.decay_trials, c.decay_power),
+            Component::Lstd(_) => (None, None),
+        };
+        check_schedule(at, trials, power)?;
         match self {
             Component::Llr(l) => l.validate(at),
             Component::Rbf(r) => {
@@ -258,6 +297,58 @@ impl LlrConfig {
     }
 }
 
+/// The learning rate `alpha` with the schedule `decay_trials`, `decay_power` say, of each
+/// approximator that has a learning rate.
+macro_rules! step_size_of {
+    ($($config:ty),*) => {$(
+        impl $config {
+            /// The learning rate with its schedule ([`crate::step_size`]).
+            pub fn step_size(&self) -> StepSize {
+                let decay = self.decay_trials.map(|trials| Decay {
+                    trials,
+                    power: self.decay_power.unwrap_or(1.0),
+                });
+                StepSize::new(self.alpha, decay)
+            }
+        }
+    )*};
+}
+step_size_of!(LlrConfig, RbfConfig, TilesConfig);
+
+/// Checks a learning-rate schedule's keys: `τ` positive and finite, `p` in `(1/2, 1]`
+/// (Eq. 2.21–2.22) and only with `τ`, and no schedule for a process model, which has no
+/// learning rate.
+fn check_schedule(at: &Slot, trials: Option<f64>, power: Option<f64>) -> Result<(), ConfigError> {
+    match (trials, power) {
+        (None, None) => return Ok(()),
+        (None, Some(_)) => {
+            return Err(ConfigError::new(
+                &at.key("decay_power"),
+                format!(
+                    "is the power of a decay: give `{}` too",
+                    at.key("decay_trials")
+                ),
+            ));
+        }
+        _ if at.section == "model" => {
+            return Err(ConfigError::new(
+                &at.key("decay_trials"),
+                "a process model has no learning rate to decay; a schedule is for [actor] and [critic]",
+            ));
+        }
+        (Some(trials), _) => check_float(&at.key("decay_trials"), trials, 0.0, 1e9, true)?,
+    }
+    match power {
+        Some(p) if !(p > 0.5 && p <= 1.0) => Err(ConfigError::new(
+            &at.key("decay_power"),
+            format!(
+                "{p} is out of range: must be a finite number in (0.5, 1] (Σα_k = ∞ needs p ≤ 1, Σα_k² < ∞ needs p > 1/2, Eq. 2.21–2.22)"
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Checks an RBF grid's `centres`: one entry per input, 1 to 1000 each, at most `max`
 /// basis functions in all (`why` of the count says why the limit).
 fn check_grid(
@@ -298,6 +389,21 @@ mod tests {
         }
     }
 
+    /// An LLR memory of 10 samples on two inputs, `neighbours` of them read.
+    fn memory(neighbours: usize, decay_trials: Option<f64>) -> LlrConfig {
+        LlrConfig {
+            alpha: 0.1,
+            memory: 10,
+            neighbours,
+            weights: vec![1.0, 0.1],
+            eviction: EvictionRule::Oldest,
+            redundancy_radius: 0.0,
+            clip_to_neighbours: false,
+            decay_trials,
+            decay_power: None,
+        }
+    }
+
     #[test]
     fn grids_and_memories_are_checked_against_their_limits() {
         let lstd = |centres| {
@@ -319,16 +425,9 @@ mod tests {
             e.message,
             "has 1 entries; must have 2, one per state component"
         );
-        let llr = LlrConfig {
-            alpha: 0.1,
-            memory: 10,
-            neighbours: 11,
-            weights: vec![1.0, 0.1],
-            eviction: EvictionRule::Oldest,
-            redundancy_radius: 0.0,
-            clip_to_neighbours: false,
-        };
-        let e = Component::Llr(llr).validate(&critic(2)).unwrap_err();
+        let e = Component::Llr(memory(11, None))
+            .validate(&critic(2))
+            .unwrap_err();
         assert_eq!(
             e.to_string(),
             "`critic.neighbours`: 11 is out of range: must be an integer in 1..=10"
@@ -337,6 +436,8 @@ mod tests {
             alpha: 0.1,
             centres: vec![9, 9],
             intersection: 0.5,
+            decay_trials: None,
+            decay_power: None,
         });
         let e = rbf.validate(&critic(2)).unwrap_err();
         assert_eq!(e.key, "critic");
@@ -344,5 +445,20 @@ mod tests {
             e.message
                 .starts_with("holds rbf parameters; vgbp expects lstd or llr")
         );
+    }
+
+    /// A process model only stores (or fits without a rate of its own to decay): a
+    /// schedule there is refused, also when built in code rather than read from a file.
+    #[test]
+    fn a_process_model_takes_no_schedule() {
+        let llr = memory(3, Some(100.0));
+        let model = Slot {
+            section: "model",
+            kinds: &[ApproxKind::Llr],
+            ..critic(2)
+        };
+        let e = Component::Llr(llr.clone()).validate(&model).unwrap_err();
+        assert_eq!(e.key, "model.decay_trials");
+        Component::Llr(llr).validate(&critic(2)).unwrap();
     }
 }

@@ -23,6 +23,8 @@ fn llr_memory(alpha: f64, memory: usize, neighbours: usize, weights: Vec<f64>) -
         eviction: EvictionRule::Redundant,
         redundancy_radius: REDUNDANCY_RADIUS,
         clip_to_neighbours: false,
+        decay_trials: None,
+        decay_power: None,
     }
 }
 
@@ -51,6 +53,8 @@ pub(super) fn llr_model(memory: usize, neighbours: usize, weights: Vec<f64>) -> 
         eviction: EvictionRule::Oldest,
         redundancy_radius: 0.0,
         clip_to_neighbours: false,
+        decay_trials: None,
+        decay_power: None,
     })
 }
 
@@ -61,5 +65,7 @@ pub(super) fn rbf(alpha: f64, centres: Vec<usize>, intersection: f64) -> Compone
         alpha,
         centres,
         intersection,
+        decay_trials: None,
+        decay_power: None,
     })
 }

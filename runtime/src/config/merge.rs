@@ -61,6 +61,47 @@ pub(super) fn add_optional_sections(base: &mut toml::Table, user: &mut toml::Tab
     }
 }
 
+/// Keys no preset writes that a user may add to `[actor]` and `[critic]` when they have a
+/// learning rate: its schedule (`agent::step_size`; off unless given).
+const SCHEDULE_KEYS: [&str; 2] = ["decay_trials", "decay_power"];
+
+/// The sections whose learning rate may follow a schedule.
+const SCHEDULED_SECTIONS: [&str; 2] = ["actor", "critic"];
+
+/// Moves each schedule key the user's `[actor]` or `[critic]` has into `base`'s section,
+/// if that has a learning rate (`alpha`), as a number; elsewhere (an LSTD critic, a
+/// process model) the key stays and [`merge`] names it as unknown.
+pub(super) fn add_schedule_keys(
+    base: &mut toml::Table,
+    user: &mut toml::Table,
+) -> Result<(), ConfigError> {
+    for section in SCHEDULED_SECTIONS {
+        let (Some(toml::Value::Table(b)), Some(toml::Value::Table(u))) =
+            (base.get_mut(section), user.get_mut(section))
+        else {
+            continue;
+        };
+        if !b.contains_key("alpha") {
+            continue;
+        }
+        for key in SCHEDULE_KEYS {
+            let value = match u.remove(key) {
+                None => continue,
+                Some(toml::Value::Integer(i)) => i as f64,
+                Some(toml::Value::Float(f)) => f,
+                Some(other) => {
+                    return Err(ConfigError::new(
+                        &format!("{section}.{key}"),
+                        format!("{other} has the wrong type: expected a number"),
+                    ));
+                }
+            };
+            b.insert(key.into(), toml::Value::Float(value));
+        }
+    }
+    Ok(())
+}
+
 /// Overlays `user` on `base`, rejecting keys `base` does not have.
 pub(super) fn merge(
     base: &mut toml::Table,
@@ -100,10 +141,18 @@ fn unknown_key(known: &toml::Table, key: &str, prefix: &str) -> ConfigError {
     } else {
         format!("in [{prefix}]")
     };
+    let schedule = if SCHEDULED_SECTIONS.contains(&prefix) && known.contains_key("alpha") {
+        format!(
+            "; and the learning rate's schedule: {}",
+            SCHEDULE_KEYS.join(", ")
+        )
+    } else {
+        String::new()
+    };
     ConfigError::new(
         key,
         format!(
-            "unknown key; the keys allowed {place} are: {}",
+            "unknown key; the keys allowed {place} are: {}{schedule}",
             keys.join(", ")
         ),
     )

@@ -8,7 +8,7 @@ use plant::config::{ConfigError, RunConfig};
 use plant::{SystemName, TaskFile};
 
 use super::layout::Layout;
-use super::merge::{add_optional_sections, check_choice, choose, merge};
+use super::merge::{add_optional_sections, add_schedule_keys, check_choice, choose, merge};
 use super::{ExperimentConfig, Sections};
 
 /// Command-line choices and overrides, applied over preset and file: the experiment
@@ -310,6 +310,7 @@ pub fn resolve(
     let choice = PresetChoice::of(&user, o, task.as_ref()).map_err(with_file)?;
     let mut merged = choice.table().map_err(with_file)?;
     add_optional_sections(&mut merged, &mut user);
+    add_schedule_keys(&mut merged, &mut user).map_err(with_file)?;
     merge(&mut merged, user, "").map_err(with_file)?;
     check_choices(&merged).map_err(with_file)?;
     let mut layout: Layout = toml::Value::Table(merged)

@@ -450,3 +450,77 @@ fn a_planning_section_is_added_checked_and_round_trips() {
     assert_eq!(e.key, "planning", "{e}");
     assert!(e.message.contains("remove the [planning] section"), "{e}");
 }
+
+#[test]
+fn a_learning_rate_schedule_resolves_round_trips_and_is_fingerprinted() {
+    let plain = resolve(None, &Overrides::default()).unwrap();
+    assert!(
+        !plain.to_toml().contains("decay"),
+        "off by default, not written"
+    );
+    let c = resolve_str(
+        "[actor]\ndecay_trials = 200\n[critic]\ndecay_trials = 400.0\ndecay_power = 0.6\n",
+    )
+    .unwrap();
+    let (Some(Component::Llr(actor)), Component::Llr(critic)) = (&c.agent.actor, &c.agent.critic)
+    else {
+        panic!()
+    };
+    assert_eq!((actor.decay_trials, actor.decay_power), (Some(200.0), None));
+    assert_eq!(
+        (critic.decay_trials, critic.decay_power),
+        (Some(400.0), Some(0.6))
+    );
+    assert_eq!(resolve_str(&c.to_toml()).unwrap(), c);
+    assert_ne!(c.origin(0).fingerprint, plain.origin(0).fingerprint);
+    // SAC's tile coding and SARSA's grid have a learning rate too.
+    for algo in [
+        "algo = \"sac\"\napprox = \"tiles\"\n",
+        "algo = \"sarsa\"\napprox = \"rbf\"\n",
+    ] {
+        resolve_str(&format!("{algo}[critic]\ndecay_trials = 50\n")).unwrap();
+    }
+}
+
+#[test]
+fn learning_rate_schedule_errors_name_the_key_and_what_is_allowed() {
+    let err = |text: &str| resolve_str(text).unwrap_err().to_string();
+    assert_eq!(
+        err("[actor]\ndecay_trials = -5\n"),
+        "exp.toml: `actor.decay_trials`: -5 is out of range: must be a finite number in (0, 1000000000)"
+    );
+    assert_eq!(
+        err("[critic]\ndecay_trials = nan\n"),
+        "exp.toml: `critic.decay_trials`: NaN is out of range: must be a finite number in (0, 1000000000)"
+    );
+    assert_eq!(
+        err("[actor]\ndecay_trials = 100\ndecay_power = 0.5\n"),
+        "exp.toml: `actor.decay_power`: 0.5 is out of range: must be a finite number in (0.5, 1] (Σα_k = ∞ needs p ≤ 1, Σα_k² < ∞ needs p > 1/2, Eq. 2.21–2.22)"
+    );
+    assert_eq!(
+        err("[critic]\ndecay_power = 1\n"),
+        "exp.toml: `critic.decay_power`: is the power of a decay: give `critic.decay_trials` too"
+    );
+    assert_eq!(
+        err("[actor]\ndecay_trials = \"slow\"\n"),
+        "exp.toml: `actor.decay_trials`: \"slow\" has the wrong type: expected a number"
+    );
+    // No learning rate, no schedule: the process model, an LSTD critic.
+    let e = err("[model]\ndecay_trials = 100\n");
+    assert!(
+        e.starts_with("exp.toml: `model.decay_trials`: unknown key"),
+        "{e}"
+    );
+    let e = err("algo = \"vgbp\"\napprox = \"lstd\"\n[critic]\ndecay_trials = 100\n");
+    assert!(
+        e.starts_with("exp.toml: `critic.decay_trials`: unknown key"),
+        "{e}"
+    );
+    assert!(!e.contains("schedule"), "{e}");
+    // A misspelt key in a section with a learning rate lists the schedule's keys too.
+    let e = err("[actor]\ndecay_trails = 100\n");
+    assert!(
+        e.ends_with("; and the learning rate's schedule: decay_trials, decay_power"),
+        "{e}"
+    );
+}

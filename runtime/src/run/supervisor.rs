@@ -12,13 +12,13 @@ use wire::{Action, Bus, Estimate, Measurement, Truth, flags, topic};
 
 use crate::experiment::TrialRecord;
 
+use super::command::Role;
 use super::error::{Result, RunError};
 use super::gaps::Gaps;
 use super::logs::Logs;
 use super::recording::Recording;
 use super::retention::{Progress, Retention};
 use super::returns::Returns;
-use super::command::Role;
 
 /// How long the supervisor watches after a process exits early, to see which process
 /// caused the stop (the others follow within milliseconds).
@@ -345,7 +345,8 @@ impl Supervisor {
     /// the observer and the agent answer the samples it sent (a trial's last sample
     /// without its action would leave that trial incomplete), then stop.
     fn record_the_rest(&mut self, bar: &ProgressBar) {
-        self.children.freeze_where(|role| role == Role::Plant.name());
+        self.children
+            .freeze_where(|role| role == Role::Plant.name());
         let deadline = Instant::now() + ANSWER_WINDOW;
         while !self.answered() && Instant::now() < deadline {
             if !matches!(self.drain(bar), Ok(false)) {
