@@ -2,10 +2,19 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
 
 mod common;
 use common::drivers::{Driver, Kind};
 use common::{names_stages, ok, pipelined, rig};
+
+/// The tests' `rig latency` runs go one at a time: a run under SCHED_FIFO or with its
+/// plant pinned takes a CPU from another run's processes, whose timing the tests assert.
+static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+fn one_at_a_time() -> MutexGuard<'static, ()> {
+    ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
+}
 
 fn tmp(name: &str) -> PathBuf {
     common::tmp("latency", name)
@@ -13,6 +22,7 @@ fn tmp(name: &str) -> PathBuf {
 
 #[test]
 fn latency_times_every_stage_of_every_cycle() {
+    let _one = one_at_a_time();
     // A short `rig latency` at 3 ms periods (the pendulum 10 × faster than real time).
     let dir = tmp("latency");
     let out = ok(rig()
@@ -121,6 +131,7 @@ fn short_latency(name: &str, extra: &[&str]) -> std::process::Output {
 
 #[test]
 fn latency_pins_the_plant_to_a_cpu_of_its_own_or_says_why_not() {
+    let _one = one_at_a_time();
     let out = short_latency("latency-pin", &["--pin-cpus"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -135,6 +146,7 @@ fn latency_pins_the_plant_to_a_cpu_of_its_own_or_says_why_not() {
 
 #[test]
 fn latency_runs_under_a_real_time_priority_or_says_why_not() {
+    let _one = one_at_a_time();
     let dir = tmp("latency-rt");
     let out = short_latency("latency-rt", &["--rt-priority", "5"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -160,6 +172,7 @@ fn latency_runs_under_a_real_time_priority_or_says_why_not() {
 
 #[test]
 fn the_cpu_wakeup_limit_is_held_or_refused_naming_the_device() {
+    let _one = one_at_a_time();
     let out = short_latency("latency-wakeup", &["--cpu-wakeup-us", "0"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -203,6 +216,7 @@ fn the_cpu_wakeup_limit_is_held_or_refused_naming_the_device() {
 
 #[test]
 fn latency_against_a_driver_times_its_samples_to_the_commands() {
+    let _one = one_at_a_time();
     // `rig sim-driver` at 10 × real time (3 ms periods) on this host: one clock.
     let driver = Driver::launch(&Kind::Rust, "latency", &["--speed", "10"]);
     let dir = tmp("latency-driver");
@@ -265,6 +279,7 @@ fn latency_against_a_driver_times_its_samples_to_the_commands() {
 
 #[test]
 fn latency_against_a_driver_refuses_what_only_the_simulated_plant_has() {
+    let _one = one_at_a_time();
     let dir = tmp("latency-driver-bad");
     for (extra, says) in [
         (&["--period-ms", "3"][..], "cannot be used with"),
