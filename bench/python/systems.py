@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The systems a lab brings, learned: every experiment of a matrix file (default
-bench/configs/systems.toml) × its learners × SEEDS seeds, in lockstep against the
+bench/python/systems.toml) × its learners × SEEDS seeds, in lockstep against the
 experiment's Python driver; one table of success rates, simulated seconds of interaction
 to success and wall times, the learning curves, and beside them the published figures of
 the field and (with --sb3) Stable-Baselines3's SAC run here on Gymnasium's Pendulum-v1
@@ -177,8 +177,8 @@ def report(rows, out: Path, sb3: Path | None) -> str:
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("out", type=Path, help="the output folder (kept: a second call resumes)")
-    p.add_argument("--matrix", type=Path, default=ROOT / "bench" / "configs" / "systems.toml",
-                   help="the experiments (default bench/configs/systems.toml)")
+    p.add_argument("--matrix", type=Path, default=Path(__file__).resolve().parent / "systems.toml",
+                   help="the experiments (default bench/python/systems.toml)")
     p.add_argument("--seeds", type=int, default=5, help="seeds per experiment × learner (1..N) [default: 5]")
     p.add_argument("--only", default="", help="comma-separated experiment names to run (default all)")
     p.add_argument("--trials", type=int, help="trials per run instead of each experiment's own (a short look)")
