@@ -8,14 +8,23 @@ mod common;
 use std::path::Path;
 use std::process::Command;
 
-#[test]
-fn a_short_soak_finishes_with_no_foreign_command_and_no_gap_learned() {
+/// `$RIG_PYTHON` (default `python3`) if it imports mcap; else says why not.
+fn python_with_mcap() -> Option<String> {
     let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
     let has_mcap = Command::new(&python).args(["-c", "import mcap"]).output();
-    if !has_mcap.is_ok_and(|o| o.status.success()) {
+    if has_mcap.is_ok_and(|o| o.status.success()) {
+        Some(python)
+    } else {
         println!("skipped: {python} cannot import mcap (pip install mcap==1.6.0)");
-        return;
+        None
     }
+}
+
+#[test]
+fn a_short_soak_finishes_with_no_foreign_command_and_no_gap_learned() {
+    let Some(python) = python_with_mcap() else {
+        return;
+    };
     // The scratch hosts of common::hosts check root and the tools; the script makes its
     // own.
     let Some(hosts) = common::hosts::Hosts::new(1) else {
@@ -80,12 +89,9 @@ fn a_short_soak_finishes_with_no_foreign_command_and_no_gap_learned() {
 /// resumed run's start, or of the run's own that a resume dropped from the recording.
 #[test]
 fn the_soak_counts_a_second_sessions_command_only_while_the_run_held_the_driver() {
-    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
-    let has_mcap = Command::new(&python).args(["-c", "import mcap"]).output();
-    if !has_mcap.is_ok_and(|o| o.status.success()) {
-        println!("skipped: {python} cannot import mcap (pip install mcap==1.6.0)");
+    let Some(python) = python_with_mcap() else {
         return;
-    }
+    };
     let script =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../bench/scripts/test_soak_figures.py");
     let out = Command::new(&python).arg(script).output().unwrap();
