@@ -34,30 +34,41 @@ pub struct StepSize {
     decay: Option<Decay>,
     /// Learning trials begun.
     begun: u64,
+    /// `α_k` of the current trial: computed when a trial begins, read at every update.
+    alpha: f64,
 }
 
 impl StepSize {
     /// `α_0`, decaying as `decay` says, or constant without one.
     pub fn new(alpha0: f64, decay: Option<Decay>) -> Self {
-        Self {
+        let mut s = Self {
             alpha0,
             decay,
             begun: 0,
-        }
+            alpha: alpha0,
+        };
+        s.alpha = s.rate();
+        s
     }
 
     /// The rate of the current trial, `α_k`.
     pub fn alpha(&self) -> f64 {
-        let Some(Decay { trials: tau, power }) = self.decay else {
-            return self.alpha0;
-        };
-        let k = self.begun.saturating_sub(1) as f64;
-        self.alpha0 * (tau / (tau + k)).powf(power)
+        self.alpha
     }
 
     /// A learning trial begins: `k` is the number of those before it.
     pub fn start_trial(&mut self) {
         self.begun += 1;
+        self.alpha = self.rate();
+    }
+
+    /// `α_k = α_0 (τ / (τ + k))^p` with `k` the trials before the current one.
+    fn rate(&self) -> f64 {
+        let Some(Decay { trials: tau, power }) = self.decay else {
+            return self.alpha0;
+        };
+        let k = self.begun.saturating_sub(1) as f64;
+        self.alpha0 * (tau / (tau + k)).powf(power)
     }
 }
 
@@ -87,6 +98,7 @@ impl Persist for StepSize {
                     });
                 }
             };
+            self.alpha = self.rate();
         }
         Ok(())
     }
