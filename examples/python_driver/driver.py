@@ -142,6 +142,7 @@ class Driver:
         self.clamped = 0
         self.rejected = 0
         self.watchdog_trips = 0
+        self.held = []  # --inject-fault late: commands kept for the next sample instant
 
         sample_type = BadSample if args.inject_fault == "layout" else DriverSample
         io = Services(args.driver_id, sample_type)
@@ -261,6 +262,9 @@ class Driver:
                 return
             cmd = DriverCommand.from_buffer_copy(c.payload().contents)
             del c  # returns the slot
+            if self.args.inject_fault == "late":
+                self.held.append(cmd)  # the fault: handled a period late
+                continue
             self.physics_to(time.monotonic_ns())
             self.command(cmd)
 
@@ -328,6 +332,9 @@ class Driver:
             s.status = self.status  # status after this instant's decisions
             s.t_publish_ns = time.monotonic_ns()
             self.publish(self.sample_pub, self.sample_note, s)
+            held, self.held = self.held, []
+            for cmd in held:  # --inject-fault late: last period's commands, now
+                self.command(cmd)
             if t_sample >= next_info:
                 self.publish_info()
                 next_info = t_sample + 1_000_000_000
@@ -380,12 +387,13 @@ def main():
     )
     p.add_argument(
         "--inject-fault",
-        choices=["layout", "watchdog", "limits", "clock"],
+        choices=["layout", "watchdog", "limits", "clock", "late"],
         help="misbehave on purpose, to see what `rig check-driver` says: publish a "
         "wrong sample layout, never engage the watchdog, apply out-of-range and "
         "non-finite actions instead of clamping and rejecting them, or time each "
         "sample from the previous one with a wait off by up to ±2 ms (as a timed wait "
-        "would be), so that the instants drift",
+        "would be), so that the instants drift; or (late) handle each command at the "
+        "sample instant after it arrived, a period late",
     )
     p.add_argument(
         "--sensor",

@@ -516,6 +516,22 @@ fn check_driver_says_when_a_drivers_clock_drifts() {
     );
 }
 
+/// A driver whose commands take effect a period late (as across a slow link, or on a
+/// loaded host) fails the sample-rate check, which times them, and passes the checks of
+/// what it does with a command once it has it: clamping and rejecting.
+#[test]
+fn check_driver_tells_late_actions_from_unsafe_ones() {
+    let Some(py) = python() else { return };
+    let d = Driver::start(&py, "late", &["--speed", "5", "--inject-fault", "late"]);
+    let out = check_driver(&d.id);
+    let (stdout, stderr) = text(&out);
+    assert_eq!(out.status.code(), Some(1), "{stdout}\n{stderr}");
+    assert!(line(&stdout, "sample rate").starts_with("FAIL"), "{stdout}");
+    for check in ["out-of-range actions", "non-finite and malformed actions"] {
+        assert!(line(&stdout, check).starts_with("PASS"), "{stdout}");
+    }
+}
+
 #[test]
 fn a_driver_with_an_incompatible_payload_is_a_one_line_error() {
     let Some(py) = python() else { return };

@@ -10,6 +10,19 @@ use wire::now_ns;
 use super::clock::{clock_diagnosis, interval_jitter, lateness, percentile};
 use super::{Probe, STEP_PERIODS, measures, same, vector};
 
+/// How many periods a real-time driver's sample may take to show a probe's command.
+const TAKEN_PERIODS: usize = 50;
+
+/// The sample shows the action `seq` applied (clamped or not).
+fn applied(_: &DriverSample, s: &DriverSample, seq: u64) -> bool {
+    s.last_command >= seq
+}
+
+/// The sample shows one more command rejected than `before`.
+fn rejected(before: &DriverSample, s: &DriverSample, _: u64) -> bool {
+    s.rejected > before.rejected
+}
+
 impl Probe<'_> {
     /// The phases in order; the first that cannot go on ends the check.
     pub(super) fn run_phases(&mut self) {
@@ -288,18 +301,34 @@ impl Probe<'_> {
         Ok(())
     }
 
-    /// Sends `cmd` answering the next sample; returns that sample and the one after it
-    /// (which a lockstep driver's next probe answers).
-    fn probe(&mut self, cmd: DriverCommand) -> Result<(DriverSample, DriverSample), Error> {
+    /// Sends `cmd` answering the next sample; returns that sample and the sample that
+    /// shows the command taken. A lockstep driver's next sample answers it (and the next
+    /// probe answers that one). A real-time driver's command may arrive a period late or
+    /// more (a loaded host, a network link): the samples are read until `taken(before,
+    /// sample, seq)` holds, for at most [`TAKEN_PERIODS`] periods. Timing is the
+    /// sample-rate check's business; these checks are about what the driver does with a
+    /// command once it has it.
+    fn probe(
+        &mut self,
+        cmd: DriverCommand,
+        taken: fn(&DriverSample, &DriverSample, u64) -> bool,
+    ) -> Result<(DriverSample, DriverSample), Error> {
         let before = self.sample()?;
-        self.link.send_raw(DriverCommand {
+        let seq = self.link.send_raw(DriverCommand {
             sample_seq: before.seq,
             ..cmd
         })?;
-        let after = self.sample()?;
+        let mut after = self.sample()?;
         if self.info.lockstep() {
             // The next probe answers it.
             self.pending = Some(after);
+            return Ok((before, after));
+        }
+        for _ in 1..TAKEN_PERIODS {
+            if taken(&before, &after, seq) {
+                break;
+            }
+            after = self.sample()?;
         }
         Ok((before, after))
     }
@@ -323,7 +352,7 @@ impl Probe<'_> {
         let below: Vec<f64> = (0..n).map(|j| lo[j] - 10.0 * span[j]).collect();
         let mut wrong = Vec::new();
         for (u, want) in [(above, hi.clone()), (below, lo.clone())] {
-            let (before, after) = self.probe(self.action_command(&u, n))?;
+            let (before, after) = self.probe(self.action_command(&u, n), applied)?;
             let counted = after.clamped - before.clamped;
             if !same(after.applied(), &want) || counted != 1 {
                 wrong.push(format!(
@@ -355,10 +384,10 @@ impl Probe<'_> {
             ("n_u = 0", valid[0], 0),
         ];
         for (label, value, n_u) in cases {
-            let (_, armed) = self.probe(self.action_command(&valid, n))?;
+            let (_, armed) = self.probe(self.action_command(&valid, n), applied)?;
             let mut u = valid.clone();
             u[0] = value;
-            let (before, after) = self.probe(self.action_command(&u, n_u))?;
+            let (before, after) = self.probe(self.action_command(&u, n_u), rejected)?;
             let counted = after.rejected - before.rejected;
             let zero = after.applied().iter().all(|&x| x == 0.0);
             if !same(armed.applied(), &valid) || !zero || counted != 1 {
