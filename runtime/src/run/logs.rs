@@ -11,6 +11,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use super::command::Role;
 use super::error::Result;
 use crate::error::AtFile;
 
@@ -22,19 +23,19 @@ const LAST_WORDS: Duration = Duration::from_secs(1);
 
 /// The logs of the run's processes, by role.
 #[derive(Default)]
-pub(super) struct Logs(pub(super) Vec<(&'static str, Log)>);
+pub(super) struct Logs(pub(super) Vec<(Role, Log)>);
 
 impl Logs {
     /// The log of process `role`.
-    pub(super) fn of(&self, role: &str) -> Option<&Log> {
+    pub(super) fn of(&self, role: Role) -> Option<&Log> {
         self.0.iter().find(|(r, _)| *r == role).map(|(_, l)| l)
     }
 
     /// `last lines of DIR/<role>.log:` and those lines.
-    pub(super) fn last_lines(&self, role: &str) -> String {
+    pub(super) fn last_lines(&self, role: Role) -> String {
         match self.of(role) {
             Some(log) => format!("last lines of {}:\n{}", log.path.display(), log.tail()),
-            None => format!("no log of the {role} process"),
+            None => format!("no log of the {} process", role.name()),
         }
     }
 
@@ -44,7 +45,7 @@ impl Logs {
             .0
             .iter()
             .find_map(|(role, l)| Some((role, l.error()?)))?;
-        Some(format!("{e}; {}", self.last_lines(role)))
+        Some(format!("{e}; {}", self.last_lines(*role)))
     }
 }
 

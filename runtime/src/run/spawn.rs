@@ -90,7 +90,7 @@ pub(super) fn processes(
     for (role, settings) in nodes.write(out)? {
         let role_name = role.name();
         let (log, pipe) = Log::open(&out.join(format!("{role_name}.log")))?;
-        logs.0.push((role_name, log));
+        logs.0.push((role, log));
         let mut command = command.of(role, &settings);
         in_own_group(&mut command);
         let child = command
@@ -105,7 +105,7 @@ pub(super) fn processes(
         // The command, dropped, closes this process's copy of the pipe's writing end:
         // the log's relay ends when the process does.
         drop(command);
-        children.0.push((role_name, child));
+        children.0.push((role, child));
     }
     Ok((children, logs))
 }

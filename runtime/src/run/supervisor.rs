@@ -49,7 +49,7 @@ impl Continuity {
 }
 
 /// The child processes; killed when dropped.
-pub(super) struct Children(pub(super) Vec<(&'static str, Child)>);
+pub(super) struct Children(pub(super) Vec<(Role, Child)>);
 
 impl Children {
     /// Stops every process where it is (SIGSTOP): nothing more is sent, and what they
@@ -59,8 +59,8 @@ impl Children {
     }
 
     /// Stops the processes of the roles `which` picks (SIGSTOP).
-    fn freeze_where(&self, which: impl Fn(&str) -> bool) {
-        for (_, c) in self.0.iter().filter(|(role, _)| which(role)) {
+    fn freeze_where(&self, which: impl Fn(Role) -> bool) {
+        for (_, c) in self.0.iter().filter(|(role, _)| which(*role)) {
             // SAFETY: `kill` sends a signal to the child's pid; it touches no memory.
             unsafe {
                 libc::kill(c.id() as libc::pid_t, libc::SIGSTOP);
@@ -262,7 +262,7 @@ impl Supervisor {
     }
 
     /// A process that has exited, if any: its role and exit status.
-    pub(super) fn exited(&mut self) -> Result<Option<(&'static str, std::process::ExitStatus)>> {
+    pub(super) fn exited(&mut self) -> Result<Option<(Role, std::process::ExitStatus)>> {
         for (role, child) in &mut self.children.0 {
             if let Some(status) = child.try_wait()? {
                 return Ok(Some((*role, status)));
@@ -273,7 +273,7 @@ impl Supervisor {
 
     /// Of the processes that have exited, the one that caused the others to: killed by a
     /// signal rather than stopped by an error (a process whose peer dies stops with one).
-    pub(super) fn cause(&mut self) -> Result<(&'static str, std::process::ExitStatus)> {
+    pub(super) fn cause(&mut self) -> Result<(Role, std::process::ExitStatus)> {
         use std::os::unix::process::ExitStatusExt;
         let mut first = None;
         for (role, child) in &mut self.children.0 {
@@ -296,15 +296,15 @@ impl Supervisor {
                 if let Some(status) = child.try_wait()? {
                     if !status.success() {
                         return Err(RunError::Failed {
-                            role,
+                            role: role.name(),
                             status,
-                            log: self.logs.last_lines(role),
+                            log: self.logs.last_lines(*role),
                         });
                     }
                     break;
                 }
                 if Instant::now() > deadline {
-                    return Err(RunError::Lingered { role });
+                    return Err(RunError::Lingered { role: role.name() });
                 }
                 std::thread::sleep(Duration::from_millis(5));
             }
@@ -345,8 +345,7 @@ impl Supervisor {
     /// the observer and the agent answer the samples it sent (a trial's last sample
     /// without its action would leave that trial incomplete), then stop.
     fn record_the_rest(&mut self, bar: &ProgressBar) {
-        self.children
-            .freeze_where(|role| role == Role::Plant.name());
+        self.children.freeze_where(|role| role == Role::Plant);
         let deadline = Instant::now() + ANSWER_WINDOW;
         while !self.answered() && Instant::now() < deadline {
             if !matches!(self.drain(bar), Ok(false)) {
@@ -414,7 +413,7 @@ impl Supervisor {
                 }
                 let (role, status) = self.cause()?;
                 return Err(RunError::Exited {
-                    role,
+                    role: role.name(),
                     status,
                     hint: self.resume_hint(),
                     log: self.logs.last_lines(role),
