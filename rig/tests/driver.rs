@@ -518,7 +518,7 @@ fn check_driver_says_when_a_drivers_clock_drifts() {
 
 /// A driver whose commands take effect a period late (as across a slow link, or on a
 /// loaded host) fails the sample-rate check, which times them, and passes the checks of
-/// what it does with a command once it has it: clamping and rejecting.
+/// what it does with a command once it has it: the step response, clamping, rejecting.
 #[test]
 fn check_driver_tells_late_actions_from_unsafe_ones() {
     let Some(py) = python() else { return };
@@ -527,9 +527,17 @@ fn check_driver_tells_late_actions_from_unsafe_ones() {
     let (stdout, stderr) = text(&out);
     assert_eq!(out.status.code(), Some(1), "{stdout}\n{stderr}");
     assert!(line(&stdout, "sample rate").starts_with("FAIL"), "{stdout}");
-    for check in ["out-of-range actions", "non-finite and malformed actions"] {
+    for check in [
+        "step response",
+        "out-of-range actions",
+        "non-finite and malformed actions",
+    ] {
         assert!(line(&stdout, check).starts_with("PASS"), "{stdout}");
     }
+    assert!(
+        line(&stdout, "step response").contains("1 taken before their action arrived (late)"),
+        "{stdout}"
+    );
 }
 
 #[test]

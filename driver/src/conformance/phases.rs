@@ -13,6 +13,53 @@ use super::{Probe, STEP_PERIODS, measures, same, vector};
 /// How many periods a real-time driver's sample may take to show a probe's command.
 const TAKEN_PERIODS: usize = 50;
 
+/// What the step's samples show as applied. A sample whose own action (the one answering
+/// the sample before it) the driver has taken must show the step; one whose action came
+/// late may still show the step before it, or zero (the watchdog's, or the rest before
+/// the step): lateness is the sample-rate check's to judge.
+#[derive(Default)]
+struct StepShown {
+    /// Samples showing the step.
+    applied: usize,
+    /// Samples taken before their action arrived.
+    late: usize,
+    /// Samples showing anything else, and what.
+    wrong: Vec<String>,
+}
+
+impl StepShown {
+    /// Sample `s`, whose action is command `sent`; the step is `u`.
+    fn add(&mut self, s: &DriverSample, sent: u64, u: &[f64]) {
+        let taken = s.last_command >= sent;
+        if same(s.applied(), u) {
+            self.applied += 1;
+        } else if !taken && s.applied().iter().all(|&x| x == 0.0) {
+            self.late += 1;
+        } else {
+            let what = format!("sample {}: {}", s.seq, vector(s.applied()));
+            self.wrong.push(what);
+        }
+    }
+
+    fn ok(&self) -> bool {
+        self.applied > 0 && self.wrong.is_empty()
+    }
+
+    fn describe(&self) -> String {
+        let mut text = format!(
+            "reported applied in {} of {STEP_PERIODS} samples",
+            self.applied
+        );
+        if self.late > 0 {
+            text += &format!(", {} taken before their action arrived (late)", self.late);
+        }
+        if !self.wrong.is_empty() {
+            text += &format!(", other actions shown: {}", self.wrong.join("; "));
+        }
+        text
+    }
+}
+
 /// The sample shows the action `seq` applied (clamped or not).
 fn applied(_: &DriverSample, s: &DriverSample, seq: u64) -> bool {
     s.last_command >= seq
@@ -224,27 +271,28 @@ impl Probe<'_> {
     fn step(&mut self) -> Result<(), Error> {
         let u = self.action(self.opts.step);
         let s0 = self.sample()?;
-        self.act(&u, &s0)?;
-        let mut applied = 0;
+        let mut sent = self.act(&u, &s0)?;
+        let mut shown = StepShown::default();
         let mut s = s0;
         for _ in 0..STEP_PERIODS {
             s = self.sample()?;
-            applied += usize::from(same(s.applied(), &u));
-            self.act(&u, &s)?;
+            shown.add(&s, sent, &u);
+            sent = self.act(&u, &s)?;
         }
         self.t_last_action = now_ns();
         let response = self.change(s0.state(), s.state());
         let bound = (5.0 * self.drift).max(1e-3);
         self.record(
             "step response",
-            response > bound && applied == STEP_PERIODS,
+            response > bound && shown.ok(),
             format!(
-                "u = {} for {STEP_PERIODS} periods: x {} → {}, a change of {:.2} % of the state range (bound: > {:.2} %, five times zero input's); reported applied in {applied} of {STEP_PERIODS} samples",
+                "u = {} for {STEP_PERIODS} periods: x {} → {}, a change of {:.2} % of the state range (bound: > {:.2} %, five times zero input's); {}",
                 vector(&u),
                 vector(s0.state()),
                 vector(s.state()),
                 response * 100.0,
-                bound * 100.0
+                bound * 100.0,
+                shown.describe()
             ),
         );
         Ok(())
