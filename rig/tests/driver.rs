@@ -518,7 +518,8 @@ fn check_driver_says_when_a_drivers_clock_drifts() {
 
 /// A driver whose commands take effect a period late (as across a slow link, or on a
 /// loaded host) fails the sample-rate check, which times them, and passes the checks of
-/// what it does with a command once it has it: the step response, clamping, rejecting.
+/// what it does with a command once it has it: the step response, the watchdog (two
+/// periods from when the last action was taken), clamping, rejecting.
 #[test]
 fn check_driver_tells_late_actions_from_unsafe_ones() {
     let Some(py) = python() else { return };
@@ -529,6 +530,7 @@ fn check_driver_tells_late_actions_from_unsafe_ones() {
     assert!(line(&stdout, "sample rate").starts_with("FAIL"), "{stdout}");
     for check in [
         "step response",
+        "watchdog",
         "out-of-range actions",
         "non-finite and malformed actions",
     ] {

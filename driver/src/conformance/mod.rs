@@ -108,6 +108,7 @@ pub fn check(opts: &CheckOptions, report: &mut dyn FnMut(&Outcome)) -> Result<Ve
         opts: opts.clone(),
         drift: 0.0,
         t_last_action: 0,
+        last_action: 0,
         pending: None,
     };
     s.record(
@@ -144,8 +145,9 @@ struct Probe<'r> {
     opts: CheckOptions,
     /// The largest change of the state over the step's horizon with zero input.
     drift: f64,
-    /// When the last action of the step was sent (monotonic ns).
+    /// When the last action of the step was sent (monotonic ns), and its `seq`.
     t_last_action: u64,
+    last_action: u64,
     /// A lockstep driver's newest sample, read but not answered yet: it publishes no
     /// other until it is.
     pending: Option<DriverSample>,

@@ -280,6 +280,7 @@ impl Probe<'_> {
             sent = self.act(&u, &s)?;
         }
         self.t_last_action = now_ns();
+        self.last_action = sent;
         let response = self.change(s0.state(), s.state());
         let bound = (5.0 * self.drift).max(1e-3);
         self.record(
@@ -303,14 +304,27 @@ impl Probe<'_> {
         let period = self.period_ns();
         let t_a = self.t_last_action as f64;
         // The driver decides at sample instants; allow for its jitter.
-        let due = t_a + 2.0 * period + (0.1 * period).max(1e6);
+        let tolerance = (0.1 * period).max(1e6);
+        let mut due = t_a + 2.0 * period + tolerance;
+        // The sample that first shows the last action taken: one that arrived late (a
+        // loaded host, a link) starts the driver's two periods later.
+        let mut taken_late: Option<f64> = None;
         let mut late: Vec<String> = Vec::new();
         let mut last_nonzero: Option<f64> = None;
         let mut first_zero: Option<f64> = None;
-        let trips_before = self.sample()?.watchdog_trips;
+        let first = self.sample()?;
+        let trips_before = first.watchdog_trips;
+        let mut next = Some(first);
         let trips_after = loop {
-            let s = self.sample()?;
+            let s = match next.take() {
+                Some(s) => s,
+                None => self.sample()?,
+            };
             let t = s.t_sample_ns as f64;
+            if taken_late.is_none() && s.last_command >= self.last_action && t - period > t_a {
+                taken_late = Some((t - period - t_a) / period);
+                due = t + period + tolerance;
+            }
             let zero = s.applied().iter().all(|&u| u == 0.0);
             if zero {
                 first_zero.get_or_insert(t);
@@ -326,24 +340,27 @@ impl Probe<'_> {
                     s.status
                 ));
             }
-            if t > t_a + 5.0 * period {
+            if t > due + 3.0 * period {
                 break s.watchdog_trips;
             }
         };
         let after =
             |t: Option<f64>| t.map_or("-".to_string(), |t| format!("{:.2}", (t - t_a) / period));
+        let arrived = taken_late.map_or(String::new(), |p| {
+            format!(" (it arrived late: taken at least {p:.2} periods after it was sent)")
+        });
         let tripped = trips_after > trips_before;
         self.record(
             "watchdog",
             late.is_empty() && tripped,
             if late.is_empty() {
                 format!(
-                    "zero applied from between {} and {} periods after the last action (bound: by 2) with WATCHDOG; watchdog_trips {trips_before} → {trips_after} (must grow)",
+                    "zero applied from between {} and {} periods after the last action{arrived} (bound: by 2 after it was taken) with WATCHDOG; watchdog_trips {trips_before} → {trips_after} (must grow)",
                     after(last_nonzero.filter(|&t| first_zero.is_none_or(|z| t < z))),
                     after(first_zero)
                 )
             } else {
-                format!("still acting more than 2 periods after the last action: {}", late.join("; "))
+                format!("still acting more than 2 periods after the last action{arrived}: {}", late.join("; "))
             },
         );
         Ok(())
