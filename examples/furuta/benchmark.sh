@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Reproduces the tables of docs/results/furuta.md's "Balance, 5 seeds per configuration"
 # in one command: MLAC/LLR on furuta-balance.toml with mlac-llr.toml, two variants of it
-# (learning rates halved; and exploration sigma 1 V) and mlac-llr-decay.toml (its rates
-# decaying over the trials), RUNS seeds each (default 5),
+# (learning rates halved; and exploration sigma 1 V), mlac-llr-decay.toml (its rates
+# decaying over the trials) and mlac-llr-two-timescale.toml (the actor's rate decaying
+# faster, the critic's more slowly), RUNS seeds each (default 5),
 # each seed against a driver of its own (experiment.sh), 800 trials; then
 # bench/python/furuta_report.py's per-seed tables and verdicts into OUT/report.md.
 #
@@ -26,8 +27,10 @@ TASK=$bal "$e" "$out/bal-mlac-llr" "$runs" 800 --config "$here/mlac-llr.toml"
 TASK=$bal "$e" "$out/bal-halved" "$runs" 800 --config "$halved"
 TASK=$bal "$e" "$out/bal-halved-sigma1" "$runs" 800 --config "$sigma1"
 TASK=$bal "$e" "$out/bal-decay" "$runs" 800 --config "$here/mlac-llr-decay.toml"
+TASK=$bal "$e" "$out/bal-two-timescale" "$runs" 800 --config "$here/mlac-llr-two-timescale.toml"
 {
   echo "## balance (furuta-balance.toml)"
   "$python" "$root/bench/python/furuta_report.py" "$out/bal" mlac-llr="$out/bal-mlac-llr" \
-    halved="$out/bal-halved" halved-sigma1="$out/bal-halved-sigma1" decay="$out/bal-decay"
+    halved="$out/bal-halved" halved-sigma1="$out/bal-halved-sigma1" decay="$out/bal-decay" \
+    two-timescale="$out/bal-two-timescale"
 } | tee "$out/report.md"
