@@ -44,6 +44,7 @@ fn the_shipped_furuta_learners_run_and_repeat() {
     let dir = common::tmp("furuta", "shipped");
     let pairs = [
         ("furuta-balance.toml", "mlac-llr.toml", "4"),
+        ("furuta-balance.toml", "mlac-llr-two-timescale.toml", "4"),
         ("furuta.toml", "mlac-plan.toml", "2"),
         ("furuta-balance.toml", "mlac-plan.toml", "2"),
     ];
@@ -67,6 +68,41 @@ fn the_shipped_furuta_learners_run_and_repeat() {
             "{task:?} with {config:?}: a greedy evaluation: {a}"
         );
     }
+}
+
+/// Every configuration file shipped beside the Furuta tasks resolves against them
+/// (`rig config` refuses an unknown key or a value out of range).
+#[test]
+fn every_shipped_furuta_configuration_resolves() {
+    let mut configs = 0;
+    for entry in std::fs::read_dir(furuta()).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap_or_default();
+        if path.extension().is_none_or(|e| e != "toml") || !text.contains("\nalgo = ") {
+            continue;
+        }
+        configs += 1;
+        for task in [
+            "furuta.toml",
+            "furuta-balance.toml",
+            "furuta-swing-balance.toml",
+        ] {
+            let out = rig()
+                .arg("config")
+                .arg("--task")
+                .arg(furuta().join(task))
+                .arg("--config")
+                .arg(&path)
+                .output()
+                .unwrap();
+            assert!(
+                out.status.success(),
+                "{path:?} with {task}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+    }
+    assert!(configs >= 5, "{configs} configuration files found");
 }
 
 /// A run that fails stops `seeds.sh` (which `experiment.sh` runs its seeds with) and the
