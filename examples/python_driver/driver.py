@@ -230,7 +230,9 @@ class Driver:
             else:
                 self.periods_without_action += 1
             self.action_this_period = False
-            engage = self.periods_without_action >= 1 and self.acted_since_reset
+            # --inject-fault slow-watchdog: a period too late.
+            periods = 2 if self.args.inject_fault == "slow-watchdog" else 1
+            engage = self.periods_without_action >= periods and self.acted_since_reset
             if engage and not self.status & WATCHDOG and self.args.inject_fault != "watchdog":
                 self.status |= WATCHDOG
                 self.watchdog_trips += 1
@@ -387,9 +389,10 @@ def main():
     )
     p.add_argument(
         "--inject-fault",
-        choices=["layout", "watchdog", "limits", "clock", "late"],
+        choices=["layout", "watchdog", "slow-watchdog", "limits", "clock", "late"],
         help="misbehave on purpose, to see what `rig check-driver` says: publish a "
-        "wrong sample layout, never engage the watchdog, apply out-of-range and "
+        "wrong sample layout, never engage the watchdog (or only after two periods "
+        "without an action: slow-watchdog), apply out-of-range and "
         "non-finite actions instead of clamping and rejecting them, or time each "
         "sample from the previous one with a wait off by up to ±2 ms (as a timed wait "
         "would be), so that the instants drift; or (late) handle each command at the "

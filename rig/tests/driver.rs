@@ -564,11 +564,15 @@ fn a_driver_with_an_incompatible_payload_is_a_one_line_error() {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
+/// A driver that never engages its watchdog, or a period late, fails the watchdog check
+/// (the two periods count from when it took the last action, which it took on time); one
+/// that neither clamps nor rejects fails those two checks.
 #[test]
 fn check_driver_fails_a_driver_without_watchdog_or_limits() {
     let Some(py) = python() else { return };
     for (fault, failing) in [
         ("watchdog", &["watchdog"][..]),
+        ("slow-watchdog", &["watchdog"][..]),
         (
             "limits",
             &["out-of-range actions", "non-finite and malformed actions"][..],

@@ -308,6 +308,7 @@ impl Probe<'_> {
         let mut due = t_a + 2.0 * period + tolerance;
         // The sample that first shows the last action taken: one that arrived late (a
         // loaded host, a link) starts the driver's two periods later.
+        let mut taken = false;
         let mut taken_late: Option<f64> = None;
         let mut late: Vec<String> = Vec::new();
         let mut last_nonzero: Option<f64> = None;
@@ -321,9 +322,12 @@ impl Probe<'_> {
                 None => self.sample()?,
             };
             let t = s.t_sample_ns as f64;
-            if taken_late.is_none() && s.last_command >= self.last_action && t - period > t_a {
-                taken_late = Some((t - period - t_a) / period);
-                due = t + period + tolerance;
+            if !taken && s.last_command >= self.last_action {
+                taken = true;
+                if t - period > t_a {
+                    taken_late = Some((t - period - t_a) / period);
+                    due = t + period + tolerance;
+                }
             }
             let zero = s.applied().iter().all(|&u| u == 0.0);
             if zero {
