@@ -26,7 +26,7 @@ import acrobot  # noqa: E402
 TS = 0.05  # the sampling time [s], --ts
 SAMPLES = 60  # a 3 s trial, round(3 / TS)
 # acrobot-balance.toml's start states (theta1, theta2), at rest.
-STARTS = [(0.1, 0.0), (-0.1, 0.0), (0.0, 0.2), (0.05, -0.1)]
+STARTS = [(0.05, 0.0), (-0.05, 0.0), (0.0, 0.1), (0.025, -0.05)]
 
 
 def step(x, u: float):
