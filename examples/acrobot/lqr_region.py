@@ -1,14 +1,17 @@
 #!/usr/bin/env python3
 """How far from upright a linear controller can balance the acrobot within its torque
-bound: a discrete LQR on the model (acrobot.py) linearised at upright, sampled at the
-task's 50 ms, its torque saturated, simulated for 3 s (60 samples) from the first link
-deflected by THETA1 at rest. A start "balances" if both angles end within 0.05 rad.
+bound: a discrete LQR on the model (acrobot.py) linearised at upright, sampled every TS
+(default 50 ms), its torque saturated, simulated for 3 s from the first link deflected by
+THETA1 at rest. A start "balances" if both angles end within 0.05 rad.
 
     python3 examples/acrobot/lqr_region.py            # the task's weights, +-6/10/20 N m
     python3 examples/acrobot/lqr_region.py --sweep    # 243 weightings, +-6 N m
+    python3 examples/acrobot/lqr_region.py --ts 0.02 --bound 10 --starts 2
 
 Prints, per torque bound and weighting, the largest THETA1 (in steps of 5 mrad) from
-which it balances. Needs numpy.
+which it balances. `--ts S` sets the sampling time, `--bound B` a single torque bound
+(N m); `--starts F` also checks the balance task's start states scaled by F.
+Needs numpy.
 """
 
 import itertools
@@ -20,8 +23,10 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import acrobot  # noqa: E402
 
-TS = 0.05  # the task's sampling time [s]
-SAMPLES = 60  # a 3 s trial
+TS = 0.05  # the sampling time [s], --ts
+SAMPLES = 60  # a 3 s trial, round(3 / TS)
+# acrobot-balance.toml's start states (theta1, theta2), at rest.
+STARTS = [(0.05, 0.0), (-0.05, 0.0), (0.0, 0.1), (0.025, -0.05)]
 
 
 def step(x, u: float):
@@ -52,25 +57,43 @@ def lqr(a, b, q, r):
     return k
 
 
-def balances(k, theta1: float, bound: float) -> bool:
-    """Whether u = sat(-K x) brings the model from (theta1, 0, 0, 0) to upright."""
-    x = np.array([theta1, 0.0, 0.0, 0.0])
+def balances(k, theta1: float, bound: float, theta2: float = 0.0) -> bool:
+    """Whether u = sat(-K x) brings the model from (theta1, theta2, 0, 0) to upright."""
+    x = np.array([theta1, theta2, 0.0, 0.0])
     for _ in range(SAMPLES):
         x = step(x, float(np.clip(-(k @ x)[0], -bound, bound)))
     return max(abs(x[0]), abs(x[1])) < 0.05
 
 
 def region(k, bound: float) -> float:
-    """The largest theta1 (5 mrad steps, up to 0.2 rad) from which every smaller one balances."""
+    """The largest theta1 (5 mrad steps, up to 0.4 rad) from which every smaller one balances."""
     best = 0.0
-    for th in np.arange(0.005, 0.2001, 0.005):
+    for th in np.arange(0.005, 0.4001, 0.005):
         if not balances(k, th, bound):
             break
         best = th
     return best
 
 
+def flag(name: str, default):
+    """The value after `name` on the command line, or `default`."""
+    if name in sys.argv:
+        return float(sys.argv[sys.argv.index(name) + 1])
+    return default
+
+
+def starts(k, bound: float, scale: float) -> str:
+    """Which of the balance task's start states, scaled by `scale`, the LQR balances."""
+    ok = [balances(k, scale * t1, bound, scale * t2) for t1, t2 in STARTS]
+    return f"{sum(ok)}/{len(ok)} start states x{scale:g}"
+
+
 def main():
+    global TS, SAMPLES
+    TS = flag("--ts", TS)
+    SAMPLES = round(3.0 / TS)
+    only = flag("--bound", None)
+    scale = flag("--starts", None)
     a, b = linearised()
     if "--sweep" in sys.argv:
         weights = itertools.product((1, 5, 50), (0.1, 1, 10), (0.01, 0.1, 1), (0.01, 0.1, 1), (0.01, 1, 100))
@@ -78,10 +101,14 @@ def main():
         print(f"+-6 N m, 243 weightings: at most theta1 = {best[0]:.3f} rad (Q, R = {best[1]})")
         return
     q = np.diag([5.0, 1.0, 0.05, 0.05])  # the task's reward weights
-    for bound in (6.0, 10.0, 20.0):
+    for bound in (6.0, 10.0, 20.0) if only is None else (only,):
         for r in (0.01, 1.0):
             k = lqr(a, b, q, np.array([[r]]))
-            print(f"+-{bound:.0f} N m, R {r}: balances from theta1 up to {region(k, bound):.3f} rad (K_theta1 {k[0, 0]:.0f} N m/rad)")
+            line = f"Ts {TS * 1000:g} ms, +-{bound:g} N m, R {r}: balances from theta1 up to {region(k, bound):.3f} rad"
+            line += f" (K_theta1 {k[0, 0]:.0f} N m/rad)"
+            if scale is not None:
+                line += "; " + starts(k, bound, scale)
+            print(line)
 
 
 if __name__ == "__main__":
