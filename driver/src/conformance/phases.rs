@@ -33,7 +33,7 @@ impl StepShown {
         let taken = s.last_command >= sent;
         if same(s.applied(), u) {
             self.applied += 1;
-        } else if !taken && s.applied().iter().all(|&x| x == 0.0) {
+        } else if !taken && applies_zero(s) {
             self.late += 1;
         } else {
             let what = format!("sample {}: {}", s.seq, vector(s.applied()));
@@ -58,6 +58,11 @@ impl StepShown {
         }
         text
     }
+}
+
+/// The sample shows zero applied: the safe action.
+fn applies_zero(s: &DriverSample) -> bool {
+    s.applied().iter().all(|&u| u == 0.0)
 }
 
 /// The sample shows the action `seq` applied (clamped or not).
@@ -329,7 +334,7 @@ impl Probe<'_> {
                     due = t + period + tolerance;
                 }
             }
-            let zero = s.applied().iter().all(|&u| u == 0.0);
+            let zero = applies_zero(&s);
             if zero {
                 first_zero.get_or_insert(t);
             } else {
@@ -458,7 +463,7 @@ impl Probe<'_> {
             u[0] = value;
             let (before, after) = self.probe(self.action_command(&u, n_u), rejected)?;
             let counted = after.rejected - before.rejected;
-            let zero = after.applied().iter().all(|&x| x == 0.0);
+            let zero = applies_zero(&after);
             if !same(armed.applied(), &valid) || !zero || counted != 1 {
                 wrong.push(format!(
                     "{label}: applied {} after {} (want zero after {}), rejected count +{counted} (want +1)",
