@@ -16,6 +16,7 @@ use crate::learner::{Algorithm, Learner, Plain, SarsaParts, Smooth, VgbpCritic};
 use crate::lstd::Lstd;
 use crate::mlac::Mlac;
 use crate::model::ProcessModel;
+use crate::lqr::Lqr;
 use crate::plan::Planner;
 use crate::rmac::Rmac;
 use crate::sac::Sac;
@@ -144,9 +145,10 @@ pub fn build(task: &Task, learner: &Learner, run_seed: u64) -> Box<dyn Agent> {
                 l.gamma,
                 l.saturation_margin,
             );
-            let improver: Box<dyn Improver> = match &learner.planning {
-                Some(plan) => Box::new(Planner::new(mlac, plan.clone(), l.gamma, run_seed)),
-                None => Box::new(mlac),
+            let improver: Box<dyn Improver> = match (&learner.planning, &learner.lqr) {
+                (Some(plan), _) => Box::new(Planner::new(mlac, plan.clone(), l.gamma, run_seed)),
+                (None, Some(lqr)) => Box::new(Lqr::new(mlac, lqr.clone(), l.gamma)),
+                (None, None) => Box::new(mlac),
             };
             (td_critic(&spaces, &p.critic), improver)
         }

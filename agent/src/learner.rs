@@ -4,7 +4,7 @@
 //! names the key that is wrong); [`crate::build()`] builds the agent from it.
 
 use crate::config::{HorizonKind, LearningConfig, LlrConfig, LstdConfig, RbfConfig};
-use crate::config::{PlanningConfig, SarsaConfig, TilesConfig, VgbpConfig};
+use crate::config::{LqrConfig, PlanningConfig, SarsaConfig, TilesConfig, VgbpConfig};
 use crate::step_size::StepSize;
 
 /// An approximator with a gradient (§3.5): what a process model, an MLAC or RMAC actor
@@ -103,6 +103,9 @@ pub struct Learner {
     pub horizon: HorizonKind,
     /// MLAC's actions planned with its learned model ([`crate::plan`]), if given.
     pub planning: Option<PlanningConfig>,
+    /// MLAC's actions near the reference from a regulator of its learned model
+    /// ([`crate::lqr`]), if given.
+    pub lqr: Option<LqrConfig>,
 }
 
 impl Smooth {

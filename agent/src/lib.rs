@@ -11,7 +11,9 @@
 //!   process model; [`step_size`] — a learning rate's schedule over the trials
 //!   (constant, or decaying as Eq. 2.21–2.22 ask); [`explore`] — Gaussian
 //!   exploration; [`sarsa`] — the discrete-action baseline; [`plan`] — MLAC's actions
-//!   planned with its learned model (beyond the thesis, chosen by `[planning]`).
+//!   planned with its learned model (beyond the thesis, chosen by `[planning]`);
+//!   [`lqr`] — near the reference, a regulator of that model (beyond the thesis,
+//!   `[lqr]`).
 //! * [`horizon`] — infinite or finite horizon (Chapter 4: time as an input, terminal
 //!   reward; SAC-FH, MLAC-FH, RMAC-FH are the shared step with a finite horizon).
 //! * [`config`] — the agent's part of the configuration, [`preset`] — the thesis's
@@ -31,6 +33,7 @@ pub mod critic;
 pub mod explore;
 pub mod horizon;
 pub mod learner;
+pub mod lqr;
 pub mod lstd;
 pub mod mlac;
 pub mod model;

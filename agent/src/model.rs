@@ -33,6 +33,16 @@ pub struct Prediction {
     pub du: [f64; MAX_STATE * MAX_ACTION],
 }
 
+/// The process model's affine fit around one point ([`ProcessModel::local_fit`]).
+pub struct LocalFit {
+    /// The predicted increment `Δx̂ = f̂(x, u) − x` (angle components unwrapped).
+    pub dx: [f64; MAX_STATE],
+    /// `∂Δx̂/∂x`, row-major `n × n`.
+    pub dx_dx: [f64; MAX_STATE * MAX_STATE],
+    /// `∂Δx̂/∂u`, row-major `n × m`.
+    pub dx_du: [f64; MAX_STATE * MAX_ACTION],
+}
+
 impl ProcessModel {
     /// A model learning with rate `α_p` into `f` (inputs `[x, u]`, outputs `Δx`).
     pub fn new(f: Box<dyn Differentiable>, angle_mask: Vec<bool>, rate: f64) -> Self {
@@ -104,6 +114,30 @@ impl ProcessModel {
             p.x_next[n] = k + 1.0;
         }
         p
+    }
+
+    /// The model's affine fit around `(x, u)`, its neighbours chosen by the state (as
+    /// [`Self::predict_near_state`]): the increment `Δx̂ = f̂(x, u) − x` and its Jacobians
+    /// `∂Δx̂/∂x` (`n × n`) and `∂Δx̂/∂u` (`n × m`), row-major, of the state part of `x`.
+    pub fn local_fit(&self, x: &[f64], u: &[f64]) -> LocalFit {
+        let (n, m) = (self.n(), u.len());
+        let xu = self.input(x, u);
+        let mut dx = [0.0; MAX_OUT];
+        let mut jac = [0.0; MAX_OUT * MAX_IN];
+        self.f
+            .value_and_jacobian_near(&xu[..n + m], n, &mut dx[..n], &mut jac[..n * (n + m)]);
+        let mut fit = LocalFit {
+            dx: [0.0; MAX_STATE],
+            dx_dx: [0.0; MAX_STATE * MAX_STATE],
+            dx_du: [0.0; MAX_STATE * MAX_ACTION],
+        };
+        fit.dx[..n].copy_from_slice(&dx[..n]);
+        for i in 0..n {
+            let row = &jac[i * (n + m)..(i + 1) * (n + m)];
+            fit.dx_dx[i * n..(i + 1) * n].copy_from_slice(&row[..n]);
+            fit.dx_du[i * m..(i + 1) * m].copy_from_slice(&row[n..]);
+        }
+        fit
     }
 
     /// `(stored, capacity)` if the model is memory-based.

@@ -7,10 +7,13 @@ THETA1 at rest. A start "balances" if both angles end within 0.05 rad.
     python3 examples/acrobot/lqr_region.py            # the task's weights, +-6/10/20 N m
     python3 examples/acrobot/lqr_region.py --sweep    # 243 weightings, +-6 N m
     python3 examples/acrobot/lqr_region.py --ts 0.02 --bound 10 --starts 2
+    python3 examples/acrobot/lqr_region.py --bound 20 --starts 1 --gamma 0.95
 
 Prints, per torque bound and weighting, the largest THETA1 (in steps of 5 mrad) from
 which it balances. `--ts S` sets the sampling time, `--bound B` a single torque bound
-(N m); `--starts F` also checks the balance task's start states scaled by F.
+(N m); `--starts F` also checks the balance task's start states scaled by F; `--gamma G`
+makes the LQR the discounted one, sum of G^k times the cost (the LQR of sqrt(G) A,
+sqrt(G) B), the controller a learner with discount G would converge to.
 Needs numpy.
 """
 
@@ -95,6 +98,8 @@ def main():
     only = flag("--bound", None)
     scale = flag("--starts", None)
     a, b = linearised()
+    gamma = flag("--gamma", 1.0)
+    a, b = np.sqrt(gamma) * a, np.sqrt(gamma) * b
     if "--sweep" in sys.argv:
         weights = itertools.product((1, 5, 50), (0.1, 1, 10), (0.01, 0.1, 1), (0.01, 0.1, 1), (0.01, 1, 100))
         best = max((region(lqr(a, b, np.diag(w[:4]), np.array([[w[4]]])), 6.0), w) for w in weights)

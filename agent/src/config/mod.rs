@@ -19,6 +19,7 @@
 mod component;
 mod learner;
 mod learning;
+mod lqr;
 mod planning;
 mod sarsa;
 mod vgbp;
@@ -29,6 +30,7 @@ pub use component::{
 pub(crate) use learner::finite_horizon_unsupported;
 pub use learner::{Algo, ApproxKind, HorizonKind};
 pub use learning::LearningConfig;
+pub use lqr::LqrConfig;
 pub use planning::PlanningConfig;
 pub use sarsa::SarsaConfig;
 pub use vgbp::VgbpConfig;
@@ -64,6 +66,9 @@ pub struct AgentConfig {
     /// MLAC's actions planned with its learned model ([`crate::plan`]); absent: the
     /// actor's, as the thesis has it.
     pub planning: Option<PlanningConfig>,
+    /// MLAC's actions near the reference from a regulator of its learned model
+    /// ([`crate::lqr`]); absent: the actor's (or the planner's).
+    pub lqr: Option<LqrConfig>,
 }
 
 impl AgentConfig {
@@ -89,6 +94,7 @@ impl AgentConfig {
             learning: self.learning.clone(),
             horizon: self.horizon,
             planning: self.planning_section()?,
+            lqr: self.lqr_section(task)?,
         })
     }
 
@@ -236,6 +242,30 @@ impl AgentConfig {
         }
         p.validate()?;
         Ok(Some(p.clone()))
+    }
+
+    /// `[lqr]`, checked: MLAC's, with an infinite horizon, and not beside `[planning]`.
+    fn lqr_section(&self, task: &Task) -> Result<Option<LqrConfig>, ConfigError> {
+        let Some(l) = &self.lqr else {
+            return Ok(None);
+        };
+        if self.algo != Algo::Mlac || self.horizon != HorizonKind::Infinite {
+            return Err(ConfigError::new(
+                "lqr",
+                format!(
+                    "regulates with MLAC's process model and an infinite horizon; {} with a {} horizon has none: remove the [lqr] section",
+                    self.algo, self.horizon
+                ),
+            ));
+        }
+        if self.planning.is_some() {
+            return Err(ConfigError::new(
+                "lqr",
+                "[lqr] and [planning] both choose MLAC's actions: keep one of them",
+            ));
+        }
+        l.validate(task)?;
+        Ok(Some(l.clone()))
     }
 
     /// `[sarsa]`, checked.

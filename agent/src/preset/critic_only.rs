@@ -127,6 +127,7 @@ pub(super) fn critic_only(system: SystemName, algo: Algo, approx: ApproxKind) ->
             epsilon_min: 0.1,
         }),
         planning: None,
+        lqr: None,
     };
     // One greedy evaluation per sequence of the four start states (§6.4.2).
     let eval_every = if arm_6_4 { 4 } else { 5 };

@@ -89,6 +89,7 @@ pub fn finite_horizon(
         vgbp: None,
         sarsa: None,
         planning: None,
+        lqr: None,
     };
     Ok(Preset {
         agent,

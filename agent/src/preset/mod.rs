@@ -158,6 +158,7 @@ pub fn preset(
         vgbp: None,
         sarsa: None,
         planning: None,
+        lqr: None,
     };
     let run = if arm {
         run_section(600, 20, 10)

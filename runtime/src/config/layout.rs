@@ -5,7 +5,7 @@
 //! every configuration file and `config.toml` has.
 
 use agent::config::{
-    AgentConfig, Algo, ApproxKind, Component, HorizonKind, LearningConfig, PlanningConfig,
+    AgentConfig, Algo, ApproxKind, Component, HorizonKind, LearningConfig, LqrConfig, PlanningConfig,
     SarsaConfig, VgbpConfig,
 };
 use observer::config::ObserverConfig;
@@ -42,6 +42,8 @@ pub(super) struct Layout {
     sarsa: Option<SarsaConfig>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     planning: Option<PlanningConfig>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    lqr: Option<LqrConfig>,
     /// Absent: full state, pass-through.
     #[serde(default, skip_serializing_if = "ObserverConfig::is_default")]
     pub(super) observer: ObserverConfig,
@@ -75,6 +77,7 @@ impl TryFrom<Layout> for ExperimentConfig {
                 vgbp: l.vgbp,
                 sarsa: l.sarsa,
                 planning: l.planning,
+                lqr: l.lqr,
             },
             run: l.run,
             observer: l.observer,
@@ -120,6 +123,7 @@ impl Layout {
             vgbp: a.vgbp,
             sarsa: a.sarsa,
             planning: a.planning,
+            lqr: a.lqr,
             observer,
             task,
         }

@@ -45,8 +45,9 @@ pub(super) fn choose<T: Choice>(
 }
 
 /// Sections no preset has, which a user may add whole: `[planning]` (MLAC's actions
-/// planned with its learned model). Their keys are checked when the configuration is read.
-const OPTIONAL_SECTIONS: [&str; 1] = ["planning"];
+/// planned with its learned model) and `[lqr]` (a regulator of that model near the
+/// reference). Their keys are checked when the configuration is read.
+const OPTIONAL_SECTIONS: [&str; 2] = ["planning", "lqr"];
 
 /// Moves each optional section `user` has and `base` lacks into `base` whole (its keys
 /// are checked when the configuration is read, not against a preset's).

@@ -451,6 +451,32 @@ fn a_planning_section_is_added_checked_and_round_trips() {
     assert!(e.message.contains("remove the [planning] section"), "{e}");
 }
 
+/// `[lqr]`, which no preset has: a file adds it (empty, or with a region), it round-trips,
+/// and a wrong region, algorithm or a `[planning]` beside it is named.
+#[test]
+fn an_lqr_section_is_added_checked_and_round_trips() {
+    let c = resolve_str("[lqr]\n").unwrap();
+    assert_eq!(c.agent().lqr.as_ref().unwrap().region, None);
+    let lqr = "[lqr]\nregion = [0.5, inf]\n";
+    let c = resolve_str(lqr).unwrap();
+    assert_eq!(
+        c.agent().lqr.as_ref().unwrap().region,
+        Some(vec![0.5, f64::INFINITY])
+    );
+    assert_eq!(resolve_str(&c.to_toml()).unwrap(), c);
+    let e = resolve_str("[lqr]\nregion = [0.5]\n").unwrap_err();
+    assert_eq!(e.key, "lqr.region", "{e}");
+    let e = resolve_str("[lqr]\nregion = [0.5, -1.0]\n").unwrap_err();
+    assert_eq!(e.key, "lqr.region", "{e}");
+    let e = resolve_str("[lqr]\nregoin = [0.5, 1.0]\n").unwrap_err();
+    assert!(e.to_string().contains("regoin"), "{e}");
+    let e = resolve_str(&format!("algo = \"sac\"\n{lqr}")).unwrap_err();
+    assert!(e.message.contains("remove the [lqr] section"), "{e}");
+    let plan = "[planning]\nhorizon = 15\nsamples = 64\nelites = 8\niterations = 3\n";
+    let e = resolve_str(&format!("{lqr}{plan}")).unwrap_err();
+    assert_eq!(e.key, "lqr", "{e}");
+}
+
 #[test]
 fn a_learning_rate_schedule_resolves_round_trips_and_is_fingerprinted() {
     let plain = resolve(None, &Overrides::default()).unwrap();
