@@ -9,14 +9,20 @@
 //! ```
 //!
 //! with `K_k` the discounted LQR gain of the affine model the learned `f̂` gives around
-//! `(x_k, π(x_k))`, its neighbours chosen by the state ([`ProcessModel::local_fit`]):
+//! the reference `(x_r, u = 0)`, its neighbours chosen by the state
+//! ([`ProcessModel::local_fit`]),
 //!
 //! ```text
-//! e_{k+1} ≈ (I + ∂Δ̂/∂x) e_k + ∂Δ̂/∂u u_k + c,   c = Δ̂ − ∂Δ̂/∂x e_0 − ∂Δ̂/∂u u_0
+//! e_{k+1} ≈ (I + ∂Δ̂/∂x) e_k + ∂Δ̂/∂u u_k + c,   c = Δ̂(x_r, 0),
 //! ```
 //!
 //! and the reward's quadratic approximation at the reference, `ρ ≈ −eᵀQe − uᵀPu`, `Q =
 //! −½ ∂²ρ/∂x²` at `x_r` (the quadratic form's `Q`, plus half of each `1 − cos` weight).
+//! The fit is taken at the reference, not at `x_k`: on the acrobot's balance, with the
+//! fit at `x_k` — whose neighbours, and so the gain, change from sample to sample — only
+//! 125 of the 200 greedy evaluations of 5 seeds × 400 trials were upright at the end,
+//! with the fit at the reference every one.
+//!
 //! The discounted problem is the undiscounted one of `(√γ A, √γ B)`, whose Riccati
 //! equation is iterated until the gain settles:
 //!
@@ -78,16 +84,17 @@ impl Lqr {
         (0..self.info().n()).map(|i| reward.error(x, i)).collect()
     }
 
-    /// `(A, B)` of `z_{k+1} = A z_k + B u_k` around `(x, u_0)`, `z = [e; 1]`.
-    fn local_model(&self, x: &[f64], u0: &[f64]) -> (DMatrix<f64>, DMatrix<f64>) {
+    /// `(A, B)` of `z_{k+1} = A z_k + B u_k`, `z = [e; 1]`, from the model's fit around
+    /// the reference `(x_r, u = 0)`.
+    fn local_model(&self) -> (DMatrix<f64>, DMatrix<f64>) {
         let (n, m) = (self.info().n(), self.info().m());
-        let fit = self.mlac.model().local_fit(x, u0);
-        let e0 = self.error(x);
+        let fit = self
+            .mlac
+            .model()
+            .local_fit(&self.info().reward.reference, &vec![0.0; m]);
         let jx = DMatrix::from_row_slice(n, n, &fit.dx_dx[..n * n]);
         let ju = DMatrix::from_row_slice(n, m, &fit.dx_du[..n * m]);
-        let c = DMatrix::from_column_slice(n, 1, &fit.dx[..n])
-            - &jx * DMatrix::from_column_slice(n, 1, &e0)
-            - &ju * DMatrix::from_column_slice(m, 1, u0);
+        let c = DMatrix::from_column_slice(n, 1, &fit.dx[..n]);
         let mut a = DMatrix::identity(n + 1, n + 1);
         let mut top = a.view_mut((0, 0), (n, n));
         top += &jx;
@@ -136,12 +143,12 @@ impl Lqr {
     }
 
     /// The regulator's action from `x`, if `x` is in the region and the gain is finite.
-    fn regulate(&self, x: &[f64], u0: &[f64], u: &mut [f64]) -> bool {
+    fn regulate(&self, x: &[f64], u: &mut [f64]) -> bool {
         let e = self.error(x);
         if !self.config.contains(&e) {
             return false;
         }
-        let (a, b) = self.local_model(x, u0);
+        let (a, b) = self.local_model();
         let Some(k) = self.gain(&a, &b) else {
             return false;
         };
@@ -171,10 +178,8 @@ fn quadratic_weights(reward: &Reward) -> Vec<f64> {
 
 impl Improver for Lqr {
     fn act(&self, x: &[f64], u_prev: &[f64], critic: &ValueWithGradient, u: &mut [f64]) {
-        self.mlac.act(x, u_prev, critic, u);
-        let u0 = u.to_vec();
-        if !self.regulate(x, &u0, u) {
-            u.copy_from_slice(&u0);
+        if !self.regulate(x, u) {
+            self.mlac.act(x, u_prev, critic, u);
         }
     }
 
