@@ -505,7 +505,7 @@ fn the_acrobot_is_a_task_file_and_a_python_driver() {
 
 /// MLAC with a regulator of its own learned process model (`[lqr]`,
 /// examples/acrobot/mlac-lqr.toml) balances the acrobot: after 40 trials of seed 1 the
-/// greedy trials from the four start states return −30 or more on average (−10 to −15
+/// greedy trials from the four start states return −30 or more on average (−9.5 to −9.7
 /// measured for seeds 1–5). Without the regulator the thesis's learners end at −157 at
 /// best, the first link held and the second folded (docs/results/acrobot.md).
 #[test]
