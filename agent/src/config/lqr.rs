@@ -14,6 +14,26 @@ pub struct LqrConfig {
     /// acts everywhere.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub region: Option<Vec<f64>>,
+    /// Where the process model is linearised.
+    #[serde(default, skip_serializing_if = "FitAt::is_reference")]
+    pub fit_at: FitAt,
+}
+
+/// Where [`crate::lqr`] linearises the learned process model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FitAt {
+    /// Around the reward's reference `(x_r, u = 0)`, the same point at every sample.
+    #[default]
+    Reference,
+    /// Around the current state and the actor's action there.
+    State,
+}
+
+impl FitAt {
+    fn is_reference(&self) -> bool {
+        *self == FitAt::Reference
+    }
 }
 
 impl LqrConfig {
@@ -59,15 +79,18 @@ mod tests {
         LqrConfig::default().validate(&task).unwrap();
         let ok = LqrConfig {
             region: Some(vec![0.3, f64::INFINITY]),
+            ..LqrConfig::default()
         };
         ok.validate(&task).unwrap();
         assert!(ok.contains(&[-0.2, 40.0]) && !ok.contains(&[0.31, 0.0]));
         let short = LqrConfig {
             region: Some(vec![0.3]),
+            ..LqrConfig::default()
         };
         assert_eq!(short.validate(&task).unwrap_err().key, "lqr.region");
         let zero = LqrConfig {
             region: Some(vec![0.3, 0.0]),
+            ..LqrConfig::default()
         };
         let e = zero.validate(&task).unwrap_err();
         assert!(e.message.contains("> 0"), "{e}");

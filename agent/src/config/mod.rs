@@ -30,7 +30,7 @@ pub use component::{
 pub(crate) use learner::finite_horizon_unsupported;
 pub use learner::{Algo, ApproxKind, HorizonKind};
 pub use learning::LearningConfig;
-pub use lqr::LqrConfig;
+pub use lqr::{FitAt, LqrConfig};
 pub use planning::PlanningConfig;
 pub use sarsa::SarsaConfig;
 pub use vgbp::VgbpConfig;

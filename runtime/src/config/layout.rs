@@ -5,8 +5,8 @@
 //! every configuration file and `config.toml` has.
 
 use agent::config::{
-    AgentConfig, Algo, ApproxKind, Component, HorizonKind, LearningConfig, LqrConfig, PlanningConfig,
-    SarsaConfig, VgbpConfig,
+    AgentConfig, Algo, ApproxKind, Component, HorizonKind, LearningConfig, LqrConfig,
+    PlanningConfig, SarsaConfig, VgbpConfig,
 };
 use observer::config::ObserverConfig;
 use plant::config::RunConfig;
