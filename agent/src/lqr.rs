@@ -45,10 +45,10 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::actor_critic::{Improver, TaskInfo, Transition};
+use crate::actor_critic::{Improver, TaskInfo};
 use crate::config::{FitAt, LqrConfig};
 use crate::critic::ValueWithGradient;
-use crate::mlac::Mlac;
+use crate::mlac::{ChoosesActions, Mlac};
 use plant::Reward;
 
 /// Riccati iterations at most, per sample.
@@ -185,60 +185,29 @@ fn quadratic_weights(reward: &Reward) -> Vec<f64> {
         .collect()
 }
 
-impl Improver for Lqr {
-    fn act(&self, x: &[f64], u_prev: &[f64], critic: &ValueWithGradient, u: &mut [f64]) {
+impl ChoosesActions for Lqr {
+    fn mlac(&self) -> &Mlac {
+        &self.mlac
+    }
+
+    fn mlac_mut(&mut self) -> &mut Mlac {
+        &mut self.mlac
+    }
+
+    fn choose(&self, x: &[f64], u_prev: &[f64], critic: &ValueWithGradient, u: &mut [f64]) {
         self.mlac.act(x, u_prev, critic, u);
         let u0 = u.to_vec();
         if !self.regulate(x, &u0, u) {
             u.copy_from_slice(&u0);
         }
     }
-
-    fn start_trial(&mut self) {
-        self.mlac.start_trial();
-    }
-
-    fn improve(&mut self, t: &Transition, critic: &ValueWithGradient) {
-        self.mlac.improve(t, critic);
-    }
-
-    fn memories(&self) -> Vec<(&'static str, usize, usize)> {
-        self.mlac.memories()
-    }
-}
-
-use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
-
-impl Persist for Lqr {
-    fn save(&self, s: &mut Snapshot) {
-        self.mlac.save(s);
-    }
-    fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
-        self.mlac.restore(r)
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::approx::rbf::{Rbf, RbfParams};
     use crate::horizon::Horizon;
-    use crate::testing;
-
-    /// A constant function of one input (the actor `π = c` and the critic).
-    fn constant(c: f64) -> Rbf {
-        let mut f = Rbf::new(&RbfParams {
-            centres: vec![1],
-            range: vec![(-1.0, 1.0)],
-            periodic: vec![false],
-            intersection: 0.5,
-            outputs: 1,
-            initial: 0.0,
-            bounds: None,
-        });
-        f.parameters_mut()[0] = c;
-        f
-    }
+    use crate::testing::{self, constant};
 
     /// On the tiny task (`ρ = −x² − u²`, the model `x' = x + b u`), actor `π = 0.1`.
     fn regulator(b: f64, gamma: f64, region: Option<Vec<f64>>) -> Lqr {

@@ -178,3 +178,41 @@ mod tests {
         }
     }
 }
+
+/// An improver that learns as MLAC and chooses the actions its own way ([`crate::plan`],
+/// [`crate::lqr`]): MLAC's learning, memories and checkpoint, its own action.
+pub trait ChoosesActions: Send {
+    /// The MLAC whose actor, critic updates and process model it keeps.
+    fn mlac(&self) -> &Mlac;
+    /// The same, to learn.
+    fn mlac_mut(&mut self) -> &mut Mlac;
+    /// The action from `x` (without exploration).
+    fn choose(&self, x: &[f64], u_prev: &[f64], critic: &ValueWithGradient, u: &mut [f64]);
+}
+
+impl<T: ChoosesActions> Improver for T {
+    fn act(&self, x: &[f64], u_prev: &[f64], critic: &ValueWithGradient, u: &mut [f64]) {
+        self.choose(x, u_prev, critic, u);
+    }
+
+    fn start_trial(&mut self) {
+        self.mlac_mut().start_trial();
+    }
+
+    fn improve(&mut self, t: &Transition, critic: &ValueWithGradient) {
+        self.mlac_mut().improve(t, critic);
+    }
+
+    fn memories(&self) -> Vec<(&'static str, usize, usize)> {
+        self.mlac().memories()
+    }
+}
+
+impl<T: ChoosesActions> Persist for T {
+    fn save(&self, s: &mut Snapshot) {
+        self.mlac().save(s);
+    }
+    fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        self.mlac_mut().restore(r)
+    }
+}

@@ -35,11 +35,11 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-use crate::actor_critic::{Improver, TaskInfo, Transition};
+use crate::actor_critic::{Improver, TaskInfo};
 use crate::approx::{Differentiable, scalar};
 use crate::config::PlanningConfig;
 use crate::critic::ValueWithGradient;
-use crate::mlac::Mlac;
+use crate::mlac::{ChoosesActions, Mlac};
 use crate::model::ProcessModel;
 
 /// The random stream of the planner's draws ([`crate::explore::stream::PLANNING`]).
@@ -192,33 +192,18 @@ fn refit(elites: &[Scored], mean: &mut [f64], spread: &mut [f64]) {
     }
 }
 
-impl Improver for Planner {
-    fn act(&self, x: &[f64], _u_prev: &[f64], critic: &ValueWithGradient, u: &mut [f64]) {
+impl ChoosesActions for Planner {
+    fn mlac(&self) -> &Mlac {
+        &self.mlac
+    }
+
+    fn mlac_mut(&mut self) -> &mut Mlac {
+        &mut self.mlac
+    }
+
+    fn choose(&self, x: &[f64], _u_prev: &[f64], critic: &ValueWithGradient, u: &mut [f64]) {
         let m = self.info().m();
         u.copy_from_slice(&self.plan(x, critic).seq[..m]);
-    }
-
-    fn start_trial(&mut self) {
-        self.mlac.start_trial();
-    }
-
-    fn improve(&mut self, t: &Transition, critic: &ValueWithGradient) {
-        self.mlac.improve(t, critic);
-    }
-
-    fn memories(&self) -> Vec<(&'static str, usize, usize)> {
-        self.mlac.memories()
-    }
-}
-
-use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
-
-impl Persist for Planner {
-    fn save(&self, s: &mut Snapshot) {
-        self.mlac.save(s);
-    }
-    fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
-        self.mlac.restore(r)
     }
 }
 
@@ -226,24 +211,9 @@ impl Persist for Planner {
 mod tests {
     use super::*;
     use crate::approx::Approximator;
-    use crate::approx::rbf::{Rbf, RbfParams};
+    use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
     use crate::horizon::Horizon;
-    use crate::testing;
-
-    /// A constant function of one input, `f = c` (the critic `V` and the actor `π`).
-    fn constant(c: f64) -> Rbf {
-        let mut f = Rbf::new(&RbfParams {
-            centres: vec![1],
-            range: vec![(-1.0, 1.0)],
-            periodic: vec![false],
-            intersection: 0.5,
-            outputs: 1,
-            initial: 0.0,
-            bounds: None,
-        });
-        f.parameters_mut()[0] = c;
-        f
-    }
+    use crate::testing::{self, constant};
 
     /// On the tiny task (`ρ = −x² − u²`, the model `x' = x + b u`), infinite horizon.
     fn planner(horizon: u32, seed: u64) -> Planner {

@@ -156,3 +156,18 @@ pub fn greedy(agent: &ActorCritic, x: f64, k: usize) -> f64 {
 pub fn close(a: f64, b: f64) {
     assert!((a - b).abs() < 1e-12, "{a} ≠ {b}");
 }
+
+/// A constant function of one input, `f = c` (a critic `V` or an actor `π`).
+pub fn constant(c: f64) -> Rbf {
+    let mut f = Rbf::new(&RbfParams {
+        centres: vec![1],
+        range: vec![(-1.0, 1.0)],
+        periodic: vec![false],
+        intersection: 0.5,
+        outputs: 1,
+        initial: 0.0,
+        bounds: None,
+    });
+    f.parameters_mut()[0] = c;
+    f
+}
