@@ -143,42 +143,6 @@ impl Persist for Mlac {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::Agent;
-    use crate::testing::{self, close, dot, psi, slope_at_0};
-
-    /// MLAC-FH (Algorithm 5), the actor update of one sample by hand (line 15), on the
-    /// tiny task of [`crate::testing`] with the model `x' = x + b u`: the critic is read at
-    /// the predicted *time* `k + 1`, and only its gradient in the state enters.
-    #[test]
-    fn mlac_fh_step_by_hand() {
-        let (alpha_a, b) = (0.5, 0.5);
-        // V(x, k) = Σ θ_ij φ_i(x) ψ_j(k): rises with x, and with k (∂V/∂k ≠ 0).
-        let theta = [0.0, 0.0, 2.0, 3.0];
-        let actor = Box::new(testing::rbf(1, Some(10.0)));
-        let info = testing::info(10.0);
-        let mlac = Mlac::new(info.clone(), actor, testing::model(b), alpha_a, 1.0, 0.0);
-        let critic = testing::critic(theta);
-        let mut ac = testing::agent(info, critic, 0.0, 0.0, Box::new(mlac), 1.0);
-        let mut u = [0.0];
-        ac.start_trial(&[0.0], &mut u);
-        ac.learn(-1.0, &[0.1], Some(&mut u));
-        // ũ_0 = π(x_0, 0) = 0, x̃_1 = (x_0 + b ũ_0, 0 + 1) = (0, 1)           (lines 13–14)
-        // ∇_x V(x̃_1, 1) = Σ θ_ij ∂φ_i/∂x(0) ψ_j(1)
-        let s = slope_at_0();
-        let dv =
-            s[0] * dot([theta[0], theta[1]], psi(1)) + s[1] * dot([theta[2], theta[3]], psi(1));
-        // ϑ ← ϑ + α_a {∇_u ρ(x_0, ũ_0) + ∇_x Vᵀ ∇_u f̂} ψ(x_0, 0), ∇_u ρ(0) = 0  (line 15)
-        let g = alpha_a * (0.0 + dv * b);
-        assert!(g > 0.0);
-        for k in 0..2 {
-            close(testing::greedy(&ac, 0.0, k), g * dot(psi(0), psi(k)));
-        }
-    }
-}
-
 /// An improver that learns as MLAC and chooses the actions its own way ([`crate::plan`],
 /// [`crate::lqr`]): MLAC's learning, memories and checkpoint, its own action.
 pub trait ChoosesActions: Send {
@@ -214,5 +178,41 @@ impl<T: ChoosesActions> Persist for T {
     }
     fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
         self.mlac_mut().restore(r)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Agent;
+    use crate::testing::{self, close, dot, psi, slope_at_0};
+
+    /// MLAC-FH (Algorithm 5), the actor update of one sample by hand (line 15), on the
+    /// tiny task of [`crate::testing`] with the model `x' = x + b u`: the critic is read at
+    /// the predicted *time* `k + 1`, and only its gradient in the state enters.
+    #[test]
+    fn mlac_fh_step_by_hand() {
+        let (alpha_a, b) = (0.5, 0.5);
+        // V(x, k) = Σ θ_ij φ_i(x) ψ_j(k): rises with x, and with k (∂V/∂k ≠ 0).
+        let theta = [0.0, 0.0, 2.0, 3.0];
+        let actor = Box::new(testing::rbf(1, Some(10.0)));
+        let info = testing::info(10.0);
+        let mlac = Mlac::new(info.clone(), actor, testing::model(b), alpha_a, 1.0, 0.0);
+        let critic = testing::critic(theta);
+        let mut ac = testing::agent(info, critic, 0.0, 0.0, Box::new(mlac), 1.0);
+        let mut u = [0.0];
+        ac.start_trial(&[0.0], &mut u);
+        ac.learn(-1.0, &[0.1], Some(&mut u));
+        // ũ_0 = π(x_0, 0) = 0, x̃_1 = (x_0 + b ũ_0, 0 + 1) = (0, 1)           (lines 13–14)
+        // ∇_x V(x̃_1, 1) = Σ θ_ij ∂φ_i/∂x(0) ψ_j(1)
+        let s = slope_at_0();
+        let dv =
+            s[0] * dot([theta[0], theta[1]], psi(1)) + s[1] * dot([theta[2], theta[3]], psi(1));
+        // ϑ ← ϑ + α_a {∇_u ρ(x_0, ũ_0) + ∇_x Vᵀ ∇_u f̂} ψ(x_0, 0), ∇_u ρ(0) = 0  (line 15)
+        let g = alpha_a * (0.0 + dv * b);
+        assert!(g > 0.0);
+        for k in 0..2 {
+            close(testing::greedy(&ac, 0.0, k), g * dot(psi(0), psi(k)));
+        }
     }
 }

@@ -35,7 +35,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-use crate::actor_critic::{Improver, TaskInfo};
+use crate::actor_critic::TaskInfo;
 use crate::approx::{Differentiable, scalar};
 use crate::config::PlanningConfig;
 use crate::critic::ValueWithGradient;
@@ -210,6 +210,7 @@ impl ChoosesActions for Planner {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::actor_critic::Improver;
     use crate::approx::Approximator;
     use crate::checkpoint::{CheckpointError, Persist, Reader, Snapshot};
     use crate::horizon::Horizon;
