@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use agent::config::{Algo, ApproxKind, Component, HorizonKind, LstdPrior};
+use agent::config::{Algo, ApproxKind, Component, FitAt, HorizonKind, LstdPrior};
 use observer::config::{ObserverMode, ObserverModel, SensorKind};
 use plant::SystemName;
 use plant::config::ConfigError;
@@ -464,6 +464,11 @@ fn an_lqr_section_is_added_checked_and_round_trips() {
         Some(vec![0.5, f64::INFINITY])
     );
     assert_eq!(resolve_str(&c.to_toml()).unwrap(), c);
+    let state = resolve_str("[lqr]\nfit_at = \"state\"\n").unwrap();
+    assert_eq!(state.agent().lqr.as_ref().unwrap().fit_at, FitAt::State);
+    assert_eq!(resolve_str(&state.to_toml()).unwrap(), state);
+    let e = resolve_str("[lqr]\nfit_at = \"sate\"\n").unwrap_err();
+    assert!(e.to_string().contains("sate"), "{e}");
     let e = resolve_str("[lqr]\nregion = [0.5]\n").unwrap_err();
     assert_eq!(e.key, "lqr.region", "{e}");
     let e = resolve_str("[lqr]\nregion = [0.5, -1.0]\n").unwrap_err();
