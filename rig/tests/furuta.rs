@@ -34,7 +34,7 @@ fn run(id: &str, task: &Path, config: &Path, trials: &str, dir: &Path) -> String
     std::fs::read_to_string(dir.join("returns.csv")).unwrap()
 }
 
-/// Each shipped pair of a task and a configuration (the planner's too) runs against the
+/// Each shipped pair of a task and a configuration (the planner's and the regulator's too) runs against the
 /// Python driver, and repeats its returns on a second run.
 #[test]
 fn the_shipped_furuta_learners_run_and_repeat() {
@@ -46,6 +46,7 @@ fn the_shipped_furuta_learners_run_and_repeat() {
         ("furuta-balance.toml", "mlac-llr.toml", "4"),
         ("furuta-balance.toml", "mlac-llr-two-timescale.toml", "4"),
         ("furuta-balance.toml", "mlac-lqr.toml", "4"),
+        ("furuta-swing-balance.toml", "mlac-lqr-swing.toml", "2"),
         ("furuta.toml", "mlac-plan.toml", "2"),
         ("furuta-balance.toml", "mlac-plan.toml", "2"),
     ];
