@@ -34,8 +34,8 @@ fn run(id: &str, task: &Path, config: &Path, trials: &str, dir: &Path) -> String
     std::fs::read_to_string(dir.join("returns.csv")).unwrap()
 }
 
-/// Each shipped pair of a task and a configuration (the planner's and the regulator's too) runs against the
-/// Python driver, and repeats its returns on a second run.
+/// Each shipped pair of a task and a configuration (the planner's and the regulator's
+/// too) runs against the Python driver, and repeats its returns on a second run.
 #[test]
 fn the_shipped_furuta_learners_run_and_repeat() {
     let Some(python) = python() else {
