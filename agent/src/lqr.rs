@@ -151,12 +151,9 @@ impl Lqr {
         None
     }
 
-    /// The regulator's action from `x`, if `x` is in the region and the gain is finite.
-    fn regulate(&self, x: &[f64], u0: &[f64], u: &mut [f64]) -> bool {
-        let e = self.error(x);
-        if !self.config.contains(&e) {
-            return false;
-        }
+    /// The regulator's action from `x` (state error `e`), the model fitted around
+    /// `(x, u_0)` if it is fitted at the state; `false` if the gain is not finite.
+    fn regulate(&self, x: &[f64], e: &[f64], u0: &[f64], u: &mut [f64]) -> bool {
         let (a, b) = self.local_model(x, u0);
         let Some(k) = self.gain(&a, &b) else {
             return false;
@@ -194,12 +191,23 @@ impl ChoosesActions for Lqr {
         &mut self.mlac
     }
 
+    /// The regulator's action in the region, the actor's elsewhere (or where the gain is
+    /// not finite); the actor is asked only where its action is needed.
     fn choose(&self, x: &[f64], u_prev: &[f64], critic: &ValueWithGradient, u: &mut [f64]) {
-        self.mlac.act(x, u_prev, critic, u);
-        let u0 = u.to_vec();
-        if !self.regulate(x, &u0, u) {
-            u.copy_from_slice(&u0);
+        let e = self.error(x);
+        if self.config.contains(&e) {
+            let u0 = match self.config.fit_at {
+                FitAt::Reference => vec![0.0; u.len()],
+                FitAt::State => {
+                    self.mlac.act(x, u_prev, critic, u);
+                    u.to_vec()
+                }
+            };
+            if self.regulate(x, &e, &u0, u) {
+                return;
+            }
         }
+        self.mlac.act(x, u_prev, critic, u);
     }
 }
 

@@ -226,20 +226,27 @@ impl AgentConfig {
         Ok(v.clone())
     }
 
+    /// A section that chooses MLAC's actions with its process model (`[planning]`,
+    /// `[lqr]`) needs MLAC with an infinite horizon; `does` says what the section does.
+    fn needs_mlac_model(&self, section: &str, does: &str) -> Result<(), ConfigError> {
+        if self.algo == Algo::Mlac && self.horizon == HorizonKind::Infinite {
+            return Ok(());
+        }
+        Err(ConfigError::new(
+            section,
+            format!(
+                "{does} with MLAC's process model and an infinite horizon; {} with a {} horizon has none: remove the [{section}] section",
+                self.algo, self.horizon
+            ),
+        ))
+    }
+
     /// `[planning]`, checked: MLAC's, with an infinite horizon.
     fn planning_section(&self) -> Result<Option<PlanningConfig>, ConfigError> {
         let Some(p) = &self.planning else {
             return Ok(None);
         };
-        if self.algo != Algo::Mlac || self.horizon != HorizonKind::Infinite {
-            return Err(ConfigError::new(
-                "planning",
-                format!(
-                    "plans with MLAC's process model and an infinite horizon; {} with a {} horizon has none: remove the [planning] section",
-                    self.algo, self.horizon
-                ),
-            ));
-        }
+        self.needs_mlac_model("planning", "plans")?;
         p.validate()?;
         Ok(Some(p.clone()))
     }
@@ -249,15 +256,7 @@ impl AgentConfig {
         let Some(l) = &self.lqr else {
             return Ok(None);
         };
-        if self.algo != Algo::Mlac || self.horizon != HorizonKind::Infinite {
-            return Err(ConfigError::new(
-                "lqr",
-                format!(
-                    "regulates with MLAC's process model and an infinite horizon; {} with a {} horizon has none: remove the [lqr] section",
-                    self.algo, self.horizon
-                ),
-            ));
-        }
+        self.needs_mlac_model("lqr", "regulates")?;
         if self.planning.is_some() {
             return Err(ConfigError::new(
                 "lqr",
