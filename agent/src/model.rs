@@ -88,7 +88,14 @@ impl ProcessModel {
         self.predict_with(x, u, true)
     }
 
-    fn predict_with(&self, x: &[f64], u: &[f64], near_state: bool) -> Prediction {
+    /// `Δx̂` and `∂Δx̂/∂[x, u]` (row-major `n × (n + m)`) at `(x, u)`, the neighbours of a
+    /// memory-based model chosen by the state if `near_state`.
+    fn evaluate(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        near_state: bool,
+    ) -> ([f64; MAX_OUT], [f64; MAX_OUT * MAX_IN]) {
         let (n, m) = (self.n(), u.len());
         let xu = self.input(x, u);
         let mut dx = [0.0; MAX_OUT];
@@ -99,6 +106,12 @@ impl ProcessModel {
         } else {
             self.f.value_and_jacobian(&xu[..n + m], y, j);
         }
+        (dx, jac)
+    }
+
+    fn predict_with(&self, x: &[f64], u: &[f64], near_state: bool) -> Prediction {
+        let (n, m) = (self.n(), u.len());
+        let (dx, jac) = self.evaluate(x, u, near_state);
         let mut p = Prediction {
             x_next: [0.0; MAX_STATE],
             du: [0.0; MAX_STATE * MAX_ACTION],
@@ -121,11 +134,7 @@ impl ProcessModel {
     /// `∂Δx̂/∂x` (`n × n`) and `∂Δx̂/∂u` (`n × m`), row-major, of the state part of `x`.
     pub fn local_fit(&self, x: &[f64], u: &[f64]) -> LocalFit {
         let (n, m) = (self.n(), u.len());
-        let xu = self.input(x, u);
-        let mut dx = [0.0; MAX_OUT];
-        let mut jac = [0.0; MAX_OUT * MAX_IN];
-        self.f
-            .value_and_jacobian_near(&xu[..n + m], n, &mut dx[..n], &mut jac[..n * (n + m)]);
+        let (dx, jac) = self.evaluate(x, u, true);
         let mut fit = LocalFit {
             dx: [0.0; MAX_STATE],
             dx_dx: [0.0; MAX_STATE * MAX_STATE],
