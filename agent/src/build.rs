@@ -8,10 +8,11 @@ use crate::approx::llr::{Eviction, Llr, LlrParams, Search};
 use crate::approx::rbf::{Rbf, RbfParams};
 use crate::approx::tiles::{Tiles, TilesParams};
 use crate::approx::{Approximator, Differentiable, Traced, ValueFunction};
-use crate::config::{EvictionRule, LearningConfig, LstdPrior, TilesConfig};
+use crate::config::{EvictionRule, LearningConfig, LstdPrior, PlanningMethod, TilesConfig};
 use crate::critic::{Critic, TdLambda};
 use crate::explore::Exploration;
 use crate::horizon::Horizon;
+use crate::ilqr::Ilqr;
 use crate::learner::{Algorithm, Learner, Plain, SarsaParts, Smooth, VgbpCritic};
 use crate::lqr::Lqr;
 use crate::lstd::Lstd;
@@ -146,6 +147,9 @@ pub fn build(task: &Task, learner: &Learner, run_seed: u64) -> Box<dyn Agent> {
                 l.saturation_margin,
             );
             let improver: Box<dyn Improver> = match (&learner.planning, &learner.lqr) {
+                (Some(plan), _) if plan.method == PlanningMethod::Ilqr => {
+                    Box::new(Ilqr::new(mlac, plan.clone(), l.gamma))
+                }
                 (Some(plan), _) => Box::new(Planner::new(mlac, plan.clone(), l.gamma, run_seed)),
                 (None, Some(lqr)) => Box::new(Lqr::new(mlac, lqr.clone(), l.gamma)),
                 (None, None) => Box::new(mlac),

@@ -11,7 +11,8 @@
 //!   process model; [`step_size`] — a learning rate's schedule over the trials
 //!   (constant, or decaying as Eq. 2.21–2.22 ask); [`explore`] — Gaussian
 //!   exploration; [`sarsa`] — the discrete-action baseline; [`plan`] — MLAC's actions
-//!   planned with its learned model (beyond the thesis, chosen by `[planning]`);
+//!   planned with its learned model by the cross-entropy method, [`ilqr`] — by the
+//!   iterative LQR (beyond the thesis, chosen by `[planning]`);
 //!   [`lqr`] — near the reference, a regulator of that model (beyond the thesis,
 //!   `[lqr]`).
 //! * [`horizon`] — infinite or finite horizon (Chapter 4: time as an input, terminal
@@ -32,6 +33,7 @@ pub mod config;
 pub mod critic;
 pub mod explore;
 pub mod horizon;
+pub mod ilqr;
 pub mod learner;
 pub mod lqr;
 pub mod lstd;

@@ -92,63 +92,18 @@ impl Lqr {
     /// the reference `(x_r, u = 0)`, or around `(x, u_0)` (`fit_at = "state"`).
     fn local_model(&self, x: &[f64], u0: &[f64]) -> (DMatrix<f64>, DMatrix<f64>) {
         let (n, m) = (self.info().n(), self.info().m());
-        let (x0, u0) = match self.config.fit_at {
-            FitAt::Reference => (self.info().reward.reference.clone(), vec![0.0; m]),
-            FitAt::State => (x[..n].to_vec(), u0.to_vec()),
-        };
-        let fit = self.mlac.model().local_fit(&x0, &u0);
-        let e0 = DMatrix::from_column_slice(n, 1, &self.error(&x0));
-        let jx = DMatrix::from_row_slice(n, n, &fit.dx_dx[..n * n]);
-        let ju = DMatrix::from_row_slice(n, m, &fit.dx_du[..n * m]);
-        // c = Δ̂ − ∂Δ̂/∂x e_0 − ∂Δ̂/∂u u_0: the fit's offset moved to e = 0, u = 0
-        let c = DMatrix::from_column_slice(n, 1, &fit.dx[..n])
-            - &jx * e0
-            - &ju * DMatrix::from_column_slice(m, 1, &u0);
-        let mut a = DMatrix::identity(n + 1, n + 1);
-        let mut top = a.view_mut((0, 0), (n, n));
-        top += &jx;
-        a.view_mut((0, n), (n, 1)).copy_from(&c);
-        let mut b = DMatrix::zeros(n + 1, m);
-        b.view_mut((0, 0), (n, m)).copy_from(&ju);
-        (a, b)
+        match self.config.fit_at {
+            FitAt::Reference => {
+                affine_model(&self.mlac, &self.info().reward.reference, &vec![0.0; m])
+            }
+            FitAt::State => affine_model(&self.mlac, &x[..n], u0),
+        }
     }
 
     /// The discounted LQR gain `K` of `(A, B)`; `None` if the Riccati iteration does not
     /// settle — the model cannot hold the state, its cost growing without bound.
     fn gain(&self, a: &DMatrix<f64>, b: &DMatrix<f64>) -> Option<DMatrix<f64>> {
-        let n = self.info().n();
-        let g = self.gamma;
-        let mut qz = DMatrix::zeros(n + 1, n + 1);
-        for (i, q) in self.q.iter().enumerate() {
-            qz[(i, i)] = *q;
-        }
-        let p = DMatrix::from_diagonal(&DVector::from_vec(self.info().reward.p.clone()));
-        let mut s = qz.clone();
-        let mut last_k: Option<DMatrix<f64>> = None;
-        for _ in 0..MAX_ITERATIONS {
-            let bts = b.transpose() * &s;
-            let k = (&p + g * &bts * b).try_inverse()? * (g * &bts * a);
-            let closed = a - b * &k;
-            let next = &qz + g * closed.transpose() * &s * &closed + k.transpose() * &p * &k;
-            // The state block settles at the closed loop's rate; the constant's own
-            // entry, which no action moves, only at γ's, and does not enter K.
-            let state_block = |m: &DMatrix<f64>| m.view((0, 0), (n, n)).clone_owned();
-            let (s_now, s_next) = (state_block(&s), state_block(&next));
-            let bounded = next.iter().all(|v| v.is_finite() && v.abs() < 1e15);
-            if !bounded || !k.iter().all(|v| v.is_finite()) {
-                return None;
-            }
-            let settled = |d: f64, scale: f64| d <= TOLERANCE * scale.max(1.0);
-            let k_settled = last_k
-                .as_ref()
-                .is_some_and(|prev| settled((&k - prev).amax(), k.amax()));
-            s = next;
-            if k_settled && settled((&s_next - &s_now).amax(), s_next.amax()) {
-                return Some(k);
-            }
-            last_k = Some(k);
-        }
-        None
+        riccati(a, b, &self.q, &self.info().reward.p, self.gamma).map(|(k, _)| k)
     }
 
     /// The regulator's action from `x` (state error `e`), the model fitted around
@@ -169,7 +124,7 @@ impl Lqr {
 
 /// `Q = −½ ∂²ρ/∂x²` at the reference, by central differences per component (the terms
 /// are sums over components), never negative.
-fn quadratic_weights(reward: &Reward) -> Vec<f64> {
+pub(crate) fn quadratic_weights(reward: &Reward) -> Vec<f64> {
     const H: f64 = 1e-3;
     let x_r = &reward.reference;
     let at = |i: usize, d: f64| {
@@ -180,6 +135,72 @@ fn quadratic_weights(reward: &Reward) -> Vec<f64> {
     (0..x_r.len())
         .map(|i| (-(at(i, H) - 2.0 * at(i, 0.0) + at(i, -H)) / (2.0 * H * H)).max(0.0))
         .collect()
+}
+
+/// `(A, B)` of `z_{k+1} = A z_k + B u_k`, `z = [e; 1]`, `e = x − x_r`, from `mlac`'s
+/// process model fitted around `(x_0, u_0)`: the fit's offset moved to `e = 0`, `u = 0`.
+pub(crate) fn affine_model(mlac: &Mlac, x0: &[f64], u0: &[f64]) -> (DMatrix<f64>, DMatrix<f64>) {
+    let (n, m) = (mlac.info().n(), mlac.info().m());
+    let reward = &mlac.info().reward;
+    let fit = mlac.model().local_fit(x0, u0);
+    let e0: Vec<f64> = (0..n).map(|i| reward.error(x0, i)).collect();
+    let jx = DMatrix::from_row_slice(n, n, &fit.dx_dx[..n * n]);
+    let ju = DMatrix::from_row_slice(n, m, &fit.dx_du[..n * m]);
+    // c = Δ̂ − ∂Δ̂/∂x e_0 − ∂Δ̂/∂u u_0
+    let c = DMatrix::from_column_slice(n, 1, &fit.dx[..n])
+        - &jx * DMatrix::from_column_slice(n, 1, &e0)
+        - &ju * DMatrix::from_column_slice(m, 1, u0);
+    let mut a = DMatrix::identity(n + 1, n + 1);
+    let mut top = a.view_mut((0, 0), (n, n));
+    top += &jx;
+    a.view_mut((0, n), (n, 1)).copy_from(&c);
+    let mut b = DMatrix::zeros(n + 1, m);
+    b.view_mut((0, 0), (n, m)).copy_from(&ju);
+    (a, b)
+}
+
+/// The discounted LQR of `(A, B)` with the stage cost `eᵀ diag(q) e + uᵀ diag(p) u`: its
+/// gain `K` and cost-to-go `S` (`V(z) ≈ −zᵀ S z`); `None` if the Riccati iteration does
+/// not settle — the model cannot hold the state, its cost growing without bound.
+pub(crate) fn riccati(
+    a: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    q: &[f64],
+    p: &[f64],
+    g: f64,
+) -> Option<(DMatrix<f64>, DMatrix<f64>)> {
+    let n = q.len();
+    let mut qz = DMatrix::zeros(n + 1, n + 1);
+    for (i, q) in q.iter().enumerate() {
+        qz[(i, i)] = *q;
+    }
+    let p = DMatrix::from_diagonal(&DVector::from_column_slice(p));
+    let mut s = qz.clone();
+    let mut last_k: Option<DMatrix<f64>> = None;
+    for _ in 0..MAX_ITERATIONS {
+        let bts = b.transpose() * &s;
+        let k = (&p + g * &bts * b).try_inverse()? * (g * &bts * a);
+        let closed = a - b * &k;
+        let next = &qz + g * closed.transpose() * &s * &closed + k.transpose() * &p * &k;
+        // The state block settles at the closed loop's rate; the constant's own
+        // entry, which no action moves, only at γ's, and does not enter K.
+        let state_block = |m: &DMatrix<f64>| m.view((0, 0), (n, n)).clone_owned();
+        let (s_now, s_next) = (state_block(&s), state_block(&next));
+        let bounded = next.iter().all(|v| v.is_finite() && v.abs() < 1e15);
+        if !bounded || !k.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let settled = |d: f64, scale: f64| d <= TOLERANCE * scale.max(1.0);
+        let k_settled = last_k
+            .as_ref()
+            .is_some_and(|prev| settled((&k - prev).amax(), k.amax()));
+        s = next;
+        if k_settled && settled((&s_next - &s_now).amax(), s_next.amax()) {
+            return Some((k, s));
+        }
+        last_k = Some(k);
+    }
+    None
 }
 
 impl ChoosesActions for Lqr {

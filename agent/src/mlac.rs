@@ -152,6 +152,13 @@ pub trait ChoosesActions: Send {
     fn mlac_mut(&mut self) -> &mut Mlac;
     /// The action from `x` (without exploration).
     fn choose(&self, x: &[f64], u_prev: &[f64], critic: &ValueWithGradient, u: &mut [f64]);
+    /// Saves what it carries from one sample to the next beyond the MLAC (nothing by
+    /// default).
+    fn save_own(&self, _s: &mut Snapshot) {}
+    /// Restores what [`Self::save_own`] saved.
+    fn restore_own(&mut self, _r: &mut Reader) -> Result<(), CheckpointError> {
+        Ok(())
+    }
 }
 
 impl<T: ChoosesActions> Improver for T {
@@ -175,9 +182,11 @@ impl<T: ChoosesActions> Improver for T {
 impl<T: ChoosesActions> Persist for T {
     fn save(&self, s: &mut Snapshot) {
         self.mlac().save(s);
+        self.save_own(s);
     }
     fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
-        self.mlac_mut().restore(r)
+        self.mlac_mut().restore(r)?;
+        self.restore_own(r)
     }
 }
 

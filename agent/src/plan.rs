@@ -136,12 +136,12 @@ impl Planner {
         critic: &dyn Differentiable,
     ) -> Vec<Scored> {
         let m = self.info().m();
-        let mut out = Vec::with_capacity(self.config.samples as usize);
+        let mut out = Vec::with_capacity(self.config.samples() as usize);
         out.push(Scored {
             g: self.score(x, mean, critic),
             seq: mean.to_vec(),
         });
-        for _ in 1..self.config.samples {
+        for _ in 1..self.config.samples() {
             let mut seq = mean.to_vec();
             for (k, v) in seq.iter_mut().enumerate() {
                 let z: f64 = StandardNormal.sample(rng);
@@ -170,7 +170,7 @@ impl Planner {
         };
         for _ in 0..self.config.iterations {
             let mut c = self.candidates(x, &mean, &spread, &mut rng, critic);
-            c.truncate(self.config.elites as usize);
+            c.truncate(self.config.elites() as usize);
             refit(&c, &mut mean, &mut spread);
             let first = c.swap_remove(0);
             if first.g > best.g {
@@ -225,9 +225,10 @@ mod tests {
         let actor = Box::new(constant(0.0));
         let mlac = Mlac::new(info, actor, testing::model(0.5), 0.1, 1.0, 0.0);
         let config = PlanningConfig {
+            method: crate::config::PlanningMethod::Cem,
             horizon,
-            samples: 64,
-            elites: 8,
+            samples: Some(64),
+            elites: Some(8),
             iterations: 6,
         };
         Planner::new(mlac, config, 1.0, seed)

@@ -31,7 +31,7 @@ pub(crate) use learner::finite_horizon_unsupported;
 pub use learner::{Algo, ApproxKind, HorizonKind};
 pub use learning::LearningConfig;
 pub use lqr::{FitAt, LqrConfig};
-pub use planning::PlanningConfig;
+pub use planning::{PlanningConfig, PlanningMethod};
 pub use sarsa::SarsaConfig;
 pub use vgbp::VgbpConfig;
 

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use agent::config::{Algo, ApproxKind, Component, FitAt, HorizonKind, LstdPrior};
+use agent::config::{Algo, ApproxKind, Component, FitAt, HorizonKind, LstdPrior, PlanningMethod};
 use observer::config::{ObserverMode, ObserverModel, SensorKind};
 use plant::SystemName;
 use plant::config::ConfigError;
@@ -428,9 +428,13 @@ fn a_planning_section_is_added_checked_and_round_trips() {
     let p = c.agent().planning.as_ref().unwrap();
     assert_eq!(
         (p.horizon, p.samples, p.elites, p.iterations),
-        (15, 64, 8, 3)
+        (15, Some(64), Some(8), 3)
     );
     assert_eq!(resolve_str(&c.to_toml()).unwrap(), c);
+    assert!(
+        !c.to_toml().contains("method"),
+        "the default method is not written"
+    );
     assert!(
         resolve(None, &Overrides::default())
             .unwrap()
@@ -449,6 +453,28 @@ fn a_planning_section_is_added_checked_and_round_trips() {
     let e = resolve_str(&format!("algo = \"sac\"\n{plan}")).unwrap_err();
     assert_eq!(e.key, "planning", "{e}");
     assert!(e.message.contains("remove the [planning] section"), "{e}");
+}
+
+/// `[planning]` with `method = "ilqr"`: horizon and iterations only; it round-trips, and
+/// the cross-entropy method's keys or a wrong method are named.
+#[test]
+fn an_ilqr_planning_section_resolves_and_round_trips() {
+    let ilqr = "[planning]\nmethod = \"ilqr\"\nhorizon = 40\niterations = 3\n";
+    let c = resolve_str(ilqr).unwrap();
+    let p = c.agent().planning.as_ref().unwrap();
+    assert_eq!(
+        (p.method, p.horizon, p.iterations),
+        (PlanningMethod::Ilqr, 40, 3)
+    );
+    assert!(c.to_toml().contains("method = \"ilqr\""), "{}", c.to_toml());
+    assert_eq!(resolve_str(&c.to_toml()).unwrap(), c);
+    let e = resolve_str(&format!("{ilqr}elites = 8\n")).unwrap_err();
+    assert_eq!(e.key, "planning.elites", "{e}");
+    let e = resolve_str(&ilqr.replace("ilqr", "ilq")).unwrap_err();
+    assert!(e.to_string().contains("ilq"), "{e}");
+    assert!(e.to_string().contains("cem"), "names the methods: {e}");
+    let e = resolve_str(&ilqr.replace("horizon = 40", "horizon = 0")).unwrap_err();
+    assert_eq!(e.key, "planning.horizon", "{e}");
 }
 
 /// `[lqr]`, which no preset has: a file adds it (empty, or with a region), it round-trips,

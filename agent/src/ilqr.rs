@@ -1,0 +1,411 @@
+//! Planning with MLAC's learned process model by the iterative LQR (iLQR): model-predictive
+//! control whose action sequence is improved by Newton-like steps along the model's local
+//! fits.
+//!
+//! At every sample the action applied is the first of the sequence `u_0 … u_{H−1}` that
+//! lowers the predicted cost
+//!
+//! ```text
+//! J = Σ_{i<H} γ^i ℓ(x̃_i, u_i) + γ^H z̃_Hᵀ S z̃_H,   ℓ = −ρ,   x̃_0 = x_k,   x̃_{i+1} = f̂(x̃_i, u_i)
+//! ```
+//!
+//! with `f̂` the process model MLAC learns online (Algorithm 2, line 13), `z = [e; 1]` and
+//! `S` the cost-to-go of the discounted LQR of the model's fit at the reference
+//! ([`crate::lqr`]) — the stage cost's quadratic form `eᵀ diag(q) e` while that LQR has no
+//! finite solution. The iterative LQR (W. Li, E. Todorov, "Iterative linear quadratic
+//! regulator design for nonlinear biological movement systems", ICINCO 2004) with a
+//! learned locally weighted model (D. Mitrovic, S. Klanke, S. Vijayakumar, "Adaptive
+//! optimal feedback control with learned internal dynamics models", 2010), run in a
+//! receding horizon from the last sample's plan (Y. Tassa, T. Erez, E. Todorov,
+//! "Synthesis and stabilization of complex behaviors through online trajectory
+//! optimization", IROS 2012), the LQR's cost as the terminal cost (D. Q. Mayne et al.,
+//! "Constrained model predictive control: stability and optimality", Automatica 36, 2000):
+//!
+//! 1. the sequence starts as the better (lower `J`) of the last sample's plan, shifted by
+//!    one sample, its last action repeated, and the actor's rollout through the model;
+//! 2. backward pass, along the rollout `x̄_i, ū_i` with the model's fit there,
+//!    `δx_{i+1} = A_i δx_i + B_i δu_i` (`A = I + ∂Δ̂/∂x`, `B = ∂Δ̂/∂u`), `ℓ`'s gradient
+//!    and the reward's curvature at the reference (`ℓ_xx = 2 diag(q)`, `ℓ_uu = 2 diag(p)`):
+//!
+//!    ```text
+//!    Q_x  = ℓ_x + γ Aᵀ V_x'          Q_u  = ℓ_u + γ Bᵀ V_x'
+//!    Q_xx = ℓ_xx + γ Aᵀ V_xx' A      Q_uu = ℓ_uu + γ Bᵀ V_xx' B + μ I      Q_ux = γ Bᵀ V_xx' A
+//!    k = −Q_uu⁻¹ Q_u,   K = −Q_uu⁻¹ Q_ux   (both zero for an action at its bound that k pushes beyond)
+//!    V_x  = Q_x + Kᵀ Q_uu k + Kᵀ Q_u + Q_uxᵀ k
+//!    V_xx = Q_xx + Kᵀ Q_uu K + Kᵀ Q_ux + Q_uxᵀ K
+//!    ```
+//!
+//!    `μ` growing tenfold from 10⁻⁶ until every `Q_uu` is positive definite;
+//! 3. forward pass, `u_i = sat(ū_i + α k_i + K_i (x̃_i ⊖ x̄_i))` through the model, `α`
+//!    halved from 1 until `J` decreases; if it does not within five halvings, the search
+//!    ends.
+//!
+//! Learning is MLAC's, unchanged: the critic, the actor and the model learn from the
+//! transitions the planned actions (with exploration) produce. The plan carried from one
+//! sample to the next is saved in a checkpoint, so a resumed run repeats an
+//! uninterrupted one.
+
+use std::sync::Mutex;
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::actor_critic::{Improver, TaskInfo};
+use crate::checkpoint::{CheckpointError, Reader, Snapshot};
+use crate::config::PlanningConfig;
+use crate::critic::ValueWithGradient;
+use crate::lqr::{affine_model, quadratic_weights, riccati};
+use crate::mlac::{ChoosesActions, Mlac};
+use plant::angle::wrap;
+
+/// The halvings of the forward pass's step `α` before an iteration gives up.
+const LINE_SEARCH: usize = 5;
+
+/// The regularisations `μ` tried, smallest first, until every `Q_uu` is positive definite.
+const REGULARISATION: [f64; 6] = [1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1];
+
+/// MLAC whose actions are planned by the iterative LQR with its own process model.
+pub struct Ilqr {
+    mlac: Mlac,
+    config: PlanningConfig,
+    gamma: f64,
+    /// `q` of the reward's quadratic approximation at the reference.
+    q: Vec<f64>,
+    /// The last sample's plan, `H × m` row-major (empty before the first).
+    last: Mutex<Vec<f64>>,
+}
+
+/// A sequence's rollout through the model: the states `x̃_0 … x̃_H`, the actions, the
+/// model's fit `(A_i, B_i)` at each step and the cost `J` (`+∞` if not finite).
+struct Rollout {
+    xs: Vec<Vec<f64>>,
+    us: Vec<f64>,
+    fits: Vec<(DMatrix<f64>, DMatrix<f64>)>,
+    cost: f64,
+}
+
+/// The feedback of a backward pass: `k_i` and `K_i` of every step.
+struct Feedback {
+    k: Vec<DVector<f64>>,
+    gain: Vec<DMatrix<f64>>,
+}
+
+impl Ilqr {
+    /// Plans for `mlac` with discount `γ`; `config.method` is the iterative LQR's.
+    pub fn new(mlac: Mlac, config: PlanningConfig, gamma: f64) -> Self {
+        let q = quadratic_weights(&mlac.info().reward);
+        Self {
+            mlac,
+            config,
+            gamma,
+            q,
+            last: Mutex::new(Vec::new()),
+        }
+    }
+
+    fn info(&self) -> &TaskInfo {
+        self.mlac.info()
+    }
+
+    fn horizon(&self) -> usize {
+        self.config.horizon as usize
+    }
+
+    /// `e = x − x_r`, angle components wrapped.
+    fn error(&self, x: &[f64]) -> Vec<f64> {
+        let reward = &self.info().reward;
+        (0..self.info().n()).map(|i| reward.error(x, i)).collect()
+    }
+
+    /// `a ⊖ b`: the difference of two states, angle components wrapped.
+    fn difference(&self, a: &[f64], b: &[f64]) -> DVector<f64> {
+        let mask = &self.info().angle_mask;
+        DVector::from_iterator(
+            a.len(),
+            (0..a.len()).map(|i| {
+                if mask[i] {
+                    wrap(a[i] - b[i])
+                } else {
+                    a[i] - b[i]
+                }
+            }),
+        )
+    }
+
+    /// `S` of the terminal cost `zᵀ S z`: the LQR's of the model's fit at the reference,
+    /// or the stage cost's quadratic form where that LQR has no finite solution.
+    fn terminal(&self) -> DMatrix<f64> {
+        let m = self.info().m();
+        let (a, b) = affine_model(&self.mlac, &self.info().reward.reference, &vec![0.0; m]);
+        let reward = &self.info().reward;
+        riccati(&a, &b, &self.q, &reward.p, self.gamma).map_or_else(
+            || {
+                let n = self.q.len();
+                let mut s = DMatrix::zeros(n + 1, n + 1);
+                for (i, q) in self.q.iter().enumerate() {
+                    s[(i, i)] = *q;
+                }
+                s
+            },
+            |(_, s)| s,
+        )
+    }
+
+    /// `x̃_{i+1} = f̂(x̃_i, u_i)` and the model's fit `(A, B)` there.
+    fn step(&self, x: &[f64], u: &[f64]) -> (Vec<f64>, (DMatrix<f64>, DMatrix<f64>)) {
+        let (n, m) = (self.info().n(), self.info().m());
+        let fit = self.mlac.model().local_fit(x, u);
+        let mask = &self.info().angle_mask;
+        let next = (0..n)
+            .map(|i| {
+                let v = x[i] + fit.dx[i];
+                if mask[i] { wrap(v) } else { v }
+            })
+            .collect();
+        let a = DMatrix::identity(n, n) + DMatrix::from_row_slice(n, n, &fit.dx_dx[..n * n]);
+        let b = DMatrix::from_row_slice(n, m, &fit.dx_du[..n * m]);
+        (next, (a, b))
+    }
+
+    /// The rollout from `x` of the actions `policy(i, x̃_i)` chooses, saturated.
+    fn rollout(
+        &self,
+        x: &[f64],
+        s: &DMatrix<f64>,
+        mut policy: impl FnMut(usize, &[f64], &mut [f64]),
+    ) -> Rollout {
+        let (n, m, h) = (self.info().n(), self.info().m(), self.horizon());
+        let mut r = Rollout {
+            xs: vec![x[..n].to_vec()],
+            us: vec![0.0; h * m],
+            fits: Vec::with_capacity(h),
+            cost: 0.0,
+        };
+        let mut discount = 1.0;
+        for i in 0..h {
+            let u = &mut r.us[i * m..(i + 1) * m];
+            policy(i, &r.xs[i], u);
+            self.info().saturate(u);
+            r.cost -= discount * self.info().reward.reward(&r.xs[i], u);
+            discount *= self.gamma;
+            let (next, fit) = self.step(&r.xs[i], u);
+            r.xs.push(next);
+            r.fits.push(fit);
+        }
+        let mut z = self.error(&r.xs[h]);
+        z.push(1.0);
+        let z = DVector::from_vec(z);
+        r.cost += discount * (z.transpose() * s * &z)[(0, 0)];
+        if !r.cost.is_finite() {
+            r.cost = f64::INFINITY;
+        }
+        r
+    }
+
+    /// Step 1: the better of the last plan, shifted, and the actor's rollout.
+    fn initial(&self, x: &[f64], s: &DMatrix<f64>) -> Rollout {
+        let (m, h) = (self.info().m(), self.horizon());
+        let actor = self.rollout(x, s, |_, xi, u| self.mlac.actor().value(xi, u));
+        let last = self.last.lock().expect("the plan's lock").clone();
+        if last.len() != h * m {
+            return actor;
+        }
+        let shifted = self.rollout(x, s, |i, _, u| {
+            let j = (i + 1).min(h - 1);
+            u.copy_from_slice(&last[j * m..(j + 1) * m]);
+        });
+        if shifted.cost <= actor.cost { shifted } else { actor }
+    }
+
+    /// Step 2 with regularisation `μ`; `None` if some `Q_uu` is not positive definite.
+    fn backward(&self, r: &Rollout, s: &DMatrix<f64>, mu: f64) -> Option<Feedback> {
+        let (n, m, h, g) = (self.info().n(), self.info().m(), self.horizon(), self.gamma);
+        let reward = &self.info().reward;
+        let lxx =
+            DMatrix::from_diagonal(&DVector::from_iterator(n, self.q.iter().map(|q| 2.0 * q)));
+        let luu = DMatrix::from_diagonal(&DVector::from_iterator(
+            m,
+            reward.p.iter().map(|p| 2.0 * p + mu),
+        ));
+        let mut z = self.error(&r.xs[h]);
+        z.push(1.0);
+        let sz = s * DVector::from_vec(z);
+        let mut vx = 2.0 * sz.rows(0, n).clone_owned();
+        let mut vxx = 2.0 * s.view((0, 0), (n, n)).clone_owned();
+        let mut fb = Feedback {
+            k: vec![DVector::zeros(m); h],
+            gain: vec![DMatrix::zeros(m, n); h],
+        };
+        for i in (0..h).rev() {
+            let (a, b) = &r.fits[i];
+            let (x, u) = (&r.xs[i], &r.us[i * m..(i + 1) * m]);
+            let (mut lx, mut lu) = (vec![0.0; n], vec![0.0; m]);
+            reward.grad_x(x, &mut lx);
+            reward.grad_u(u, &mut lu);
+            let qx = -DVector::from_vec(lx) + g * a.transpose() * &vx;
+            let qu = -DVector::from_vec(lu) + g * b.transpose() * &vx;
+            let qxx = &lxx + g * a.transpose() * &vxx * a;
+            let quu = &luu + g * b.transpose() * &vxx * b;
+            let qux = g * b.transpose() * &vxx * a;
+            let chol = quu.clone().cholesky()?;
+            let mut k = -chol.solve(&qu);
+            let mut gain = -chol.solve(&qux);
+            for j in 0..m {
+                let (lo, hi) = (self.info().action_low[j], self.info().action_high[j]);
+                if (u[j] >= hi && k[j] > 0.0) || (u[j] <= lo && k[j] < 0.0) {
+                    k[j] = 0.0;
+                    gain.row_mut(j).fill(0.0);
+                }
+            }
+            vx = &qx + gain.transpose() * &quu * &k + gain.transpose() * &qu + qux.transpose() * &k;
+            let v = &qxx
+                + gain.transpose() * &quu * &gain
+                + gain.transpose() * &qux
+                + qux.transpose() * &gain;
+            vxx = 0.5 * (&v + v.transpose());
+            fb.k[i] = k;
+            fb.gain[i] = gain;
+        }
+        Some(fb)
+    }
+
+    /// Step 3: the first step `α` whose rollout lowers `J`, if any.
+    fn forward(&self, x: &[f64], r: &Rollout, fb: &Feedback, s: &DMatrix<f64>) -> Option<Rollout> {
+        let m = self.info().m();
+        let mut alpha = 1.0;
+        for _ in 0..=LINE_SEARCH {
+            let next = self.rollout(x, s, |i, xi, u| {
+                let du = &fb.gain[i] * self.difference(xi, &r.xs[i]);
+                for j in 0..m {
+                    u[j] = r.us[i * m + j] + alpha * fb.k[i][j] + du[j];
+                }
+            });
+            if next.cost < r.cost {
+                return Some(next);
+            }
+            alpha *= 0.5;
+        }
+        None
+    }
+
+    /// The plan from `x`: the initial sequence improved by the configured iterations.
+    fn plan(&self, x: &[f64]) -> Rollout {
+        let s = self.terminal();
+        let mut r = self.initial(x, &s);
+        for _ in 0..self.config.iterations {
+            let Some(fb) = REGULARISATION
+                .iter()
+                .find_map(|&mu| self.backward(&r, &s, mu))
+            else {
+                break;
+            };
+            match self.forward(x, &r, &fb, &s) {
+                Some(next) => r = next,
+                None => break,
+            }
+        }
+        r
+    }
+}
+
+impl ChoosesActions for Ilqr {
+    fn mlac(&self) -> &Mlac {
+        &self.mlac
+    }
+
+    fn mlac_mut(&mut self) -> &mut Mlac {
+        &mut self.mlac
+    }
+
+    /// The first action of the plan; the actor's where the model predicts no finite cost.
+    fn choose(&self, x: &[f64], u_prev: &[f64], critic: &ValueWithGradient, u: &mut [f64]) {
+        let r = self.plan(x);
+        if !r.cost.is_finite() {
+            self.last.lock().expect("the plan's lock").clear();
+            self.mlac.act(x, u_prev, critic, u);
+            return;
+        }
+        u.copy_from_slice(&r.us[..u.len()]);
+        *self.last.lock().expect("the plan's lock") = r.us;
+    }
+
+    fn save_own(&self, s: &mut Snapshot) {
+        s.f64s("plan", &self.last.lock().expect("the plan's lock"));
+    }
+
+    fn restore_own(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        let plan = r.f64s("plan")?.to_vec();
+        *self.last.get_mut().expect("the plan's lock") = plan;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::checkpoint::Persist;
+    use crate::config::PlanningMethod;
+    use crate::horizon::Horizon;
+    use crate::testing::{self, constant};
+
+    /// On the tiny task (`ρ = −x² − u²`, the model `x' = x + b u`), actor `π = 0.1`.
+    fn planner(b: f64, gamma: f64, horizon: u32) -> Ilqr {
+        let info = TaskInfo {
+            horizon: Horizon::Infinite,
+            ..testing::info(5.0)
+        };
+        let mlac = Mlac::new(
+            info,
+            Box::new(constant(0.1)),
+            testing::model(b),
+            0.1,
+            gamma,
+            0.0,
+        );
+        let config = PlanningConfig {
+            method: PlanningMethod::Ilqr,
+            horizon,
+            samples: None,
+            elites: None,
+            iterations: 3,
+        };
+        Ilqr::new(mlac, config, gamma)
+    }
+
+    /// With a linear model the terminal cost is the exact cost-to-go, so the plan's first
+    /// action is the infinite-horizon LQR's, `−k x` (`k = γ b s / (1 + γ b² s)`, `s` the
+    /// scalar discounted Riccati equation's root), over one sample or ten.
+    #[test]
+    fn on_a_linear_model_the_plan_is_the_lqr() {
+        let (b, gamma): (f64, f64) = (0.5, 0.9);
+        let (qa, qb) = (gamma * b * b, 1.0 - gamma - gamma * b * b);
+        let s = (-qb + (qb * qb + 4.0 * qa).sqrt()) / (2.0 * qa);
+        let k = gamma * b * s / (1.0 + gamma * b * b * s);
+        for horizon in [1, 10] {
+            let p = planner(b, gamma, horizon);
+            let mut u = [0.0];
+            p.act(&[0.8], &[0.0], &constant(0.0), &mut u);
+            assert!(
+                (u[0] + k * 0.8).abs() < 1e-6,
+                "H = {horizon}: u = {}, −k x = {}",
+                u[0],
+                -k * 0.8
+            );
+        }
+    }
+
+    /// The plan carried to the next sample is saved and restored with the learner: a
+    /// restored planner holds the same plan.
+    #[test]
+    fn the_carried_plan_is_checkpointed() {
+        let p = planner(0.5, 0.9, 4);
+        let mut u = [0.0];
+        p.act(&[0.8], &[0.0], &constant(0.0), &mut u);
+        let plan = p.last.lock().unwrap().clone();
+        assert_eq!(plan.len(), 4);
+        let mut snapshot = Snapshot::default();
+        p.save(&mut snapshot);
+        let mut q = planner(0.5, 0.9, 4);
+        q.restore(&mut snapshot.reader()).unwrap();
+        assert_eq!(*q.last.lock().unwrap(), plan);
+    }
+}
