@@ -142,6 +142,8 @@ pub trait Improver<F: ?Sized = ValueWithGradient>: Send + crate::checkpoint::Per
     fn act(&self, x: &[f64], u_prev: &[f64], critic: &F, u: &mut [f64]);
     /// A learning trial begins (a learning rate on a schedule counts it).
     fn start_trial(&mut self) {}
+    /// A greedy trial begins (nothing learns; a planner drops its last plan).
+    fn start_greedy_trial(&mut self) {}
     /// Improves the policy and learns any models from transition `t`.
     fn improve(&mut self, t: &Transition, critic: &F);
     /// Whether the next action is chosen after the critic and model updates of this
@@ -297,6 +299,10 @@ impl<F: Approximator + ?Sized> Agent for ActorCritic<F> {
 
     fn greedy(&self, k: usize, x: &[f64], u_prev: &[f64], u: &mut [f64]) {
         u.copy_from_slice(&self.policy(&self.info.horizon.input(x, k), u_prev));
+    }
+
+    fn start_greedy_trial(&mut self) {
+        self.improver.start_greedy_trial();
     }
 
     fn memories(&self) -> Vec<(&'static str, usize, usize)> {

@@ -22,7 +22,8 @@
 //! "Constrained model predictive control: stability and optimality", Automatica 36, 2000):
 //!
 //! 1. the sequence starts as the better (lower `J`) of the last sample's plan, shifted by
-//!    one sample, its last action repeated, and the actor's rollout through the model;
+//!    one sample, its last action repeated, and the actor's rollout through the model
+//!    (the rollout alone at a trial's first sample);
 //! 2. backward pass, along the rollout `x̄_i, ū_i` with the model's fit there,
 //!    `δx_{i+1} = A_i δx_i + B_i δu_i` (`A = I + ∂Δ̂/∂x`, `B = ∂Δ̂/∂u`), `ℓ`'s gradient
 //!    and the reward's curvature at the reference (`ℓ_xx = 2 diag(q)`, `ℓ_uu = 2 diag(p)`):
@@ -41,16 +42,16 @@
 //!    ends.
 //!
 //! Learning is MLAC's, unchanged: the critic, the actor and the model learn from the
-//! transitions the planned actions (with exploration) produce. The plan carried from one
-//! sample to the next is saved in a checkpoint, so a resumed run repeats an
-//! uninterrupted one.
+//! transitions the planned actions (with exploration) produce. The plan is carried from
+//! one sample to the next within a trial, learning or greedy, and dropped when the next
+//! begins: every trial starts from the actor's rollout, so a run resumed at a trial
+//! repeats an uninterrupted one.
 
 use std::sync::Mutex;
 
 use nalgebra::{DMatrix, DVector};
 
 use crate::actor_critic::{Improver, TaskInfo};
-use crate::checkpoint::{CheckpointError, Reader, Snapshot};
 use crate::config::PlanningConfig;
 use crate::critic::ValueWithGradient;
 use crate::lqr::{affine_model, quadratic_weights, riccati};
@@ -213,7 +214,11 @@ impl Ilqr {
             let j = (i + 1).min(h - 1);
             u.copy_from_slice(&last[j * m..(j + 1) * m]);
         });
-        if shifted.cost <= actor.cost { shifted } else { actor }
+        if shifted.cost <= actor.cost {
+            shifted
+        } else {
+            actor
+        }
     }
 
     /// Step 2 with regularisation `μ`; `None` if some `Q_uu` is not positive definite.
@@ -328,21 +333,15 @@ impl ChoosesActions for Ilqr {
         *self.last.lock().expect("the plan's lock") = r.us;
     }
 
-    fn save_own(&self, s: &mut Snapshot) {
-        s.f64s("plan", &self.last.lock().expect("the plan's lock"));
-    }
-
-    fn restore_own(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
-        let plan = r.f64s("plan")?.to_vec();
-        *self.last.get_mut().expect("the plan's lock") = plan;
-        Ok(())
+    /// Each trial's first plan starts from the actor's rollout.
+    fn start_any_trial(&mut self) {
+        self.last.get_mut().expect("the plan's lock").clear();
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::checkpoint::Persist;
     use crate::config::PlanningMethod;
     use crate::horizon::Horizon;
     use crate::testing::{self, constant};
@@ -393,19 +392,18 @@ mod tests {
         }
     }
 
-    /// The plan carried to the next sample is saved and restored with the learner: a
-    /// restored planner holds the same plan.
+    /// The plan is carried to the next sample and dropped when a trial, learning or
+    /// greedy, begins.
     #[test]
-    fn the_carried_plan_is_checkpointed() {
-        let p = planner(0.5, 0.9, 4);
+    fn the_carried_plan_is_dropped_at_each_trial() {
+        let mut p = planner(0.5, 0.9, 4);
         let mut u = [0.0];
         p.act(&[0.8], &[0.0], &constant(0.0), &mut u);
-        let plan = p.last.lock().unwrap().clone();
-        assert_eq!(plan.len(), 4);
-        let mut snapshot = Snapshot::default();
-        p.save(&mut snapshot);
-        let mut q = planner(0.5, 0.9, 4);
-        q.restore(&mut snapshot.reader()).unwrap();
-        assert_eq!(*q.last.lock().unwrap(), plan);
+        assert_eq!(p.last.lock().unwrap().len(), 4);
+        p.start_greedy_trial();
+        assert!(p.last.lock().unwrap().is_empty());
+        p.act(&[0.8], &[0.0], &constant(0.0), &mut u);
+        p.start_trial();
+        assert!(p.last.lock().unwrap().is_empty());
     }
 }

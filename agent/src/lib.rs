@@ -74,6 +74,9 @@ pub trait Agent: Send + checkpoint::Persist {
     /// `u_prev` is the action applied in the previous sample (zero at a trial start); `k`
     /// matters to a finite-horizon agent, whose policy is time-varying (Chapter 4).
     fn greedy(&self, k: usize, x: &[f64], u_prev: &[f64], u: &mut [f64]);
+    /// A greedy trial begins: whatever the policy carries from one sample to the next
+    /// within a trial (a planner's last plan) is dropped. Nothing by default.
+    fn start_greedy_trial(&mut self) {}
     /// `(name, stored, capacity)` of each memory-based (LLR) approximator.
     fn memories(&self) -> Vec<(&'static str, usize, usize)>;
 }

@@ -152,13 +152,9 @@ pub trait ChoosesActions: Send {
     fn mlac_mut(&mut self) -> &mut Mlac;
     /// The action from `x` (without exploration).
     fn choose(&self, x: &[f64], u_prev: &[f64], critic: &ValueWithGradient, u: &mut [f64]);
-    /// Saves what it carries from one sample to the next beyond the MLAC (nothing by
-    /// default).
-    fn save_own(&self, _s: &mut Snapshot) {}
-    /// Restores what [`Self::save_own`] saved.
-    fn restore_own(&mut self, _r: &mut Reader) -> Result<(), CheckpointError> {
-        Ok(())
-    }
+    /// A trial, learning or greedy, begins: what it carries from one sample to the next
+    /// within a trial is dropped (nothing by default).
+    fn start_any_trial(&mut self) {}
 }
 
 impl<T: ChoosesActions> Improver for T {
@@ -167,7 +163,12 @@ impl<T: ChoosesActions> Improver for T {
     }
 
     fn start_trial(&mut self) {
+        self.start_any_trial();
         self.mlac_mut().start_trial();
+    }
+
+    fn start_greedy_trial(&mut self) {
+        self.start_any_trial();
     }
 
     fn improve(&mut self, t: &Transition, critic: &ValueWithGradient) {
@@ -182,11 +183,9 @@ impl<T: ChoosesActions> Improver for T {
 impl<T: ChoosesActions> Persist for T {
     fn save(&self, s: &mut Snapshot) {
         self.mlac().save(s);
-        self.save_own(s);
     }
     fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
-        self.mlac_mut().restore(r)?;
-        self.restore_own(r)
+        self.mlac_mut().restore(r)
     }
 }
 

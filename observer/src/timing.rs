@@ -118,7 +118,11 @@ pub struct ToAgent<'a> {
 /// — and writes the action into `u` (zero where there is none to apply).
 pub fn act(agent: &mut dyn Agent, greedy: bool, t: &ToAgent, u: &mut [f64]) {
     match (greedy, t.call) {
-        (true, Call::Start | Call::Learn) => agent.greedy(t.step, t.x, t.u_prev, u),
+        (true, Call::Start) => {
+            agent.start_greedy_trial();
+            agent.greedy(t.step, t.x, t.u_prev, u);
+        }
+        (true, Call::Learn) => agent.greedy(t.step, t.x, t.u_prev, u),
         (true, _) | (false, Call::Hold) => u.fill(0.0),
         (false, Call::Start) => agent.start_trial(t.x, u),
         (false, Call::Learn) => agent.learn(t.reward, t.x, Some(u)),

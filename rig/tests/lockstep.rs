@@ -531,6 +531,51 @@ fn a_regulator_of_the_learned_model_balances_the_acrobot() {
     assert!(last >= -30.0, "greedy returns {greedy:?}");
 }
 
+/// MLAC whose actions the iterative LQR plans with its learned model (`[planning] method
+/// = "ilqr"`, examples/acrobot/mlac-ilqr.toml) carries each sample's plan to the next; a
+/// run of the acrobot's swing-up stopped after 2 trials and resumed to 4 writes the
+/// 4-trial run's returns, greedy evaluations included, byte for byte.
+#[test]
+fn a_run_planning_with_the_ilqr_resumes_to_the_whole_runs_bytes() {
+    let Some(python) = common::drivers::python() else {
+        return;
+    };
+    let dir = tmp("acrobot-ilqr-resume");
+    let task = root().join("examples/acrobot/acrobot.toml");
+    let config = root().join("examples/acrobot/mlac-ilqr.toml");
+    let (task, config) = (task.to_str().unwrap(), config.to_str().unwrap());
+    let d = Driver::script(
+        &python,
+        "examples/acrobot/driver.py",
+        "acrobot-ilqr",
+        &["--task", task],
+    );
+    let args = |trials| {
+        [
+            "--task",
+            task,
+            "--config",
+            config,
+            "--eval-every",
+            "1",
+            "--trials",
+            trials,
+        ]
+    };
+    ok(run(&d.id, &args("4"), &dir.join("whole")));
+    ok(run(&d.id, &args("2"), &dir.join("part")));
+    ok(rig()
+        .args([
+            "run", "--plant", "external", "--driver", &d.id, "--quiet", "--trials", "4",
+        ])
+        .arg("--resume")
+        .arg(dir.join("part"))
+        .output()
+        .unwrap());
+    assert_eq!(returns(&dir.join("part")), returns(&dir.join("whole")));
+    assert_eq!(greedy_returns(&dir.join("whole")).len(), 4);
+}
+
 /// Whether the run in `dir` learned the driver's rewards: every measurement flagged
 /// DRIVER_REWARD and the recording's metadata `reward_from = driver` (`Some(true)`), or
 /// neither (`Some(false)`); `None` if they disagree.
