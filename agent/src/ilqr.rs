@@ -371,14 +371,11 @@ mod tests {
     }
 
     /// With a linear model the terminal cost is the exact cost-to-go, so the plan's first
-    /// action is the infinite-horizon LQR's, `−k x` (`k = γ b s / (1 + γ b² s)`, `s` the
-    /// scalar discounted Riccati equation's root), over one sample or ten.
+    /// action is the infinite-horizon LQR's, `−k x`, over one sample or ten.
     #[test]
     fn on_a_linear_model_the_plan_is_the_lqr() {
-        let (b, gamma): (f64, f64) = (0.5, 0.9);
-        let (qa, qb) = (gamma * b * b, 1.0 - gamma - gamma * b * b);
-        let s = (-qb + (qb * qb + 4.0 * qa).sqrt()) / (2.0 * qa);
-        let k = gamma * b * s / (1.0 + gamma * b * b * s);
+        let (b, gamma) = (0.5, 0.9);
+        let k = testing::scalar_lqr_gain(b, gamma);
         for horizon in [1, 10] {
             let p = planner(b, gamma, horizon);
             let mut u = [0.0];

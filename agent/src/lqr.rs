@@ -268,11 +268,8 @@ mod tests {
     /// fitted at the reference or at the state.
     #[test]
     fn the_action_is_the_discounted_lqr_gains() {
-        let (b, gamma): (f64, f64) = (0.5, 0.9);
-        // γ b² s² + (1 − γ − γ b²) s − 1 = 0
-        let (qa, qb) = (gamma * b * b, 1.0 - gamma - gamma * b * b);
-        let s = (-qb + (qb * qb + 4.0 * qa).sqrt()) / (2.0 * qa);
-        let k = gamma * b * s / (1.0 + gamma * b * b * s);
+        let (b, gamma) = (0.5, 0.9);
+        let k = testing::scalar_lqr_gain(b, gamma);
         for fit_at in [FitAt::Reference, FitAt::State] {
             let mut lqr = regulator(b, gamma, None);
             lqr.config.fit_at = fit_at;

@@ -171,3 +171,12 @@ pub fn constant(c: f64) -> Rbf {
     f.parameters_mut()[0] = c;
     f
 }
+
+/// The discounted LQR gain of the tiny task (`ρ = −x² − u²`, `x' = x + b u`): the scalar
+/// Riccati equation `γ b² s² + (1 − γ − γ b²) s − 1 = 0` solved in closed form,
+/// `k = γ b s / (1 + γ b² s)`.
+pub fn scalar_lqr_gain(b: f64, gamma: f64) -> f64 {
+    let (qa, qb) = (gamma * b * b, 1.0 - gamma - gamma * b * b);
+    let s = (-qb + (qb * qb + 4.0 * qa).sqrt()) / (2.0 * qa);
+    gamma * b * s / (1.0 + gamma * b * b * s)
+}
