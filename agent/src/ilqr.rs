@@ -84,6 +84,12 @@ struct Rollout {
     cost: f64,
 }
 
+/// The cost-to-go's quadratic expansion at one sample of the plan: `V_x` and `V_xx`.
+struct Value {
+    x: DVector<f64>,
+    xx: DMatrix<f64>,
+}
+
 /// The feedback of a backward pass: `k_i` and `K_i` of every step.
 struct Feedback {
     k: Vec<DVector<f64>>,
@@ -223,54 +229,80 @@ impl Ilqr {
 
     /// Step 2 with regularisation `μ`; `None` if some `Q_uu` is not positive definite.
     fn backward(&self, r: &Rollout, s: &DMatrix<f64>, mu: f64) -> Option<Feedback> {
-        let (n, m, h, g) = (self.info().n(), self.info().m(), self.horizon(), self.gamma);
-        let reward = &self.info().reward;
-        let lxx =
-            DMatrix::from_diagonal(&DVector::from_iterator(n, self.q.iter().map(|q| 2.0 * q)));
-        let luu = DMatrix::from_diagonal(&DVector::from_iterator(
-            m,
-            reward.p.iter().map(|p| 2.0 * p + mu),
-        ));
+        let (n, m, h) = (self.info().n(), self.info().m(), self.horizon());
+        let diagonal = |v: &[f64], add: f64| {
+            DMatrix::from_diagonal(&DVector::from_iterator(
+                v.len(),
+                v.iter().map(|w| 2.0 * w + add),
+            ))
+        };
+        let (lxx, luu) = (diagonal(&self.q, 0.0), diagonal(&self.info().reward.p, mu));
+        // V at the plan's end: the terminal cost z̃_Hᵀ S z̃_H
         let mut z = self.error(&r.xs[h]);
         z.push(1.0);
         let sz = s * DVector::from_vec(z);
-        let mut vx = 2.0 * sz.rows(0, n).clone_owned();
-        let mut vxx = 2.0 * s.view((0, 0), (n, n)).clone_owned();
+        let mut v = Value {
+            x: 2.0 * sz.rows(0, n).clone_owned(),
+            xx: 2.0 * s.view((0, 0), (n, n)).clone_owned(),
+        };
         let mut fb = Feedback {
             k: vec![DVector::zeros(m); h],
             gain: vec![DMatrix::zeros(m, n); h],
         };
         for i in (0..h).rev() {
-            let (a, b) = &r.fits[i];
-            let (x, u) = (&r.xs[i], &r.us[i * m..(i + 1) * m]);
-            let (mut lx, mut lu) = (vec![0.0; n], vec![0.0; m]);
-            reward.grad_x(x, &mut lx);
-            reward.grad_u(u, &mut lu);
-            let qx = -DVector::from_vec(lx) + g * a.transpose() * &vx;
-            let qu = -DVector::from_vec(lu) + g * b.transpose() * &vx;
-            let qxx = &lxx + g * a.transpose() * &vxx * a;
-            let quu = &luu + g * b.transpose() * &vxx * b;
-            let qux = g * b.transpose() * &vxx * a;
-            let chol = quu.clone().cholesky()?;
-            let mut k = -chol.solve(&qu);
-            let mut gain = -chol.solve(&qux);
-            for j in 0..m {
-                let (lo, hi) = (self.info().action_low[j], self.info().action_high[j]);
-                if (u[j] >= hi && k[j] > 0.0) || (u[j] <= lo && k[j] < 0.0) {
-                    k[j] = 0.0;
-                    gain.row_mut(j).fill(0.0);
-                }
-            }
-            vx = &qx + gain.transpose() * &quu * &k + gain.transpose() * &qu + qux.transpose() * &k;
-            let v = &qxx
-                + gain.transpose() * &quu * &gain
-                + gain.transpose() * &qux
-                + qux.transpose() * &gain;
-            vxx = 0.5 * (&v + v.transpose());
-            fb.k[i] = k;
-            fb.gain[i] = gain;
+            (fb.k[i], fb.gain[i], v) = self.step_back(r, i, &v, &lxx, &luu)?;
         }
         Some(fb)
+    }
+
+    /// One step of the backward pass at sample `i`: `k_i`, `K_i` and `V` there, from `V`
+    /// at sample `i + 1`.
+    fn step_back(
+        &self,
+        r: &Rollout,
+        i: usize,
+        next: &Value,
+        lxx: &DMatrix<f64>,
+        luu: &DMatrix<f64>,
+    ) -> Option<(DVector<f64>, DMatrix<f64>, Value)> {
+        let (n, m, g) = (self.info().n(), self.info().m(), self.gamma);
+        let reward = &self.info().reward;
+        let (a, b) = &r.fits[i];
+        let (x, u) = (&r.xs[i], &r.us[i * m..(i + 1) * m]);
+        let (mut lx, mut lu) = (vec![0.0; n], vec![0.0; m]);
+        reward.grad_x(x, &mut lx);
+        reward.grad_u(u, &mut lu);
+        // ℓ = −ρ: its gradients are −∂ρ/∂x, −∂ρ/∂u
+        let qx = -DVector::from_vec(lx) + g * a.transpose() * &next.x;
+        let qu = -DVector::from_vec(lu) + g * b.transpose() * &next.x;
+        let qxx = lxx + g * a.transpose() * &next.xx * a;
+        let quu = luu + g * b.transpose() * &next.xx * b;
+        let qux = g * b.transpose() * &next.xx * a;
+        let chol = quu.clone().cholesky()?;
+        let mut k = -chol.solve(&qu);
+        let mut gain = -chol.solve(&qux);
+        self.hold_at_bounds(u, &mut k, &mut gain);
+        let vx = &qx + gain.transpose() * &quu * &k + gain.transpose() * &qu + qux.transpose() * &k;
+        let vxx = &qxx
+            + gain.transpose() * &quu * &gain
+            + gain.transpose() * &qux
+            + qux.transpose() * &gain;
+        let value = Value {
+            x: vx,
+            xx: 0.5 * (&vxx + vxx.transpose()),
+        };
+        Some((k, gain, value))
+    }
+
+    /// `k_j` and row `j` of `K` zero for an action at its bound that `k` pushes beyond.
+    fn hold_at_bounds(&self, u: &[f64], k: &mut DVector<f64>, gain: &mut DMatrix<f64>) {
+        for j in 0..u.len() {
+            let (lo, hi) = (self.info().action_low[j], self.info().action_high[j]);
+            if (u[j] >= hi && k[j] > 0.0) || (u[j] <= lo && k[j] < 0.0) {
+                k[j] = 0.0;
+                gain.row_mut(j).fill(0.0);
+            }
+        }
     }
 
     /// Step 3: the first step `α` whose rollout lowers `J`, if any.
