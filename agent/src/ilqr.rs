@@ -406,18 +406,9 @@ mod tests {
     /// action is the infinite-horizon LQR's, `−k x`, over one sample or ten.
     #[test]
     fn on_a_linear_model_the_plan_is_the_lqr() {
-        let (b, gamma) = (0.5, 0.9);
-        let k = testing::scalar_lqr_gain(b, gamma);
         for horizon in [1, 10] {
-            let p = planner(b, gamma, horizon);
-            let mut u = [0.0];
-            p.act(&[0.8], &[0.0], &constant(0.0), &mut u);
-            assert!(
-                (u[0] + k * 0.8).abs() < 1e-6,
-                "H = {horizon}: u = {}, −k x = {}",
-                u[0],
-                -k * 0.8
-            );
+            let p = planner(0.5, 0.9, horizon);
+            testing::acts_as_lqr(&p, 0.5, 0.9, 1e-6, &format!("H = {horizon}"));
         }
     }
 

@@ -268,19 +268,10 @@ mod tests {
     /// fitted at the reference or at the state.
     #[test]
     fn the_action_is_the_discounted_lqr_gains() {
-        let (b, gamma) = (0.5, 0.9);
-        let k = testing::scalar_lqr_gain(b, gamma);
         for fit_at in [FitAt::Reference, FitAt::State] {
-            let mut lqr = regulator(b, gamma, None);
+            let mut lqr = regulator(0.5, 0.9, None);
             lqr.config.fit_at = fit_at;
-            let mut u = [0.0];
-            lqr.act(&[0.8], &[0.0], &constant(0.0), &mut u);
-            assert!(
-                (u[0] + k * 0.8).abs() < 1e-7,
-                "{fit_at:?}: u = {}, −k x = {}",
-                u[0],
-                -k * 0.8
-            );
+            testing::acts_as_lqr(&lqr, 0.5, 0.9, 1e-7, &format!("{fit_at:?}"));
         }
     }
 

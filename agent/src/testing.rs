@@ -172,11 +172,19 @@ pub fn constant(c: f64) -> Rbf {
     f
 }
 
-/// The discounted LQR gain of the tiny task (`ρ = −x² − u²`, `x' = x + b u`): the scalar
-/// Riccati equation `γ b² s² + (1 − γ − γ b²) s − 1 = 0` solved in closed form,
-/// `k = γ b s / (1 + γ b² s)`.
-pub fn scalar_lqr_gain(b: f64, gamma: f64) -> f64 {
+/// Asserts that `improver` acts from `x = 0.8` as the discounted LQR of the tiny task
+/// (`ρ = −x² − u²`, `x' = x + b u`), `u = −k x` within `tol`: the scalar Riccati equation
+/// `γ b² s² + (1 − γ − γ b²) s − 1 = 0` solved in closed form, `k = γ b s / (1 + γ b² s)`.
+pub fn acts_as_lqr(improver: &dyn Improver, b: f64, gamma: f64, tol: f64, label: &str) {
     let (qa, qb) = (gamma * b * b, 1.0 - gamma - gamma * b * b);
     let s = (-qb + (qb * qb + 4.0 * qa).sqrt()) / (2.0 * qa);
-    gamma * b * s / (1.0 + gamma * b * b * s)
+    let k = gamma * b * s / (1.0 + gamma * b * b * s);
+    let mut u = [0.0];
+    improver.act(&[0.8], &[0.0], &constant(0.0), &mut u);
+    assert!(
+        (u[0] + k * 0.8).abs() < tol,
+        "{label}: u = {}, −k x = {}",
+        u[0],
+        -k * 0.8
+    );
 }
