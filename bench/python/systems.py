@@ -70,8 +70,12 @@ def read_matrix(path: Path):
             sys.exit(f"{where}: success must be {{ upright = A, hold = S }} or "
                      f"{{ return_at_least = R }}, not {s}")
         for learner in e["learners"]:
-            if sorted(learner) != ["flags", "label"]:
-                sys.exit(f"{where}: a learner is {{ label = \"…\", flags = [\"…\"] }}, not {learner}")
+            if not {"flags", "label"} <= learner.keys() <= {"flags", "label", "trials"}:
+                sys.exit(f"{where}: a learner is {{ label = \"…\", flags = [\"…\"] }} and "
+                         f"optionally trials = N, not {learner}")
+            t = learner.get("trials", e["trials"])
+            if type(t) is not int or t < 1:
+                sys.exit(f"{where}: trials must be a whole number >= 1, not {t!r}")
     return experiments
 
 
@@ -92,8 +96,9 @@ def learn(e, learner, folder: Path, seeds: int, env):
     # A seed interrupted part way leaves its folder; it is run again from its start.
     shutil.rmtree(folder / f"seed-{done + 1}", ignore_errors=True)
     print(f"{e['name']} × {learner['label']}: seeds {done + 1}..{seeds}", flush=True)
+    trials = learner.get("trials", e["trials"])
     run = subprocess.run(
-        [str(SEEDS_SH), str(folder), str(seeds - done), str(e["trials"]), e["task"], *e["driver"],
+        [str(SEEDS_SH), str(folder), str(seeds - done), str(trials), e["task"], *e["driver"],
          "--", *learner["flags"]],
         cwd=ROOT, env={**env, "FIRST": str(done + 1)},
     )
@@ -181,7 +186,7 @@ def main():
                    help="the experiments (default bench/python/systems.toml)")
     p.add_argument("--seeds", type=int, default=5, help="seeds per experiment × learner (1..N) [default: 5]")
     p.add_argument("--only", default="", help="comma-separated experiment names to run (default all)")
-    p.add_argument("--trials", type=int, help="trials per run instead of each experiment's own (a short look)")
+    p.add_argument("--trials", type=int, help="trials per run instead of each experiment's and learner's own (a short look)")
     p.add_argument("--sb3", action="store_true", help="also run bench/python/sb3_pendulum.py, 20 000 steps")
     p.add_argument("--rig", type=Path, default=ROOT / "target" / "release" / "rig",
                    help="the rig binary [default: the release build]")
@@ -203,7 +208,8 @@ def main():
         if only and e["name"] not in only:
             continue
         if args.trials is not None:
-            e = {**e, "trials": args.trials}
+            e = {**e, "trials": args.trials,
+                 "learners": [{**l, "trials": args.trials} for l in e["learners"]]}
         curves = []
         for learner in e["learners"]:
             folder = args.out / e["name"] / slug(learner["label"])

@@ -128,4 +128,19 @@ fn a_bad_matrix_is_refused_in_one_line() {
         err.contains("bad.toml") && err.contains("sytem") && err.contains("system"),
         "{err}"
     );
+    let learner = "learners = [{ label = \"a\", flags = [], trials = 0 }]";
+    std::fs::write(
+        &matrix,
+        format!("[[experiment]]\nname = \"x\"\nsystem = \"s\"\ntask = \"t\"\ndriver = []\ntrials = 5\nsuccess = {{ return_at_least = 0.0 }}\n{learner}\n"),
+    )
+    .unwrap();
+    let out = systems(
+        &python,
+        &dir.join("out"),
+        &["--matrix", matrix.to_str().unwrap()],
+    );
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("trials must be a whole number"), "{err}");
 }
