@@ -113,34 +113,33 @@ fn a_bad_matrix_is_refused_in_one_line() {
     let Some(python) = interpreter() else {
         return;
     };
-    let dir = common::tmp("systems", "bad");
-    let matrix = dir.join("bad.toml");
-    std::fs::write(&matrix, "[[experiment]]\nname = \"x\"\nsytem = \"typo\"\n").unwrap();
-    let out = systems(
-        &python,
-        &dir.join("out"),
-        &["--matrix", matrix.to_str().unwrap()],
-    );
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    let err = refused(&python, "[[experiment]]\nname = \"x\"\nsytem = \"typo\"\n");
     assert!(
         err.contains("bad.toml") && err.contains("sytem") && err.contains("system"),
         "{err}"
     );
     let learner = "learners = [{ label = \"a\", flags = [], trials = 0 }]";
-    std::fs::write(
-        &matrix,
-        format!("[[experiment]]\nname = \"x\"\nsystem = \"s\"\ntask = \"t\"\ndriver = []\ntrials = 5\nsuccess = {{ return_at_least = 0.0 }}\n{learner}\n"),
-    )
-    .unwrap();
-    let out = systems(
+    let err = refused(
         &python,
+        &format!(
+            "[[experiment]]\nname = \"x\"\nsystem = \"s\"\ntask = \"t\"\ndriver = []\ntrials = 5\nsuccess = {{ return_at_least = 0.0 }}\n{learner}\n"
+        ),
+    );
+    assert!(err.contains("trials must be a whole number"), "{err}");
+}
+
+/// The one-line error of `systems.py --matrix` on a matrix file `bad.toml` holding `text`.
+fn refused(python: &str, text: &str) -> String {
+    let dir = common::tmp("systems", "bad");
+    let matrix = dir.join("bad.toml");
+    std::fs::write(&matrix, text).unwrap();
+    let out = systems(
+        python,
         &dir.join("out"),
         &["--matrix", matrix.to_str().unwrap()],
     );
     assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
     assert_eq!(err.trim().lines().count(), 1, "{err}");
-    assert!(err.contains("trials must be a whole number"), "{err}");
+    err
 }
