@@ -3,7 +3,7 @@
 Gymnasium Pendulum-v1: environment steps and wall time until the greedy return first
 reaches a common level, per seed, and the learning curves in one plot.
 
-    python3 bench/python/sb3_pendulum.py OUT [--seeds 3] [--steps 40000] [--level -300]
+    python3 bench/python/sb3_pendulum.py OUT [--seeds 3] [--steps 40000] [--level -300] [--rig R]
 
 Both sides are evaluated alike: the greedy (deterministic) policy, one 200-step episode
 from each of the task's four start states (examples/gymnasium/pendulum-v1.toml), the
@@ -15,13 +15,15 @@ users run it. Steps count learning steps only; wall time is the whole run's, eva
 included, on the machine this runs on.
 
 Writes OUT/curves.csv (learner, seed, steps, wall_s, greedy_return), OUT/curves.png/.svg,
-OUT/summary.md. Needs stable-baselines3 (with torch), gymnasium, iceoryx2 0.10.0,
-matplotlib, and the release build of the rig.
+OUT/summary.md. Each learner's seed is appended to curves.csv as it finishes, and a second
+call keeps those already there (a call interrupted part way goes on where it stopped);
+a folder holding runs of another length is refused. Needs stable-baselines3 (with
+torch), gymnasium, iceoryx2 0.10.0, matplotlib, and the release build of the rig.
 """
 
 import argparse
 import csv
-import math
+import shutil
 import statistics
 import subprocess
 import sys
@@ -76,9 +78,8 @@ def sb3_sac(seed: int, steps: int, starts):
     return curve
 
 
-def rig_learner(algo: str, seed: int, steps: int, out: Path, python: str):
+def rig_learner(rig: Path, algo: str, seed: int, steps: int, out: Path, python: str):
     """A learner of the rig through the adapter: [(steps, wall_s, greedy_return)]."""
-    rig = ROOT / "target" / "release" / "rig"
     driver_id = f"bench-gym-{algo}-{seed}"
     adapter = subprocess.Popen(
         [python, str(ROOT / "examples/gymnasium/adapter.py"), "--mapping",
@@ -86,15 +87,19 @@ def rig_learner(algo: str, seed: int, steps: int, out: Path, python: str):
         stderr=subprocess.DEVNULL,
     )
     run_dir = out / f"rig-{algo}-{seed}"
+    # A run interrupted part way left its folder; it is run again from its start.
+    shutil.rmtree(run_dir, ignore_errors=True)
     try:
         t0 = time.monotonic()
-        subprocess.run(
+        run = subprocess.run(
             [str(rig), "run", "--plant", "external", "--driver", driver_id, "--task", str(TASK),
              "--algo", algo, "--approx", "llr", "--seed", str(seed), "--trials", str(steps // EPISODE),
              "--eval-every", str(EVAL_EVERY // EPISODE), "--quiet", "--out", str(run_dir)],
-            check=True,
         )
         wall = time.monotonic() - t0
+        if run.returncode != 0:
+            sys.exit(f"rig run {algo} seed {seed} failed (its error above); "
+                     f"the finished runs are kept in {out}: call again to go on")
     finally:
         adapter.terminate()
         adapter.wait()
@@ -113,30 +118,72 @@ def first_reaching(curve, level):
     return next(((s, w) for s, w, g in curve if g >= level), None)
 
 
+HEADER = ["learner", "seed", "steps", "wall_s", "greedy_return"]
+
+
+def kept_curves(path: Path, steps: int):
+    """The finished runs of an earlier call, {(learner, seed): curve}; exits in one line
+    if they learned for another number of steps."""
+    curves = {}
+    if not path.exists():
+        return curves
+    with open(path) as f:
+        for r in csv.DictReader(f):
+            curve = curves.setdefault((r["learner"], int(r["seed"])), [])
+            curve.append((int(r["steps"]), float(r["wall_s"]), float(r["greedy_return"])))
+    if other := sorted({c[-1][0] for c in curves.values()} - {steps}):
+        sys.exit(f"{path}: holds runs of {other[0]} steps, not --steps {steps}: "
+                 "use another folder or the same --steps")
+    return curves
+
+
+def append(path: Path, learner: str, seed: int, curve):
+    """One finished run's evaluations, appended to curves.csv (its header if new)."""
+    new = not path.exists()
+    with open(path, "a", newline="") as f:
+        w = csv.writer(f)
+        if new:
+            w.writerow(HEADER)
+        for s, t, g in curve:
+            w.writerow([learner, seed, s, f"{t:.3f}", g])
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("out")
-    p.add_argument("--seeds", type=int, default=3)
-    p.add_argument("--steps", type=int, default=40000, help="learning steps per run")
-    p.add_argument("--level", type=float, default=-300.0, help="the common greedy-return level")
+    p.add_argument("out", help="the output folder (kept: a second call resumes)")
+    p.add_argument("--seeds", type=int, default=3, help="seeds 1..N per learner [default: 3]")
+    p.add_argument("--steps", type=int, default=40000,
+                   help=f"learning steps per run, a multiple of {EVAL_EVERY} [default: 40000]")
+    p.add_argument("--level", type=float, default=-300.0,
+                   help="the common greedy-return level [default: -300]")
+    p.add_argument("--rig", type=Path, default=ROOT / "target" / "release" / "rig",
+                   help="the rig binary [default: the release build]")
     p.add_argument("--python", default=sys.executable, help="the interpreter for the adapter")
     args = p.parse_args()
+    if args.seeds < 1:
+        p.error("--seeds must be at least 1")
+    if args.steps < EVAL_EVERY or args.steps % EVAL_EVERY:
+        p.error(f"--steps must be a positive multiple of {EVAL_EVERY} (one evaluation each)")
+    if not args.rig.exists():
+        p.error(f"--rig {args.rig}: no such rig binary (cargo build --release -p rig)")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     starts = Task.read(str(TASK)).starts
+    table = out / "curves.csv"
+    kept = kept_curves(table, args.steps)
     curves = {}
     for seed in range(1, args.seeds + 1):
-        for algo in ("mlac", "sac"):
-            curves[(f"rig {algo.upper()}/LLR", seed)] = rig_learner(algo, seed, args.steps, out, args.python)
-            print(f"rig {algo} seed {seed}: {curves[(f'rig {algo.upper()}/LLR', seed)][-1]}", flush=True)
-        curves[("SB3 SAC", seed)] = sb3_sac(seed, args.steps, starts)
-        print(f"sb3 sac seed {seed}: {curves[('SB3 SAC', seed)][-1]}", flush=True)
-    with open(out / "curves.csv", "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["learner", "seed", "steps", "wall_s", "greedy_return"])
-        for (learner, seed), curve in curves.items():
-            for s, t, g in curve:
-                w.writerow([learner, seed, s, f"{t:.3f}", g])
+        runs = [(f"rig {a.upper()}/LLR", lambda a=a: rig_learner(args.rig, a, seed, args.steps, out, args.python))
+                for a in ("mlac", "sac")]
+        runs.append(("SB3 SAC", lambda: sb3_sac(seed, args.steps, starts)))
+        for learner, learn in runs:
+            if (learner, seed) in kept:
+                curves[(learner, seed)] = kept[(learner, seed)]
+                print(f"{learner} seed {seed}: kept from {table}", flush=True)
+                continue
+            curves[(learner, seed)] = learn()
+            append(table, learner, seed, curves[(learner, seed)])
+            print(f"{learner} seed {seed}: {curves[(learner, seed)][-1]}", flush=True)
     summarize(curves, args, out)
     plot(curves, out)
 
@@ -153,10 +200,11 @@ def summarize(curves, args, out: Path):
         runs = [c for (name, _), c in curves.items() if name == learner]
         reached = [first_reaching(c, args.level) for c in runs]
         hit = [r for r in reached if r is not None]
-        med = lambda v: statistics.median(v) if v else math.nan  # noqa: E731
+        med = lambda v, spec, unit="": format(statistics.median(v), spec) + unit if v else "—"  # noqa: E731
         lines.append(
-            f"| {learner} | {len(hit)} of {len(runs)} | {med([s for s, _ in hit]):.0f} | {med([w for _, w in hit]):.1f} s "
-            f"| {med([c[-1][2] for c in runs]):.1f} | {med([c[-1][1] for c in runs]):.1f} s |"
+            f"| {learner} | {len(hit)} of {len(runs)} | {med([s for s, _ in hit], '.0f')} "
+            f"| {med([w for _, w in hit], '.1f', ' s')} | {med([c[-1][2] for c in runs], '.1f')} "
+            f"| {med([c[-1][1] for c in runs], '.1f', ' s')} |"
         )
     text = "\n".join(lines) + "\n"
     (out / "summary.md").write_text(text)

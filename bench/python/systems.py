@@ -12,7 +12,7 @@ with the same seeds (bench/python/sb3_pendulum.py).
 
 Resumable: a learner's seeds already in OUT/<experiment>/<learner>/wall.csv are kept
 and the next seed starts where they stop (an interrupted seed is run again from its
-start). Writes OUT/table.md (the whole report), OUT/table.csv and OUT/<experiment>.png
+start; --sb3's finished runs are kept the same way). Writes OUT/table.md (the whole report), OUT/table.csv and OUT/<experiment>.png
 (median greedy return over the seeds against simulated seconds of learning, the band from
 the worst to the best seed). Needs iceoryx2 0.10.0, mcap and matplotlib (and what each
 driver imports: gymnasium for the adapter); --sb3 needs stable-baselines3.
@@ -221,9 +221,12 @@ def main():
     sb3 = None
     if args.sb3:
         sb3 = args.out / "pendulum-v1"
-        subprocess.run([args.python, str(ROOT / "bench" / "python" / "sb3_pendulum.py"), str(sb3),
-                        "--seeds", str(args.seeds), "--steps", "20000", "--python", args.python],
-                       cwd=ROOT, check=True)
+        run = subprocess.run([args.python, str(ROOT / "bench" / "python" / "sb3_pendulum.py"), str(sb3),
+                              "--seeds", str(args.seeds), "--steps", "20000", "--rig", str(args.rig.resolve()),
+                              "--python", args.python], cwd=ROOT)
+        if run.returncode != 0:
+            sys.exit(f"--sb3: the Pendulum-v1 comparison failed (its error above); "
+                     f"its finished runs are kept in {sb3}: call again to go on")
     text = report(rows, args.out, sb3)
     (args.out / "table.md").write_text(text)
     print(text)

@@ -143,3 +143,71 @@ fn refused(python: &str, text: &str) -> String {
     assert_eq!(err.trim().lines().count(), 1, "{err}");
     err
 }
+
+/// `sb3_pendulum.py OUT --seeds 1 --steps 2000` with `args`, the rig under test.
+fn comparison(python: &str, out: &Path, args: &[&str]) -> Output {
+    Command::new(python)
+        .arg(root().join("bench/python/sb3_pendulum.py"))
+        .arg(out)
+        .args(["--seeds", "1", "--steps", "2000", "--python", python])
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// The Pendulum-v1 comparison keeps what an earlier call finished: here Stable-Baselines3's
+/// seed (CI does not install it; its evaluation is written as an earlier call would have),
+/// and on a second call the rig's runs too. Runs of another length, or a rig that is not
+/// there, are refused in one line.
+#[test]
+fn the_pendulum_comparison_keeps_the_runs_an_earlier_call_finished() {
+    let Some(python) = interpreter() else {
+        return;
+    };
+    let gym = Command::new(&python)
+        .args(["-c", "import gymnasium"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !gym {
+        println!("skipped: {python} cannot import gymnasium");
+        return;
+    }
+    let out = common::tmp("systems", "sb3").join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let kept = "learner,seed,steps,wall_s,greedy_return\nSB3 SAC,1,2000,61.500,-150.25\n";
+    std::fs::write(out.join("curves.csv"), kept).unwrap();
+    let rig = ["--rig", env!("CARGO_BIN_EXE_rig")];
+
+    let first = common::ok(comparison(&python, &out, &rig));
+    let text = String::from_utf8_lossy(&first.stdout);
+    assert!(text.contains("SB3 SAC seed 1: kept"), "{text}");
+    assert!(text.contains("| SB3 SAC | 1 of 1 | 2000 | 61.5 s | -150.2 | 61.5 s |"), "{text}");
+    for learner in ["rig MLAC/LLR", "rig SAC/LLR"] {
+        assert!(text.contains(&format!("| {learner} | ")), "{text}");
+    }
+    let curves = std::fs::read_to_string(out.join("curves.csv")).unwrap();
+    assert!(curves.starts_with(kept), "{curves}");
+    assert_eq!(curves.lines().count(), 4, "{curves}");
+    let returns = out.join("rig-mlac-1/returns.csv");
+    let modified = || std::fs::metadata(&returns).unwrap().modified().unwrap();
+    let ran = modified();
+
+    let again = common::ok(comparison(&python, &out, &rig));
+    let text = String::from_utf8_lossy(&again.stdout);
+    assert_eq!(text.matches(": kept from ").count(), 3, "{text}");
+    assert_eq!(modified(), ran, "the rig's run kept, not run again");
+    assert_eq!(
+        std::fs::read_to_string(out.join("curves.csv")).unwrap(),
+        curves
+    );
+
+    let longer = comparison(&python, &out, &[&rig[..], &["--steps", "4000"]].concat());
+    let err = String::from_utf8_lossy(&longer.stderr);
+    assert!(!longer.status.success());
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(err.contains("holds runs of 2000 steps"), "{err}");
+    let absent = comparison(&python, &out, &["--rig", "/nonexistent/rig"]);
+    let err = String::from_utf8_lossy(&absent.stderr);
+    assert!(!absent.status.success());
+    assert!(err.contains("/nonexistent/rig: no such rig binary"), "{err}");
+}
