@@ -3,7 +3,9 @@
 each seed, the greedy return at the last evaluation, whether it succeeds, the simulated
 seconds of learning until the first evaluation that succeeds, the mean return of its
 last 100 learning trials (with exploration, from the learning trials' starts) and the
-run's wall time.
+run's wall time, and the agent's step per sample (from receiving the estimate to
+publishing the action, the recording's `/timing/agent/action`: the learner's compute,
+and what the machine's other work added to it).
 
     python3 bench/python/seeds_report.py OUT --return-at-least 90
     python3 bench/python/seeds_report.py OUT --upright 0.3 --hold 1.5
@@ -15,7 +17,7 @@ An evaluation succeeds
                         run's recording, run.mcap) runs its full length and its last S
                         seconds keep every angle state within A rad of 0 (upright).
 Prints a Markdown table and a line "K of N seeds succeed at the last evaluation".
-Needs mcap (the official reader) for --upright.
+Needs mcap (the official reader).
 """
 
 import argparse
@@ -44,21 +46,36 @@ def task_of(run_dir: Path):
     return task["sampling_time"], task["trial_seconds"], angles
 
 
-def greedy_measurements(mcap_path: Path):
-    """evaluation (the learning trial it follows) -> [[measurement message per step] per
-    greedy trial], from a run's recording."""
+def read_recording(mcap_path: Path, greedy: bool = True, agent: bool = True):
+    """From a run's recording: evaluation (the learning trial it follows) -> [[measurement
+    message per step] per greedy trial] (if `greedy`), and the agent's step of every
+    sample in ns (if `agent`: from receiving the estimate to publishing the action,
+    `/timing/agent/action`)."""
     from mcap.reader import make_reader
 
-    evals = {}
+    evals, steps = {}, []
+    topics = (["/timing/agent/action"] if agent else []) + (["/plant/measurement"] if greedy else [])
     with open(mcap_path, "rb") as f:
-        for _, _, msg in make_reader(f).iter_messages(topics=["/plant/measurement"]):
+        for _, channel, msg in make_reader(f).iter_messages(topics=topics):
             m = json.loads(msg.data)
-            if m["flags"] & FLAG_GREEDY:
+            if channel.topic == "/timing/agent/action":
+                steps.append(m["t_publish_ns"] - m["t_received_ns"])
+            elif m["flags"] & FLAG_GREEDY:
                 trials = evals.setdefault(m["trial"], [])
                 if m["step"] == 0 or not trials:
                     trials.append([])
                 trials[-1].append(m)
-    return evals
+    return evals, steps
+
+
+def greedy_measurements(mcap_path: Path):
+    """The greedy trials' measurement messages of `read_recording`, alone."""
+    return read_recording(mcap_path, agent=False)[0]
+
+
+def percentile(sorted_values, q: float):
+    """The nearest-rank `q` percentile (0 < q <= 100) of a sorted list."""
+    return sorted_values[max(0, math.ceil(q / 100 * len(sorted_values)) - 1)]
 
 
 def states(measurement) -> list:
@@ -66,12 +83,9 @@ def states(measurement) -> list:
     return [measurement[f"y_{i}"] for i in range(sum(k.startswith("y_") for k in measurement))]
 
 
-def greedy_trials(mcap_path: Path):
-    """evaluation (the learning trial it follows) -> [[state per step] per greedy trial]."""
-    return {
-        e: [[states(m) for m in trial] for trial in trials]
-        for e, trials in greedy_measurements(mcap_path).items()
-    }
+def greedy_trials(measurements):
+    """evaluation -> [[state per step] per greedy trial], of `read_recording`'s first part."""
+    return {e: [[states(m) for m in trial] for trial in trials] for e, trials in measurements.items()}
 
 
 def upright_at_end(trial, ts, length, angles, tol, hold) -> bool:
@@ -114,8 +128,9 @@ def seed_results(out: Path, return_at_least=None, upright=None, hold=1.5):
     `seed`, `trials`, `final` (the greedy return at the last evaluation), `succeeds`
     (there), `first_success_s` (simulated seconds of learning until the first evaluation
     that succeeds, or None), `learning_mean` (the last 100 learning trials), `wall_s`,
-    `curve` ([(simulated s, greedy return)] of every evaluation) and `notes` (with
-    `upright`: when each last greedy trial is upright). Success as `main` says: give one
+    `agent_ms` (the agent's step per sample, median and 99th percentile in ms, or None
+    if the recording has none), `curve` ([(simulated s, greedy return)] of every
+    evaluation) and `notes` (with `upright`: when each last greedy trial is upright). Success as `main` says: give one
     of `return_at_least` and `upright`."""
     with open(out / "wall.csv") as f:
         walls = {int(r["seed"]): float(r["wall_s"]) for r in csv.DictReader(f)}
@@ -126,11 +141,13 @@ def seed_results(out: Path, return_at_least=None, upright=None, hold=1.5):
         if not evals:
             sys.exit(f"{run}: no greedy evaluation in returns.csv (learn more trials than eval_every)")
         notes = []
+        measurements, steps = read_recording(run / "run.mcap", greedy=upright is not None)
+        steps.sort()
         if upright is None:
             good = [e[2] >= return_at_least for e in evals]
         else:
             ts, length, angles = task_of(run)
-            greedy = greedy_trials(run / "run.mcap")
+            greedy = greedy_trials(measurements)
             good = [
                 all(upright_at_end(t, ts, length, angles, upright, hold) for t in greedy[e[0]])
                 for e in evals
@@ -149,6 +166,7 @@ def seed_results(out: Path, return_at_least=None, upright=None, hold=1.5):
             "first_success_s": next((e[1] for e, g in zip(evals, good) if g), None),
             "learning_mean": last_learning_mean(run),
             "wall_s": walls[seed],
+            "agent_ms": (percentile(steps, 50) / 1e6, percentile(steps, 99) / 1e6) if steps else None,
             "curve": [(e[1], e[2]) for e in evals],
             "notes": notes,
         })
@@ -167,14 +185,16 @@ def main():
     results = seed_results(args.out, args.return_at_least, args.upright, args.hold)
     print(
         "| seed | trials | greedy return at the last evaluation | succeeds | simulated s to first success "
-        "| mean return, last 100 learning trials | wall time |"
+        "| mean return, last 100 learning trials | wall time | agent's step, median / 99 % |"
     )
-    print("|---:|---:|---:|---|---:|---:|---:|")
+    print("|---:|---:|---:|---|---:|---:|---:|---:|")
     for r in results:
         first = r["first_success_s"]
+        step = "—" if r["agent_ms"] is None else "{:.3f} / {:.3f} ms".format(*r["agent_ms"])
         print(
             f"| {r['seed']} | {r['trials']} | {r['final']:.2f} | {'yes' if r['succeeds'] else 'no'} "
-            f"| {'never' if first is None else f'{first:.0f}'} | {r['learning_mean']:.2f} | {r['wall_s']:.1f} s |"
+            f"| {'never' if first is None else f'{first:.0f}'} | {r['learning_mean']:.2f} | {r['wall_s']:.1f} s "
+            f"| {step} |"
         )
     notes = [n for r in results for n in r["notes"]]
     if notes:

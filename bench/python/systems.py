@@ -2,9 +2,9 @@
 """The systems a lab brings, learned: every experiment of a matrix file (default
 bench/python/systems.toml) × its learners × SEEDS seeds, in lockstep against the
 experiment's Python driver; one table of success rates, simulated seconds of interaction
-to success and wall times, the learning curves, and beside them the published figures of
-the field and (with --sb3) Stable-Baselines3's SAC run here on Gymnasium's Pendulum-v1
-with the same seeds (bench/python/sb3_pendulum.py).
+to success, wall times and the agent's compute per sample, the learning curves, and
+beside them the published figures of the field and (with --sb3) Stable-Baselines3's SAC
+run here on Gymnasium's Pendulum-v1 with the same seeds (bench/python/sb3_pendulum.py).
 
     python3 bench/python/systems.py OUT                      # everything, 5 seeds
     python3 bench/python/systems.py OUT --only furuta-balance --seeds 2
@@ -118,7 +118,8 @@ def median_or_none(values):
 
 
 def summary_row(e, learner, results):
-    """One row of the table: success rate, seconds to success, final return, wall time."""
+    """One row of the table: success rate, seconds to success, final return, wall time,
+    the agent's step."""
     firsts = [r["first_success_s"] for r in results if r["first_success_s"] is not None]
     return {
         "experiment": e["name"], "system": e["system"], "learner": learner["label"],
@@ -126,6 +127,8 @@ def summary_row(e, learner, results):
         "sim_s_to_success": median_or_none(firsts), "ever_succeeded": len(firsts),
         "final_return": median_or_none([r["final"] for r in results]),
         "wall_s": median_or_none([r["wall_s"] for r in results]),
+        "agent_ms_median": median_or_none([r["agent_ms"][0] for r in results if r["agent_ms"]]),
+        "agent_ms_p99": median_or_none([r["agent_ms"][1] for r in results if r["agent_ms"]]),
     }
 
 
@@ -156,14 +159,16 @@ def report(rows, out: Path, sb3: Path | None) -> str:
     """The Markdown report: the table, the published figures, the SB3 comparison."""
     lines = [
         "| system | learner | seeds succeeding | simulated s to first success (median of those that did) "
-        "| greedy return at the end (median) | wall time per run (median) |",
-        "|---|---|---:|---:|---:|---:|",
+        "| greedy return at the end (median) | wall time per run (median) "
+        "| agent's step per sample, median / 99 % (medians of the seeds) |",
+        "|---|---|---:|---:|---:|---:|---:|",
     ]
     for r in rows:
         lines.append(
             f"| {r['system']} | {r['learner']} | {r['succeed']} of {r['seeds']} "
             f"| {fmt(r['sim_s_to_success'], '.0f')} ({r['ever_succeeded']} ever) "
-            f"| {fmt(r['final_return'], '.2f')} | {fmt(r['wall_s'], '.1f')} s |"
+            f"| {fmt(r['final_return'], '.2f')} | {fmt(r['wall_s'], '.1f')} s "
+            f"| {fmt(r['agent_ms_median'], '.3f')} / {fmt(r['agent_ms_p99'], '.3f')} ms |"
         )
     lines += ["", "Published figures for the same kinds of task:", "",
               "| source | task | figure |", "|---|---|---|"]

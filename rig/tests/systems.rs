@@ -1,9 +1,10 @@
 //! The systems benchmark (`bench/python/systems.py`) in a short version: one experiment of
 //! the shipped matrix (the acrobot's balance, one learner, a few trials) runs, its table,
-//! table.csv and curve are written, a second call with one seed more keeps the first
-//! seed's run and adds the second, and a bad matrix file is refused in one line naming
-//! the file and the keys. What the learners reach in full runs is the benchmark's
-//! (docs/results/systems.md).
+//! table.csv (with the agent's step per sample, from the recordings) and curve are
+//! written, a second call with one seed more keeps the first seed's run and adds the
+//! second, and a bad matrix file is refused in one line naming the file and the keys;
+//! the Pendulum-v1 comparison keeps its finished runs. What the learners reach in full
+//! runs is the benchmark's (docs/results/systems.md).
 //!
 //! Needs iceoryx2 0.10.0, mcap and matplotlib importable by `$RIG_PYTHON` (default
 //! `python3`); without them it prints why and passes — CI installs them.
@@ -106,6 +107,25 @@ fn a_short_benchmark_writes_its_table_and_resumes_with_more_seeds() {
     assert_eq!(wall.lines().count(), 3, "{wall}");
     let csv = std::fs::read_to_string(out.join("table.csv")).unwrap();
     assert_eq!(csv.lines().count(), 2, "{csv}");
+    // The agent's step per sample, read from the seeds' recordings: the last two columns
+    // (the system's name before them may hold a quoted comma).
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .ends_with(",agent_ms_median,agent_ms_p99"),
+        "{csv}"
+    );
+    let last: Vec<f64> = csv
+        .lines()
+        .nth(1)
+        .unwrap()
+        .rsplit(',')
+        .take(2)
+        .map(|v| v.parse().unwrap_or_else(|e| panic!("{v}: {e}: {csv}")))
+        .collect();
+    let (median, p99) = (last[1], last[0]);
+    assert!(0.0 < median && median <= p99 && p99 < 1000.0, "{csv}");
 }
 
 #[test]
@@ -181,7 +201,10 @@ fn the_pendulum_comparison_keeps_the_runs_an_earlier_call_finished() {
     let first = common::ok(comparison(&python, &out, &rig));
     let text = String::from_utf8_lossy(&first.stdout);
     assert!(text.contains("SB3 SAC seed 1: kept"), "{text}");
-    assert!(text.contains("| SB3 SAC | 1 of 1 | 2000 | 61.5 s | -150.2 | 61.5 s |"), "{text}");
+    assert!(
+        text.contains("| SB3 SAC | 1 of 1 | 2000 | 61.5 s | -150.2 | 61.5 s |"),
+        "{text}"
+    );
     for learner in ["rig MLAC/LLR", "rig SAC/LLR"] {
         assert!(text.contains(&format!("| {learner} | ")), "{text}");
     }
@@ -209,5 +232,8 @@ fn the_pendulum_comparison_keeps_the_runs_an_earlier_call_finished() {
     let absent = comparison(&python, &out, &["--rig", "/nonexistent/rig"]);
     let err = String::from_utf8_lossy(&absent.stderr);
     assert!(!absent.status.success());
-    assert!(err.contains("/nonexistent/rig: no such rig binary"), "{err}");
+    assert!(
+        err.contains("/nonexistent/rig: no such rig binary"),
+        "{err}"
+    );
 }
