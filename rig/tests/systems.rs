@@ -21,13 +21,18 @@ fn root() -> PathBuf {
 
 /// The interpreter, if it has the benchmark's modules.
 fn interpreter() -> Option<String> {
+    interpreter_with("mcap, matplotlib")
+}
+
+/// The interpreter, if it can import `modules` (comma-separated).
+fn interpreter_with(modules: &str) -> Option<String> {
     let python = python()?;
     let has = Command::new(&python)
-        .args(["-c", "import mcap, matplotlib"])
+        .args(["-c", &format!("import {modules}")])
         .status()
         .is_ok_and(|s| s.success());
     if !has {
-        println!("skipped: {python} cannot import mcap and matplotlib");
+        println!("skipped: {python} cannot import {modules}");
     }
     has.then_some(python)
 }
@@ -181,17 +186,9 @@ fn comparison(python: &str, out: &Path, args: &[&str]) -> Output {
 /// there, are refused in one line.
 #[test]
 fn the_pendulum_comparison_keeps_the_runs_an_earlier_call_finished() {
-    let Some(python) = interpreter() else {
+    let Some(python) = interpreter_with("mcap, matplotlib, gymnasium") else {
         return;
     };
-    let gym = Command::new(&python)
-        .args(["-c", "import gymnasium"])
-        .status()
-        .is_ok_and(|s| s.success());
-    if !gym {
-        println!("skipped: {python} cannot import gymnasium");
-        return;
-    }
     let out = common::tmp("systems", "sb3").join("out");
     std::fs::create_dir_all(&out).unwrap();
     let kept = "learner,seed,steps,wall_s,greedy_return\nSB3 SAC,1,2000,61.500,-150.25\n";
