@@ -130,8 +130,8 @@ def seed_results(out: Path, return_at_least=None, upright=None, hold=1.5):
     that succeeds, or None), `learning_mean` (the last 100 learning trials), `wall_s`,
     `agent_ms` (the agent's step per sample, median and 99th percentile in ms, or None
     if the recording has none), `curve` ([(simulated s, greedy return)] of every
-    evaluation) and `notes` (with `upright`: when each last greedy trial is upright). Success as `main` says: give one
-    of `return_at_least` and `upright`."""
+    evaluation) and `notes` (with `upright`: when each last greedy trial is upright).
+    Success as `main` says: give one of `return_at_least` and `upright`."""
     with open(out / "wall.csv") as f:
         walls = {int(r["seed"]): float(r["wall_s"]) for r in csv.DictReader(f)}
     results = []
