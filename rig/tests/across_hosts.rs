@@ -934,7 +934,12 @@ fn a_second_rig_is_told_who_holds_the_driver() {
                 .output()
                 .unwrap()
         });
-        let first = x.run(&run, &["--trials", "30", "--reset-timeout", "5"]);
+        // Gaps learned through: on a loaded machine the 6 ms period is not always kept,
+        // and this run only has to hold the driver while the second one asks for it.
+        let first = x.run(
+            &run,
+            &["--trials", "30", "--reset-timeout", "5", "--gaps", "learn"],
+        );
         (first, second.join().unwrap())
     });
     assert!(first.status.success(), "{}", text(&first));
