@@ -14,8 +14,9 @@ Resumable: a learner's seeds already in OUT/<experiment>/<learner>/wall.csv are 
 and the next seed starts where they stop (an interrupted seed is run again from its
 start; --sb3's finished runs are kept the same way). Writes OUT/table.md (the whole
 report), OUT/table.csv and OUT/<experiment>.png (median greedy return over the seeds
-against simulated seconds of learning, the band from the worst to the best seed). Needs iceoryx2 0.10.0, mcap and matplotlib (and what each
-driver imports: gymnasium for the adapter); --sb3 needs stable-baselines3.
+against simulated seconds of learning, the band from the worst to the best seed). Needs
+iceoryx2 0.10.0, mcap and matplotlib (and what each driver imports: gymnasium for the
+adapter); --sb3 needs stable-baselines3.
 """
 
 import argparse
