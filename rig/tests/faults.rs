@@ -202,6 +202,46 @@ fn a_finished_run_learns_on_with_more_trials() {
     );
 }
 
+/// A run whose last checkpoint was never written (its agent stopped on a full disk as
+/// the run ended) has every row of `returns.csv` but is not done: `--resume` redoes the
+/// trials after its newest checkpoint and ends with the bytes of a run never stopped.
+#[test]
+fn a_run_without_its_last_checkpoint_is_not_done_and_resume_redoes_the_rest() {
+    let dir = tmp("last-checkpoint");
+    let run = |out: &str| {
+        ok(rig()
+            .arg("run")
+            .args(["--trials", "4", "--eval-every", "2", "--quiet", "--out"])
+            .arg(dir.join(out))
+            .output()
+            .unwrap())
+    };
+    run("whole");
+    run("lost");
+    let last = dir.join("lost/checkpoints/trial-000004.ckpt");
+    std::fs::remove_file(&last).unwrap();
+    let resumed = ok(rig()
+        .args(["run", "--quiet", "--resume"])
+        .arg(dir.join("lost"))
+        .output()
+        .unwrap());
+    assert!(
+        // Which trials: the writer may have skipped trial 3's checkpoint for trial 4's.
+        stderr(&resumed).contains("..=4 are redone"),
+        "{}",
+        stderr(&resumed)
+    );
+    assert!(last.exists());
+    assert_eq!(
+        std::fs::read_to_string(dir.join("lost/returns.csv")).unwrap(),
+        std::fs::read_to_string(dir.join("whole/returns.csv")).unwrap()
+    );
+    assert_eq!(
+        run_messages(&dir.join("lost/run.mcap")),
+        run_messages(&dir.join("whole/run.mcap"))
+    );
+}
+
 /// Trials that end early (the §6.4.2 manipulator's operating range): the agent stamps the
 /// checkpoint with the trial's start plus its samples, returns.csv with whole trials less
 /// the samples not run, which round apart; resuming still continues as the whole run.

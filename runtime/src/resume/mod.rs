@@ -19,7 +19,9 @@
 //! into the new `run.mcap`), and continues with trial `C + 1` from the checkpoint: the
 //! plant starts there with the simulated time and the sequence numbers continuing, the
 //! agent restores its state. In lockstep the result is bit for bit that of a run never
-//! interrupted.
+//! interrupted. A run is done only when its last trial is complete everywhere: one whose
+//! last checkpoints were never written (a full disk) has every row of `returns.csv` and
+//! still redoes the trials after its newest checkpoint.
 
 use std::path::{Path, PathBuf};
 
@@ -76,21 +78,23 @@ pub fn prepare(
     let mut notes = Vec::new();
     let rows = read_returns(&out.join("returns.csv"), &mut notes)?;
     let done = rows.len() as u32;
-    if done >= cfg.run().trials {
-        return Err(PrepareError::Done {
-            dir: out.to_path_buf(),
-            trials: cfg.run().trials,
-            done,
-        });
-    }
     let messages = read_recording(out, &mut notes)?;
-    same_plant(out, &messages, external)?;
     let dir = checkpoint_dir(out);
     let available = checkpoints(&dir);
     let (c, first_seq) = last_complete_trial(cfg, &available, done, &index(&messages)?)
         .ok_or_else(|| PrepareError::NoCompleteTrial {
             dir: out.to_path_buf(),
         })?;
+    // Done only when complete everywhere: a run stopped as its last checkpoint failed
+    // has every row but must redo the trials after its newest checkpoint.
+    if c >= cfg.run().trials {
+        return Err(PrepareError::Done {
+            dir: out.to_path_buf(),
+            trials: cfg.run().trials,
+            done,
+        });
+    }
+    same_plant(out, &messages, external)?;
     let checkpoint = (c > 0).then(|| checkpoint_path(&dir, c));
     let sim_time_s = if c > 0 {
         rows[c as usize - 1].sim_time_s
