@@ -71,6 +71,18 @@ fn run_messages(path: &Path) -> Messages {
     m
 }
 
+/// Asserts that run folders `a` and `b` hold the same `returns.csv` and run messages.
+fn same_run(a: &Path, b: &Path) {
+    assert_eq!(
+        std::fs::read_to_string(a.join("returns.csv")).unwrap(),
+        std::fs::read_to_string(b.join("returns.csv")).unwrap()
+    );
+    assert_eq!(
+        run_messages(&a.join("run.mcap")),
+        run_messages(&b.join("run.mcap"))
+    );
+}
+
 /// The uninterrupted run's trials: enough for the killed runs' rows to stay below them
 /// while the kill takes effect (a trial takes about 2 ms in lockstep; finding and
 /// killing a process on a loaded machine, a few hundred ms).
@@ -192,14 +204,7 @@ fn a_finished_run_learns_on_with_more_trials() {
         .arg(dir.join("four"))
         .output()
         .unwrap());
-    assert_eq!(
-        std::fs::read_to_string(dir.join("four/returns.csv")).unwrap(),
-        std::fs::read_to_string(dir.join("eight/returns.csv")).unwrap()
-    );
-    assert_eq!(
-        run_messages(&dir.join("four/run.mcap")),
-        run_messages(&dir.join("eight/run.mcap"))
-    );
+    same_run(&dir.join("four"), &dir.join("eight"));
 }
 
 /// A run whose last checkpoint was never written (its agent stopped on a full disk as
@@ -232,14 +237,7 @@ fn a_run_without_its_last_checkpoint_is_not_done_and_resume_redoes_the_rest() {
         stderr(&resumed)
     );
     assert!(last.exists());
-    assert_eq!(
-        std::fs::read_to_string(dir.join("lost/returns.csv")).unwrap(),
-        std::fs::read_to_string(dir.join("whole/returns.csv")).unwrap()
-    );
-    assert_eq!(
-        run_messages(&dir.join("lost/run.mcap")),
-        run_messages(&dir.join("whole/run.mcap"))
-    );
+    same_run(&dir.join("lost"), &dir.join("whole"));
 }
 
 /// Trials that end early (the §6.4.2 manipulator's operating range): the agent stamps the
