@@ -9,12 +9,12 @@ use ::observer::timing::{Call, ToAgent, act};
 
 use wire::{Action, Estimate, flags, now_ns, topic};
 
-use super::{AgentConfig, NodeError, Result, SILENCE, STARTUP, pack};
+use super::{AgentSettings, NodeError, Result, SILENCE, STARTUP, pack};
 use crate::config::ExperimentConfig;
 use crate::resume::CheckpointWriter;
 
 /// Runs the agent side of a run until the plant announces its end.
-pub fn run(args: &AgentConfig) -> Result<()> {
+pub fn run(args: &AgentSettings) -> Result<()> {
     let node = &args.node;
     super::set_rt_priority(node.scheduling.rt_priority)?;
     node.scheduling.place(super::Part::Node)?;

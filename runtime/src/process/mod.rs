@@ -36,7 +36,7 @@ pub use cpus::{CpuSet, Layout, Part};
 pub use wakeup::{Wakeup, WakeupLimit};
 
 pub use args::{SPIN_US, Scheduling, Spin, Wait, WaitKind};
-pub use node::{AgentConfig, NodeConfig, ObserverConfig, PlantConfig, Settings};
+pub use node::{AgentSettings, NodeSettings, ObserverSettings, PlantSettings, Settings};
 
 /// How long a process waits for a message before deciding a peer has died.
 pub const SILENCE: Duration = Duration::from_secs(10);

@@ -8,7 +8,7 @@ use super::Result;
 use ::observer::timing::{Call, Front, Sample};
 use wire::{Estimate, Measurement, flags, now_ns, topic};
 
-use super::{ObserverConfig, SILENCE, STARTUP, pack};
+use super::{ObserverSettings, SILENCE, STARTUP, pack};
 
 /// The [`flags`] an estimate carries for agent call `call`: the measurement's, plus
 /// [`flags::LAST`] / [`flags::HOLD`] where predictive timing makes the agent's trial end
@@ -76,7 +76,7 @@ pub fn estimate(front: &mut Front, m: &Measurement) -> Estimate {
 }
 
 /// Runs the observer side of a run until the plant announces its end.
-pub fn run(settings: &ObserverConfig) -> Result<()> {
+pub fn run(settings: &ObserverSettings) -> Result<()> {
     let args = &settings.node;
     super::set_rt_priority(args.scheduling.rt_priority)?;
     args.scheduling.place(super::Part::Node)?;

@@ -35,7 +35,7 @@ use ::plant::schedule::Trial;
 use driver::contract::{DriverInfo, DriverLink, DriverSample, status};
 use wire::{flags, now_ns};
 
-use super::super::{PlantConfig, SILENCE, STARTUP};
+use super::super::{PlantSettings, SILENCE, STARTUP};
 use super::link::{Link, TrialHeader, end_flags};
 use super::{Ended, Gap, Trials};
 use crate::clock::ExternalDriver;
@@ -64,7 +64,7 @@ pub struct Bridge {
 impl Bridge {
     /// Connects to driver `d`: waits for its info (its `timeout`), checks it against the
     /// task, then waits for the observer (and recorder) to listen.
-    pub(super) fn connect(mut link: Link, d: &ExternalDriver, args: &PlantConfig) -> Result<Self> {
+    pub(super) fn connect(mut link: Link, d: &ExternalDriver, args: &PlantSettings) -> Result<Self> {
         let driver_id = d.id.as_str();
         let driver = DriverLink::connect(&link.bus, driver_id)?;
         let timeout = d.timeout;

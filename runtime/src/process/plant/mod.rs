@@ -28,7 +28,7 @@ use ::plant::safety::SafetyCounts;
 use ::plant::schedule::{Schedule, Trial};
 
 use super::node::Continuation;
-use super::{PlantConfig, STARTUP, Scheduling};
+use super::{PlantSettings, STARTUP, Scheduling};
 use crate::clock::Clock;
 use crate::config::ExperimentConfig;
 use link::Link;
@@ -51,7 +51,7 @@ pub const CYCLES_HEADER: &str = "seq,t_sample_ns,t_woke_ns,t_action_ns";
 /// [`crate::experiment::sensor`], its noise from the run seed exactly as in process); the
 /// true state stays here and, when the sensor does not measure all of it, goes out on
 /// the evaluation topic [`wire::topic::TRUTH`], for the supervisor alone.
-pub fn run(args: &PlantConfig) -> Result<()> {
+pub fn run(args: &PlantSettings) -> Result<()> {
     schedule_clock(&args.node.scheduling)?;
     let cfg = args.node.experiment()?;
     args.clock.check(&cfg, args.node.waiting())?;
@@ -189,7 +189,7 @@ trait Trials {
 /// What runs the trials that `args` and `cfg` ask for, once the peers listen on `link`.
 fn runner(
     link: Link,
-    args: &PlantConfig,
+    args: &PlantSettings,
     cfg: &ExperimentConfig,
     run_seed: u64,
 ) -> Result<Box<dyn Trials>> {
@@ -223,7 +223,7 @@ fn runner(
 
 /// Writes the run's timing files: every sample's publish-to-action time
 /// (`latency_out`) and, in real time, every sample's timing (`cycles_out`).
-fn write_timing(link: &Link, args: &PlantConfig) -> Result<()> {
+fn write_timing(link: &Link, args: &PlantSettings) -> Result<()> {
     if let Some(path) = &args.latency_out {
         let text: String = link.latencies.iter().map(|ns| format!("{ns}\n")).collect();
         write(path, &text)?;
