@@ -7,7 +7,7 @@
 //!   for it (clock, commands, resets, watchdog); [`serve_lockstep`] serves a simulation
 //!   ([`Lockstep`]) one period per action; [`Simulated`] is any built-in system as a
 //!   device (`rig sim-driver`).
-//! - [`safety`]: the supervisor every action passes (clamps, rejection, watchdog, range
+//! - [`safety`]: the safety layer every action passes (clamps, rejection, watchdog, range
 //!   stop), the same one the simulated plant uses.
 //! - [`conformance`]: the check a driver passes (`rig check-driver`), for a driver's own
 //!   tests too.

@@ -1,7 +1,7 @@
 //! The driver's side of the driver contract (`docs/driver.md`): [`serve`] makes a
 //! process the driver of a [`Device`] — the clock (a sample every period on
 //! `CLOCK_MONOTONIC`), the safety layer of the actuator (clamping, rejection and the
-//! watchdog of [`plant::safety::Supervisor`]) and resets — so that a driver for a real
+//! watchdog of [`plant::safety::SafetyLayer`]) and resets — so that a driver for a real
 //! motor is one `impl Device` for its amplifier and encoder. [`serve_lockstep`] serves a
 //! simulation ([`Lockstep`]) without a clock: one period per action.
 

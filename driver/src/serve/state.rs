@@ -2,7 +2,7 @@
 //! of a sample instant (a reset's progress, the watchdog), the sample it publishes.
 
 use plant::Task;
-use plant::safety::{Admission, Supervisor};
+use plant::safety::{Admission, SafetyLayer};
 use wire::{MAX_U, MAX_X};
 
 use crate::contract::{DriverCommand, DriverSample, kind, status};
@@ -21,9 +21,9 @@ pub(super) struct Driver {
     pub(super) u: [f64; MAX_U],
     pub(super) action_this_period: bool,
     pub(super) acted_since_reset: bool,
-    pub(super) safety: Supervisor,
+    pub(super) safety: SafetyLayer,
     /// Commands rejected for other reasons than a non-finite action (those the
-    /// supervisor counts): wrong dimensions, unknown kind, an action while not READY.
+    /// safety layer counts): wrong dimensions, unknown kind, an action while not READY.
     pub(super) other_rejected: u64,
     pub(super) verbose: bool,
 }
@@ -43,7 +43,7 @@ impl Driver {
             u: [0.0; MAX_U],
             action_this_period: false,
             acted_since_reset: false,
-            safety: Supervisor::new(task),
+            safety: SafetyLayer::new(task),
             other_rejected: 0,
             verbose,
         }

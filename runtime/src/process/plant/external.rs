@@ -30,7 +30,7 @@ use std::time::Duration;
 
 use crate::process::{NodeError, Result};
 use ::plant::episode::{Step, TimeLimit};
-use ::plant::safety::{SafetyCounts, Supervisor};
+use ::plant::safety::{SafetyCounts, SafetyLayer};
 use ::plant::schedule::Trial;
 use driver::contract::{DriverInfo, DriverLink, DriverSample, status};
 use wire::{flags, now_ns};
@@ -51,7 +51,7 @@ pub struct Bridge {
     silence: Duration,
     /// The rig's side of safety: actions are clamped (non-finite ones never reach the
     /// driver) and the operating range is watched here too; the driver does its own.
-    safety: Supervisor,
+    safety: SafetyLayer,
     /// Whether the driver measures positions only (NaN velocities), as its first sample
     /// of the run showed.
     positions_only: Option<bool>,
@@ -77,7 +77,7 @@ impl Bridge {
             link.run_flags |= flags::DRIVER_REWARD;
         }
         Ok(Self {
-            safety: Supervisor::new(&link.task),
+            safety: SafetyLayer::new(&link.task),
             limit: TimeLimit::new(link.task.steps_per_trial()),
             silence: info.silence_limit(d.timeout),
             reset_timeout: d.reset_timeout,

@@ -7,7 +7,7 @@
 //! next interval (none arrived: the previous one is held). An interval in which the
 //! action for its sample did not arrive is a missed deadline. The reward of an interval
 //! is `ρ(x_k, u)` with the action in effect at its end. An interval without any action
-//! trips the plant's watchdog ([`plant::safety::Supervisor::period`]): zero from its end
+//! trips the plant's watchdog ([`plant::safety::SafetyLayer::period`]): zero from its end
 //! on, until an action arrives. A late answer to the previous trial's last sample is
 //! dropped, not applied in this one. Nothing is allocated per interval.
 //!
