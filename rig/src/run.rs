@@ -9,7 +9,7 @@ use anyhow::{Context, Result, anyhow};
 use clap::Args as Flags;
 use runtime::clock::{Clock, Timing};
 use runtime::config::ExperimentConfig;
-use runtime::process::{Layout, WaitKind};
+use runtime::process::{CpuLayout, WaitKind};
 use runtime::run::{NodeCommand, RunOptions, RunSummary, run_with};
 
 use crate::external::DriverArgs;
@@ -211,7 +211,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
     let mut scheduling = args.scheduling;
     match scheduling.layout() {
         Some(layout) => layout.check()?,
-        None if lockstep => scheduling.cpus = Some(Layout::lockstep(waiting)),
+        None if lockstep => scheduling.cpus = Some(CpuLayout::lockstep(waiting)),
         None => {}
     }
     let opts = RunOptions {

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use runtime::error::AtFile;
 use runtime::output::write_atomic;
 use runtime::process::{
-    AgentSettings, Layout, NodeSettings, ObserverSettings, PlantSettings, Scheduling, Settings, Wait,
+    AgentSettings, CpuLayout, NodeSettings, ObserverSettings, PlantSettings, Scheduling, Settings, Wait,
 };
 use wire::Waiting;
 
@@ -96,7 +96,7 @@ pub fn three_processes(
     dir: &Path,
     trials: u32,
     waiting: Waiting,
-    layout: Layout,
+    layout: CpuLayout,
 ) -> Result<Timed, LoopError> {
     let t = trials.to_string();
     let d = dir.to_string_lossy();
@@ -116,7 +116,7 @@ pub fn unrecorded(
     dir: &Path,
     trials: u32,
     waiting: Waiting,
-    layout: Layout,
+    layout: CpuLayout,
 ) -> Result<(Timed, Vec<u64>), LoopError> {
     std::fs::create_dir_all(dir).at("cannot create", dir)?;
     let mut cfg = runtime::config::resolve(None, &Default::default())?;

@@ -7,7 +7,7 @@ use observer::config::{ObserverConfig, ObserverKind, ObserverMode, ObserverModel
 use plant::config::{ConfigError, RunConfig};
 use plant::{SystemName, TaskFile};
 
-use super::layout::Layout;
+use super::file::ExperimentFile;
 use super::merge::{add_optional_sections, add_schedule_keys, check_choice, choose, merge};
 use super::{ExperimentConfig, Sections};
 
@@ -199,7 +199,7 @@ impl PresetChoice {
             run: preset.run,
             observer: ObserverConfig::default(),
         };
-        let layout = Layout::new(Some(self.system), sections, None);
+        let layout = ExperimentFile::new(Some(self.system), sections, None);
         let mut table = toml::Table::try_from(&layout).expect("a preset always serialises");
         // The observer section is written only when it differs from the default; a user's
         // file may still set any of its keys.
@@ -313,7 +313,7 @@ pub fn resolve(
     add_schedule_keys(&mut merged, &mut user).map_err(with_file)?;
     merge(&mut merged, user, "").map_err(with_file)?;
     check_choices(&merged).map_err(with_file)?;
-    let mut layout: Layout = toml::Value::Table(merged)
+    let mut layout: ExperimentFile = toml::Value::Table(merged)
         .try_into()
         .map_err(|e: toml::de::Error| with_file(ConfigError::new("", e.message())))?;
     (layout.system, layout.task) = (Some(choice.system), task);

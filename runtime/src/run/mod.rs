@@ -34,7 +34,7 @@ use crate::error::AtFile;
 use crate::experiment::TrialRecord;
 use crate::lock::FolderLock;
 use crate::output::{progress_bar, write_atomic};
-use crate::process::{Layout, Scheduling, Spin};
+use crate::process::{CpuLayout, Scheduling, Spin};
 use crate::record::Tap;
 use crate::resume;
 
@@ -270,7 +270,7 @@ fn free_run_id(opts: &RunOptions) -> Result<String> {
 /// The options of a run against a driver whose info is `info`: with a driver that keeps
 /// the lockstep clock, the processes wait as [`RunOptions::lockstep_waiting`] says and,
 /// unless `--cpus` said, are placed as a lockstep run that waits so
-/// ([`Layout::lockstep`]); polling without end is refused with a driver in real time.
+/// ([`CpuLayout::lockstep`]); polling without end is refused with a driver in real time.
 fn driver_options(opts: &RunOptions, info: &DriverInfo) -> Result<RunOptions, ClockError> {
     let mut with = opts.clone();
     if info.lockstep()
@@ -278,7 +278,7 @@ fn driver_options(opts: &RunOptions, info: &DriverInfo) -> Result<RunOptions, Cl
     {
         with.waiting = w;
         if with.scheduling.layout().is_none() {
-            with.scheduling.cpus = Some(Layout::lockstep(w));
+            with.scheduling.cpus = Some(CpuLayout::lockstep(w));
         }
     }
     Clock::check_driver_waiting(info, with.waiting)?;
@@ -364,15 +364,15 @@ mod tests {
         let opts = options(Waiting::Block, Some(polls));
         let with = driver_options(&opts, &info(clock::LOCKSTEP)).unwrap();
         assert_eq!(with.waiting, polls);
-        assert_eq!(with.scheduling.cpus, Some(Layout::lockstep(polls)));
+        assert_eq!(with.scheduling.cpus, Some(CpuLayout::lockstep(polls)));
         let with = driver_options(&opts, &info(clock::REALTIME)).unwrap();
         assert_eq!(with.waiting, Waiting::Block);
         assert_eq!(with.scheduling.cpus, None);
         // `--cpus` given stays.
         let mut placed = opts.clone();
-        placed.scheduling.cpus = Some(Layout::Shared);
+        placed.scheduling.cpus = Some(CpuLayout::Shared);
         let with = driver_options(&placed, &info(clock::LOCKSTEP)).unwrap();
-        assert_eq!(with.scheduling.cpus, Some(Layout::Shared));
+        assert_eq!(with.scheduling.cpus, Some(CpuLayout::Shared));
         // Polling without end asked for against a driver in real time is refused.
         let opts = options(polls, None);
         assert!(driver_options(&opts, &info(clock::LOCKSTEP)).is_ok());

@@ -169,7 +169,7 @@ impl Recording {
         for m in &p.messages {
             self.rec
                 .write_encoded(&m.topic, m.log_time, m.publish_time, &m.data)
-                .map_err(|source| RunError::Layout {
+                .map_err(|source| RunError::Channels {
                     path: old.to_owned(),
                     source,
                 })?;

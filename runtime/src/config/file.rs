@@ -1,4 +1,4 @@
-//! The experiment file's layout: every key where a user writes it — the system and the
+//! The experiment file as written: every key where a user writes it — the system and the
 //! learner's choices at the top level, then `[run]`, the agent's sections, `[observer]`,
 //! and the task when a task file gives it (`[task]`).
 //! [`ExperimentConfig`] is read and written through it, so its TOML form is the one
@@ -17,9 +17,9 @@ use super::{ExperimentConfig, Sections};
 
 /// The top level of an experiment file, in the order it is written.
 #[derive(Serialize, Deserialize)]
-// Messages about the whole file name the experiment, not this layout.
+// Messages about the whole file name the experiment, not this struct.
 #[serde(deny_unknown_fields, rename = "ExperimentConfig")]
-pub(super) struct Layout {
+pub(super) struct ExperimentFile {
     /// Absent for a task without a simulation (its presets are the pendulum's, by rules:
     /// [`ExperimentConfig::to_toml`] says so in a comment); otherwise the system simulated.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -52,11 +52,11 @@ pub(super) struct Layout {
     pub(super) task: Option<TaskFile>,
 }
 
-impl TryFrom<Layout> for ExperimentConfig {
+impl TryFrom<ExperimentFile> for ExperimentConfig {
     type Error = plant::config::ConfigError;
 
     /// The configuration, its task read and checked.
-    fn try_from(l: Layout) -> Result<Self, Self::Error> {
+    fn try_from(l: ExperimentFile) -> Result<Self, Self::Error> {
         let simulated = match &l.task {
             Some(t) => t
                 .simulation
@@ -86,7 +86,7 @@ impl TryFrom<Layout> for ExperimentConfig {
     }
 }
 
-impl From<ExperimentConfig> for Layout {
+impl From<ExperimentConfig> for ExperimentFile {
     fn from(c: ExperimentConfig) -> Self {
         let driven = c.task.as_ref().is_some_and(|t| t.simulation.is_none());
         let sections = Sections {
@@ -98,7 +98,7 @@ impl From<ExperimentConfig> for Layout {
     }
 }
 
-impl Layout {
+impl ExperimentFile {
     /// The file of `sections` on `system` (absent: a task without a simulation) and
     /// `task` (absent: the system's shipped one).
     pub(super) fn new(
