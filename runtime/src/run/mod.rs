@@ -195,7 +195,7 @@ pub fn run_with(
         (Some(i), _) => Some(Duration::from_nanos(i.period_ns.saturating_mul(4))),
         (None, period) => period.map(|p| 4 * p),
     };
-    let gaps = gaps::Gaps::create(&opts.out.join("gaps.csv"), point.as_ref())?;
+    let gaps = gaps::GapLog::create(&opts.out.join("gaps.csv"), point.as_ref())?;
     let first_seq = point.as_ref().map_or(0, |p| p.first_seq);
     let mut sup = Supervisor::new(
         bus,

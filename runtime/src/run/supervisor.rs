@@ -14,7 +14,7 @@ use crate::experiment::TrialRecord;
 
 use super::command::Role;
 use super::error::{Result, RunError};
-use super::gaps::Gaps;
+use super::gaps::GapLog;
 use super::logs::Logs;
 use super::recording::Recording;
 use super::retention::{Progress, Retention};
@@ -93,7 +93,7 @@ pub(super) struct Supervisor {
     pub(super) recording: Recording,
     pub(super) returns: Returns,
     /// The trial attempts cut short by gaps.
-    pub(super) gaps: Gaps,
+    pub(super) gaps: GapLog,
     pub(super) children: Children,
     /// Their output.
     pub(super) logs: Logs,
@@ -123,7 +123,7 @@ impl Supervisor {
     pub(super) fn new(
         bus: Bus,
         recording: Recording,
-        (returns, gaps): (Returns, Gaps),
+        (returns, gaps): (Returns, GapLog),
         out: &Path,
         first_seq: u64,
         driver: Option<DriverWatch>,
