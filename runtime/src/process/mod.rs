@@ -113,10 +113,10 @@ pub fn batch_thread() {
 const LINGER: Duration = Duration::from_secs(10);
 
 /// A process's last duty in a recorded run (`receivers = 2`): after its last message it
-/// waits until the recorder announces that it has read everything ([`wire::Recorded`]),
-/// since what the process sent may be gone from the recorder's queue once the process
-/// is.
-pub struct Linger(Option<wire::Recorded>);
+/// waits until the recorder announces that it has read everything
+/// ([`wire::RecordedSignal`]), since what the process sent may be gone from the
+/// recorder's queue once the process is.
+pub struct Linger(Option<wire::RecordedSignal>);
 
 impl Linger {
     /// Opens the run's signal on `bus` if a recorder listens (`receivers` ≥ 2).

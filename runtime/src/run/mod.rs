@@ -52,7 +52,7 @@ pub use command::NodeCommand;
 use error::Result;
 pub use error::RunError;
 pub use gaps::GAPS_HEADER;
-use recording::{About, Recording};
+use recording::{About, RecordingWriter};
 use returns::Returns;
 use supervisor::Supervisor;
 
@@ -181,7 +181,7 @@ pub fn run_with(
         driver_reward: driver_info.is_some_and(|i| i.provides_reward()),
         point: point.as_ref(),
     };
-    let mut recording = Recording::open(&opts.out, &about)?;
+    let mut recording = RecordingWriter::open(&opts.out, &about)?;
     if let Some(tap) = tap {
         recording.live(tap)?;
     }

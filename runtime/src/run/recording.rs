@@ -29,7 +29,7 @@ use crate::resume::ResumePoint;
 /// The MCAP recording: one channel per topic, and one `/timing/...` channel per topic
 /// for the wall-clock timestamps, which differ from run to run by nature. Log time is
 /// simulated time.
-pub(super) struct Recording {
+pub(super) struct RecordingWriter {
     pub(super) rec: Recorder,
     pub(super) measurement: ChannelId,
     pub(super) estimate: ChannelId,
@@ -48,7 +48,7 @@ pub(super) struct Recording {
     pub(super) realtime: bool,
     /// The current sample's plant sample time (monotonic ns).
     pub(super) t_sample_ns: u64,
-    /// `/returns` and `/latency`, for a live view only ([`Recording::live`]).
+    /// `/returns` and `/latency`, for a live view only ([`RecordingWriter::live`]).
     pub(super) live: Option<(ChannelId, ChannelId)>,
     /// The log time of the last message of the loop recorded.
     pub(super) log_time_ns: u64,
@@ -137,7 +137,7 @@ pub(super) struct About<'a> {
     pub(super) point: Option<&'a ResumePoint>,
 }
 
-impl Recording {
+impl RecordingWriter {
     /// Creates `DIR/run.mcap` for the run `about` describes: its channels, the
     /// configuration attached, the metadata `run`, and, when resumed, the messages of the
     /// trials it keeps (the old recording is replaced).

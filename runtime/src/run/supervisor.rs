@@ -16,7 +16,7 @@ use super::command::Role;
 use super::error::{Result, RunError};
 use super::gaps::GapLog;
 use super::logs::Logs;
-use super::recording::Recording;
+use super::recording::RecordingWriter;
 use super::retention::{Progress, Retention};
 use super::returns::Returns;
 
@@ -90,7 +90,7 @@ pub(super) struct Supervisor {
     pub(super) batch: Vec<Measurement>,
     /// Ground truth drained ahead of its measurement.
     pub(super) truth_queue: std::collections::VecDeque<Truth>,
-    pub(super) recording: Recording,
+    pub(super) recording: RecordingWriter,
     pub(super) returns: Returns,
     /// The trial attempts cut short by gaps.
     pub(super) gaps: GapLog,
@@ -104,7 +104,7 @@ pub(super) struct Supervisor {
     /// The external driver's traffic, recorded.
     pub(super) driver: Option<DriverWatch>,
     /// The announcement that everything is recorded, which the processes wait for.
-    pub(super) recorded: wire::Recorded,
+    pub(super) recorded: wire::RecordedSignal,
     /// Realtime and external driver: how long to go on recording after a process died,
     /// so that the recording shows the plant's reaction (its watchdog, or the driver's,
     /// applying the safe action within two periods).
@@ -122,7 +122,7 @@ impl Supervisor {
     /// that no message is missed); the processes come later ([`Self::children`]).
     pub(super) fn new(
         bus: Bus,
-        recording: Recording,
+        recording: RecordingWriter,
         (returns, gaps): (Returns, GapLog),
         out: &Path,
         first_seq: u64,
