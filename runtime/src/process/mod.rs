@@ -2,7 +2,7 @@
 //! ([`wire`]), waits for its peers, and runs its component one sample at a time in
 //! lockstep — simulated time advances only when the action for the sample has arrived.
 //!
-//! The step order is exactly that of the in-process driver
+//! The step order is exactly that of the in-process runner
 //! ([`crate::experiment::Experiment`]), so a run over three processes gives the same
 //! numbers, bit for bit:
 //!

@@ -2,7 +2,7 @@
 //!
 //! It sees the plant's sensor output only (`Measurement.y`; with an encoder the
 //! velocities are NaN — not measured), never the ground truth, and runs the observer
-//! the configuration asks for ([`::observer::build`], as the in-process driver does).
+//! the configuration asks for ([`::observer::build`], as the in-process runner does).
 
 use super::Result;
 use ::observer::timing::{Call, Front, Sample};
@@ -82,7 +82,7 @@ pub fn run(settings: &ObserverSettings) -> Result<()> {
     args.scheduling.place(super::Part::Node)?;
     let cfg = args.experiment()?;
     let task = cfg.task();
-    let mut front = crate::experiment::front(&task, &cfg);
+    let mut front = crate::build::front(&task, &cfg);
     let bus = args.join("observer")?;
     let measurements = bus.rx::<Measurement>(topic::MEASUREMENT)?;
     let out = bus.tx::<Estimate>(topic::ESTIMATE)?;

@@ -142,7 +142,7 @@ pub fn replay(rec: &Recording, progress: &ProgressBar) -> Result<Outcome, Replay
     let cfg = &rec.cfg;
     let task = cfg.task();
     let (n, m) = (task.state_dim(), task.action_dim());
-    let mut front = crate::experiment::front(&task, cfg);
+    let mut front = crate::build::front(&task, cfg);
     let mut learner =
         Learner::new(cfg, 0, None, None).map_err(|e| ReplayError::Config(chain(&e)))?;
     for x in &rec.measurements {

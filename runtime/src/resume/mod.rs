@@ -132,7 +132,7 @@ fn resumable(out: &Path, cfg: &ExperimentConfig) -> Result<(), PrepareError> {
             observer: cfg.observer().observer.to_string(),
         });
     }
-    crate::experiment::resumable_delays(cfg).map_err(|why| PrepareError::Config { config, why })
+    crate::resumable::resumable_delays(cfg).map_err(|why| PrepareError::Config { config, why })
 }
 
 /// The last trial, at most `done`, that has a checkpoint (`available`; trial 0 needs

@@ -48,7 +48,7 @@ pub const CYCLES_HEADER: &str = "seq,t_sample_ns,t_woke_ns,t_action_ns";
 /// samples run.
 ///
 /// What is published is the configured sensor's output (`[observer] sensor`,
-/// [`crate::experiment::sensor`], its noise from the run seed exactly as in process); the
+/// [`crate::build::sensor`], its noise from the run seed exactly as in process); the
 /// true state stays here and, when the sensor does not measure all of it, goes out on
 /// the evaluation topic [`wire::topic::TRUTH`], for the supervisor alone.
 pub fn run(args: &PlantSettings) -> Result<()> {
@@ -57,7 +57,7 @@ pub fn run(args: &PlantSettings) -> Result<()> {
     args.clock.check(&cfg, args.node.waiting())?;
     let task = cfg.task();
     let run_seed = ::agent::seed::run_seed(cfg.run().seed, args.node.run_index);
-    let sensor = crate::experiment::sensor(&task, cfg.observer(), run_seed);
+    let sensor = crate::build::sensor(&task, cfg.observer(), run_seed);
     let resume = args.resume.unwrap_or(Continuation {
         after_trial: 0,
         sim_time: 0.0,
@@ -204,7 +204,7 @@ fn runner(
     link.out
         .wait_for_receivers(args.node.receivers, STARTUP, &link.bus)?;
     let task = link.task.clone();
-    let actuator = crate::experiment::actuator(&task, cfg, run_seed);
+    let actuator = crate::build::actuator(&task, cfg, run_seed);
     let episode = Episode::new(Plant::new(task.clone()), actuator);
     Ok(match period {
         Some(period) => Box::new(
