@@ -724,7 +724,7 @@ fn cpu_of(pid: u32) -> std::time::Duration {
 /// driver whose rig has gone costs no CPU.
 #[test]
 fn a_lockstep_driver_tells_a_new_rig_at_once_and_idles_once_the_rig_is_gone() {
-    use driver::contract::{DriverWatch, wait_info};
+    use driver::link::{DriverWatch, wait_info};
     use std::time::{Duration, Instant};
     let dir = tmp("idle");
     for kind in drivers() {

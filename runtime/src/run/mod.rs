@@ -25,7 +25,8 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use driver::contract::{DriverInfo, DriverWatch};
+use driver::contract::DriverInfo;
+use driver::link::DriverWatch;
 use wire::{Bus, Waiting};
 
 use crate::clock::{Clock, ClockError, ExternalDriver};
@@ -309,9 +310,9 @@ fn wait_for_driver(
     verbose: bool,
 ) -> Result<(DriverWatch, DriverInfo)> {
     let watch = DriverWatch::open(bus, &d.id)?;
-    let serve = driver::contract::how_to_serve(task, &d.id, None);
-    let info = driver::contract::wait_info(bus, &watch.info, &d.id, d.timeout, verbose, &serve)?;
-    driver::check_info(&d.id, &info, task)?;
+    let serve = driver::link::how_to_serve(task, &d.id, None);
+    let info = driver::link::wait_info(bus, &watch.info, &d.id, d.timeout, verbose, &serve)?;
+    driver::link::check_info(&d.id, &info, task)?;
     Ok((watch, info))
 }
 

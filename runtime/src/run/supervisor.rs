@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::Child;
 use std::time::{Duration, Instant};
 
-use driver::contract::DriverWatch;
+use driver::link::DriverWatch;
 use indicatif::ProgressBar;
 use wire::{Action, Bus, Estimate, Measurement, Truth, flags, topic};
 

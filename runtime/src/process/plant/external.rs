@@ -32,7 +32,8 @@ use crate::process::{NodeError, Result};
 use ::plant::episode::{Step, TimeLimit};
 use ::plant::safety::{SafetyCounts, SafetyLayer};
 use ::plant::schedule::Trial;
-use driver::contract::{DriverInfo, DriverLink, DriverSample, status};
+use driver::contract::{DriverInfo, DriverSample, status};
+use driver::link::DriverLink;
 use wire::{flags, now_ns};
 
 use super::super::{PlantSettings, SILENCE, STARTUP};
@@ -68,9 +69,9 @@ impl Bridge {
         let driver_id = d.id.as_str();
         let driver = DriverLink::connect(&link.bus, driver_id)?;
         let timeout = d.timeout;
-        let serve = driver::contract::how_to_serve(&link.task, driver_id, None);
+        let serve = driver::link::how_to_serve(&link.task, driver_id, None);
         let info = driver.wait_info(&link.bus, timeout, false, &serve)?;
-        driver::check_info(driver_id, &info, &link.task)?;
+        driver::link::check_info(driver_id, &info, &link.task)?;
         link.out
             .wait_for_receivers(args.node.receivers, STARTUP, &link.bus)?;
         if info.provides_reward() {

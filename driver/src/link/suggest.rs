@@ -2,7 +2,7 @@
 
 use plant::{SystemName, Task};
 
-use crate::Simulated;
+use crate::kit::Simulated;
 
 /// How to start a driver `id` for `task`, or why the rig has none: the Python example
 /// driver and `rig sim-driver` serve the pendulum, `rig sim-driver` every other built-in

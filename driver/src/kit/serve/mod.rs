@@ -10,7 +10,7 @@ use wire::{Bus, Rx, Tx, now_ns};
 use crate::contract::{
     DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, VERSION, provides, service, topic,
 };
-use crate::device::Device;
+use crate::kit::device::Device;
 use crate::error::Error;
 
 mod announce;

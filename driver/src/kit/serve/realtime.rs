@@ -5,7 +5,7 @@ use wire::{MAX_U, MAX_X, now_ns};
 
 use super::{Served, Serving, Start};
 use crate::contract::clock;
-use crate::device::Device;
+use crate::kit::device::Device;
 use crate::error::Error;
 
 /// Serves `device` as driver `driver_id` until Ctrl-C or SIGTERM (or

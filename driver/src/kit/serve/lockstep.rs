@@ -17,7 +17,7 @@ use super::announce::Announcer;
 use super::state::Driver;
 use super::{Served, Services, Serving, Start};
 use crate::contract::{DriverCommand, clock, kind, status};
-use crate::device::Device;
+use crate::kit::device::Device;
 use crate::error::Error;
 
 /// A simulation that can run in lockstep: its state can be set, and it integrates exactly

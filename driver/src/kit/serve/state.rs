@@ -6,7 +6,7 @@ use plant::safety::{Admission, SafetyLayer};
 use wire::{MAX_U, MAX_X};
 
 use crate::contract::{DriverCommand, DriverSample, kind, status};
-use crate::device::{Device, REST_SAMPLES};
+use crate::kit::device::{Device, REST_SAMPLES};
 
 /// A whole period's worth of the driver's state between sample instants.
 pub(super) struct Driver {

@@ -1,10 +1,10 @@
 //! The hardware behind a driver, as the driver kit sees it: the [`Device`] trait that a
 //! motor driver implements — read the sensors, apply an action, the reset brake — and
-//! that [`crate::serve`] runs the driver contract (`docs/driver.md`) for.
+//! that [`crate::kit::serve`] runs the driver contract (`docs/driver.md`) for.
 
 use plant::Task;
 
-/// The hardware behind a driver (or a simulation of it). [`serve`](crate::serve) calls it from one
+/// The hardware behind a driver (or a simulation of it). [`serve`](crate::kit::serve) calls it from one
 /// thread, in time order.
 pub trait Device {
     /// The task the device is: its system, dimensions, sample time and action limits —
@@ -23,7 +23,7 @@ pub trait Device {
     fn sample(&mut self, t_ns: u64, x: &mut [f64]);
 
     /// Puts action `u` into effect from monotonic time `t_ns` (now) until the next call.
-    /// [`serve`](crate::serve) only passes finite actions within the task's limits.
+    /// [`serve`](crate::kit::serve) only passes finite actions within the task's limits.
     fn apply(&mut self, t_ns: u64, u: &[f64]);
 
     /// During a reset, at a sample instant with state `x`: the action (to be clamped to

@@ -1,5 +1,8 @@
-//! The rig's end of the driver contract: finding the running drivers, waiting for a
-//! driver's info, watching a driver's traffic, and commanding a driver.
+//! The rig's end of the driver contract: finding the running drivers ([`running`]),
+//! waiting for a driver's info ([`wait_info`]), watching a driver's traffic
+//! ([`DriverWatch`]) and commanding a driver ([`DriverLink`]); whether a driver fits a
+//! task ([`fits_task`], [`check_info`]); which command serves a task when no driver
+//! answers ([`how_to_serve`]); and the [`conformance`] check a driver passes.
 
 use std::cell::Cell;
 use std::time::Duration;
@@ -12,6 +15,13 @@ use crate::contract::{
     service, status, topic,
 };
 use crate::error::Error;
+
+pub mod conformance;
+mod fits;
+mod suggest;
+
+pub use fits::{check_info, fits_task};
+pub use suggest::how_to_serve;
 
 /// Drivers whose nodes are alive on this host: `(id, process id)`, by node name.
 pub fn running(bus: &Bus) -> Vec<(String, u32)> {
@@ -28,7 +38,7 @@ pub fn running(bus: &Bus) -> Vec<(String, u32)> {
 /// [`DriverInfo::validate`]); waits in steps of 100 ms, so Ctrl-C ends the wait. With
 /// `say`, a driver silent for a second is said to be awaited, on stderr. The error names
 /// the service, the drivers that are running and `serve`: how to start one
-/// ([`crate::contract::how_to_serve`]).
+/// ([`how_to_serve`]).
 pub fn wait_info(
     bus: &Bus,
     rx: &Rx<DriverInfo>,

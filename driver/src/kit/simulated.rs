@@ -13,8 +13,8 @@ use wire::{MAX_U, now_ns};
 
 use crate::Error;
 
-use crate::device::Device;
-use crate::serve::Lockstep;
+use crate::kit::device::Device;
+use crate::kit::serve::Lockstep;
 
 /// A simulated device: a [`Task`]'s system integrated with RK4 over the real elapsed
 /// time (times `speed`), piecewise between action arrivals, with the steps of the
@@ -37,7 +37,7 @@ pub struct Simulated {
     t_ns: u64,
     speed: f64,
     gains: (f64, f64),
-    /// Served in lockstep ([`crate::serve_lockstep`]): time passes only by
+    /// Served in lockstep ([`crate::kit::serve_lockstep`]): time passes only by
     /// [`Lockstep::step`], never with the wall clock.
     lockstep: bool,
 }
@@ -88,7 +88,7 @@ impl Simulated {
         })
     }
 
-    /// For [`crate::serve_lockstep`]: time passes one period per [`Lockstep::step`], not
+    /// For [`crate::kit::serve_lockstep`]: time passes one period per [`Lockstep::step`], not
     /// with the wall clock, and resets place the system at once.
     pub fn in_lockstep(mut self) -> Self {
         self.lockstep = true;
@@ -182,7 +182,7 @@ impl Lockstep for Simulated {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::device::REST_SAMPLES;
+    use crate::kit::device::REST_SAMPLES;
 
     /// The simulated pendulum falls from near the top as the in-process plant does.
     #[test]

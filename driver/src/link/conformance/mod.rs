@@ -32,7 +32,8 @@
 use std::time::Duration;
 
 use crate::Error;
-use crate::contract::{DriverCommand, DriverInfo, DriverLink, DriverSample, service};
+use crate::contract::{DriverCommand, DriverInfo, DriverSample, service};
+use crate::link::DriverLink;
 use plant::Task;
 use plant::angle::wrap;
 use wire::{Bus, MAX_U, type_name_of};
@@ -54,7 +55,7 @@ pub struct CheckOptions {
     /// How long to wait for the driver's info (saying so after a second).
     pub timeout: Duration,
     /// How to start a driver of the task, for the error when none answers
-    /// ([`crate::contract::how_to_serve`]).
+    /// ([`crate::link::how_to_serve`]).
     pub serve: String,
     /// How long one reset may take.
     pub reset_timeout: Duration,
@@ -244,7 +245,7 @@ impl Probe<'_> {
         let i = self.info;
         let fits = i
             .validate()
-            .map(|()| crate::fits_task(&i, &self.task).err());
+            .map(|()| crate::link::fits_task(&i, &self.task).err());
         let text = format!(
             "task {} (hash {:016x}), {} clock, n_x {}, n_u {}, Ts {:.3} ms (period {:.3} ms × time scale {}), u_min {}, u_max {}, watchdog {} period(s), reward {}",
             i.task_name(),
