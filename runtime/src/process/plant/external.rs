@@ -42,7 +42,7 @@ use super::{Ended, Gap, Trials};
 use crate::clock::ExternalDriver;
 
 /// The episode master for an external driver.
-pub struct Bridge {
+pub struct ExternalPlant {
     link: Link,
     driver: DriverLink,
     info: DriverInfo,
@@ -62,7 +62,7 @@ pub struct Bridge {
     cut_gaps: bool,
 }
 
-impl Bridge {
+impl ExternalPlant {
     /// Connects to driver `d`: waits for its info (its `timeout`), checks it against the
     /// task, then waits for the observer (and recorder) to listen.
     pub(super) fn connect(mut link: Link, d: &ExternalDriver, args: &PlantSettings) -> Result<Self> {
@@ -157,7 +157,7 @@ impl Bridge {
     }
 }
 
-impl Bridge {
+impl ExternalPlant {
     /// Resets the driver to `x0` and publishes the start sample (`header`) when it is
     /// READY there. Returns the READY sample, the reset's id and when the start sample
     /// was published.
@@ -249,7 +249,7 @@ impl Bridge {
     }
 }
 
-impl Trials for Bridge {
+impl Trials for ExternalPlant {
     fn trial(&mut self, trial: &Trial) -> Result<Ended> {
         let header = TrialHeader::new(trial, self.link.task.ts);
         let (mut s, reset_id, mut t_publish) = self.start(&trial.x0, &header)?;

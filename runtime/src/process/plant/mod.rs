@@ -176,7 +176,7 @@ impl Gap {
 }
 
 /// Runs trials: the simulation in lockstep or in real time, or an external driver
-/// ([`external::Bridge`]).
+/// ([`external::ExternalPlant`]).
 trait Trials {
     /// Runs an attempt at `trial`.
     fn trial(&mut self, trial: &Trial) -> Result<Ended>;
@@ -195,8 +195,8 @@ fn runner(
 ) -> Result<Box<dyn Trials>> {
     let period = match &args.clock {
         Clock::External(d) => {
-            let bridge = external::Bridge::connect(link, d, args)?;
-            return Ok(Box::new(bridge.cutting_gaps(!args.learn_across_gaps)));
+            let external = external::ExternalPlant::connect(link, d, args)?;
+            return Ok(Box::new(external.cutting_gaps(!args.learn_across_gaps)));
         }
         Clock::Lockstep => None,
         Clock::Realtime { period } => Some(*period),
@@ -208,7 +208,7 @@ fn runner(
     let episode = Episode::new(Plant::new(task.clone()), actuator);
     Ok(match period {
         Some(period) => Box::new(
-            realtime::Realtime::new(
+            realtime::RealtimePlant::new(
                 link,
                 episode,
                 (task.ts, period),
@@ -217,7 +217,7 @@ fn runner(
             )
             .cutting_gaps(!args.learn_across_gaps),
         ),
-        None => Box::new(lockstep::Lockstep::new(link, episode)),
+        None => Box::new(lockstep::LockstepPlant::new(link, episode)),
     })
 }
 
