@@ -15,7 +15,7 @@
 //!
 //! Each measurement goes through the observer process's step
 //! ([`crate::process::observer::estimate`]) and the estimate through the agent process's
-//! ([`crate::process::agent::Learner::action`]); each result is compared with the
+//! ([`crate::process::agent::AgentNode::action`]); each result is compared with the
 //! recorded message of the same sequence number, field by field and bit for bit
 //! ([`compare`]). The first difference ends the replay. [`observers`] runs another
 //! observer over the same measurements (`rig replay --observer`).
@@ -25,7 +25,7 @@ use std::path::PathBuf;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::error::chain;
-use crate::process::agent::Learner;
+use crate::process::agent::AgentNode;
 
 pub mod compare;
 pub mod observers;
@@ -144,7 +144,7 @@ pub fn replay(rec: &Recording, progress: &ProgressBar) -> Result<Outcome, Replay
     let (n, m) = (task.state_dim(), task.action_dim());
     let mut front = crate::build::front(&task, cfg);
     let mut learner =
-        Learner::new(cfg, 0, None, None).map_err(|e| ReplayError::Config(chain(&e)))?;
+        AgentNode::new(cfg, 0, None, None).map_err(|e| ReplayError::Config(chain(&e)))?;
     for x in &rec.measurements {
         progress.inc(1);
         let e = crate::process::observer::estimate(&mut front, x);
