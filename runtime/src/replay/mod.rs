@@ -110,7 +110,7 @@ pub enum ReplayError {
 
 /// How a replay ended.
 #[derive(Debug, PartialEq)]
-pub enum Outcome {
+pub enum ReplayEnd {
     /// Every estimate and action replayed as recorded.
     Identical {
         /// The messages compared, per topic.
@@ -138,7 +138,7 @@ pub fn progress_bar(samples: u64, shown: bool) -> ProgressBar {
 
 /// Replays `rec`'s observer and agent over its measurements, counting samples on
 /// `progress`; stops at the first difference.
-pub fn replay(rec: &Recording, progress: &ProgressBar) -> Result<Outcome, ReplayError> {
+pub fn replay(rec: &Recording, progress: &ProgressBar) -> Result<ReplayEnd, ReplayError> {
     let cfg = &rec.cfg;
     let task = cfg.task();
     let (n, m) = (task.state_dim(), task.action_dim());
@@ -149,12 +149,12 @@ pub fn replay(rec: &Recording, progress: &ProgressBar) -> Result<Outcome, Replay
         progress.inc(1);
         let e = crate::process::observer::estimate(&mut front, x);
         let Some(recorded) = rec.estimates.get(&x.header.seq) else {
-            return Ok(Outcome::Differs(Difference::missing(
+            return Ok(ReplayEnd::Differs(Difference::missing(
                 ESTIMATE, &e.header, false,
             )));
         };
         if let Some(d) = compare::estimate(ESTIMATE, recorded, &e, n, m) {
-            return Ok(Outcome::Differs(d));
+            return Ok(ReplayEnd::Differs(d));
         }
         let a = learner
             .action(&e, false)
@@ -163,19 +163,19 @@ pub fn replay(rec: &Recording, progress: &ProgressBar) -> Result<Outcome, Replay
                 cause: chain(&err),
             })?;
         let Some(recorded) = rec.actions.get(&x.header.seq) else {
-            return Ok(Outcome::Differs(Difference::missing(
+            return Ok(ReplayEnd::Differs(Difference::missing(
                 ACTION, &a.header, false,
             )));
         };
         if let Some(d) = compare::action(ACTION, recorded, &a, m) {
-            return Ok(Outcome::Differs(d));
+            return Ok(ReplayEnd::Differs(d));
         }
     }
     Ok(unmatched(rec).map_or_else(
-        || Outcome::Identical {
+        || ReplayEnd::Identical {
             counts: vec![(ESTIMATE, rec.estimates.len()), (ACTION, rec.actions.len())],
         },
-        Outcome::Differs,
+        ReplayEnd::Differs,
     ))
 }
 

@@ -73,7 +73,7 @@ pub struct CheckOptions {
 
 /// One line of the report.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Outcome {
+pub struct CheckLine {
     /// What was checked.
     pub name: &'static str,
     /// Whether it passed.
@@ -82,7 +82,7 @@ pub struct Outcome {
     pub detail: String,
 }
 
-impl std::fmt::Display for Outcome {
+impl std::fmt::Display for CheckLine {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let verdict = if self.pass { "PASS" } else { "FAIL" };
         write!(f, "{verdict}  {:<34} {}", self.name, self.detail)
@@ -92,7 +92,10 @@ impl std::fmt::Display for Outcome {
 /// Runs the check against a running driver; `report` sees each outcome as soon as it is
 /// known. An error means the check could not start: no driver, incompatible payloads, the
 /// driver in use by another rig process.
-pub fn check(opts: &CheckOptions, report: &mut dyn FnMut(&Outcome)) -> Result<Vec<Outcome>, Error> {
+pub fn check(
+    opts: &CheckOptions,
+    report: &mut dyn FnMut(&CheckLine),
+) -> Result<Vec<CheckLine>, Error> {
     let bus = Bus::join(&format!("check-{}", std::process::id()), "check-driver")?;
     let link = DriverLink::connect(&bus, &opts.driver)?;
     let info = link.wait_info(&bus, opts.timeout, true, &opts.serve)?;
@@ -141,8 +144,8 @@ struct Probe<'r> {
     task: std::sync::Arc<Task>,
     silence: Duration,
     reset_id: u64,
-    outcomes: Vec<Outcome>,
-    report: &'r mut dyn FnMut(&Outcome),
+    outcomes: Vec<CheckLine>,
+    report: &'r mut dyn FnMut(&CheckLine),
     opts: CheckOptions,
     /// The largest change of the state over the step's horizon with zero input.
     drift: f64,
@@ -178,7 +181,7 @@ fn same(a: &[f64], b: &[f64]) -> bool {
 
 impl Probe<'_> {
     fn record(&mut self, name: &'static str, pass: bool, detail: String) {
-        let o = Outcome { name, pass, detail };
+        let o = CheckLine { name, pass, detail };
         (self.report)(&o);
         self.outcomes.push(o);
     }
