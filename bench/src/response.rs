@@ -7,9 +7,9 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use runtime::response::ResponseSample;
 use runtime::report::plot::{Drawing, colours, draw_legend, padded_range, render, tick_label};
 use runtime::report::{DrawError, PlotError};
+use runtime::response::ResponseSample;
 
 /// Plots the time responses `(label, samples)` into a PNG and an SVG image.
 ///
@@ -33,7 +33,8 @@ pub fn plot_responses(
                 format!("response '{label}' is empty"),
             ));
         }
-        let finite = |s: &ResponseSample| s.t.is_finite() && s.x[0].is_finite() && s.u[0].is_finite();
+        let finite =
+            |s: &ResponseSample| s.t.is_finite() && s.x[0].is_finite() && s.u[0].is_finite();
         if !r.iter().all(finite) {
             let why = format!("response '{label}' has a non-finite value");
             return Err(PlotError::data(title, why));

@@ -319,7 +319,10 @@ mod tests {
         let a = parse(&[]).unwrap();
         assert_eq!((a.plant, a.gaps), (PlantSource::Simulated, GapPolicy::Cut));
         let a = parse(&["--plant", "sim", "--gaps", "learn"]).unwrap();
-        assert_eq!((a.plant, a.gaps), (PlantSource::Simulated, GapPolicy::Learn));
+        assert_eq!(
+            (a.plant, a.gaps),
+            (PlantSource::Simulated, GapPolicy::Learn)
+        );
         let a = parse(&["--plant", "external"]).unwrap();
         assert_eq!(a.plant, PlantSource::External);
         assert!(parse(&["--gaps", "skip"]).is_err());

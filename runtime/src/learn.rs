@@ -37,12 +37,12 @@ use rayon::prelude::*;
 use crate::config::ExperimentConfig;
 use crate::error::{AtFile, FileError};
 use crate::experiment::{Experiment, TrialRecord};
-use crate::response::ResponseSample;
 use crate::lock::LockError;
 use crate::output::responses::{write_acted_on, write_responses};
 use crate::output::runs::{OrderedWriter, RUNS_HEADER, curves};
 use crate::output::{progress_bar, write_atomic};
 use crate::report::{self, CurveError, CurvePoint, PlotError, Series, SeriesStyle};
+use crate::response::ResponseSample;
 use plant::config::ConfigError;
 
 /// Why `rig learn` stopped.

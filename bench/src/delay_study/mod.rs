@@ -37,8 +37,8 @@ mod study;
 
 pub use report::summary;
 pub use study::{
-    COMPARED_AT_MS, DELAYS_MS, DelayStudyError, DelayStudyOptions, LEARNERS, ReturnStats,
-    SWING_UP, StudyCell, welch,
+    COMPARED_AT_MS, DELAYS_MS, DelayStudyError, DelayStudyOptions, LEARNERS, ReturnStats, SWING_UP,
+    StudyCell, welch,
 };
 
 /// Runs the study and writes its report; see the module documentation.

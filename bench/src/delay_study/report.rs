@@ -11,8 +11,7 @@ use runtime::report::plot::{PointSeries, plot_points};
 use runtime::report::{Series, SeriesStyle, plot_curves};
 
 use super::study::{
-    COMPARED_AT_MS, DelayStudyError, DelayStudyOptions, LEARNERS, SWING_UP, StudyCell, ms,
-    welch,
+    COMPARED_AT_MS, DelayStudyError, DelayStudyOptions, LEARNERS, SWING_UP, StudyCell, ms, welch,
 };
 
 /// `cells.csv`, the plots and `summary.txt`.
@@ -124,7 +123,6 @@ pub fn write(opts: &DelayStudyOptions, cells: &[StudyCell]) -> Result<(), DelayS
     }
     Ok(())
 }
-
 
 /// The table and the acceptance checks.
 pub fn summary(model: ObserverModel, cells: &[StudyCell]) -> String {

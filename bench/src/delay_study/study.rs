@@ -124,7 +124,6 @@ pub struct StudyCell {
     pub greedy_curve: Vec<CurvePoint>,
 }
 
-
 /// One-sided Welch t-test that the mean of `a` exceeds that of `b`: `(t, df, p)`.
 pub fn welch(a: &ReturnStats, b: &ReturnStats) -> Option<(f64, f64, f64)> {
     let (va, vb) = (a.sd.powi(2) / a.n as f64, b.sd.powi(2) / b.n as f64);
@@ -136,7 +135,6 @@ pub fn welch(a: &ReturnStats, b: &ReturnStats) -> Option<(f64, f64, f64)> {
     let p = 1.0 - StudentsT::new(0.0, 1.0, df).ok()?.cdf(t);
     Some((t, df, p))
 }
-
 
 /// The mean over runs of the velocity components' RMSE (the second half of the state).
 fn velocity_error(acted_on_rmse: &[Vec<f64>]) -> f64 {
@@ -150,12 +148,10 @@ fn velocity_error(acted_on_rmse: &[Vec<f64>]) -> f64 {
     per_run.iter().sum::<f64>() / per_run.len().max(1) as f64
 }
 
-
 /// The spelling of a delay in directory names and tables.
 pub(super) fn ms(d: f64) -> String {
     format!("{d}")
 }
-
 
 /// Learns every cell of the study (the module documentation of [`super`]).
 pub fn run(opts: &DelayStudyOptions) -> Result<Vec<StudyCell>, DelayStudyError> {
@@ -260,4 +256,3 @@ mod tests {
         assert!((p - 0.5).abs() < 1e-12);
     }
 }
-

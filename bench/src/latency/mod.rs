@@ -68,7 +68,7 @@ pub use machine::MachineLoad;
 use runtime::clock::Clock;
 use runtime::config::Overrides;
 use runtime::output::write_atomic;
-use runtime::process::{CpuSet, CpuLayout, Scheduling, Spin, Wakeup};
+use runtime::process::{CpuLayout, CpuSet, Scheduling, Spin, Wakeup};
 use runtime::report::plot::{Histogram, plot_histograms};
 use runtime::run::{NodeCommand, RunOptions, run};
 pub use sweep::{SweepPoint, sweep};

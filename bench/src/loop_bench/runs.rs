@@ -8,7 +8,8 @@ use std::time::{Duration, Instant};
 use runtime::error::AtFile;
 use runtime::output::write_atomic;
 use runtime::process::{
-    AgentSettings, CpuLayout, NodeSettings, ObserverSettings, PlantSettings, Scheduling, Settings, Wait,
+    AgentSettings, CpuLayout, NodeSettings, ObserverSettings, PlantSettings, Scheduling, Settings,
+    Wait,
 };
 use wire::Waiting;
 

@@ -201,7 +201,10 @@ mod tests {
         assert_eq!(CpuLayout::lockstep(Waiting::Spin(FOREVER)), apart);
         assert_eq!(CpuLayout::lockstep(Waiting::Block), CpuLayout::Shared);
         let bounded = std::time::Duration::from_micros(100);
-        assert_eq!(CpuLayout::lockstep(Waiting::Yield(bounded)), CpuLayout::Shared);
+        assert_eq!(
+            CpuLayout::lockstep(Waiting::Yield(bounded)),
+            CpuLayout::Shared
+        );
     }
 
     #[test]

@@ -32,7 +32,7 @@ use std::time::Duration;
 
 pub use error::{NodeError, Result, SystemError};
 
-pub use cpus::{CpuSet, CpuLayout, Part};
+pub use cpus::{CpuLayout, CpuSet, Part};
 pub use wakeup::{Wakeup, WakeupLimit};
 
 pub use args::{SPIN_US, Scheduling, Spin, Wait, WaitKind};

@@ -17,8 +17,8 @@ use super::announce::Announcer;
 use super::state::Driver;
 use super::{Served, Services, Serving, Start};
 use crate::contract::{DriverCommand, clock, kind, status};
-use crate::kit::device::Device;
 use crate::error::Error;
+use crate::kit::device::Device;
 
 /// A simulation that can run in lockstep: its state can be set, and it integrates exactly
 /// one sample period at a time (hardware cannot: it keeps the real-time clock).

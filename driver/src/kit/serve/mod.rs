@@ -10,8 +10,8 @@ use wire::{Bus, Rx, Tx, now_ns};
 use crate::contract::{
     DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, VERSION, provides, service, topic,
 };
-use crate::kit::device::Device;
 use crate::error::Error;
+use crate::kit::device::Device;
 
 mod announce;
 mod lockstep;

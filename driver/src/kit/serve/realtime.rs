@@ -5,8 +5,8 @@ use wire::{MAX_U, MAX_X, now_ns};
 
 use super::{Served, Serving, Start};
 use crate::contract::clock;
-use crate::kit::device::Device;
 use crate::error::Error;
+use crate::kit::device::Device;
 
 /// Serves `device` as driver `driver_id` until Ctrl-C or SIGTERM (or
 /// [`Serving::stop_after`] samples): opens the three services of `docs/driver.md`,

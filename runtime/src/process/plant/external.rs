@@ -65,7 +65,11 @@ pub struct ExternalPlant {
 impl ExternalPlant {
     /// Connects to driver `d`: waits for its info (its `timeout`), checks it against the
     /// task, then waits for the observer (and recorder) to listen.
-    pub(super) fn connect(mut link: Link, d: &ExternalDriver, args: &PlantSettings) -> Result<Self> {
+    pub(super) fn connect(
+        mut link: Link,
+        d: &ExternalDriver,
+        args: &PlantSettings,
+    ) -> Result<Self> {
         let driver_id = d.id.as_str();
         let driver = DriverLink::connect(&link.bus, driver_id)?;
         let timeout = d.timeout;
