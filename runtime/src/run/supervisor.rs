@@ -17,7 +17,7 @@ use super::error::{Result, RunError};
 use super::gaps::GapLog;
 use super::logs::Logs;
 use super::recording::RecordingWriter;
-use super::retention::{Progress, Retention};
+use super::retention::{DrainMark, Retention};
 use super::returns::Returns;
 
 /// How long the supervisor watches after a process exits early, to see which process
@@ -163,7 +163,7 @@ impl Supervisor {
     /// Records everything waiting, then removes the checkpoints no resume can need any
     /// more; returns whether the run's end came by.
     pub(super) fn drain(&mut self, bar: &ProgressBar) -> Result<bool> {
-        let before = Progress {
+        let before = DrainMark {
             recorded: self.continuity.iter().map(|c| c.next).min().unwrap_or(0),
             rows: self.returns.ends.len(),
         };
