@@ -51,6 +51,7 @@ mod actor_critic;
 mod components;
 mod critic_only;
 mod finite;
+pub mod by_task;
 pub mod rules;
 #[cfg(test)]
 mod tests;
