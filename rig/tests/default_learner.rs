@@ -38,16 +38,32 @@ fn choice_lines(out: &Output) -> Vec<String> {
 #[test]
 fn each_kind_of_task_gets_its_learner_said_in_one_line() {
     let cases = [
-        ("examples/furuta/furuta-balance.toml", "with the LQR of its learned model", "\n[lqr]\n"),
-        ("examples/acrobot/acrobot.toml", "planning by the iterative LQR", "method = \"ilqr\""),
-        ("examples/gymnasium/mountain-car-continuous.toml", "MLAC/LLR — task", "algo = \"mlac\""),
+        (
+            "examples/furuta/furuta-balance.toml",
+            "with the LQR of its learned model",
+            "\n[lqr]\n",
+        ),
+        (
+            "examples/acrobot/acrobot.toml",
+            "planning by the iterative LQR",
+            "method = \"ilqr\"",
+        ),
+        (
+            "examples/gymnasium/mountain-car-continuous.toml",
+            "MLAC/LLR — task",
+            "algo = \"mlac\"",
+        ),
     ];
     for (task, said, written) in cases {
         let out = ok(config(&["--task", root(task).to_str().unwrap()]));
         let lines = choice_lines(&out);
         assert_eq!(lines.len(), 1, "{task}: {lines:?}");
         assert!(lines[0].contains(said), "{task}: {}", lines[0]);
-        assert!(lines[0].contains("--algo or a configuration file"), "{}", lines[0]);
+        assert!(
+            lines[0].contains("--algo or a configuration file"),
+            "{}",
+            lines[0]
+        );
         let toml = String::from_utf8_lossy(&out.stdout);
         assert!(toml.contains(written), "{task}: {toml}");
     }
@@ -65,12 +81,23 @@ fn a_named_learner_and_the_thesis_tasks_choose_nothing() {
     let dir = common::tmp("default-learner", "named");
     let file = dir.join("sac.toml");
     std::fs::write(&file, "algo = \"sac\"\n").unwrap();
-    let from_file = ok(config(&["--task", task, "--config", file.to_str().unwrap()]));
+    let from_file = ok(config(&[
+        "--task",
+        task,
+        "--config",
+        file.to_str().unwrap(),
+    ]));
     assert!(choice_lines(&from_file).is_empty());
-    let thesis = ok(config(&["--task", root("plant/tasks/pendulum.toml").to_str().unwrap()]));
+    let thesis = ok(config(&[
+        "--task",
+        root("plant/tasks/pendulum.toml").to_str().unwrap(),
+    ]));
     assert!(choice_lines(&thesis).is_empty());
     let toml = String::from_utf8_lossy(&thesis.stdout);
-    assert!(!toml.contains("[lqr]") && !toml.contains("[planning]"), "{toml}");
+    assert!(
+        !toml.contains("[lqr]") && !toml.contains("[planning]"),
+        "{toml}"
+    );
 }
 
 /// A balance task whose reward has no action cost: the regulator cannot be designed, and
@@ -89,7 +116,10 @@ fn a_task_without_an_action_cost_is_refused_with_what_to_add() {
     assert_eq!(e.trim().lines().count(), 1, "{e}");
     assert!(e.contains("free.toml"), "{e}");
     assert!(e.contains("reward.action_weights"), "{e}");
-    assert!(e.contains("add one to its [reward], e.g. action_weights = ["), "{e}");
+    assert!(
+        e.contains("add one to its [reward], e.g. action_weights = ["),
+        "{e}"
+    );
 }
 
 /// The README's path for a system of one's own — a task file, a driver, `rig run --plant
@@ -104,9 +134,16 @@ fn a_balance_is_learned_without_a_configuration() {
     let dir = common::tmp("default-learner", "furuta-balance");
     let task = root("examples/furuta/furuta-balance.toml");
     let task = task.to_str().unwrap();
-    let d = Driver::script(&python, "examples/furuta/driver.py", "default", &["--task", task]);
+    let d = Driver::script(
+        &python,
+        "examples/furuta/driver.py",
+        "default",
+        &["--task", task],
+    );
     let out = ok(rig()
-        .args(["run", "--plant", "external", "--driver", &d.id, "--task", task])
+        .args([
+            "run", "--plant", "external", "--driver", &d.id, "--task", task,
+        ])
         .args(["--trials", "10", "--quiet", "--out"])
         .arg(&dir)
         .output()

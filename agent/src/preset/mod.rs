@@ -48,10 +48,10 @@ use plant::{SystemName, Task};
 use crate::config::{AgentConfig, Algo, ApproxKind, HorizonKind, LearningConfig};
 
 mod actor_critic;
+pub mod by_task;
 mod components;
 mod critic_only;
 mod finite;
-pub mod by_task;
 pub mod rules;
 #[cfg(test)]
 mod tests;

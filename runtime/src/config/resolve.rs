@@ -221,7 +221,10 @@ impl PresetChoice {
                 })?;
                 (preset, Some(choice))
             }
-            (None, None) => (agent::preset::preset(self.system, algo, approx, horizon)?, None),
+            (None, None) => (
+                agent::preset::preset(self.system, algo, approx, horizon)?,
+                None,
+            ),
             (None, Some(task)) => (agent::preset::for_task(task, algo, approx, horizon)?, None),
         };
         let sections = Sections {
