@@ -20,7 +20,7 @@ mod task_tests;
 #[cfg(test)]
 mod tests;
 
-pub use resolve::{Overrides, resolve};
+pub use resolve::{Overrides, resolve, resolve_with_choice};
 
 use agent::checkpoint::{self, Origin};
 use std::sync::Arc;
