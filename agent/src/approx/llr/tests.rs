@@ -1,4 +1,5 @@
 use super::super::Traced;
+use super::super::kdtree::dist2;
 use super::*;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
