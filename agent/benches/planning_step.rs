@@ -154,9 +154,10 @@ fn setup(case: Case, seed: u64) -> (Task, Box<dyn Agent>) {
         Case::Lqr => "acrobot-balance.toml",
     };
     let task = Task::from_file(&root.join(file)).expect("the acrobot's task file");
-    let mut cfg = agent::preset::for_task(&task, Algo::Mlac, ApproxKind::Llr, HorizonKind::Infinite)
-        .expect("MLAC/LLR's preset")
-        .agent;
+    let mut cfg =
+        agent::preset::for_task(&task, Algo::Mlac, ApproxKind::Llr, HorizonKind::Infinite)
+            .expect("MLAC/LLR's preset")
+            .agent;
     cfg.learning.gamma = 0.99;
     match case {
         Case::Ilqr => {
@@ -202,9 +203,11 @@ impl Digest {
 
 /// Whether `x` has left the task's operating range.
 fn outside(task: &Task, x: &[f64]) -> bool {
-    task.operating_range
-        .as_ref()
-        .is_some_and(|r| x.iter().zip(&r.limits).any(|(v, (lo, hi))| v < lo || v > hi))
+    task.operating_range.as_ref().is_some_and(|r| {
+        x.iter()
+            .zip(&r.limits)
+            .any(|(v, (lo, hi))| v < lo || v > hi)
+    })
 }
 
 /// The CPU time this thread has used, in seconds: what a step costs whatever else the

@@ -54,7 +54,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::actor_critic::{Improver, TaskInfo};
 use crate::config::PlanningConfig;
 use crate::critic::ValueWithGradient;
-use crate::lqr::{affine_model, quadratic_weights, riccati};
+use crate::lqr::{LastSolution, affine_model, quadratic_weights};
 use crate::mlac::{ChoosesActions, Mlac};
 use plant::angle::wrap;
 
@@ -73,6 +73,8 @@ pub struct Ilqr {
     q: Vec<f64>,
     /// The last sample's plan, `H × m` row-major (empty before the first).
     last: Mutex<Vec<f64>>,
+    /// The terminal cost's LQR, solved again only when the model's fit changes.
+    solved: LastSolution,
 }
 
 /// A sequence's rollout through the model: the states `x̃_0 … x̃_H`, the actions, the
@@ -106,6 +108,7 @@ impl Ilqr {
             gamma,
             q,
             last: Mutex::new(Vec::new()),
+            solved: LastSolution::default(),
         }
     }
 
@@ -144,17 +147,19 @@ impl Ilqr {
         let m = self.info().m();
         let (a, b) = affine_model(&self.mlac, &self.info().reward.reference, &vec![0.0; m]);
         let reward = &self.info().reward;
-        riccati(&a, &b, &self.q, &reward.p, self.gamma).map_or_else(
-            || {
-                let n = self.q.len();
-                let mut s = DMatrix::zeros(n + 1, n + 1);
-                for (i, q) in self.q.iter().enumerate() {
-                    s[(i, i)] = *q;
-                }
-                s
-            },
-            |(_, s)| s,
-        )
+        self.solved
+            .riccati(&a, &b, &self.q, &reward.p, self.gamma)
+            .map_or_else(
+                || {
+                    let n = self.q.len();
+                    let mut s = DMatrix::zeros(n + 1, n + 1);
+                    for (i, q) in self.q.iter().enumerate() {
+                        s[(i, i)] = *q;
+                    }
+                    s
+                },
+                |(_, s)| s,
+            )
     }
 
     /// `x̃_{i+1} = f̂(x̃_i, u_i)` and the model's fit `(A, B)` there.

@@ -79,7 +79,9 @@ impl Llr {
         }
         let index = near.as_ref().expect("built above");
         let mut best = Best::reusing(self.k, std::mem::take(out));
-        index.tree.search(&q[..lead], &self.period[..lead], &mut best);
+        index
+            .tree
+            .search(&q[..lead], &self.period[..lead], &mut best);
         *out = best.into_sorted();
     }
 
