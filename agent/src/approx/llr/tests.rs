@@ -4,7 +4,7 @@ use super::*;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-fn params(n: usize, m: usize, memory: usize, k: usize) -> LlrParams {
+pub(super) fn params(n: usize, m: usize, memory: usize, k: usize) -> LlrParams {
     LlrParams {
         memory,
         neighbours: k,
