@@ -350,9 +350,18 @@ mod with_the_view {
         let offers = [
             ("foxglove.websocket.v1", Some("foxglove.websocket.v1")),
             ("foxglove.sdk.v1", Some("foxglove.sdk.v1")),
-            ("foxglove.websocket.v1, foxglove.sdk.v1", Some("foxglove.sdk.v1")),
-            ("foxglove.sdk.v1, foxglove.websocket.v1", Some("foxglove.sdk.v1")),
-            ("other, foxglove.websocket.v1", Some("foxglove.websocket.v1")),
+            (
+                "foxglove.websocket.v1, foxglove.sdk.v1",
+                Some("foxglove.sdk.v1"),
+            ),
+            (
+                "foxglove.sdk.v1, foxglove.websocket.v1",
+                Some("foxglove.sdk.v1"),
+            ),
+            (
+                "other, foxglove.websocket.v1",
+                Some("foxglove.websocket.v1"),
+            ),
             ("foxglove.websocket.v2", None),
         ];
         for (offer, answer) in offers {
@@ -413,7 +422,10 @@ mod with_the_view {
             let got = received(&out(offer));
             assert_eq!(got.protocol, answer, "offering {offer}");
             let per_topic = recording.check(&got);
-            eprintln!("offering {offer}: received {per_topic:?}, others {:?}", got.others);
+            eprintln!(
+                "offering {offer}: received {per_topic:?}, others {:?}",
+                got.others
+            );
         }
     }
 

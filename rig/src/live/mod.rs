@@ -130,7 +130,8 @@ impl LiveView {
     /// Starts the server on `addr` for a run of `task`; returns it and the feed to give
     /// the recorder ([`runtime::run::run_with`]).
     pub fn start(addr: SocketAddr, task: &plant::Task) -> Result<(LiveView, Box<dyn Tap>)> {
-        let refused = |e: &dyn std::fmt::Display| anyhow!("--live {addr}: cannot serve the live view: {e}");
+        let refused =
+            |e: &dyn std::fmt::Display| anyhow!("--live {addr}: cannot serve the live view: {e}");
         let ctx = Context::new();
         // The server on this host only, behind the door where the user asked.
         let server = WebSocketServer::new()
