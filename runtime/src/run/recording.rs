@@ -146,7 +146,13 @@ impl RecordingWriter {
         let path = dir.join("run.mcap");
         // Written as `run.mcap.part` until finished: a resumed run's old recording,
         // which holds what it keeps, stays until copied.
-        let mut r = Self::create(&path, task.state_dim(), task.action_dim())?;
+        let mut rec = Recorder::create(&path)?;
+        // The configuration and the metadata before the channels: each closes the open
+        // chunk, and a chunk of channel records without a message is refused by some
+        // readers (Lichtblick 1.10's, when the messages start at log time 0).
+        rec.attach("config.toml", "application/toml", cfg.to_toml().as_bytes())?;
+        rec.metadata("run", &metadata(about))?;
+        let mut r = Self::create(rec, task.state_dim(), task.action_dim())?;
         r.realtime = about.realtime;
         if about.driver {
             r.add_driver()?;
@@ -154,9 +160,6 @@ impl RecordingWriter {
         if cfg.observer().sensor != ::observer::config::SensorKind::Full {
             r.add_truth()?;
         }
-        r.rec
-            .attach("config.toml", "application/toml", cfg.to_toml().as_bytes())?;
-        r.rec.metadata("run", &metadata(about))?;
         if let Some(p) = about.point {
             r.keep(p, &path)?;
         }
@@ -181,8 +184,8 @@ impl RecordingWriter {
         Ok(())
     }
 
-    pub(super) fn create(path: &Path, n: usize, m: usize) -> Result<Self, RecordError> {
-        let mut rec = Recorder::create(path)?;
+    /// The recording's channels in `rec`, for a task of `n` states and `m` actions.
+    pub(super) fn create(mut rec: Recorder, n: usize, m: usize) -> Result<Self, RecordError> {
         let state = |name| {
             vec![
                 vec![Field::number("reward")],
