@@ -2,18 +2,30 @@
 examples/furuta/): the driver id, the task file (checked for the model's shape),
 --verbose and the model's own options, then lockstep.serve_until_signalled.
 
-    from model_driver import run
+    from rigkit.model_driver import run
     run(__doc__, lambda args: Acrobot(), default_task=HERE / "acrobot.toml", shape=(4, 1), what="acrobot")
 """
 
+from __future__ import annotations
+
 import argparse
 import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
 
-from lockstep import Services, serve_until_signalled
-from task import Task, TaskError
+from .lockstep import Services, Simulation, serve_until_signalled
+from .task import Task, TaskError
 
 
-def run(doc: str, simulation, default_task, shape, what, options=()) -> int:
+def run(
+    doc: str,
+    simulation: Callable[[argparse.Namespace], Simulation],
+    default_task: Path,
+    shape: tuple[int, int],
+    what: str | Callable[[argparse.Namespace], str],
+    options: Sequence[tuple[str, dict[str, Any]]] = (),
+) -> int:
     """Parses the command line described by `doc` and serves the model `simulation(args)`
     makes from the parsed arguments (n states and m actions, `shape`) for the task file
     given, until a signal. `options` are the model's own flags, `(flag, keywords of
