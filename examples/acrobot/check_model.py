@@ -10,9 +10,11 @@ gymnasium, the second check is skipped and said so.
 import math
 import random
 import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+try:
+    import rigkit  # noqa: F401 - the model's angles
+except ModuleNotFoundError:
+    sys.exit("error: check_model.py needs the rig's Python package rigkit: pip install ./python")
 
 from acrobot import Acrobot, derivative  # noqa: E402
 

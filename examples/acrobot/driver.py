@@ -13,11 +13,16 @@ with Ctrl-C or SIGTERM.
 import sys
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python_driver"))  # the contract's modules
+try:
+    from rigkit.script import need
+except ModuleNotFoundError:
+    sys.exit("error: driver.py needs the rig's Python package rigkit: pip install ./python")
 
-from acrobot import Acrobot  # noqa: E402
-from model_driver import run  # noqa: E402
+HERE = Path(__file__).resolve().parent
 
 if __name__ == "__main__":
+    need("driver.py", modules=["iceoryx2"])
+    from acrobot import Acrobot
+    from rigkit.model_driver import run
+
     sys.exit(run(__doc__, lambda _: Acrobot(), default_task=HERE / "acrobot.toml", shape=(4, 1), what="acrobot"))

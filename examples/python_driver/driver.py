@@ -15,7 +15,7 @@ time, piecewise between action arrivals.
 
 It advertises the task it serves — by default the rig's shipped pendulum task,
 plant/tasks/pendulum.toml; `--task FILE` another task file of the pendulum's shape, whose
-sampling time and action bounds it then keeps — with the task's hash (task.py). With
+sampling time and action bounds it then keeps — with the task's hash (rigkit.task). With
 `--clock lockstep` it is a simulator rather than a stand-in for hardware: it publishes
 sample k+1 only after the action for sample k arrived, integrating exactly one period,
 and resets by placing the pendulum at the start state (docs/driver.md, "Lockstep").
@@ -32,13 +32,22 @@ import signal
 import struct
 import sys
 import time
-
 from pathlib import Path
 
-import iceoryx2 as iox2
+try:
+    from rigkit.script import need
+except ModuleNotFoundError:
+    sys.exit("error: driver.py needs the rig's Python package rigkit: pip install ./python")
+
+need("driver.py", modules=["iceoryx2"])
+
+import iceoryx2 as iox2  # noqa: E402
+
+from rigkit.angle import wrap  # noqa: E402
+from rigkit.lockstep import Services, info, serve  # noqa: E402
 
 # DriverSample, DriverCommand and the constants of docs/driver.md.
-from messages import (  # the modules next to this file
+from rigkit.messages import (  # noqa: E402
     ACTION,
     READY,
     REALTIME,
@@ -48,8 +57,7 @@ from messages import (  # the modules next to this file
     DriverCommand,
     DriverSample,
 )
-from lockstep import Services, info, serve
-from task import Task, TaskError
+from rigkit.task import Task, TaskError  # noqa: E402
 
 # The rig's pendulum task, shipped with it.
 PENDULUM_TASK = Path(__file__).resolve().parents[2] / "plant" / "tasks" / "pendulum.toml"
@@ -102,11 +110,6 @@ class Pendulum:
 
 # Counts per revolution of the simulated encoder (--sensor angle), as `rig sim-driver`'s.
 ENCODER_COUNTS = 4096
-
-
-def wrap(a):
-    """Angle to [-π, π)."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def finite(values):

@@ -29,6 +29,18 @@ def start(argv: Sequence[str], **popen: Any) -> subprocess.Popen[Any]:
     return subprocess.Popen(list(argv), start_new_session=True, **popen)
 
 
+def call(argv: Sequence[str], **popen: Any) -> int:
+    """`argv` run to its end in a group of its own, its output the script's; stopped with
+    everything it started (`stop`) if the wait ends otherwise (Ctrl-C, an exception).
+    Returns its exit status."""
+    p = start(argv, **popen)
+    try:
+        return p.wait()
+    except BaseException:
+        stop(p)
+        raise
+
+
 def run(
     argv: Sequence[str], timeout: float | None = None, **popen: Any
 ) -> subprocess.CompletedProcess[str]:
