@@ -56,6 +56,17 @@ def read(path: str | Path) -> list[Row]:
     return [parse(lines[0], row, f"{path}:{n}") for n, row in enumerate(lines[1:], start=2)]
 
 
+def count(path: str | Path) -> int:
+    """How many complete rows a returns file has so far (0 before it exists), without
+    reading them: for following a run that is writing it."""
+    try:
+        with open(path, "rb") as f:
+            lines = f.read().count(b"\n")
+    except FileNotFoundError:
+        return 0
+    return max(0, lines - 1)
+
+
 def evaluations(rows: list[Row]) -> list[Row]:
     """The rows a greedy evaluation follows."""
     return [r for r in rows if r.greedy is not None]
