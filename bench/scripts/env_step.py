@@ -14,8 +14,15 @@ import argparse
 import sys
 import time
 
-import gymnasium
-import numpy as np
+try:
+    from rigkit.script import need
+except ModuleNotFoundError:
+    sys.exit("error: env_step.py needs the rig's Python package rigkit: pip install ./python")
+
+need("env_step.py", modules=["gymnasium"])
+
+import gymnasium  # noqa: E402
+import numpy as np  # noqa: E402
 
 
 def main():
