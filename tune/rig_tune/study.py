@@ -7,6 +7,7 @@ import argparse
 import hashlib
 import os
 import random
+import signal
 import subprocess
 import sys
 import time
@@ -142,6 +143,19 @@ def start_workers(argv: list[str], workers: int, out: Path) -> list[subprocess.P
         procs.append(subprocess.Popen(cmd, stdout=sink, stderr=subprocess.STDOUT))
         sink.close()
     return procs
+
+
+def forward_sigterm(procs: list[subprocess.Popen]) -> None:
+    """SIGTERM (a timeout, a scheduler) acts as Ctrl-C: passed on to the workers, which a
+    terminal's Ctrl-C reaches by itself, then KeyboardInterrupt here."""
+
+    def stopping(signum: int, frame: object) -> None:
+        for p in procs:
+            if p.poll() is None:
+                p.send_signal(signal.SIGTERM)
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stopping)
 
 
 def describe(t: FrozenTrial) -> str:
