@@ -51,8 +51,8 @@ def read(path: str | Path) -> list[Row]:
             lines = list(csv.reader(f))
     except OSError as e:
         raise ReturnsError(f"{path}: cannot read: {e.strerror}") from None
-    if not lines:
-        raise ReturnsError(f"{path}: empty, expected the header {','.join(HEADER)}")
+    if not lines or lines[0] != HEADER:
+        raise ReturnsError(f"{path}: header {lines[:1]}, expected {HEADER}")
     return [parse(lines[0], row, f"{path}:{n}") for n, row in enumerate(lines[1:], start=2)]
 
 

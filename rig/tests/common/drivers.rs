@@ -4,15 +4,17 @@
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use super::python as py;
 use super::rig;
 
-/// The Python interpreter with the bindings, or `None` (and why) if there is none.
+/// The Python interpreter with the bindings (and the source tree's rigkit), or `None`
+/// (and why) if there is none.
 pub fn python() -> Option<String> {
-    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
-    let probe = Command::new(&python)
+    let python = py::interpreter();
+    let probe = py::command(&python)
         .args([
             "-c",
-            "import importlib.metadata as m, iceoryx2; print(m.version('iceoryx2'))",
+            "import importlib.metadata as m, iceoryx2, rigkit; print(m.version('iceoryx2'))",
         ])
         .output();
     match probe {
@@ -21,7 +23,7 @@ pub fn python() -> Option<String> {
         }
         Ok(o) => {
             println!(
-                "skipped: {python} cannot import iceoryx2 0.10.0 (pip install iceoryx2==0.10.0, or set RIG_PYTHON): {}{}",
+                "skipped: {python} cannot import iceoryx2 0.10.0 and rigkit (pip install \"./python[driver]\", or set RIG_PYTHON): {}{}",
                 String::from_utf8_lossy(&o.stdout).trim(),
                 String::from_utf8_lossy(&o.stderr)
                     .lines()
@@ -90,9 +92,7 @@ impl Driver {
     /// The Python driver `script` (relative to the repository) with id `<name>-py<pid>`
     /// and flags `extra`.
     pub fn script(python: &str, script: &str, name: &str, extra: &[&str]) -> Self {
-        let mut c = Command::new(python);
-        c.arg(format!("{}/../{script}", env!("CARGO_MANIFEST_DIR")));
-        Self::spawn(c, &format!("{name}-py"), extra)
+        Self::spawn(py::script(python, script), &format!("{name}-py"), extra)
     }
 
     /// `command --driver-id <prefix><pid> extra…`, once the other tests' drivers are done.
