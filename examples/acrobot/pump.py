@@ -7,7 +7,7 @@ after a first push towards q2* = alpha for 0.25 s — over 100 gain sets (alpha,
 from hanging at rest, the torque saturated to the bound and held for 50 ms.
 
     python3 examples/acrobot/pump.py
-    python3 examples/acrobot/pump.py --bound 4 --gains -1.5,20,2   # one bound, one gain set
+    python3 examples/acrobot/pump.py --bound 4 --gains=-2.5,10,1   # one bound, one gain set
 
 Prints, per bound, the earliest time the tip comes within 0.1 m of its highest point (2 m
 above the pivot) within 10 s, and the gains that do it.
