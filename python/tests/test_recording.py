@@ -26,7 +26,7 @@ def write(path: Path, messages: list[tuple[str, dict[str, Any]]]) -> None:
                 channels[topic] = w.register_channel(topic, "json", schema)
             w.add_message(channels[topic], log_time=k, publish_time=k, data=json.dumps(m).encode())
         w.add_metadata("run", {"horizon": "infinite"})
-        w.finish()
+        w.finish()  # type: ignore[no-untyped-call]
 
 
 def measurement(trial: int, step: int, flags: int, y: list[float | None]) -> tuple[str, dict[str, Any]]:
