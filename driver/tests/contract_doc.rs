@@ -11,10 +11,7 @@ use driver::contract::{
 use wire::type_name_of;
 
 const DOC: &str = include_str!("../../docs/driver.md");
-const PY_MESSAGES: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../python/rigkit/messages.py"
-);
+const PY_MESSAGES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../python/rigkit/messages.py");
 
 /// One row of a layout table: field, offset, size, type.
 type Row = (String, usize, usize, String);

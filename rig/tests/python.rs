@@ -24,7 +24,14 @@ fn the_python_package_passes_its_tests() {
         return;
     };
     let out = python::command(&py)
-        .args(["-m", "pytest", "-q", "-p", "no:cacheprovider", "python/tests"])
+        .args([
+            "-m",
+            "pytest",
+            "-q",
+            "-p",
+            "no:cacheprovider",
+            "python/tests",
+        ])
         .current_dir(python::root())
         .env("RIG", env!("CARGO_BIN_EXE_rig"))
         .output()
@@ -46,6 +53,9 @@ fn the_python_package_type_checks() {
         .output()
         .unwrap();
     let said = text(&out);
-    assert!(out.status.success(), "mypy (python/pyproject.toml):\n{said}");
+    assert!(
+        out.status.success(),
+        "mypy (python/pyproject.toml):\n{said}"
+    );
     assert!(said.starts_with("Success: no issues found"), "{said}");
 }

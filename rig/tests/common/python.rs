@@ -53,7 +53,10 @@ pub fn with(modules: &str) -> Option<String> {
         Ok(o) => {
             println!(
                 "skipped: {python} cannot import {modules} ({}; pip install \"./python[driver,gymnasium,recording]\", or set RIG_PYTHON)",
-                String::from_utf8_lossy(&o.stderr).lines().last().unwrap_or("")
+                String::from_utf8_lossy(&o.stderr)
+                    .lines()
+                    .last()
+                    .unwrap_or("")
             );
             None
         }
