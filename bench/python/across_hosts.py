@@ -28,17 +28,17 @@ started and removes its hosts.
 
 import argparse
 import csv
+import importlib.util
 import os
 import platform
 import subprocess
 import sys
 import time
 
-try:
-    from rigkit import script
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: across_hosts.py needs the rig's Python package rigkit: pip install ./python")
 
+from rigkit import script  # noqa: E402
 from rigkit import processes, recording  # noqa: E402
 from rigkit.hosts import Hosts  # noqa: E402
 
@@ -136,13 +136,11 @@ def main():
     ap.add_argument("--trials", type=int, default=20)
     ap.add_argument("--speed", type=float, default=1.0)
     ap.add_argument("--repetitions", type=int, default=3)
-    ap.add_argument("--rig", default="target/release/rig")
+    script.rig_option(ap, "target/release/rig")
     a = ap.parse_args()
     script.need(WHO, modules=["mcap"], tools=["ip", "nsenter", "unshare"], root=True)
     script.interrupt_on_sigterm()
-    rig = os.path.abspath(a.rig)
-    if not os.access(rig, os.X_OK):
-        script.fail(WHO, f"--rig {rig}: no such executable (cargo build --release -p rig --features bridge)")
+    rig = str(script.rig_binary(WHO, a.rig))
     try:
         measured = repetitions(a, rig)
     except KeyboardInterrupt:

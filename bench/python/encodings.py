@@ -14,6 +14,7 @@ Needs rigkit, mcap and mcap-ros2-support (`pip install "./python[recording]" mca
 """
 
 import argparse
+import importlib.util
 import json
 import math
 import os
@@ -22,10 +23,10 @@ import statistics
 import sys
 import time
 
-try:
-    from rigkit.script import need
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: encodings.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import need  # noqa: E402
 
 need("encodings.py", modules=["mcap", "mcap_ros2"])
 

@@ -16,14 +16,15 @@ evaluation runs its full length and its last max(1.5 s, a third of the trial) ke
 pendulum within 0.3 rad of upright. Needs matplotlib and mcap (the official reader).
 """
 
+import importlib.util
 import statistics
 import sys
 from pathlib import Path
 
-try:
-    from rigkit.script import fail, need
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: furuta_report.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import fail, need  # noqa: E402
 
 need("furuta_report.py", modules=["mcap", "matplotlib"])
 

@@ -23,6 +23,7 @@ torch), gymnasium, iceoryx2 0.10.0, matplotlib, and the release build of the rig
 
 import argparse
 import csv
+import importlib.util
 import shutil
 import statistics
 import subprocess
@@ -30,10 +31,10 @@ import sys
 import time
 from pathlib import Path
 
-try:
-    from rigkit.script import fail, interrupt_on_sigterm, need
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: sb3_pendulum.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import fail, interrupt_on_sigterm, need, rig_binary, rig_option  # noqa: E402
 
 need("sb3_pendulum.py", modules=["gymnasium", "iceoryx2", "matplotlib"])
 
@@ -158,16 +159,14 @@ def main():
                    help=f"learning steps per run, a multiple of {EVAL_EVERY} [default: 40000]")
     p.add_argument("--level", type=float, default=-300.0,
                    help="the common greedy-return level [default: -300]")
-    p.add_argument("--rig", type=Path, default=ROOT / "target" / "release" / "rig",
-                   help="the rig binary [default: the release build]")
+    rig_option(p, ROOT / "target" / "release" / "rig")
     p.add_argument("--python", default=sys.executable, help="the interpreter for the adapter")
     args = p.parse_args()
+    args.rig = rig_binary("sb3_pendulum.py", args.rig)
     if args.seeds < 1:
         p.error("--seeds must be at least 1")
     if args.steps < EVAL_EVERY or args.steps % EVAL_EVERY:
         p.error(f"--steps must be a positive multiple of {EVAL_EVERY} (one evaluation each)")
-    if not args.rig.exists():
-        p.error(f"--rig {args.rig}: no such rig binary (cargo build --release -p rig)")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     starts = Task.read(str(TASK)).starts

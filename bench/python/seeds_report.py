@@ -21,14 +21,15 @@ Needs mcap (the official reader); the judging is rigkit.seeds.
 """
 
 import argparse
+import importlib.util
 import statistics
 import sys
 from pathlib import Path
 
-try:
-    from rigkit.script import fail, need
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: seeds_report.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import fail, need  # noqa: E402
 
 need("seeds_report.py", modules=["mcap"])
 

@@ -21,6 +21,7 @@ adapter); --sb3 needs stable-baselines3.
 
 import argparse
 import csv
+import importlib.util
 import os
 import re
 import shutil
@@ -29,10 +30,10 @@ import sys
 import tomllib
 from pathlib import Path
 
-try:
-    from rigkit.script import fail, interrupt_on_sigterm, need
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: systems.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import fail, interrupt_on_sigterm, need, rig_binary, rig_option  # noqa: E402
 
 need("systems.py", modules=["iceoryx2", "mcap", "matplotlib"])
 
@@ -201,14 +202,12 @@ def main():
     p.add_argument("--only", default="", help="comma-separated experiment names to run (default all)")
     p.add_argument("--trials", type=int, help="trials per run instead of each experiment's and learner's own (a short look)")
     p.add_argument("--sb3", action="store_true", help="also run bench/python/sb3_pendulum.py, 20 000 steps")
-    p.add_argument("--rig", type=Path, default=ROOT / "target" / "release" / "rig",
-                   help="the rig binary [default: the release build]")
+    rig_option(p, ROOT / "target" / "release" / "rig")
     p.add_argument("--python", default=sys.executable, help="the interpreter for the drivers")
     args = p.parse_args()
+    args.rig = rig_binary(WHO, args.rig)
     if args.seeds < 1:
         p.error("--seeds must be at least 1")
-    if not args.rig.exists():
-        p.error(f"{args.rig}: no such rig binary (cargo build --release -p rig)")
     experiments = read_matrix(args.matrix)
     names = {e["name"] for e in experiments}
     only = [n for n in args.only.split(",") if n]

@@ -11,13 +11,14 @@ time of the stepping loop alone and the time per step. Needs gymnasium and numpy
 """
 
 import argparse
+import importlib.util
 import sys
 import time
 
-try:
-    from rigkit.script import need
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: env_step.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import need  # noqa: E402
 
 need("env_step.py", modules=["gymnasium"])
 

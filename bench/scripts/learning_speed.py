@@ -14,15 +14,16 @@ return (with exploration, as the thesis's Figures 5.5 and 5.9 plot it), smoothed
 * with --levels: the simulated minutes until the smoothed curve first reaches each
   common level (the same levels for every DIR, to compare learners on equal terms).
 """
+import importlib.util
 import statistics as st
 import sys
 from collections import defaultdict
 
-try:
-    from rigkit import returns
-    from rigkit.script import fail
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: learning_speed.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit import returns  # noqa: E402
+from rigkit.script import fail  # noqa: E402
 
 
 def curve(d):

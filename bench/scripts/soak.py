@@ -37,6 +37,7 @@ exits (130 when stopped, 1 when a helper failed).
 """
 import argparse
 import bisect
+import importlib.util
 import json
 import os
 import random
@@ -48,11 +49,10 @@ import threading
 import time
 from pathlib import Path
 
-try:
-    from rigkit import script
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: soak.py needs the rig's Python package rigkit: pip install ./python")
 
+from rigkit import script  # noqa: E402
 from rigkit import processes, recording, returns  # noqa: E402
 from rigkit.hosts import Hosts  # noqa: E402
 from rigkit.recording import END, GAP, GREEDY, SHUTDOWN, START  # noqa: E402
@@ -342,7 +342,7 @@ def main():
     span = p.add_mutually_exclusive_group()
     span.add_argument("--minutes", type=float, help="minutes of faults (default 30)")
     span.add_argument("--seconds", type=float, help="seconds of faults (the CI's short soak)")
-    p.add_argument("--rig", default="target/release/rig", help="the rig binary")
+    script.rig_option(p, "target/release/rig")
     p.add_argument("--out", default="out/soak", help="the output folder (replaced)")
     p.add_argument("--seed", type=int, default=1, help="seed of the faults' moments and kinds")
     p.add_argument("--speed", type=float, default=1.0, help="the driver's speed (sim-driver)")
@@ -354,9 +354,7 @@ def main():
     args = p.parse_args()
     script.need(WHO, **NEEDS)
     script.interrupt_on_sigterm()
-    args.rig = str(Path(args.rig).resolve())
-    if not os.access(args.rig, os.X_OK):
-        script.fail(WHO, f"--rig {args.rig}: no such executable (cargo build --release -p rig --features bridge)")
+    args.rig = str(script.rig_binary(WHO, args.rig))
     seconds = args.seconds if args.seconds is not None else 60 * (args.minutes or 30)
     if args.trials is None:
         # A pendulum trial (3 s at speed 1) and its share of greedy evaluations.

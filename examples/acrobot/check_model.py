@@ -7,13 +7,12 @@ gymnasium, the second check is skipped and said so.
     python3 examples/acrobot/check_model.py
 """
 
+import importlib.util
 import math
 import random
 import sys
 
-try:
-    import rigkit  # noqa: F401 - the model's angles
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: check_model.py needs the rig's Python package rigkit: pip install ./python")
 
 from acrobot import Acrobot, derivative  # noqa: E402

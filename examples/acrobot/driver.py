@@ -10,19 +10,16 @@ The driver id defaults to the task's name, the one `rig run --task` looks for. S
 with Ctrl-C or SIGTERM.
 """
 
+import importlib.util
 import sys
 from pathlib import Path
 
-try:
-    from rigkit.script import need
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: driver.py needs the rig's Python package rigkit: pip install ./python")
 
-HERE = Path(__file__).resolve().parent
+from acrobot import Acrobot  # noqa: E402
+from rigkit.model_driver import run  # noqa: E402
 
 if __name__ == "__main__":
-    need("driver.py", modules=["iceoryx2"])
-    from acrobot import Acrobot
-    from rigkit.model_driver import run
-
-    sys.exit(run(__doc__, lambda _: Acrobot(), default_task=HERE / "acrobot.toml", shape=(4, 1), what="acrobot"))
+    task = Path(__file__).resolve().parent / "acrobot.toml"
+    sys.exit(run(__doc__, lambda _: Acrobot(), default_task=task, shape=(4, 1), what="acrobot"))

@@ -18,13 +18,14 @@ Needs numpy.
 """
 
 import argparse
+import importlib.util
 import itertools
 import sys
 
-try:
-    from rigkit.script import need
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: lqr_region.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import need  # noqa: E402
 
 need("lqr_region.py", modules=["numpy"])
 

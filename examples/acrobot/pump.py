@@ -14,13 +14,12 @@ above the pivot) within 10 s, and the gains that do it.
 """
 
 import argparse
+import importlib.util
 import itertools
 import math
 import sys
 
-try:
-    import rigkit  # noqa: F401 - the model's angles
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: pump.py needs the rig's Python package rigkit: pip install ./python")
 
 from acrobot import Acrobot, elbow_drift, elbow_inertia  # noqa: E402

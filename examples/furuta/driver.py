@@ -11,17 +11,15 @@ The driver id defaults to the task's name, the one `rig run --task` looks for. S
 with Ctrl-C or SIGTERM.
 """
 
+import importlib.util
 import sys
 from pathlib import Path
 
-try:
-    from rigkit.script import need
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: driver.py needs the rig's Python package rigkit: pip install ./python")
 
 from furuta import DAMPING, DEFAULT_DAMPING, Furuta  # noqa: E402
-
-HERE = Path(__file__).resolve().parent
+from rigkit.model_driver import run  # noqa: E402
 
 DAMPING_OPTION = (
     "--damping",
@@ -35,14 +33,11 @@ DAMPING_OPTION = (
 )
 
 if __name__ == "__main__":
-    need("driver.py", modules=["iceoryx2"])
-    from rigkit.model_driver import run
-
     sys.exit(
         run(
             __doc__,
             lambda args: Furuta(args.damping),
-            default_task=HERE / "furuta.toml",
+            default_task=Path(__file__).resolve().parent / "furuta.toml",
             shape=(4, 1),
             what=lambda args: f"QUBE-Servo 2 rotary pendulum, {args.damping} damping",
             options=[DAMPING_OPTION],

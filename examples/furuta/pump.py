@@ -18,12 +18,11 @@ pendulum's speed there, and the gains. A check of the swing-up task's feasibilit
 """
 
 import argparse
+import importlib.util
 import math
 import sys
 
-try:
-    import rigkit  # noqa: F401 - the model's angles
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: pump.py needs the rig's Python package rigkit: pip install ./python")
 
 import furuta  # noqa: E402

@@ -9,12 +9,13 @@ this file shows the mappings here).
 Stop it with Ctrl-C or SIGTERM.
 """
 
+import importlib.util
 import sys
 
-try:
-    from rigkit.script import need
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: adapter.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import need  # noqa: E402
 
 if __name__ == "__main__":
     need("adapter.py", modules=["iceoryx2", "gymnasium"])

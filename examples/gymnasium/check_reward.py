@@ -10,14 +10,15 @@ Prints the largest difference and exits 1 if it exceeds 1e-9.
 """
 
 import argparse
+import importlib.util
 import random
 import sys
 from pathlib import Path
 
-try:
-    from rigkit.script import need
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: check_reward.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import need  # noqa: E402
 
 need("check_reward.py", modules=["gymnasium", "iceoryx2"])
 

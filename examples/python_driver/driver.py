@@ -25,6 +25,7 @@ Stop it with Ctrl-C or SIGTERM (it finishes the current period and exits).
 
 import argparse
 import ctypes
+import importlib.util
 import math
 import os
 import random
@@ -34,10 +35,10 @@ import sys
 import time
 from pathlib import Path
 
-try:
-    from rigkit.script import need
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: driver.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import need  # noqa: E402
 
 need("driver.py", modules=["iceoryx2"])
 

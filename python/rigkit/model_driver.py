@@ -12,10 +12,13 @@ import argparse
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from .lockstep import Services, Simulation, serve_until_signalled
+from . import script
 from .task import Task, TaskError
+
+if TYPE_CHECKING:
+    from .lockstep import Simulation
 
 
 def run(
@@ -30,7 +33,10 @@ def run(
     makes from the parsed arguments (n states and m actions, `shape`) for the task file
     given, until a signal. `options` are the model's own flags, `(flag, keywords of
     argparse's add_argument)` pairs; `what` names the model, a string or a function of
-    the parsed arguments."""
+    the parsed arguments. Ends in one line if iceoryx2 is not installed."""
+    script.need(Path(sys.argv[0]).name, modules=["iceoryx2"])
+    from .lockstep import Services, serve_until_signalled
+
     p = argparse.ArgumentParser(description=" ".join(doc.split("\n\n")[0].split()))
     p.add_argument(
         "--driver-id",

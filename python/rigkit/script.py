@@ -12,6 +12,7 @@ before the script has made anything that would need cleaning up.
 
 from __future__ import annotations
 
+import argparse
 import importlib.util
 import os
 import shutil
@@ -20,6 +21,7 @@ import sys
 import threading
 import traceback
 from collections.abc import Callable, Iterable
+from pathlib import Path
 from typing import Any, NoReturn
 
 # How to install a Python module a script needs (from the repository's root).
@@ -76,6 +78,19 @@ def need(who: str, modules: Iterable[str] = (), tools: Iterable[str] = (), root:
     lacking = missing(modules, tools, root)
     if lacking:
         fail(who, "needs " + ", ".join(lacking))
+
+
+def rig_option(p: argparse.ArgumentParser, default: str | Path) -> None:
+    """`--rig PATH`, the rig binary a script runs (`rig_binary` checks it)."""
+    p.add_argument("--rig", type=Path, default=Path(default), help=f"the rig binary [default: {default}]")
+
+
+def rig_binary(who: str, rig: Path) -> Path:
+    """`rig` made absolute, or the script's end in one line (`fail`) if it is not an
+    executable file."""
+    if not (rig.is_file() and os.access(rig, os.X_OK)):
+        fail(who, f"--rig {rig}: no such rig binary (cargo build --release -p rig --all-features)")
+    return rig.resolve()
 
 
 def interrupt_on_sigterm() -> None:

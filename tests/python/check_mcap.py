@@ -41,6 +41,7 @@ readers: rigkit.recording, rigkit.returns; written against mcap 1.6.0).
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import struct
@@ -49,10 +50,10 @@ import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
-try:
-    from rigkit.script import need
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: check_mcap.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import need  # noqa: E402
 
 need("check_mcap.py", modules=["mcap"])
 

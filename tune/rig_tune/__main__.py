@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import sys
 import tempfile
 import warnings
 from pathlib import Path
 
-try:
-    from rigkit import script
-except ModuleNotFoundError:
+if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: rig tune needs the rig's Python package rigkit: python3 -m pip install ./python")
+
+from rigkit import script  # noqa: E402
 
 script.need("rig tune", modules=["optuna", "matplotlib", "tomli_w"])
 
