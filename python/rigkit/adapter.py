@@ -36,6 +36,7 @@ import gymnasium
 import numpy as np
 
 from .lockstep import Outcome, Services, serve_until_signalled
+from .realtime import check_driver_id
 from .task import Task, TaskError
 
 
@@ -107,6 +108,10 @@ def main() -> int:
     except TaskError as e:
         p.error(f"--task: {e}")
     driver_id = args.driver_id or task.name.replace(".", "-")
+    try:
+        check_driver_id(driver_id)
+    except ValueError as e:
+        p.error(f"--driver-id {e}")
     try:
         sim = Environment(mapping, task, args.seed, provides_reward=not args.task_reward)
     except ValueError as e:

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from . import script
+from .realtime import check_driver_id
 from .task import Task, TaskError
 
 if TYPE_CHECKING:
@@ -58,6 +59,10 @@ def run(
     if (task.n, task.m) != tuple(shape):
         p.error(f"--task {args.task}: {task.n} states and {task.m} actions, not {shape[0]} and {shape[1]}")
     driver_id = args.driver_id or task.name.replace(".", "-")
+    try:
+        check_driver_id(driver_id)
+    except ValueError as e:
+        p.error(f"--driver-id {e}")
     name = what(args) if callable(what) else what
     print(
         f"driver {driver_id!r}: task {task.name} ({name}), Ts {task.ts * 1e3:g} ms, lockstep",

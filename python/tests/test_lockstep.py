@@ -50,3 +50,12 @@ def test_the_info_advertises_the_task() -> None:
     assert i.task.decode() == "pendulum" and i.task_hash == TASK.hash()
     assert (i.version, i.clock, i.n_x, i.n_u, i.provides) == (messages.VERSION, messages.LOCKSTEP, 2, 1, 1)
     assert i.period_ns == 30_000_000 and (i.u_min[0], i.u_max[0]) == (-3.0, 3.0)
+
+
+def test_a_driver_id_the_rig_can_carry() -> None:
+    from rigkit.realtime import check_driver_id
+
+    assert check_driver_id("lab-pendulum_2") == "lab-pendulum_2"
+    for bad in ("", "a b", "a.b", "π"):
+        with pytest.raises(ValueError, match="letters, digits, '-' and '_' only"):
+            check_driver_id(bad)
