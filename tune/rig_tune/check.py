@@ -76,7 +76,9 @@ def in_parallel(runner: Runner, path: Path, todo: list[int], out: Path, workers:
     with ThreadPoolExecutor(max_workers=workers) as pool:
         futures = [pool.submit(runner.run, path, s, out / f"seed-{s}") for s in todo]
         try:
-            wait(futures, return_when=FIRST_EXCEPTION)
+            done, _ = wait(futures, return_when=FIRST_EXCEPTION)
+            for f in done:
+                f.result()  # the first failure, raised
             return [f.result() for f in futures]
         except BaseException:
             runner.cancelled.set()
