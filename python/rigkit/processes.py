@@ -57,13 +57,14 @@ def run(
     return subprocess.CompletedProcess(list(argv), p.returncode, out, err)
 
 
-def stop(p: subprocess.Popen[Any], sig: int = signal.SIGINT, patience: float = PATIENCE_S) -> int:
-    """Stops `p` with `sig` (SIGINT: as Ctrl-C) and waits for it; kills it if it has not
-    exited within `patience` seconds. A process started by `start` is stopped with its
-    whole group, and what the group still holds once `p` has exited is stopped the same
-    way. Returns `p`'s exit status."""
+def stop(p: subprocess.Popen[Any], sig: int | None = signal.SIGINT, patience: float = PATIENCE_S) -> int:
+    """Stops `p` with `sig` (SIGINT: as Ctrl-C; None: `p` was told already, by a
+    terminal's Ctrl-C, say) and waits for it; kills it if it has not exited within
+    `patience` seconds. A process started by `start` is stopped with its whole group, and
+    what the group still holds once `p` has exited is stopped the same way. Returns `p`'s
+    exit status."""
     group = _own_group(p)
-    if p.poll() is None:
+    if p.poll() is None and sig is not None:
         _signal(p, group, sig)
     try:
         p.wait(timeout=patience)
@@ -71,7 +72,7 @@ def stop(p: subprocess.Popen[Any], sig: int = signal.SIGINT, patience: float = P
         _signal(p, group, signal.SIGKILL)
         p.wait()
     if group is not None and _group_alive(group):
-        os.killpg(group, sig)
+        os.killpg(group, signal.SIGINT if sig is None else sig)
         deadline = time.monotonic() + patience
         while _group_alive(group) and time.monotonic() < deadline:
             time.sleep(0.02)

@@ -17,6 +17,7 @@ from pathlib import Path
 import optuna
 import sqlalchemy.exc
 from optuna.trial import FrozenTrial, TrialState
+from rigkit import processes
 
 from .objective import Objective
 from .runner import Driver, Runner, RunFailed
@@ -192,10 +193,6 @@ def watch(study: optuna.Study, target: int, procs: list[subprocess.Popen]) -> No
 
 
 def stop(procs: list[subprocess.Popen]) -> None:
-    """Waits for interrupted workers to mark their trials and exit."""
+    """Waits for interrupted workers to mark their trials and exit (killed after 30 s)."""
     for p in procs:
-        try:
-            p.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            p.kill()
-            p.wait()
+        processes.stop(p, None, patience=30)
