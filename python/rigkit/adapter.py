@@ -36,8 +36,8 @@ import gymnasium
 import numpy as np
 
 from .lockstep import Outcome, Services, serve_until_signalled
-from .realtime import check_driver_id
-from .task import Task, TaskError
+from .model_driver import task_and_driver_id
+from .task import Task
 
 
 def load(path: str) -> ModuleType:
@@ -103,15 +103,7 @@ def main() -> int:
     args = p.parse_args()
     mapping = load(args.mapping)
     task_path = args.task or str(Path(args.mapping).resolve().parent / mapping.TASK)
-    try:
-        task = Task.read(task_path)
-    except TaskError as e:
-        p.error(f"--task: {e}")
-    driver_id = args.driver_id or task.name.replace(".", "-")
-    try:
-        check_driver_id(driver_id)
-    except ValueError as e:
-        p.error(f"--driver-id {e}")
+    task, driver_id = task_and_driver_id(p, task_path, args.driver_id)
     try:
         sim = Environment(mapping, task, args.seed, provides_reward=not args.task_reward)
     except ValueError as e:

@@ -52,17 +52,9 @@ def run(
         p.add_argument(flag, **keywords)
     p.add_argument("--verbose", action="store_true", help="log resets to stderr")
     args = p.parse_args()
-    try:
-        task = Task.read(args.task)
-    except TaskError as e:
-        p.error(f"--task: {e}")
+    task, driver_id = task_and_driver_id(p, args.task, args.driver_id)
     if (task.n, task.m) != tuple(shape):
         p.error(f"--task {args.task}: {task.n} states and {task.m} actions, not {shape[0]} and {shape[1]}")
-    driver_id = args.driver_id or task.name.replace(".", "-")
-    try:
-        check_driver_id(driver_id)
-    except ValueError as e:
-        p.error(f"--driver-id {e}")
     name = what(args) if callable(what) else what
     print(
         f"driver {driver_id!r}: task {task.name} ({name}), Ts {task.ts * 1e3:g} ms, lockstep",
@@ -71,3 +63,18 @@ def run(
     )
     serve_until_signalled(Services(driver_id), task, simulation(args), "driver", args.verbose)
     return 0
+
+
+def task_and_driver_id(p: argparse.ArgumentParser, path: str, driver_id: str | None) -> tuple[Task, str]:
+    """The task file at `path` (`--task`) and the driver id, `driver_id` (`--driver-id`)
+    or else the task's name; the parser's error if either is bad."""
+    try:
+        task = Task.read(path)
+    except TaskError as e:
+        p.error(f"--task: {e}")
+    chosen = driver_id or task.name.replace(".", "-")
+    try:
+        check_driver_id(chosen)
+    except ValueError as e:
+        p.error(f"--driver-id {e}")
+    return task, chosen

@@ -10,33 +10,16 @@ use super::rig;
 /// The Python interpreter with the bindings (and the source tree's rigkit), or `None`
 /// (and why) if there is none.
 pub fn python() -> Option<String> {
-    let python = py::interpreter();
-    let probe = py::command(&python)
-        .args([
-            "-c",
-            "import importlib.metadata as m, iceoryx2, rigkit; print(m.version('iceoryx2'))",
-        ])
-        .output();
-    match probe {
-        Ok(o) if o.status.success() && String::from_utf8_lossy(&o.stdout).trim() == "0.10.0" => {
-            Some(python)
-        }
-        Ok(o) => {
-            println!(
-                "skipped: {python} cannot import iceoryx2 0.10.0 and rigkit (pip install \"./python[driver]\", or set RIG_PYTHON): {}{}",
-                String::from_utf8_lossy(&o.stdout).trim(),
-                String::from_utf8_lossy(&o.stderr)
-                    .lines()
-                    .last()
-                    .unwrap_or("")
-            );
-            None
-        }
-        Err(e) => {
-            println!("skipped: cannot run {python} ({e})");
-            None
-        }
+    let install = "pip install \"./python[driver]\"";
+    let (python, version) = py::probe(
+        "import importlib.metadata as m, iceoryx2, rigkit; print(m.version('iceoryx2'))",
+        &format!("iceoryx2 0.10.0 and rigkit ({install})"),
+    )?;
+    if version != "0.10.0" {
+        println!("skipped: {python} has iceoryx2 {version}, not 0.10.0 ({install})");
+        return None;
     }
+    Some(python)
 }
 
 /// A driver process: the Python example (`examples/python_driver/driver.py`, official

@@ -44,20 +44,27 @@ pub fn script(python: &str, script: &str) -> Command {
 /// The interpreter if it imports `modules` (comma-separated), or `None` with the reason
 /// printed ("skipped: ..."), for a test that passes where they are not installed.
 pub fn with(modules: &str) -> Option<String> {
+    let (python, _) = probe(
+        &format!("import {modules}"),
+        &format!("{modules} (pip install \"./python[driver,gymnasium,recording,test]\")"),
+    )?;
+    Some(python)
+}
+
+/// The interpreter and what it printed running `code`, or `None` with the reason printed:
+/// "skipped: PYTHON cannot import WHAT" where `code` fails (`what` saying what it needs
+/// and how to install it), or where there is no interpreter.
+pub fn probe(code: &str, what: &str) -> Option<(String, String)> {
     let python = interpreter();
-    match command(&python)
-        .args(["-c", &format!("import {modules}")])
-        .output()
-    {
-        Ok(o) if o.status.success() => Some(python),
+    match command(&python).args(["-c", code]).output() {
+        Ok(o) if o.status.success() => {
+            let said = String::from_utf8_lossy(&o.stdout).trim().to_string();
+            Some((python, said))
+        }
         Ok(o) => {
-            println!(
-                "skipped: {python} cannot import {modules} ({}; pip install \"./python[driver,gymnasium,recording]\", or set RIG_PYTHON)",
-                String::from_utf8_lossy(&o.stderr)
-                    .lines()
-                    .last()
-                    .unwrap_or("")
-            );
+            let why = String::from_utf8_lossy(&o.stderr);
+            let why = why.lines().last().unwrap_or("");
+            println!("skipped: {python} cannot import {what}, or set RIG_PYTHON: {why}");
             None
         }
         Err(e) => {
