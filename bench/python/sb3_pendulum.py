@@ -23,6 +23,7 @@ torch), gymnasium, iceoryx2 0.10.0, matplotlib, and the release build of the rig
 
 import argparse
 import csv
+import importlib.util
 import shutil
 import statistics
 import subprocess
@@ -30,14 +31,21 @@ import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "examples" / "python_driver"))
-sys.path.insert(0, str(ROOT / "examples" / "gymnasium"))
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: sb3_pendulum.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import fail, interrupt_on_sigterm, need, rig_binary, rig_option  # noqa: E402
+
+need("sb3_pendulum.py", modules=["gymnasium", "iceoryx2", "matplotlib"])
 
 import gymnasium  # noqa: E402
 
-import pendulum_v1  # noqa: E402
-from task import Task  # noqa: E402
+from rigkit import plots, processes, returns  # noqa: E402
+from rigkit.adapter import load  # noqa: E402
+from rigkit.task import Task  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+pendulum_v1 = load(str(ROOT / "examples" / "gymnasium" / "pendulum_v1.py"))
 
 TASK = ROOT / "examples" / "gymnasium" / "pendulum-v1.toml"
 EVAL_EVERY = 2000  # environment steps
@@ -81,7 +89,7 @@ def sb3_sac(seed: int, steps: int, starts):
 def rig_learner(rig: Path, algo: str, seed: int, steps: int, out: Path, python: str):
     """A learner of the rig through the adapter: [(steps, wall_s, greedy_return)]."""
     driver_id = f"bench-gym-{algo}-{seed}"
-    adapter = subprocess.Popen(
+    adapter = processes.start(
         [python, str(ROOT / "examples/gymnasium/adapter.py"), "--mapping",
          str(ROOT / "examples/gymnasium/pendulum_v1.py"), "--driver-id", driver_id, "--seed", str(seed)],
         stderr=subprocess.DEVNULL,
@@ -91,26 +99,20 @@ def rig_learner(rig: Path, algo: str, seed: int, steps: int, out: Path, python: 
     shutil.rmtree(run_dir, ignore_errors=True)
     try:
         t0 = time.monotonic()
-        run = subprocess.run(
+        status = processes.call(
             [str(rig), "run", "--plant", "external", "--driver", driver_id, "--task", str(TASK),
              "--algo", algo, "--approx", "llr", "--seed", str(seed), "--trials", str(steps // EPISODE),
              "--eval-every", str(EVAL_EVERY // EPISODE), "--quiet", "--out", str(run_dir)],
         )
         wall = time.monotonic() - t0
-        if run.returncode != 0:
-            sys.exit(f"rig run {algo} seed {seed} failed (its error above); "
-                     f"the finished runs are kept in {out}: call again to go on")
+        if status != 0:
+            fail("sb3_pendulum.py", f"rig run {algo} seed {seed} failed (its error above); "
+                 f"the finished runs are kept in {out}: call again to go on", 1)
     finally:
-        adapter.terminate()
-        adapter.wait()
-    curve = []
-    with open(run_dir / "returns.csv") as f:
-        rows = [r for r in csv.DictReader(f) if r["greedy_return"]]
-    for r in rows:
-        trial = int(r["trial"])
-        # The run's wall time, spread over its trials (the rig stamps no per-trial time).
-        curve.append((trial * EPISODE, wall * trial / (steps // EPISODE), float(r["greedy_return"])))
-    return curve
+        processes.stop(adapter)
+    # The run's wall time, spread over its trials (the rig stamps no per-trial time).
+    return [(r.trial * EPISODE, wall * r.trial / (steps // EPISODE), r.greedy)
+            for r in returns.evaluations(returns.read(run_dir / "returns.csv")) if r.greedy is not None]
 
 
 def first_reaching(curve, level):
@@ -132,8 +134,8 @@ def kept_curves(path: Path, steps: int):
             curve = curves.setdefault((r["learner"], int(r["seed"])), [])
             curve.append((int(r["steps"]), float(r["wall_s"]), float(r["greedy_return"])))
     if other := sorted({c[-1][0] for c in curves.values()} - {steps}):
-        sys.exit(f"{path}: holds runs of {other[0]} steps, not --steps {steps}: "
-                 "use another folder or the same --steps")
+        fail("sb3_pendulum.py", f"{path}: holds runs of {other[0]} steps, not --steps {steps}: "
+             "use another folder or the same --steps")
     return curves
 
 
@@ -149,6 +151,7 @@ def append(path: Path, learner: str, seed: int, curve):
 
 
 def main():
+    interrupt_on_sigterm()
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("out", help="the output folder (kept: a second call resumes)")
     p.add_argument("--seeds", type=int, default=3, help="seeds 1..N per learner [default: 3]")
@@ -156,16 +159,14 @@ def main():
                    help=f"learning steps per run, a multiple of {EVAL_EVERY} [default: 40000]")
     p.add_argument("--level", type=float, default=-300.0,
                    help="the common greedy-return level [default: -300]")
-    p.add_argument("--rig", type=Path, default=ROOT / "target" / "release" / "rig",
-                   help="the rig binary [default: the release build]")
+    rig_option(p, ROOT / "target" / "release" / "rig")
     p.add_argument("--python", default=sys.executable, help="the interpreter for the adapter")
     args = p.parse_args()
+    args.rig = rig_binary("sb3_pendulum.py", args.rig)
     if args.seeds < 1:
         p.error("--seeds must be at least 1")
     if args.steps < EVAL_EVERY or args.steps % EVAL_EVERY:
         p.error(f"--steps must be a positive multiple of {EVAL_EVERY} (one evaluation each)")
-    if not args.rig.exists():
-        p.error(f"--rig {args.rig}: no such rig binary (cargo build --release -p rig)")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     starts = Task.read(str(TASK)).starts
@@ -212,25 +213,15 @@ def summarize(curves, args, out: Path):
 
 
 def plot(curves, out: Path):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = plots.figure()
     for learner in dict.fromkeys(k[0] for k in curves):
         runs = [c for (name, _), c in curves.items() if name == learner]
         steps = [s for s, _, _ in runs[0]]
         values = [[c[i][2] for c in runs if i < len(c)] for i in range(len(steps))]
-        ax.plot(steps, [statistics.mean(v) for v in values], label=f"{learner} (mean of {len(runs)})")
-        ax.fill_between(steps, [min(v) for v in values], [max(v) for v in values], alpha=0.2)
-    ax.set_xlabel("environment steps of learning")
-    ax.set_ylabel("greedy return (4 start states)")
-    ax.set_title("Pendulum-v1: the rig's learners and Stable-Baselines3 SAC")
-    ax.legend(loc="lower right")
-    fig.tight_layout()
-    for ext in ("png", "svg"):
-        fig.savefig(out / f"curves.{ext}")
+        plots.band(ax, steps, values, f"{learner} (mean of {len(runs)})")
+    plots.finish(fig, ax, "environment steps of learning", "greedy return (4 start states)",
+                 "Pendulum-v1: the rig's learners and Stable-Baselines3 SAC", out / "curves", ("png", "svg"),
+                 legend="lower right")
 
 
 if __name__ == "__main__":

@@ -26,21 +26,13 @@ fn interpreter() -> Option<String> {
 
 /// The interpreter, if it can import `modules` (comma-separated).
 fn interpreter_with(modules: &str) -> Option<String> {
-    let python = python()?;
-    let has = Command::new(&python)
-        .args(["-c", &format!("import {modules}")])
-        .status()
-        .is_ok_and(|s| s.success());
-    if !has {
-        println!("skipped: {python} cannot import {modules}");
-    }
-    has.then_some(python)
+    python()?;
+    common::python::with(modules)
 }
 
 /// `systems.py OUT` with `args`, the rig under test.
 fn systems(python: &str, out: &Path, args: &[&str]) -> Output {
-    Command::new(python)
-        .arg(root().join("bench/python/systems.py"))
+    common::python::script(python, "bench/python/systems.py")
         .arg(out)
         .arg("--rig")
         .arg(env!("CARGO_BIN_EXE_rig"))
@@ -171,8 +163,7 @@ fn refused(python: &str, text: &str) -> String {
 
 /// `sb3_pendulum.py OUT --seeds 1 --steps 2000` with `args`, the rig under test.
 fn comparison(python: &str, out: &Path, args: &[&str]) -> Output {
-    Command::new(python)
-        .arg(root().join("bench/python/sb3_pendulum.py"))
+    common::python::script(python, "bench/python/sb3_pendulum.py")
         .arg(out)
         .args(["--seeds", "1", "--steps", "2000", "--python", python])
         .args(args)

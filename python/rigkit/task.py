@@ -1,31 +1,34 @@
 """Task files (docs/tasks.md) for drivers written in Python: read one, compute the hash
 a driver advertises in DriverInfo.task_hash and the reward, as the rig computes them.
 
-    from task import Task, TaskError
+    from rigkit.task import Task, TaskError
     task = Task.read("plant/tasks/pendulum.toml")
     task.name, task.ts, task.n, task.m, task.low, task.high, task.hash()
-    task.reward(x, u)          # rho(x, u), the rig's numbers (reward.py)
+    task.reward(x, u)          # rho(x, u), the rig's numbers (rigkit.reward)
 
 Standard library only (tomllib: Python 3.11 or later; before, `tomli` from PyPI, which
-requirements.txt installs there). Every key is checked against the keys the rig knows:
-an unknown or missing key is a TaskError of one line naming the file and the key. The
-values' checks are the rig's in outline (dimensions, bounds); the rig checks the rest
+`pip install ./python` installs there). Every key is checked against the keys the rig
+knows: an unknown or missing key is a TaskError of one line naming the file and the key.
+The values' checks are the rig's in outline (dimensions, bounds); the rig checks the rest
 and names what is wrong.
 
-    python3 task.py FILE...             # prints each file's name and hash
-    python3 task.py --rewards FILE      # rho of each line "x_1 ... x_n | u_1 ... u_m" of stdin
+    python3 -m rigkit.task FILE...          # prints each file's name and hash
+    python3 -m rigkit.task --rewards FILE   # rho of each line "x_1 ... x_n | u_1 ... u_m" of stdin
 """
+
+from __future__ import annotations
 
 import hashlib
 import math
 import struct
 import sys
+from typing import Any
 
-from reward import Region, Reward
+from .reward import Region, Reward
 
-try:
+if sys.version_info >= (3, 11):
     import tomllib
-except ModuleNotFoundError:  # Python < 3.11: the same parser, from PyPI
+else:  # the same parser, from PyPI
     import tomli as tomllib
 
 
@@ -34,8 +37,8 @@ class TaskError(ValueError):
 
 
 # Each table's keys in the order the rig lists them, and which of them are required.
-GOAL_KEYS = (("low", "high", "centre", "radius", "bonus", "reward"), ())
-KEYS = {
+GOAL_KEYS: tuple[tuple[str, ...], tuple[str, ...]] = (("low", "high", "centre", "radius", "bonus", "reward"), ())
+KEYS: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "": (
         (
             "name", "description", "sampling_time", "trial_seconds", "start_states", "state",
@@ -60,7 +63,7 @@ KEYS = {
 }
 
 
-def number(v, where: str) -> float:
+def number(v: object, where: str) -> float:
     """A task file's number: a TOML number, or a multiple of pi as text ("-8pi")."""
     if isinstance(v, bool):
         raise TaskError(f"`{where}`: {v!r} is not a number")
@@ -83,7 +86,7 @@ def number(v, where: str) -> float:
     raise TaskError(f"`{where}`: {v!r} is not a number or a multiple of pi")
 
 
-def numbers(values, n: int, where: str) -> list:
+def numbers(values: object, n: int, where: str) -> list[float]:
     """`n` numbers."""
     if not isinstance(values, list) or len(values) != n:
         size = len(values) if isinstance(values, list) else "no"
@@ -91,7 +94,7 @@ def numbers(values, n: int, where: str) -> list:
     return [number(v, f"{where}[{i}]") for i, v in enumerate(values)]
 
 
-def check_keys(table, schema: str, where: str):
+def check_keys(table: object, schema: str, where: str) -> None:
     """Refuses an unknown key and a missing one of `table` (KEYS[schema])."""
     if not isinstance(table, dict):
         raise TaskError(f"`{where or schema}`: must be a table")
@@ -106,7 +109,7 @@ def check_keys(table, schema: str, where: str):
             raise TaskError(f"`{f'{where}.{key}' if where else key}`: missing")
 
 
-def region(g: dict, n: int, where: str) -> Region:
+def region(g: dict[str, Any], n: int, where: str) -> Region:
     """A goal's box (low, high) or ball (centre, radius)."""
     if "low" in g and "high" in g and "centre" not in g and "radius" not in g:
         return Region("box", numbers(g["low"], n, f"{where}.low"), numbers(g["high"], n, f"{where}.high"))
@@ -120,7 +123,7 @@ def region(g: dict, n: int, where: str) -> Region:
 class Task:
     """The values of a task file the contract, the hash and the reward need."""
 
-    def __init__(self, doc: dict):
+    def __init__(self, doc: dict[str, Any]) -> None:
         check_keys(doc, "", "")
         self.name = doc["name"]
         self.ts = number(doc["sampling_time"], "sampling_time")
@@ -143,7 +146,7 @@ class Task:
             numbers(x0, self.n, f"start_states[{k}]") for k, x0 in enumerate(doc["start_states"])
         ]
         self._read_endings(doc)
-        self.start_distribution = None
+        self.start_distribution: tuple[str, list[float], list[float]] | None = None
         s = doc.get("start_distribution")
         if s is not None:
             check_keys(s, "start_distribution", "start_distribution")
@@ -155,7 +158,7 @@ class Task:
         if "simulation" in doc:
             check_keys(doc["simulation"], "simulation", "simulation")
 
-    def _read_reward(self, r: dict):
+    def _read_reward(self, r: dict[str, Any]) -> None:
         check_keys(r, "reward", "reward")
         n, m = self.n, self.m
         self.q = numbers(r["state_weights"], n, "reward.state_weights")
@@ -174,16 +177,16 @@ class Task:
             goal = (region(goal, n, "reward.goal"), number(goal["bonus"], "reward.goal.bonus"))
         self.reward = Reward(self.q, self.p, self.reference, self.angles, cosine, abs_action, goal)
 
-    def _read_endings(self, doc: dict):
+    def _read_endings(self, doc: dict[str, Any]) -> None:
         o = doc.get("operating_range")
-        self.operating_range = None
+        self.operating_range: tuple[list[tuple[float, float]], float] | None = None
         if o is not None:
             check_keys(o, "operating_range", "operating_range")
             low = numbers(o["low"], self.n, "operating_range.low")
             high = numbers(o["high"], self.n, "operating_range.high")
             self.operating_range = (list(zip(low, high)), number(o["penalty"], "operating_range.penalty"))
         g = doc.get("goal")
-        self.goal = None
+        self.goal: tuple[Region, float] | None = None
         if g is not None:
             check_keys(g, "goal", "goal")
             if "reward" not in g:
@@ -207,7 +210,7 @@ class Task:
         """The bytes the hash covers (docs/tasks.md, "The task's hash")."""
         out = bytearray(b"rig.task.v1\0" + self.name.encode() + b"\0")
 
-        def nums(values):
+        def nums(values: list[float]) -> None:
             for v in values:
                 out.extend(struct.pack("<d", v))
 
@@ -253,10 +256,10 @@ class Task:
 
     def hash(self) -> int:
         """DriverInfo.task_hash: the SHA-256's first 8 bytes, little-endian."""
-        return struct.unpack("<Q", hashlib.sha256(self.canonical_bytes()).digest()[:8])[0]
+        return int.from_bytes(hashlib.sha256(self.canonical_bytes()).digest()[:8], "little")
 
 
-def print_rewards(path: str):
+def print_rewards(path: str) -> None:
     """rho(x, u) of each stdin line "x_1 ... x_n | u_1 ... u_m", as repr (round trip)."""
     task = Task.read(path)
     for line in sys.stdin:
@@ -265,7 +268,7 @@ def print_rewards(path: str):
             print(repr(task.reward([float(v) for v in xs.split()], [float(v) for v in us.split()])))
 
 
-def main(argv: list) -> int:
+def main(argv: list[str]) -> int:
     try:
         if argv[:1] == ["--rewards"] and len(argv) == 2:
             print_rewards(argv[1])

@@ -8,33 +8,27 @@ that the numbers are the rig's bit for bit.
 with e = x - x_r, angle components wrapped to [-pi, pi). Standard library only.
 """
 
+from __future__ import annotations
+
 import math
 import struct
+from collections.abc import Sequence
 
-
-def wrap(a: float) -> float:
-    """An angle wrapped to [-pi, pi), as the rig wraps it (plant/src/angle.rs)."""
-    if -math.pi <= a < math.pi:
-        return a
-    w = math.fmod(a + math.pi, 2.0 * math.pi)
-    if w < 0.0:
-        w += 2.0 * math.pi
-    w -= math.pi
-    return w - 2.0 * math.pi if w >= math.pi else w
+from .angle import wrap
 
 
 class Region:
     """A box (low, high) or a ball (centre, radius) in the state space; an angle's
     offset from the box's middle or the ball's centre is taken on the circle."""
 
-    def __init__(self, kind: str, first: list, second: list):
+    def __init__(self, kind: str, first: list[float], second: list[float]) -> None:
         self.kind, self.first, self.second = kind, first, second
 
-    def contains(self, x: list, angles: list) -> bool:
+    def contains(self, x: Sequence[float], angles: Sequence[bool]) -> bool:
         if not all(math.isfinite(v) for v in x):
             return False
 
-        def offset(i, origin):
+        def offset(i: int, origin: float) -> float:
             d = x[i] - origin
             return wrap(d) if angles[i] else d
 
@@ -71,15 +65,24 @@ class Reward:
     """rho(x, u) of a task: `q`, `p`, `reference`, `angles` (the quadratic form) and the
     optional `cosine` weights, `abs_action` weights and `goal` = (Region, bonus)."""
 
-    def __init__(self, q, p, reference, angles, cosine=None, abs_action=None, goal=None):
+    def __init__(
+        self,
+        q: list[float],
+        p: list[float],
+        reference: list[float],
+        angles: list[bool],
+        cosine: list[float] | None = None,
+        abs_action: list[float] | None = None,
+        goal: tuple[Region, float] | None = None,
+    ) -> None:
         self.q, self.p, self.reference, self.angles = q, p, reference, angles
         self.cosine, self.abs_action, self.goal = cosine, abs_action, goal
 
-    def error(self, x: list, i: int) -> float:
+    def error(self, x: Sequence[float], i: int) -> float:
         e = x[i] - self.reference[i]
         return wrap(e) if self.angles[i] else e
 
-    def __call__(self, x: list, u: list) -> float:
+    def __call__(self, x: Sequence[float], u: Sequence[float]) -> float:
         r = 0.0
         for i, q in enumerate(self.q):
             e = self.error(x, i)
