@@ -21,12 +21,12 @@ use crate::approx::{Differentiable, MAX_IN, MAX_OUT};
 #[derive(Clone, Copy)]
 enum Neighbours {
     /// The nearest to `[x, u]`.
-    OfInput,
+    Input,
     /// The nearest to `x`, found by a scan ([`Differentiable::value_and_jacobian_near`]).
-    OfState,
+    State,
     /// The nearest to `x`, found through an index and fitted nearest first
     /// ([`Differentiable::value_and_jacobian_near_indexed`]).
-    OfStateIndexed,
+    StateIndexed,
 }
 
 /// A learned process model around a differentiable approximator.
@@ -85,7 +85,7 @@ impl ProcessModel {
     /// `f̂(x, u)` and `∂f̂/∂u`; `x` may carry time `k` after the state, and the prediction
     /// then carries `k + 1`.
     pub fn predict(&self, x: &[f64], u: &[f64]) -> Prediction {
-        self.predict_with(x, u, Neighbours::OfInput)
+        self.predict_with(x, u, Neighbours::Input)
     }
 
     /// As [`Self::predict`], with an LLR model's neighbours chosen by the state alone,
@@ -97,7 +97,7 @@ impl ProcessModel {
     /// again: the greedy policy can stay at the start state until those samples leave
     /// the memory.
     pub fn predict_near_state(&self, x: &[f64], u: &[f64]) -> Prediction {
-        self.predict_with(x, u, Neighbours::OfState)
+        self.predict_with(x, u, Neighbours::State)
     }
 
     /// `Δx̂` and `∂Δx̂/∂[x, u]` (row-major `n × (n + m)`) at `(x, u)`, a memory-based
@@ -115,9 +115,9 @@ impl ProcessModel {
         let (y, j) = (&mut dx[..n], &mut jac[..n * (n + m)]);
         let xu = &xu[..n + m];
         match near {
-            Neighbours::OfInput => self.f.value_and_jacobian(xu, y, j),
-            Neighbours::OfState => self.f.value_and_jacobian_near(xu, n, y, j),
-            Neighbours::OfStateIndexed => self.f.value_and_jacobian_near_indexed(xu, n, y, j),
+            Neighbours::Input => self.f.value_and_jacobian(xu, y, j),
+            Neighbours::State => self.f.value_and_jacobian_near(xu, n, y, j),
+            Neighbours::StateIndexed => self.f.value_and_jacobian_near_indexed(xu, n, y, j),
         }
         (dx, jac)
     }
@@ -149,7 +149,7 @@ impl ProcessModel {
     /// (`n × m`), row-major, of the state part of `x`.
     pub fn local_fit(&self, x: &[f64], u: &[f64]) -> LocalFit {
         let (n, m) = (self.n(), u.len());
-        let (dx, jac) = self.evaluate(x, u, Neighbours::OfStateIndexed);
+        let (dx, jac) = self.evaluate(x, u, Neighbours::StateIndexed);
         let mut fit = LocalFit {
             dx: [0.0; MAX_STATE],
             dx_dx: [0.0; MAX_STATE * MAX_STATE],
