@@ -21,6 +21,7 @@
 // recording, only the panels whose topics it holds. Writes OUT/live-N.png,
 // OUT/recording.png and OUT/checks.json.
 import { readFileSync } from "node:fs";
+import { createServer } from "node:http";
 import { mkdir, readFile, writeFile } from "node:fs/promises";
 import { extname, join, normalize } from "node:path";
 import { parseArgs } from "node:util";
