@@ -88,7 +88,7 @@ async function serve() {
   return server;
 }
 
-/** A fresh browser profile's page on the app, its file dialog answering `window.__pick`. */
+/** A page on the app in a fresh browser context, its file dialog answering `window.__pick`. */
 async function open(browser, url) {
   const context = await browser.createBrowserContext();
   const page = await context.newPage();
@@ -123,7 +123,7 @@ async function open(browser, url) {
   return { context, page };
 }
 
-/** Clicks the first element matching `selector` whose text is (or starts with) `text`. */
+/** Clicks an element matching `selector` whose text is (or starts with) `text`, waiting for one. */
 async function click(page, selector, text, { prefix = false, timeout = 30_000 } = {}) {
   const t0 = Date.now();
   for (;;) {
