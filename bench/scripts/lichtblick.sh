@@ -27,7 +27,7 @@ while [ $# -gt 0 ]; do
     --lichtblick) src="$(cd "$2" && pwd)"; shift 2 ;;
     --app) app="$(cd "$2" && pwd)"; shift 2 ;;
     --out) mkdir -p "$2"; out="$(cd "$2" && pwd)"; shift 2 ;;
-    -h|--help) sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "lichtblick.sh: unknown argument $1 (--help)" >&2; exit 2 ;;
   esac
 done
@@ -101,7 +101,9 @@ profile="$(mktemp -d)"
 status=0
 node "$repo/bench/scripts/lichtblick/view.mjs" --app "$app" --files "$files" \
   --live "ws://127.0.0.1:$port" --mcap run.mcap --layout live-layout.json \
-  --out "$out" --profile "$profile" --chromium "$chromium" || status=$?
+  --out "$out" --profile "$profile" --chromium "$chromium" &
+pids+=($!)
+wait $! || status=$?
 rm -rf "$profile"
 echo "Lichtblick $version, $("$chromium" --version 2>/dev/null | head -1), rig at $(git -C "$repo" rev-parse --short HEAD)" >&2
 echo "screenshots: $out" >&2

@@ -3,16 +3,24 @@
 // (Layouts → Import from file…) and takes screenshots seconds apart; then, in a fresh
 // profile, it opens a finished run's run.mcap (Open local file(s)…) with the same layout
 // and screenshots that. The operating system's file dialog, which a headless browser does
-// not have, is the only thing replaced: `showOpenFilePicker` answers with the file named.
+// not have, is the only thing replaced: `showOpenFilePicker` answers with the file named,
+// fetched into the page's own (origin private) file system.
 //
-//   node view.mjs --app DIR --files DIR --layout NAME --out DIR
-//                 [--live ws://127.0.0.1:PORT] [--mcap NAME] [--shots 2] [--every 3]
+//   node view.mjs --app DIR --files DIR --out DIR --profile DIR [--layout NAME]
+//                 [--live ws://127.0.0.1:PORT] [--mcap NAME] [--settle 8] [--shots 2]
+//                 [--every 3] [--chromium /usr/bin/chromium] [--verbose]
 //
 // --app: the built web app (Lichtblick's web/.webpack); --files: the folder of the layout
-// and the recording (served beside the app). Checks what a person would look at and exits
-// 1 naming what it did not see: the connection, a value in every plot panel's legend, the
-// system drawn in the 3D panel (pixels of the picture's colours) and, live, the 3D panel
-// changed between shots. Writes OUT/live-N.png, OUT/recording.png and OUT/checks.json.
+// (default live-layout.json) and the recording (served beside the app); --profile: an
+// empty folder for the browser's profile; --settle: seconds live before the first shot;
+// --every: seconds between shots; --verbose: the page's errors and warnings too.
+//
+// It checks what a person would look at and exits 1 naming what it did not see: the
+// connection, a value in every plot panel's legend, the system drawn in the 3D panel
+// (pixels of the picture's colours) and, live, the 3D panel changed between shots; on a
+// recording, only the panels whose topics it holds. Writes OUT/live-N.png,
+// OUT/recording.png and OUT/checks.json.
+import { readFileSync } from "node:fs";
 import { createServer } from "node:http";
 import { mkdir, readFile, writeFile } from "node:fs/promises";
 import { extname, join, normalize } from "node:path";
@@ -29,11 +37,18 @@ const { values: args } = parseArgs({
     out: { type: "string" },
     shots: { type: "string", default: "2" },
     every: { type: "string", default: "3" },
+    settle: { type: "string", default: "8" },
     chromium: { type: "string", default: "/usr/bin/chromium" },
     profile: { type: "string" },
     verbose: { type: "boolean", default: false },
+    help: { type: "boolean", default: false },
   },
 });
+if (args.help) {
+  const head = readFileSync(new URL(import.meta.url), "utf8").split("\n").filter((l) => l.startsWith("//"));
+  console.log(head.map((l) => l.replace(/^\/\/ ?/, "")).join("\n"));
+  process.exit(0);
+}
 for (const need of ["app", "files", "out", "profile"]) {
   if (!args[need]) {
     console.error(`view.mjs: --${need} is required`);
@@ -73,7 +88,7 @@ async function serve() {
   return server;
 }
 
-/** A fresh browser profile's page on the app, its file dialog answering `window.__pick`. */
+/** A page on the app in a fresh browser context, its file dialog answering `window.__pick`. */
 async function open(browser, url) {
   const context = await browser.createBrowserContext();
   const page = await context.newPage();
@@ -108,7 +123,7 @@ async function open(browser, url) {
   return { context, page };
 }
 
-/** Clicks the first element matching `selector` whose text is (or starts with) `text`. */
+/** Clicks an element matching `selector` whose text is (or starts with) `text`, waiting for one. */
 async function click(page, selector, text, { prefix = false, timeout = 30_000 } = {}) {
   const t0 = Date.now();
   for (;;) {
@@ -179,54 +194,40 @@ async function panels(page) {
   );
 }
 
-/** The pixels of `png` in the picture's colours (rig/src/live/picture.rs): its links'
- * blue and its joints' orange. */
-async function census(page, png) {
-  return await page.evaluate(
-    async (b64, colours) => {
+/** Per screenshot (PNG) of the 3D panel: its pixels in the picture's colours
+ * (rig/src/live/picture.rs: the links' blue, the joints' orange), and the pixels that
+ * changed since the screenshot before it. */
+async function look(page, shots) {
+  return await page.evaluate(async (shots) => {
+    const decode = async (b64) => {
       const img = new Image();
       img.src = `data:image/png;base64,${b64}`;
       await img.decode();
-      const canvas = new OffscreenCanvas(img.width, img.height);
-      const ctx = canvas.getContext("2d");
-      ctx.drawImage(img, 0, 0);
-      const px = ctx.getImageData(0, 0, img.width, img.height).data;
+      const c = new OffscreenCanvas(img.width, img.height).getContext("2d");
+      c.drawImage(img, 0, 0);
+      return c.getImageData(0, 0, img.width, img.height).data;
+    };
+    const seen = [];
+    let before;
+    for (const shot of shots) {
+      const px = await decode(shot);
       // Shaded by the scene's light: told apart by hue, not by value.
-      const count = { link: 0, joint: 0 };
+      const s = { link: 0, joint: 0, changed: 0 };
       for (let i = 0; i < px.length; i += 4) {
         const [r, g, b] = [px[i], px[i + 1], px[i + 2]];
-        if (b > 150 && b - r > 100 && b - g > 50) count.link++;
-        if (r > 120 && r - g > 70 && g - b > 20) count.joint++;
+        if (b > 150 && b - r > 100 && b - g > 50) s.link++;
+        if (r > 120 && r - g > 70 && g - b > 20) s.joint++;
+        if (before && (r !== before[i] || g !== before[i + 1] || b !== before[i + 2])) s.changed++;
       }
-      return { ...count, pixels: img.width * img.height };
-    },
-    png.toString("base64"),
-  );
+      seen.push(s);
+      before = px;
+    }
+    return seen;
+  }, shots.map((s) => s.toString("base64")));
 }
 
-/** The pixels that differ between two same-sized screenshots. */
-async function differing(page, a, b) {
-  return await page.evaluate(
-    async (a, b) => {
-      const data = async (b64) => {
-        const img = new Image();
-        img.src = `data:image/png;base64,${b64}`;
-        await img.decode();
-        const c = new OffscreenCanvas(img.width, img.height).getContext("2d");
-        c.drawImage(img, 0, 0);
-        return c.getImageData(0, 0, img.width, img.height).data;
-      };
-      const [x, y] = [await data(a), await data(b)];
-      let n = 0;
-      for (let i = 0; i < x.length; i += 4) {
-        if (x[i] !== y[i] || x[i + 1] !== y[i + 1] || x[i + 2] !== y[i + 2]) n++;
-      }
-      return n;
-    },
-    a.toString("base64"),
-    b.toString("base64"),
-  );
-}
+/** Whether a look at the 3D panel shows the system: its links and its joints. */
+const drawn = (s) => s.link > 500 && s.joint > 100;
 
 /** The 3D panel's screenshot alone. */
 async function scene(page) {
@@ -264,23 +265,22 @@ async function live(browser, base) {
   await page.waitForFunction((url) => document.body.textContent.includes(url), { timeout: 30_000 }, args.live);
   await importLayout(page);
   const seen = await plotted(page, 30);
-  // Let the plots fill their windows before the first shot.
-  await sleep(Number(args.every) * 1000);
+  // Let the plots gather some seconds of the run before the first shot.
+  await sleep(Number(args.settle) * 1000);
   for (const p of seen) check(`live: ${p.title}`, p.values.length > 0, `legend values ${JSON.stringify(p.values)}`);
   const shots = [];
   for (let i = 1; i <= Number(args.shots); i++) {
     if (i > 1) await sleep(Number(args.every) * 1000);
     const path = join(args.out, `live-${i}.png`);
     await page.screenshot({ path });
-    const three = await scene(page);
-    const c = await census(page, three);
-    check(`live shot ${i}: the system drawn`, c.link > 500 && c.joint > 100, `${c.link} link and ${c.joint} joint pixels in the 3D panel (${path})`);
-    shots.push(three);
+    shots.push([path, await scene(page)]);
   }
-  for (let i = 1; i < shots.length; i++) {
-    const n = await differing(page, shots[i - 1], shots[i]);
-    check(`live shots ${i} → ${i + 1}: the 3D panel moved`, n > 200, `${n} pixels differ`);
-  }
+  const looks = await look(page, shots.map(([, png]) => png));
+  looks.forEach((s, i) => {
+    const [path] = shots[i];
+    check(`live shot ${i + 1}: the system drawn`, drawn(s), `${s.link} link and ${s.joint} joint pixels in the 3D panel (${path})`);
+    if (i > 0) check(`live shots ${i} → ${i + 1}: the 3D panel moved`, s.changed > 200, `${s.changed} pixels differ`);
+  });
   await context.close();
 }
 
@@ -323,8 +323,8 @@ async function recording(browser, base) {
   const path = join(args.out, "recording.png");
   await page.screenshot({ path });
   if (holds("3D")) {
-    const c = await census(page, await scene(page));
-    check("recording: the system drawn", c.link > 500 && c.joint > 100, `${c.link} link and ${c.joint} joint pixels in the 3D panel (${path})`);
+    const [s] = await look(page, [await scene(page)]);
+    check("recording: the system drawn", drawn(s), `${s.link} link and ${s.joint} joint pixels in the 3D panel (${path})`);
   } else {
     console.error(`     recording: 3D: not recorded (${wanted["3D"]})`);
   }
