@@ -145,3 +145,14 @@ def test_env_step_times_the_environment_alone() -> None:
     done = run([sys.executable, "bench/scripts/env_step.py", "--trials", "2", "--trial-steps", "10"])
     assert done.returncode == 0, said(done)
     assert done.stdout.startswith("Pendulum-v1: 20 steps in ") and done.stdout.endswith(" us per step\n")
+
+
+def test_encodings_rewrites_a_recording_in_both_encodings(tmp_path: Path, rig: Path) -> None:
+    pytest.importorskip("mcap_ros2")
+    learned = run([str(rig), "run", "--trials", "2", "--quiet", "--out", str(tmp_path / "run")])
+    assert learned.returncode == 0, said(learned)
+    done = run([sys.executable, "bench/python/encodings.py", str(tmp_path / "run" / "run.mcap"),
+                "--out", str(tmp_path / "enc"), "--repetitions", "1"])
+    assert done.returncode == 0, said(done)
+    for name in ("json-none", "json-zstd", "cdr-lz4"):
+        assert (tmp_path / "enc" / f"{name}.mcap").stat().st_size > 0
