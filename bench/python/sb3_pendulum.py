@@ -225,4 +225,8 @@ def plot(curves, out: Path):
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except KeyboardInterrupt:
+        fail("sb3_pendulum.py", "stopped (Ctrl-C or SIGTERM), its runs with it; the finished runs are kept: "
+             "call again to go on", 130)

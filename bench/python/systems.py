@@ -249,4 +249,7 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:
+        fail(WHO, "stopped (Ctrl-C or SIGTERM), its runs with it; the seeds finished are kept: call again to go on", 130)

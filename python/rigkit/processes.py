@@ -61,23 +61,34 @@ def stop(p: subprocess.Popen[Any], sig: int | None = signal.SIGINT, patience: fl
     """Stops `p` with `sig` (SIGINT: as Ctrl-C; None: `p` was told already, by a
     terminal's Ctrl-C, say) and waits for it; kills it if it has not exited within
     `patience` seconds. A process started by `start` is stopped with its whole group, and
-    what the group still holds once `p` has exited is stopped the same way. Returns `p`'s
-    exit status."""
+    what the group still holds once `p` has exited is stopped the same way. A Ctrl-C
+    while it waits does not leave the stop half done: it goes on to its end. Returns
+    `p`'s exit status."""
     group = _own_group(p)
     if p.poll() is None and sig is not None:
         _signal(p, group, sig)
+    deadline = time.monotonic() + patience
+    while True:
+        try:
+            return _finish(p, group, signal.SIGINT if sig is None else sig, deadline, patience)
+        except KeyboardInterrupt:
+            continue
+
+
+def _finish(p: subprocess.Popen[Any], group: int | None, sig: int, deadline: float, patience: float) -> int:
+    """`stop` once `p` was told: waits until `deadline`, kills; the rest of its group too."""
     try:
-        p.wait(timeout=patience)
+        p.wait(timeout=max(0.0, deadline - time.monotonic()))
     except subprocess.TimeoutExpired:
         _signal(p, group, signal.SIGKILL)
         p.wait()
     if group is not None and _group_alive(group):
-        os.killpg(group, signal.SIGINT if sig is None else sig)
-        deadline = time.monotonic() + patience
-        while _group_alive(group) and time.monotonic() < deadline:
+        _signal(p, group, sig)
+        rest = time.monotonic() + patience
+        while _group_alive(group) and time.monotonic() < rest:
             time.sleep(0.02)
         if _group_alive(group):
-            os.killpg(group, signal.SIGKILL)
+            _signal(p, group, signal.SIGKILL)
     return p.returncode
 
 

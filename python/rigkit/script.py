@@ -102,15 +102,17 @@ def interrupt_on_sigterm() -> None:
 class Helpers:
     """A script's helper threads. The first to fail says so on stderr (its traceback)
     and interrupts the main thread as Ctrl-C would (KeyboardInterrupt), so that the
-    script's cleanup runs; `failure` then names it, for the script's exit. `closing()`
-    ends the interruptions, for the cleanup itself."""
+    script's cleanup runs; `failure` then names it, for the script's exit. The
+    interruption is repeated every half second until the script calls `closing()` (or
+    `check()`), which it does first thing in its cleanup: a signal that lands just before
+    a blocking call begins would otherwise wait for the call's end."""
 
     def __init__(self, who: str) -> None:
         self.who = who
         self.failure: str | None = None
         self._main = threading.main_thread().ident
         self._lock = threading.Lock()
-        self._closing = False
+        self._closed = threading.Event()
 
     def start(self, name: str, target: Callable[..., Any], *args: Any) -> threading.Thread:
         """Starts `target(*args)` as helper `name` (a daemon thread)."""
@@ -119,22 +121,29 @@ class Helpers:
         return t
 
     def closing(self) -> None:
+        """Ends the interruptions: the script is cleaning up."""
         with self._lock:
-            self._closing = True
+            self._closed.set()
 
     def _body(self, name: str, target: Callable[..., Any], args: tuple[Any, ...]) -> None:
         try:
             target(*args)
         except BaseException as e:  # noqa: BLE001 - any failure ends the script
             with self._lock:
-                first = self.failure is None and not self._closing
+                first = self.failure is None and not self._closed.is_set()
                 if self.failure is None:
                     self.failure = f"{name}: {type(e).__name__}: {e}"
             traceback.print_exc()
-            if first and self._main is not None:
-                signal.pthread_kill(self._main, signal.SIGINT)
+            while first and self._main is not None:
+                with self._lock:
+                    if self._closed.is_set():
+                        return
+                    signal.pthread_kill(self._main, signal.SIGINT)
+                self._closed.wait(0.5)
 
     def check(self) -> None:
-        """Ends the script (`fail`, status 1) if a helper failed."""
+        """Ends the interruptions (`closing`), then the script (`fail`, status 1) if a
+        helper failed."""
+        self.closing()
         if self.failure is not None:
             fail(self.who, f"helper thread {self.failure}", 1)

@@ -145,3 +145,63 @@ def test_env_step_times_the_environment_alone() -> None:
     done = run([sys.executable, "bench/scripts/env_step.py", "--trials", "2", "--trial-steps", "10"])
     assert done.returncode == 0, said(done)
     assert done.stdout.startswith("Pendulum-v1: 20 steps in ") and done.stdout.endswith(" us per step\n")
+
+
+def test_encodings_rewrites_a_recording_in_both_encodings(tmp_path: Path, rig: Path) -> None:
+    pytest.importorskip("mcap_ros2")
+    learned = run([str(rig), "run", "--trials", "2", "--quiet", "--out", str(tmp_path / "run")])
+    assert learned.returncode == 0, said(learned)
+    done = run([sys.executable, "bench/python/encodings.py", str(tmp_path / "run" / "run.mcap"),
+                "--out", str(tmp_path / "enc"), "--repetitions", "1"])
+    assert done.returncode == 0, said(done)
+    for name in ("json-none", "json-zstd", "cdr-lz4"):
+        assert (tmp_path / "enc" / f"{name}.mcap").stat().st_size > 0
+
+
+def test_systems_stopped_by_sigterm_stops_its_runs_and_drivers(tmp_path: Path, rig: Path) -> None:
+    pytest.importorskip("iceoryx2")
+    pytest.importorskip("matplotlib")
+    matrix = tmp_path / "matrix.toml"
+    matrix.write_text(
+        '[[experiment]]\nname = "acrobot-balance"\nsystem = "acrobot"\n'
+        'task = "examples/acrobot/acrobot-balance.toml"\ndriver = ["examples/acrobot/driver.py"]\n'
+        'trials = 400\nsuccess = { upright = 0.3, hold = 1.5 }\n'
+        'learners = [{ label = "MLAC/LLR", flags = ["--algo", "mlac"] }]\n'
+    )
+    out = tmp_path / "out"
+    p = subprocess.Popen([sys.executable, "bench/python/systems.py", str(out), "--matrix", str(matrix),
+                          "--seeds", "1", "--rig", str(rig)], cwd=ROOT, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not (out / "acrobot-balance" / "mlac-llr" / "seed-1" / "returns.csv").exists():
+        assert time.monotonic() < deadline and p.poll() is None, "the run did not start"
+        time.sleep(0.1)
+    started = descendants(p.pid)
+    assert any("examples/acrobot/driver.py" in line for line in started.values()), started
+    p.send_signal(signal.SIGTERM)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 130, err
+    assert err.strip().splitlines()[-1].startswith("error: systems.py: stopped (Ctrl-C or SIGTERM)")
+    assert [pid for pid in started if Path(f"/proc/{pid}").exists()] == []
+
+
+def descendants(pid: int) -> dict[int, str]:
+    """The processes `pid` started, and theirs: pid -> command line."""
+    parent, line = {}, {}
+    for entry in os.scandir("/proc"):
+        if entry.name.isdigit():
+            try:
+                stat = Path(f"/proc/{entry.name}/stat").read_text()
+                line[int(entry.name)] = Path(f"/proc/{entry.name}/cmdline").read_bytes().replace(b"\0", b" ").decode()
+            except OSError:
+                continue
+            parent[int(entry.name)] = int(stat.rsplit(")", 1)[1].split()[1])
+    found: dict[int, str] = {}
+    todo = [pid]
+    while todo:
+        p = todo.pop()
+        for child, up in parent.items():
+            if up == p and child not in found:
+                found[child] = line[child]
+                todo.append(child)
+    return found

@@ -5,7 +5,6 @@
 
 mod common;
 
-use std::path::Path;
 use std::process::Command;
 
 /// `$RIG_PYTHON` (default `python3`) if it imports rigkit and mcap; else says why not.

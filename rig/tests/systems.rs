@@ -10,14 +10,10 @@
 //! `python3`); without them it prints why and passes — CI installs them.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 mod common;
 use common::drivers::python;
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 /// The interpreter, if it has the benchmark's modules.
 fn interpreter() -> Option<String> {
