@@ -66,8 +66,8 @@ def read_matrix(path: Path):
     try:
         with open(path, "rb") as f:
             experiments = tomllib.load(f).get("experiment", [])
-    except (OSError, tomllib.TOMLDecodeError) as e:
-        fail(WHO, f"{path}: {e}")
+    except (OSError, tomllib.TOMLDecodeError) as err:
+        fail(WHO, f"{path}: {err}")
     keys = {"name", "system", "task", "driver", "trials", "success", "learners"}
     for k, e in enumerate(experiments):
         where = f"{path}: experiment {k + 1} ({e.get('name', '?')})"

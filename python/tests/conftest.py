@@ -1,7 +1,8 @@
 """The test bootstrap: the package is imported from this source tree (python/, first on
 sys.path, and on PYTHONPATH for the scripts the tests run), so that the tests test the
-code beside them, installed or not. `RIG` names the rig binary for the tests that run
-it (rig/tests/python.rs sets it); without it they are skipped."""
+code beside them, installed or not; `rig tune`'s package from tune/, where `rig tune`
+runs it. `RIG` names the rig binary for the tests that run it (rig/tests/python.rs sets
+it); without it they are skipped."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1]
 ROOT = PACKAGE.parent
 sys.path.insert(0, str(PACKAGE))
+sys.path.insert(1, str(ROOT / "tune"))
 os.environ["PYTHONPATH"] = os.pathsep.join([str(PACKAGE), *filter(None, [os.environ.get("PYTHONPATH")])])
 
 

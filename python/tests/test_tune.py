@@ -1,17 +1,14 @@
 """`rig tune`'s helpers (tune/rig_tune) on rigkit: the check's runs in parallel end at
 the first failure, the others stopped at once, not after they finish."""
 
-import sys
 import time
 from pathlib import Path
 
 import pytest
 
-from conftest import ROOT
 
 pytest.importorskip("optuna")
 pytest.importorskip("tomli_w")
-sys.path.insert(0, str(ROOT / "tune"))  # rig_tune is run from its folder (rig/src/tune.rs)
 
 from rig_tune.check import in_parallel  # type: ignore[import-not-found]  # noqa: E402
 from rig_tune.runner import Runner, RunFailed  # type: ignore[import-not-found]  # noqa: E402
