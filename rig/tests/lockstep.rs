@@ -111,8 +111,8 @@ fn driven_task(dir: &Path) -> PathBuf {
 
 /// A driver of a task file the rig does not simulate: the Python driver serves it (its
 /// name and hash computed by rigkit.task from the same file), `rig check-driver --task`
-/// passes it, `rig run --plant external --task` learns against it with presets by
-/// rules, and a rig with another task — the built-in pendulum's, or a file of the same
+/// passes it, `rig run --plant external --task` learns against it with the learner the
+/// task chooses, and a rig with another task — the built-in pendulum's, or a file of the same
 /// name with another reward — is refused in one line naming both.
 #[test]
 fn a_driver_serves_a_task_file_and_a_rig_of_another_task_is_refused() {
@@ -152,7 +152,10 @@ fn a_driver_serves_a_task_file_and_a_rig_of_another_task_is_refused() {
     assert!(!refused.status.success());
     let e = stderr(&refused);
     assert!(e.contains("the two task files differ"), "{e}");
-    assert_eq!(e.trim().lines().count(), 1, "{e}");
+    // The learner the task chose (none is named), then the refusal in one line.
+    let (chosen, error): (Vec<&str>, Vec<&str>) =
+        e.trim().lines().partition(|l| l.starts_with("learner: "));
+    assert_eq!((chosen.len(), error.len()), (1, 1), "{e}");
 }
 
 /// The task's hash of the Python package's reader (`python3 -m rigkit.task`) is the
