@@ -1,5 +1,5 @@
 //! The K samples nearest in the leading inputs only — a process model's neighbours by the
-//! state, whatever the action ([`Differentiable::value_and_jacobian_near`]).
+//! state, whatever the action ([`crate::approx::Differentiable::value_and_jacobian_near`]).
 //!
 //! Two ways to the same neighbours:
 //!
