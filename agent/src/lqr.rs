@@ -34,6 +34,9 @@
 //! S ← Q_z + γ AᵀSA − γ² AᵀSB (P + γ BᵀSB)⁻¹ BᵀSA,   K = γ (P + γ BᵀSB)⁻¹ BᵀSA
 //! ```
 //!
+//! The gain of a fit that is the same, bit for bit, as the last sample's (at the
+//! reference, until a sample joins or leaves its neighbours) is not computed again.
+//!
 //! Outside the region, or where the local model gives no finite gain (its samples do not
 //! yet show how the action moves the state), the actor acts, as in MLAC. Learning is
 //! MLAC's, unchanged: the regulator only chooses the actions, and it learns nothing of its

@@ -9,6 +9,10 @@
 //!   The two most recent searches are remembered and kept exact across insertions, and a
 //!   new search is warm-started from the nearest remembered one: the farthest of its
 //!   remembered neighbours from the new query bounds the new search from the start.
+//!   The neighbours nearest in the leading inputs only (a process model's, by the state:
+//!   [`Differentiable::value_and_jacobian_near`]) are found by a scan — VGBP's — or, for
+//!   the planners, through a second tree over those inputs, kept from its first query on
+//!   (`near.rs`).
 //! * **Fit**: `β = Y Xᵀ (X Xᵀ)⁻¹` solved as a centred ridge regression in coordinates
 //!   relative to the query: with `dᵢ = W (xᵢ − x_q)` (angles wrapped), the slope is
 //!   `B = (Σ d̃ d̃ᵀ + εI)⁻¹ Σ d̃ ỹᵀ` (tilde: minus the mean) and the prediction

@@ -1,5 +1,5 @@
 //! The K samples nearest in the leading inputs only — a process model's neighbours by the
-//! state, whatever the action ([`Differentiable::value_and_jacobian_near`]).
+//! state, whatever the action ([`crate::approx::Differentiable::value_and_jacobian_near`]).
 //!
 //! Two ways to the same neighbours:
 //!
@@ -73,6 +73,54 @@ impl Remembered {
     }
 }
 
+impl NearIndex {
+    fn new(lead: usize, tree: KdTree) -> Self {
+        Self {
+            lead,
+            tree,
+            recent: Vec::with_capacity(REMEMBERED),
+            next: 0,
+            #[cfg(test)]
+            recalled: 0,
+        }
+    }
+
+    /// The remembered search whose query is nearest to `q` (over the leading inputs,
+    /// of periods `period`), and the squared distance between the two queries.
+    fn nearest(&self, q: &[f64; MAX_DIM], period: &[f64]) -> Option<(&Remembered, f64)> {
+        let lead = self.lead;
+        self.recent
+            .iter()
+            .map(|r| (r, dist2(&r.q[..lead], &q[..lead], period)))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+    }
+
+    /// A buffer for the next search's list: the allocation of the search it will replace.
+    fn buffer(&mut self) -> Vec<Candidate> {
+        if self.recent.len() == REMEMBERED {
+            std::mem::take(&mut self.recent[self.next].found)
+        } else {
+            Vec::new()
+        }
+    }
+
+    /// Remembers a search, in place of the oldest once the ring is full.
+    fn remember(&mut self, r: Remembered) {
+        if self.recent.len() < REMEMBERED {
+            self.recent.push(r);
+        } else {
+            self.recent[self.next] = r;
+        }
+        self.next = (self.next + 1) % REMEMBERED;
+    }
+
+    /// Forgets every search: the stored inputs are changing.
+    fn forget(&mut self) {
+        self.recent.clear();
+        self.next = 0;
+    }
+}
+
 /// The ranking of candidates: nearer first, newer first among equals.
 fn rank(a: &Candidate, b: &Candidate) -> std::cmp::Ordering {
     a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq))
@@ -120,27 +168,15 @@ impl Llr {
         if near.as_ref().is_none_or(|i| i.lead != lead) {
             let mut tree = KdTree::new(lead);
             tree.rebuild(&self.leading(lead), &self.seq[..self.len]);
-            *near = Some(NearIndex {
-                lead,
-                tree,
-                recent: Vec::with_capacity(REMEMBERED),
-                next: 0,
-                #[cfg(test)]
-                recalled: 0,
-            });
+            *near = Some(NearIndex::new(lead, tree));
         }
         let index = near.as_mut().expect("built above");
         let period = &self.period[..lead];
-        let at = |slot: u32| dist2(&self.coords(slot)[..lead], &q[..lead], period);
-        let nearest = index
-            .recent
-            .iter()
-            .map(|r| (dist2(&r.q[..lead], &q[..lead], period), r))
-            .min_by(|a, b| a.0.total_cmp(&b.0));
-        if let Some((_, r)) = nearest.filter(|(d2, r)| r.holds_within(d2.sqrt(), self.k)) {
+        let nearest = index.nearest(q, period);
+        if let Some((r, _)) = nearest.filter(|(r, d2)| r.holds_within(d2.sqrt(), self.k)) {
             // The same K samples, ranked at `q`.
             out.extend(r.found[..self.k].iter().map(|c| Candidate {
-                d2: at(c.slot),
+                d2: dist2(&self.coords(c.slot)[..lead], &q[..lead], period),
                 ..*c
             }));
             out.sort_unstable_by(rank);
@@ -150,35 +186,31 @@ impl Llr {
             }
             return;
         }
-        // Warm start: the K + 1 samples of the nearest remembered search bound this one
-        // (a NaN, of a corrupt query, leaves it unbounded).
-        let ceiling = nearest
-            .filter(|(_, r)| r.found.len() == self.k + 1)
-            .map(|(_, r)| {
-                r.found
-                    .iter()
-                    .map(|c| at(c.slot))
-                    .fold(0.0, |a: f64, d| if d > a || d.is_nan() { d } else { a })
-            });
-        let reused = if index.recent.len() == REMEMBERED {
-            std::mem::take(&mut index.recent[index.next].found)
-        } else {
-            Vec::new()
-        };
-        let mut best = Best::reusing(self.k + 1, reused);
-        if let Some(ceiling) = ceiling.filter(|c| !c.is_nan()) {
+        let ceiling = nearest.and_then(|(r, _)| self.ceiling(r, q, lead));
+        let mut best = Best::reusing(self.k + 1, index.buffer());
+        if let Some(ceiling) = ceiling {
             best.set_ceiling(ceiling);
         }
         index.tree.search(&q[..lead], period, &mut best);
         let found = best.into_sorted();
         out.extend_from_slice(&found[..found.len().min(self.k)]);
-        let remembered = Remembered { q: *q, found };
-        if index.recent.len() < REMEMBERED {
-            index.recent.push(remembered);
-        } else {
-            index.recent[index.next] = remembered;
+        index.remember(Remembered { q: *q, found });
+    }
+
+    /// A warm start for the search at `q`: the K + 1 samples of the remembered search `r`
+    /// lie within the farthest of them from `q` (none if a distance is NaN, of a corrupt
+    /// query, or `r` holds fewer).
+    fn ceiling(&self, r: &Remembered, q: &[f64; MAX_DIM], lead: usize) -> Option<f64> {
+        if r.found.len() != self.k + 1 {
+            return None;
         }
-        index.next = (index.next + 1) % REMEMBERED;
+        let period = &self.period[..lead];
+        let d = r
+            .found
+            .iter()
+            .map(|c| dist2(&self.coords(c.slot)[..lead], &q[..lead], period));
+        let farthest = d.fold(0.0, |a: f64, d| if d > a || d.is_nan() { d } else { a });
+        (!farthest.is_nan()).then_some(farthest)
     }
 
     /// The first `lead` scaled inputs of every stored sample, packed.
@@ -194,8 +226,7 @@ impl Llr {
         let Some(index) = self.near.get_mut().as_mut() else {
             return;
         };
-        index.recent.clear();
-        index.next = 0;
+        index.forget();
         if replaced {
             index.tree.remove(slot);
         }
