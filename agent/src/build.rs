@@ -147,9 +147,9 @@ pub fn build(task: &Task, learner: &Learner, run_seed: u64) -> Box<dyn Agent> {
                 l.saturation_margin,
             );
             let improver: Box<dyn Improver> = match (&learner.planning, &learner.lqr) {
-                (Some(plan), _) if plan.method == PlanningMethod::Ilqr => {
-                    Box::new(Ilqr::new(mlac, plan.clone(), l.gamma))
-                }
+                (Some(plan), _) if plan.method == PlanningMethod::Ilqr => Box::new(
+                    Ilqr::new(mlac, plan.clone(), l.gamma).within(task.operating_range.as_ref()),
+                ),
                 (Some(plan), _) => Box::new(Planner::new(mlac, plan.clone(), l.gamma, run_seed)),
                 (None, Some(lqr)) => Box::new(Lqr::new(mlac, lqr.clone(), l.gamma)),
                 (None, None) => Box::new(mlac),

@@ -6,10 +6,12 @@
 //! lowers the predicted cost
 //!
 //! ```text
-//! J = Σ_{i<H} γ^i ℓ(x̃_i, u_i) + γ^H z̃_Hᵀ S z̃_H,   ℓ = −ρ,   x̃_0 = x_k,   x̃_{i+1} = f̂(x̃_i, u_i)
+//! J = Σ_{i<H} γ^i ℓ(x̃_i, u_i) + γ^H (z̃_Hᵀ S z̃_H + ℓ_b(x̃_H)),   ℓ = −ρ + ℓ_b,
+//! x̃_0 = x_k,   x̃_{i+1} = f̂(x̃_i, u_i)
 //! ```
 //!
-//! with `f̂` the process model MLAC learns online (Algorithm 2, line 13), `z = [e; 1]` and
+//! with `ℓ_b` the operating range's [`Barrier`] (zero for a task without one),
+//! `f̂` the process model MLAC learns online (Algorithm 2, line 13), `z = [e; 1]` and
 //! `S` the cost-to-go of the discounted LQR of the model's fit at the reference
 //! ([`crate::lqr`]) — the stage cost's quadratic form `eᵀ diag(q) e` while that LQR has no
 //! finite solution. The iterative LQR (W. Li, E. Todorov, "Iterative linear quadratic
@@ -26,7 +28,8 @@
 //!    (the rollout alone at a trial's first sample);
 //! 2. backward pass, along the rollout `x̄_i, ū_i` with the model's fit there,
 //!    `δx_{i+1} = A_i δx_i + B_i δu_i` (`A = I + ∂Δ̂/∂x`, `B = ∂Δ̂/∂u`), `ℓ`'s gradient
-//!    and the reward's curvature at the reference (`ℓ_xx = 2 diag(q)`, `ℓ_uu = 2 diag(p)`):
+//!    and the reward's curvature at the reference plus the barrier's at `x̄_i`
+//!    (`ℓ_xx = 2 diag(q) + ∂²ℓ_b/∂x²`, `ℓ_uu = 2 diag(p)`):
 //!
 //!    ```text
 //!    Q_x  = ℓ_x + γ Aᵀ V_x'          Q_u  = ℓ_u + γ Bᵀ V_x'
@@ -65,10 +68,12 @@ use std::sync::Mutex;
 use nalgebra::{DMatrix, DVector};
 
 use crate::actor_critic::{Improver, TaskInfo};
+use crate::barrier::Barrier;
 use crate::config::PlanningConfig;
 use crate::critic::ValueWithGradient;
 use crate::lqr::{LastSolution, affine_model, quadratic_weights};
 use crate::mlac::{ChoosesActions, Mlac};
+use plant::OperatingRange;
 use plant::angle::wrap;
 
 /// The halvings of the forward pass's step `α` before an iteration gives up.
@@ -88,6 +93,8 @@ pub struct Ilqr {
     last: Mutex<Vec<f64>>,
     /// The terminal cost's LQR, solved again only when the model's fit changes.
     solved: LastSolution,
+    /// The operating range's cost `ℓ_b`.
+    barrier: Barrier,
 }
 
 /// A sequence's rollout through the model: the states `x̃_0 … x̃_H`, the actions, the
@@ -122,7 +129,15 @@ impl Ilqr {
             q,
             last: Mutex::new(Vec::new()),
             solved: LastSolution::default(),
+            barrier: Barrier::default(),
         }
+    }
+
+    /// Plans within the task's operating range `range`, if it has one: its [`Barrier`]
+    /// joins the stage and terminal costs.
+    pub fn within(mut self, range: Option<&OperatingRange>) -> Self {
+        self.barrier = Barrier::of(range, &self.info().reward.reference, self.gamma);
+        self
     }
 
     fn info(&self) -> &TaskInfo {
@@ -210,7 +225,8 @@ impl Ilqr {
             let u = &mut r.us[i * m..(i + 1) * m];
             policy(i, &r.xs[i], u);
             self.info().saturate(u);
-            r.cost -= discount * self.info().reward.reward(&r.xs[i], u);
+            r.cost +=
+                discount * (self.barrier.cost(&r.xs[i]) - self.info().reward.reward(&r.xs[i], u));
             discount *= self.gamma;
             let (next, fit) = self.step(&r.xs[i], u);
             r.xs.push(next);
@@ -219,7 +235,7 @@ impl Ilqr {
         let mut z = self.error(&r.xs[h]);
         z.push(1.0);
         let z = DVector::from_vec(z);
-        r.cost += discount * (z.transpose() * s * &z)[(0, 0)];
+        r.cost += discount * ((z.transpose() * s * &z)[(0, 0)] + self.barrier.cost(&r.xs[h]));
         if !r.cost.is_finite() {
             r.cost = f64::INFINITY;
         }
@@ -263,6 +279,10 @@ impl Ilqr {
             x: 2.0 * sz.rows(0, n).clone_owned(),
             xx: 2.0 * s.view((0, 0), (n, n)).clone_owned(),
         };
+        let (mut bx, mut bxx) = (vec![0.0; n], vec![0.0; n]);
+        self.barrier.add_derivatives(&r.xs[h], &mut bx, &mut bxx);
+        v.x += DVector::from_vec(bx);
+        v.xx += DMatrix::from_diagonal(&DVector::from_vec(bxx));
         let mut fb = Feedback {
             k: vec![DVector::zeros(m); h],
             gain: vec![DMatrix::zeros(m, n); h],
@@ -290,10 +310,14 @@ impl Ilqr {
         let (mut lx, mut lu) = (vec![0.0; n], vec![0.0; m]);
         reward.grad_x(x, &mut lx);
         reward.grad_u(u, &mut lu);
-        // ℓ = −ρ: its gradients are −∂ρ/∂x, −∂ρ/∂u
-        let qx = -DVector::from_vec(lx) + g * a.transpose() * &next.x;
+        let (mut bx, mut bxx) = (vec![0.0; n], vec![0.0; n]);
+        self.barrier.add_derivatives(x, &mut bx, &mut bxx);
+        // ℓ = −ρ + ℓ_b: its gradients are −∂ρ/∂x + ∂ℓ_b/∂x, −∂ρ/∂u
+        let qx = DVector::from_vec(bx) - DVector::from_vec(lx) + g * a.transpose() * &next.x;
         let qu = -DVector::from_vec(lu) + g * b.transpose() * &next.x;
-        let qxx = lxx + g * a.transpose() * &next.xx * a;
+        let qxx = lxx
+            + DMatrix::from_diagonal(&DVector::from_vec(bxx))
+            + g * a.transpose() * &next.xx * a;
         let quu = luu + g * b.transpose() * &next.xx * b;
         let qux = g * b.transpose() * &next.xx * a;
         let chol = quu.clone().cholesky()?;
@@ -491,6 +515,30 @@ mod tests {
         let (indexed, scanned) = (run(Search::KdTree), run(Search::Scan));
         assert_eq!(indexed, scanned);
         assert!(indexed.0.iter().any(|&u| f64::from_bits(u).abs() > 0.5));
+    }
+
+    /// Near the operating range's edge the plan steers back harder than without the
+    /// range (the barrier is part of its cost); well inside, where the plan stays within
+    /// the barrier's inner bound, it is the same plan, bit for bit.
+    #[test]
+    fn the_operating_range_pushes_the_plan_back_from_its_edge() {
+        let range = OperatingRange {
+            limits: vec![(-1.0, 1.0)],
+            penalty: -1e4,
+        };
+        let first = |mut p: Ilqr, x: f64| {
+            let mut u = [0.0];
+            p.act(&[x], &[0.0], &constant(0.0), &mut u);
+            u[0]
+        };
+        // A weak actuator (x' = x + 0.1 u): the plan stays beyond the inner bound, 0.75,
+        // for a few samples.
+        let free = first(planner(0.1, 0.9, 10), 0.95);
+        let kept = first(planner(0.1, 0.9, 10).within(Some(&range)), 0.95);
+        assert!(kept < free - 0.1, "with the range {kept}, without {free}");
+        let free = first(planner(0.1, 0.9, 10), 0.2);
+        let kept = first(planner(0.1, 0.9, 10).within(Some(&range)), 0.2);
+        assert_eq!(kept.to_bits(), free.to_bits());
     }
 
     /// The plan is carried to the next sample and dropped when a trial, learning or

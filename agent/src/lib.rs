@@ -12,7 +12,8 @@
 //!   (constant, or decaying as Eq. 2.21–2.22 ask); [`explore`] — Gaussian
 //!   exploration; [`sarsa`] — the discrete-action baseline; [`plan`] — MLAC's actions
 //!   planned with its learned model by the cross-entropy method, [`ilqr`] — by the
-//!   iterative LQR (beyond the thesis, chosen by `[planning]`);
+//!   iterative LQR (beyond the thesis, chosen by `[planning]`), which sees the
+//!   operating range as a [`barrier`];
 //!   [`lqr`] — near the reference, a regulator of that model (beyond the thesis,
 //!   `[lqr]`).
 //! * [`horizon`] — infinite or finite horizon (Chapter 4: time as an input, terminal
@@ -27,6 +28,7 @@
 
 pub mod actor_critic;
 pub mod approx;
+pub mod barrier;
 mod build;
 pub mod checkpoint;
 pub mod config;
