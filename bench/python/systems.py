@@ -59,13 +59,15 @@ def read_matrix(path: Path):
     """The experiments of a matrix file, checked: one-line errors name the file and key."""
     with open(path, "rb") as f:
         experiments = tomllib.load(f).get("experiment", [])
-    keys = {"name", "system", "task", "driver", "trials", "success", "learners"}
+    keys, optional = {"name", "system", "task", "driver", "trials", "success", "learners"}, {"held_out"}
     for k, e in enumerate(experiments):
         where = f"{path}: experiment {k + 1} ({e.get('name', '?')})"
-        missing, unknown = keys - e.keys(), e.keys() - keys
+        missing, unknown = keys - e.keys(), e.keys() - keys - optional
         if missing or unknown:
             sys.exit(f"{where}: missing keys {sorted(missing)}, unknown keys {sorted(unknown)}; "
-                     f"an experiment has {sorted(keys)}")
+                     f"an experiment has {sorted(keys)} and optionally {sorted(optional)}")
+        if type(e.get("held_out", False)) is not bool:
+            sys.exit(f"{where}: held_out must be true or false, not {e['held_out']!r}")
         s = e["success"]
         if sorted(s) not in (["return_at_least"], ["hold", "upright"]):
             sys.exit(f"{where}: success must be {{ upright = A, hold = S }} or "
