@@ -123,11 +123,38 @@ def last_learning_mean(run_dir: Path, count: int = 100) -> float:
     return statistics.mean(returns[-count:])
 
 
+def to_success(evals):
+    """(first, holds) of a run's evaluations `[(interaction so far, succeeds)]` in order:
+    the interaction until the first evaluation that succeeds, and until the first one
+    from which every later evaluation succeeds too (it meets the criterion and holds it
+    to the end of the run); None for one that never comes."""
+    first = next((t for t, good in evals if good), None)
+    holds = None
+    for t, good in reversed(evals):
+        if not good:
+            break
+        holds = t
+    return first, holds
+
+
+def median_to_success(values):
+    """The median over seeds of `to_success`'s figures, a seed that never got there
+    counting as later than any that did: None if the median seed never did."""
+    if not values:
+        return None
+    ranked = sorted(values, key=lambda v: (v is None, v or 0))
+    n = len(ranked)
+    middle = ranked[(n - 1) // 2 : n // 2 + 1]
+    return None if None in middle else sum(middle) / len(middle)
+
+
 def seed_results(out: Path, return_at_least=None, upright=None, hold=1.5):
     """Per seed of experiment folder `out` (seeds.sh's OUT), in seed order: a dict of
     `seed`, `trials`, `final` (the greedy return at the last evaluation), `succeeds`
     (there), `first_success_s` (simulated seconds of learning until the first evaluation
-    that succeeds, or None), `learning_mean` (the last 100 learning trials), `wall_s`,
+    that succeeds, or None), `holds_s` (until the first evaluation from which every later
+    one succeeds, or None), `first_success_samples` and `holds_samples` (the same in
+    samples of learning), `learning_mean` (the last 100 learning trials), `wall_s`,
     `agent_ms` (the agent's step per sample, median and 99th percentile in ms, or None
     if the recording has none), `curve` ([(simulated s, greedy return)] of every
     evaluation) and `notes` (with `upright`: when each last greedy trial is upright).
@@ -141,12 +168,13 @@ def seed_results(out: Path, return_at_least=None, upright=None, hold=1.5):
         if not evals:
             sys.exit(f"{run}: no greedy evaluation in returns.csv (learn more trials than eval_every)")
         notes = []
+        ts = task_of(run)[0]
         measurements, steps = read_recording(run / "run.mcap", greedy=upright is not None)
         steps.sort()
         if upright is None:
             good = [e[2] >= return_at_least for e in evals]
         else:
-            ts, length, angles = task_of(run)
+            _, length, angles = task_of(run)
             greedy = greedy_trials(measurements)
             good = [
                 all(upright_at_end(t, ts, length, angles, upright, hold) for t in greedy[e[0]])
@@ -158,12 +186,18 @@ def seed_results(out: Path, return_at_least=None, upright=None, hold=1.5):
                     f"seed {seed}, last greedy trial from start state {k}: "
                     + ("never upright" if at is None else f"first upright at {at:.2f} s, upright {100 * share:.0f} % of it")
                 )
+        first, holds = to_success([(e[1], g) for e, g in zip(evals, good)])
+        samples = lambda t: None if t is None else round(t / ts)  # noqa: E731
         results.append({
             "seed": seed,
+            "ts": ts,
             "trials": evals[-1][0],
             "final": evals[-1][2],
             "succeeds": good[-1],
-            "first_success_s": next((e[1] for e, g in zip(evals, good) if g), None),
+            "first_success_s": first,
+            "holds_s": holds,
+            "first_success_samples": samples(first),
+            "holds_samples": samples(holds),
             "learning_mean": last_learning_mean(run),
             "wall_s": walls[seed],
             "agent_ms": (percentile(steps, 50) / 1e6, percentile(steps, 99) / 1e6) if steps else None,
@@ -185,15 +219,17 @@ def main():
     results = seed_results(args.out, args.return_at_least, args.upright, args.hold)
     print(
         "| seed | trials | greedy return at the last evaluation | succeeds | simulated s to first success "
-        "| mean return, last 100 learning trials | wall time | agent's step, median / 99 % |"
+        "| simulated s to success held to the end | mean return, last 100 learning trials | wall time "
+        "| agent's step, median / 99 % |"
     )
-    print("|---:|---:|---:|---|---:|---:|---:|---:|")
+    print("|---:|---:|---:|---|---:|---:|---:|---:|---:|")
     for r in results:
-        first = r["first_success_s"]
+        first, holds = r["first_success_s"], r["holds_s"]
         step = "—" if r["agent_ms"] is None else "{:.3f} / {:.3f} ms".format(*r["agent_ms"])
         print(
             f"| {r['seed']} | {r['trials']} | {r['final']:.2f} | {'yes' if r['succeeds'] else 'no'} "
-            f"| {'never' if first is None else f'{first:.0f}'} | {r['learning_mean']:.2f} | {r['wall_s']:.1f} s "
+            f"| {'never' if first is None else f'{first:.0f}'} | {'never' if holds is None else f'{holds:.0f}'} "
+            f"| {r['learning_mean']:.2f} | {r['wall_s']:.1f} s "
             f"| {step} |"
         )
     notes = [n for r in results for n in r["notes"]]
