@@ -134,12 +134,13 @@ def plot(e, curves, out: Path):
     plt.close(fig)
 
 
-def sac(e, args, rows):
-    """SB3's SAC on a Gymnasium experiment: its seeds run (with --sb3; sb3_sac.py, finished
-    seeds kept) and its row added to `rows` where OUT/<experiment>/sb3-sac holds any."""
+def sac(e, args, rows, run: bool):
+    """SB3's SAC on a Gymnasium experiment: its seeds run (if `run` and --sb3; sb3_sac.py,
+    finished seeds kept) and its row added to `rows` where OUT/<experiment>/sb3-sac holds
+    any."""
     folder = args.out / e["name"] / "sb3-sac"
     gym = e["driver"][:1] == ["examples/gymnasium/adapter.py"]
-    if args.sb3 and gym:
+    if run and args.sb3 and gym:
         run = subprocess.run([args.python, str(HERE / "sb3_sac.py"), str(folder), "--experiment", e["name"],
                               "--matrix", str(args.matrix), "--seeds", str(args.seeds)], cwd=ROOT)
         if run.returncode != 0:
@@ -156,6 +157,8 @@ def main():
                    help="the experiments (default bench/python/systems.toml)")
     p.add_argument("--seeds", type=int, default=5, help="seeds per experiment × learner (1..N) [default: 5]")
     p.add_argument("--only", default="", help="comma-separated experiment names to run (default all)")
+    p.add_argument("--learners", default="",
+                   help="comma-separated learner labels to run, e.g. default (default all)")
     p.add_argument("--trials", type=int, help="trials per run instead of each experiment's and learner's own (a short look)")
     p.add_argument("--sb3", action="store_true",
                    help="also run Stable-Baselines3's SAC on the Gymnasium experiments (bench/python/sb3_sac.py)")
@@ -169,27 +172,35 @@ def main():
         p.error(f"{args.rig}: no such rig binary (cargo build --release -p rig)")
     experiments = read_matrix(args.matrix)
     names = {e["name"] for e in experiments}
+    labels = {l["label"] for e in experiments for l in e["learners"]}
     only = [n for n in args.only.split(",") if n]
     if unknown := [n for n in only if n not in names]:
         p.error(f"--only: unknown experiments {unknown}; the matrix has {sorted(names)}")
+    chosen = [n for n in args.learners.split(",") if n]
+    if unknown := [n for n in chosen if n not in labels]:
+        p.error(f"--learners: unknown learners {unknown}; the matrix has {sorted(labels)}")
     args.out.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, "PYTHON": args.python, "RIG": str(args.rig.resolve())}
     rows = []
+    # Runs what --only and --learners choose; reports every experiment × learner with a
+    # seed in OUT.
     for e in experiments:
-        if only and e["name"] not in only:
-            continue
+        selected = not only or e["name"] in only
         if args.trials is not None:
             e = {**e, "trials": args.trials,
                  "learners": [{**l, "trials": args.trials} for l in e["learners"]]}
         curves = []
         for learner in e["learners"]:
             folder = args.out / e["name"] / slug(learner["label"])
-            learn(e, learner, folder, args.seeds, env)
-            results = judged(e, folder)[: args.seeds]
-            rows.append(interaction.rig_row(e, learner["label"], results))
-            curves.append((learner["label"], results))
-        plot(e, curves, args.out)
-        sac(e, args, rows)
+            if selected and (not chosen or learner["label"] in chosen):
+                learn(e, learner, folder, args.seeds, env)
+            if seeds_done(folder):
+                results = judged(e, folder)[: args.seeds]
+                rows.append(interaction.rig_row(e, learner["label"], results))
+                curves.append((learner["label"], results))
+        if curves:
+            plot(e, curves, args.out)
+        sac(e, args, rows, run=selected)
     text = interaction.report(rows, args.out)
     interaction.plot(rows, args.out)
     (args.out / "table.md").write_text(text)
