@@ -36,7 +36,7 @@ sys.path.insert(0, str(ROOT / "examples" / "cartpole"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import cartpole  # noqa: E402
-from seeds_report import upright_at_end, wrap  # noqa: E402
+from seeds_report import meets, wrap  # noqa: E402
 from task import Task  # noqa: E402
 
 
@@ -143,19 +143,6 @@ def gym_trial(task: Task, mapping, env, act, x0):
     return states, ret
 
 
-def judge(task: Task, success, trials):
-    """The experiment's success rule on one evaluation: [(states, return)] per start."""
-    mean = sum(r for _, r in trials) / len(trials)
-    if "return_at_least" in success:
-        return mean, mean >= success["return_at_least"]
-    angles = [i for i, a in enumerate(task.angles) if a]
-    ok = all(
-        upright_at_end(s, task.ts, task.trial_seconds, angles, success["upright"], success["hold"])
-        for s, _ in trials
-    )
-    return mean, ok
-
-
 def controllers(e, task: Task):
     """[(label, a function of a start state giving (states, return))] for experiment e."""
     name = e["name"]
@@ -197,7 +184,9 @@ def main():
     for e in experiments:
         task = Task.read(str(ROOT / e["task"]))
         for label, trial in controllers(e, task):
-            mean, ok = judge(task, e["success"], [trial(x0) for x0 in task.starts])
+            angles = [i for i, a in enumerate(task.angles) if a]
+            trials = [trial(x0) for x0 in task.starts]
+            mean, ok = meets(e["success"], task.ts, task.trial_seconds, angles, trials)
             rule = ", ".join(f"{k} = {v}" for k, v in e["success"].items())
             print(f"| {e['system']} | {label} | {mean:.2f} | {rule} | {'yes' if ok else 'no'} |", flush=True)
     return 0

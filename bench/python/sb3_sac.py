@@ -40,7 +40,7 @@ ROOT = HERE.parents[1]
 sys.path.insert(0, str(ROOT / "examples" / "python_driver"))
 sys.path.insert(0, str(HERE))
 
-from seeds_report import upright_at_end  # noqa: E402
+from seeds_report import meets  # noqa: E402
 from task import Task  # noqa: E402
 
 # rl-baselines3-zoo, hyperparams/sac.yml (github.com/DLR-RM/rl-baselines3-zoo, commit
@@ -123,19 +123,6 @@ def greedy_episodes(env, mapping, task: Task, act):
     return episodes
 
 
-def succeeds(success, task: Task, episodes) -> tuple:
-    """(mean return, whether the experiment's success rule holds) of one evaluation."""
-    mean = sum(r for _, r in episodes) / len(episodes)
-    if "return_at_least" in success:
-        return mean, mean >= success["return_at_least"]
-    angles = [i for i, a in enumerate(task.angles) if a]
-    ok = all(
-        upright_at_end(s, task.ts, task.trial_seconds, angles, success["upright"], success["hold"])
-        for s, _ in episodes
-    )
-    return mean, ok
-
-
 def budget(env_id: str) -> int:
     """The learning steps per run: the zoo's n_timesteps, capped."""
     return min(HYPERPARAMETERS[env_id]["n_timesteps"], BUDGET_CAP.get(env_id, 10**12))
@@ -152,6 +139,7 @@ def learn(e, mapping, task: Task, seed: int, steps: int):
     torch.set_num_threads(1)
     env_id = mapping.ENV_ID
     every = EVAL_EVERY[env_id]
+    angles = [i for i, a in enumerate(task.angles) if a]
     kwargs = {k: v for k, v in HYPERPARAMETERS[env_id].items() if k not in ("n_timesteps", "zoo_entry")}
     eval_env = gymnasium.make(env_id)
     curve, t0 = [], time.monotonic()
@@ -160,7 +148,8 @@ def learn(e, mapping, task: Task, seed: int, steps: int):
         def _on_step(self) -> bool:
             if self.num_timesteps % every == 0:
                 act = lambda obs: self.model.predict(obs, deterministic=True)[0]  # noqa: E731
-                ret, ok = succeeds(e["success"], task, greedy_episodes(eval_env, mapping, task, act))
+                episodes = greedy_episodes(eval_env, mapping, task, act)
+                ret, ok = meets(e["success"], task.ts, task.trial_seconds, angles, episodes)
                 n = self.num_timesteps
                 curve.append((n, n * task.ts, time.monotonic() - t0, ret, ok))
             return True

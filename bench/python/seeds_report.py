@@ -98,6 +98,19 @@ def upright_at_end(trial, ts, length, angles, tol, hold) -> bool:
     )
 
 
+def meets(success, ts, length, angles, trials):
+    """(the mean return, whether a success rule holds) of one greedy evaluation, its
+    trials `[(states, return)]` one per start state: `success` is an experiment's rule,
+    {"return_at_least": R} or {"upright": A, "hold": S} (bench/python/systems.toml), for a
+    task of sampling time `ts`, trials of `length` seconds and angle states `angles`."""
+    mean = sum(r for _, r in trials) / len(trials)
+    if "return_at_least" in success:
+        return mean, mean >= success["return_at_least"]
+    return mean, all(
+        upright_at_end(s, ts, length, angles, success["upright"], success["hold"]) for s, _ in trials
+    )
+
+
 def upright_times(trial, ts, angles, tol):
     """(the first time [s] every angle is within `tol` of 0, or None; the share of the
     trial's samples where they are)."""

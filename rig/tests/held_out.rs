@@ -15,24 +15,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::drivers::{Driver, python};
+use common::drivers::{Driver, python, python_with};
 use common::{ok, rig};
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-/// The interpreter, if it can import `modules` (comma-separated) besides iceoryx2.
-fn python_with(modules: &str) -> Option<String> {
-    let python = python()?;
-    let has = Command::new(&python)
-        .args(["-c", &format!("import {modules}")])
-        .status()
-        .is_ok_and(|s| s.success());
-    if !has {
-        println!("skipped: {python} cannot import {modules}");
-    }
-    has.then_some(python)
 }
 
 /// `rig check-driver --driver ID --task TASK`, asserted to pass.

@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::drivers::python;
+use common::drivers::{python, python_with};
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -21,20 +21,7 @@ fn root() -> PathBuf {
 
 /// The interpreter, if it has the benchmark's modules.
 fn interpreter() -> Option<String> {
-    interpreter_with("mcap, matplotlib")
-}
-
-/// The interpreter, if it can import `modules` (comma-separated).
-fn interpreter_with(modules: &str) -> Option<String> {
-    let python = python()?;
-    let has = Command::new(&python)
-        .args(["-c", &format!("import {modules}")])
-        .status()
-        .is_ok_and(|s| s.success());
-    if !has {
-        println!("skipped: {python} cannot import {modules}");
-    }
-    has.then_some(python)
+    python_with("mcap, matplotlib")
 }
 
 /// `systems.py OUT` with `args`, the rig under test.
@@ -192,7 +179,7 @@ const KEPT_SAC: &str = "seed,steps,sim_s,wall_s,greedy_return,success\n\
 /// interaction to success from their evaluations.
 #[test]
 fn the_sac_comparison_keeps_finished_seeds_and_is_reported_beside_the_learners() {
-    let Some(python) = interpreter_with("mcap, matplotlib, gymnasium") else {
+    let Some(python) = python_with("mcap, matplotlib, gymnasium") else {
         return;
     };
     let dir = common::tmp("systems", "sac");

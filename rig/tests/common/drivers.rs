@@ -37,6 +37,20 @@ pub fn python() -> Option<String> {
     }
 }
 
+/// The Python interpreter with the bindings, if it can also import `modules`
+/// (comma-separated), or `None` (and why).
+pub fn python_with(modules: &str) -> Option<String> {
+    let python = python()?;
+    let has = Command::new(&python)
+        .args(["-c", &format!("import {modules}")])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !has {
+        println!("skipped: {python} cannot import {modules}");
+    }
+    has.then_some(python)
+}
+
 /// A driver process: the Python example (`examples/python_driver/driver.py`, official
 /// iceoryx2 bindings) or `rig sim-driver` (Rust, the driver kit).
 #[derive(Clone, Debug)]
