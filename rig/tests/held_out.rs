@@ -38,7 +38,15 @@ fn run(id: &str, task: &str, trials: &str, dir: &Path) -> String {
         .arg("run")
         .args(common::external(id))
         .args(["--quiet", "--task", task, "--trials", trials])
-        .args(["--algo", "mlac", "--approx", "llr", "--eval-every", "2", "--out"])
+        .args([
+            "--algo",
+            "mlac",
+            "--approx",
+            "llr",
+            "--eval-every",
+            "2",
+            "--out",
+        ])
         .arg(dir)
         .output()
         .unwrap());
@@ -46,7 +54,10 @@ fn run(id: &str, task: &str, trials: &str, dir: &Path) -> String {
 }
 
 fn script(python: &str, path: &str) -> Output {
-    Command::new(python).arg(root().join(path)).output().unwrap()
+    Command::new(python)
+        .arg(root().join(path))
+        .output()
+        .unwrap()
 }
 
 /// The cart-pole: its model check passes, and for each task its driver passes `rig
@@ -66,12 +77,21 @@ fn the_cartpole_is_a_task_file_and_a_python_driver() {
     for (name, trials) in [("cartpole-balance", "4"), ("cartpole-swing-balance", "2")] {
         let task = root().join(format!("examples/cartpole/{name}.toml"));
         let task = task.to_str().unwrap();
-        let d = Driver::script(&python, "examples/cartpole/driver.py", name, &["--task", task]);
+        let d = Driver::script(
+            &python,
+            "examples/cartpole/driver.py",
+            name,
+            &["--task", task],
+        );
         check_driver(&d.id, task);
         let a = run(&d.id, task, trials, &dir.join(format!("{name}-a")));
         let b = run(&d.id, task, trials, &dir.join(format!("{name}-b")));
         assert_eq!(a, b, "{name}");
-        assert_eq!(a.lines().count(), trials.parse::<usize>().unwrap() + 1, "{a}");
+        assert_eq!(
+            a.lines().count(),
+            trials.parse::<usize>().unwrap() + 1,
+            "{a}"
+        );
     }
 }
 

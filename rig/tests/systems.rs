@@ -187,13 +187,29 @@ fn the_sac_comparison_keeps_finished_seeds_and_is_reported_beside_the_learners()
     std::fs::create_dir_all(&folder).unwrap();
     std::fs::write(folder.join("curves.csv"), KEPT_SAC).unwrap();
 
-    let kept = common::ok(sac(&python, &folder, "pendulum-v1", &["--seeds", "1", "--steps", "4000"]));
+    let kept = common::ok(sac(
+        &python,
+        &folder,
+        "pendulum-v1",
+        &["--seeds", "1", "--steps", "4000"],
+    ));
     let text = String::from_utf8_lossy(&kept.stdout);
     assert!(text.contains("seed 1: kept from"), "{text}");
-    assert_eq!(std::fs::read_to_string(folder.join("curves.csv")).unwrap(), KEPT_SAC);
+    assert_eq!(
+        std::fs::read_to_string(folder.join("curves.csv")).unwrap(),
+        KEPT_SAC
+    );
     for (name, args, says) in [
-        ("pendulum-v1", ["--seeds", "1", "--steps", "2000"], "holds runs of 4000 steps"),
-        ("acrobot-balance", ["--seeds", "1", "--steps", "2000"], "not a Gymnasium environment"),
+        (
+            "pendulum-v1",
+            ["--seeds", "1", "--steps", "2000"],
+            "holds runs of 4000 steps",
+        ),
+        (
+            "acrobot-balance",
+            ["--seeds", "1", "--steps", "2000"],
+            "not a Gymnasium environment",
+        ),
     ] {
         let refused = sac(&python, &folder, name, &args);
         let err = String::from_utf8_lossy(&refused.stderr);
@@ -210,18 +226,24 @@ name = "pendulum-v1"
 system = "Pendulum-v1"
 task = "examples/gymnasium/pendulum-v1.toml"
 driver = ["examples/gymnasium/adapter.py", "--mapping", "examples/gymnasium/pendulum_v1.py"]
-trials = 10
+trials = 2
 success = { upright = 0.3, hold = 1.5 }
-learners = [{ label = "MLAC/LLR", flags = ["--algo", "mlac", "--approx", "llr"] }]
+learners = [{ label = "MLAC/LLR", flags = ["--algo", "mlac", "--approx", "llr", "--eval-every", "2"] }]
 "#,
     )
     .unwrap();
     let m = matrix.to_str().unwrap();
-    let report = common::ok(systems(&python, &dir.join("out"), &["--matrix", m, "--seeds", "1"]));
+    let report = common::ok(systems(
+        &python,
+        &dir.join("out"),
+        &["--matrix", m, "--seeds", "1"],
+    ));
     let table = String::from_utf8_lossy(&report.stdout);
     assert!(table.contains("| Pendulum-v1 | MLAC/LLR | "), "{table}");
     assert!(
-        table.contains("| Pendulum-v1 | SB3 SAC (rl-zoo) | 0 of 1 | 1 | 100 s / 2000 | not reached | -900.50 |"),
+        table.contains(
+            "| Pendulum-v1 | SB3 SAC (rl-zoo) | 0 of 1 | 1 | 100 s / 2000 | not reached | -900.50 |"
+        ),
         "{table}"
     );
     assert!(dir.join("out/interaction.png").metadata().unwrap().len() > 0);
@@ -241,5 +263,8 @@ fn interaction_to_success_is_computed_as_documented() {
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
-    assert!(err.contains("Ran 8 tests") && err.trim_end().ends_with("OK"), "{err}");
+    assert!(
+        err.contains("Ran 8 tests") && err.trim_end().ends_with("OK"),
+        "{err}"
+    );
 }
