@@ -152,6 +152,8 @@ def learn(e, mapping, task: Task, seed: int, steps: int):
                 ret, ok = meets(e["success"], task.ts, task.trial_seconds, angles, episodes)
                 n = self.num_timesteps
                 curve.append((n, n * task.ts, time.monotonic() - t0, ret, ok))
+                print(f"  seed {seed}, {n} steps: greedy {ret:.2f}, meets the rule: {'yes' if ok else 'no'}",
+                      flush=True)
             return True
 
     model = SAC("MlpPolicy", gymnasium.make(env_id), seed=seed, device="cpu", verbose=0, **kwargs)
