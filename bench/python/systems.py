@@ -159,6 +159,8 @@ def main():
     p.add_argument("--only", default="", help="comma-separated experiment names to run (default all)")
     p.add_argument("--learners", default="",
                    help="comma-separated learner labels to run, e.g. default (default all)")
+    p.add_argument("--report-only", action="store_true",
+                   help="run nothing: the report of what OUT holds (while other calls run seeds into it)")
     p.add_argument("--trials", type=int, help="trials per run instead of each experiment's and learner's own (a short look)")
     p.add_argument("--sb3", action="store_true",
                    help="also run Stable-Baselines3's SAC on the Gymnasium experiments (bench/python/sb3_sac.py)")
@@ -185,7 +187,7 @@ def main():
     # Runs what --only and --learners choose; reports every experiment × learner with a
     # seed in OUT.
     for e in experiments:
-        selected = not only or e["name"] in only
+        selected = not args.report_only and (not only or e["name"] in only)
         if args.trials is not None:
             e = {**e, "trials": args.trials,
                  "learners": [{**l, "trials": args.trials} for l in e["learners"]]}
