@@ -34,6 +34,9 @@
 //! S ← Q_z + γ AᵀSA − γ² AᵀSB (P + γ BᵀSB)⁻¹ BᵀSA,   K = γ (P + γ BᵀSB)⁻¹ BᵀSA
 //! ```
 //!
+//! The gain of a fit that is the same, bit for bit, as the last sample's (at the
+//! reference, until a sample joins or leaves its neighbours) is not computed again.
+//!
 //! Outside the region, or where the local model gives no finite gain (its samples do not
 //! yet show how the action moves the state), the actor acts, as in MLAC. Learning is
 //! MLAC's, unchanged: the regulator only chooses the actions, and it learns nothing of its
@@ -42,6 +45,8 @@
 //! ed., 1995, ch. 5), with a learner outside the region around the reference: the swing-up
 //! by one controller and the catch near upright by a linear one (K. J. Åström, K. Furuta,
 //! "Swinging up a pendulum by energy control", Automatica 36, 2000).
+
+use std::sync::Mutex;
 
 use nalgebra::{DMatrix, DVector};
 
@@ -64,6 +69,7 @@ pub struct Lqr {
     gamma: f64,
     /// `Q` of the reward's quadratic approximation at the reference (diagonal).
     q: Vec<f64>,
+    solved: LastSolution,
 }
 
 impl Lqr {
@@ -75,6 +81,7 @@ impl Lqr {
             config,
             gamma,
             q,
+            solved: LastSolution::default(),
         }
     }
 
@@ -103,7 +110,9 @@ impl Lqr {
     /// The discounted LQR gain `K` of `(A, B)`; `None` if the Riccati iteration does not
     /// settle — the model cannot hold the state, its cost growing without bound.
     fn gain(&self, a: &DMatrix<f64>, b: &DMatrix<f64>) -> Option<DMatrix<f64>> {
-        riccati(a, b, &self.q, &self.info().reward.p, self.gamma).map(|(k, _)| k)
+        self.solved
+            .riccati(a, b, &self.q, &self.info().reward.p, self.gamma)
+            .map(|(k, _)| k)
     }
 
     /// The regulator's action from `x` (state error `e`), the model fitted around
@@ -201,6 +210,56 @@ pub(crate) fn riccati(
         last_k = Some(k);
     }
     None
+}
+
+/// [`riccati`]'s solution for one owner's `(q, p, γ)`, remembered with its `(A, B)`: the
+/// model's fit at a fixed point (the reference) is the same, bit for bit, from one sample
+/// to the next until a sample joins or leaves its neighbours, and so is the solution — the
+/// iteration is not repeated.
+#[derive(Default)]
+pub(crate) struct LastSolution(Mutex<Option<Solution>>);
+
+type Solved = Option<(DMatrix<f64>, DMatrix<f64>)>;
+
+struct Solution {
+    a: DMatrix<f64>,
+    b: DMatrix<f64>,
+    solved: Solved,
+}
+
+/// Whether two matrices are the same bits.
+fn same_bits(x: &DMatrix<f64>, y: &DMatrix<f64>) -> bool {
+    x.shape() == y.shape()
+        && x.iter()
+            .zip(y.iter())
+            .all(|(a, b)| a.to_bits() == b.to_bits())
+}
+
+impl LastSolution {
+    /// [`riccati`] of `(A, B)`; the owner passes the same `q`, `p` and `γ` every time.
+    pub(crate) fn riccati(
+        &self,
+        a: &DMatrix<f64>,
+        b: &DMatrix<f64>,
+        q: &[f64],
+        p: &[f64],
+        g: f64,
+    ) -> Solved {
+        let mut last = self.0.lock().expect("the solution's lock");
+        if let Some(l) = last
+            .as_ref()
+            .filter(|l| same_bits(&l.a, a) && same_bits(&l.b, b))
+        {
+            return l.solved.clone();
+        }
+        let solved = riccati(a, b, q, p, g);
+        *last = Some(Solution {
+            a: a.clone(),
+            b: b.clone(),
+            solved: solved.clone(),
+        });
+        solved
+    }
 }
 
 impl ChoosesActions for Lqr {

@@ -17,6 +17,18 @@ use plant::{MAX_ACTION, MAX_STATE};
 
 use crate::approx::{Differentiable, MAX_IN, MAX_OUT};
 
+/// Which samples a memory-based model fits to ([`ProcessModel::evaluate`]).
+#[derive(Clone, Copy)]
+enum Neighbours {
+    /// The nearest to `[x, u]`.
+    Input,
+    /// The nearest to `x`, found by a scan ([`Differentiable::value_and_jacobian_near`]).
+    State,
+    /// The nearest to `x`, found through an index and fitted nearest first
+    /// ([`Differentiable::value_and_jacobian_near_indexed`]).
+    StateIndexed,
+}
+
 /// A learned process model around a differentiable approximator.
 pub struct ProcessModel {
     f: Box<dyn Differentiable>,
@@ -73,7 +85,7 @@ impl ProcessModel {
     /// `f̂(x, u)` and `∂f̂/∂u`; `x` may carry time `k` after the state, and the prediction
     /// then carries `k + 1`.
     pub fn predict(&self, x: &[f64], u: &[f64]) -> Prediction {
-        self.predict_with(x, u, false)
+        self.predict_with(x, u, Neighbours::Input)
     }
 
     /// As [`Self::predict`], with an LLR model's neighbours chosen by the state alone,
@@ -85,33 +97,34 @@ impl ProcessModel {
     /// again: the greedy policy can stay at the start state until those samples leave
     /// the memory.
     pub fn predict_near_state(&self, x: &[f64], u: &[f64]) -> Prediction {
-        self.predict_with(x, u, true)
+        self.predict_with(x, u, Neighbours::State)
     }
 
-    /// `Δx̂` and `∂Δx̂/∂[x, u]` (row-major `n × (n + m)`) at `(x, u)`, the neighbours of a
-    /// memory-based model chosen by the state if `near_state`.
+    /// `Δx̂` and `∂Δx̂/∂[x, u]` (row-major `n × (n + m)`) at `(x, u)`, a memory-based
+    /// model fitted to the neighbours `near`.
     fn evaluate(
         &self,
         x: &[f64],
         u: &[f64],
-        near_state: bool,
+        near: Neighbours,
     ) -> ([f64; MAX_OUT], [f64; MAX_OUT * MAX_IN]) {
         let (n, m) = (self.n(), u.len());
         let xu = self.input(x, u);
         let mut dx = [0.0; MAX_OUT];
         let mut jac = [0.0; MAX_OUT * MAX_IN];
         let (y, j) = (&mut dx[..n], &mut jac[..n * (n + m)]);
-        if near_state {
-            self.f.value_and_jacobian_near(&xu[..n + m], n, y, j);
-        } else {
-            self.f.value_and_jacobian(&xu[..n + m], y, j);
+        let xu = &xu[..n + m];
+        match near {
+            Neighbours::Input => self.f.value_and_jacobian(xu, y, j),
+            Neighbours::State => self.f.value_and_jacobian_near(xu, n, y, j),
+            Neighbours::StateIndexed => self.f.value_and_jacobian_near_indexed(xu, n, y, j),
         }
         (dx, jac)
     }
 
-    fn predict_with(&self, x: &[f64], u: &[f64], near_state: bool) -> Prediction {
+    fn predict_with(&self, x: &[f64], u: &[f64], near: Neighbours) -> Prediction {
         let (n, m) = (self.n(), u.len());
-        let (dx, jac) = self.evaluate(x, u, near_state);
+        let (dx, jac) = self.evaluate(x, u, near);
         let mut p = Prediction {
             x_next: [0.0; MAX_STATE],
             du: [0.0; MAX_STATE * MAX_ACTION],
@@ -130,11 +143,13 @@ impl ProcessModel {
     }
 
     /// The model's affine fit around `(x, u)`, its neighbours chosen by the state (as
-    /// [`Self::predict_near_state`]): the increment `Δx̂ = f̂(x, u) − x` and its Jacobians
-    /// `∂Δx̂/∂x` (`n × n`) and `∂Δx̂/∂u` (`n × m`), row-major, of the state part of `x`.
+    /// [`Self::predict_near_state`], found through the memory's index of the states and
+    /// fitted nearest first: [`Differentiable::value_and_jacobian_near_indexed`]): the
+    /// increment `Δx̂ = f̂(x, u) − x` and its Jacobians `∂Δx̂/∂x` (`n × n`) and `∂Δx̂/∂u`
+    /// (`n × m`), row-major, of the state part of `x`.
     pub fn local_fit(&self, x: &[f64], u: &[f64]) -> LocalFit {
         let (n, m) = (self.n(), u.len());
-        let (dx, jac) = self.evaluate(x, u, true);
+        let (dx, jac) = self.evaluate(x, u, Neighbours::StateIndexed);
         let mut fit = LocalFit {
             dx: [0.0; MAX_STATE],
             dx_dx: [0.0; MAX_STATE * MAX_STATE],

@@ -21,21 +21,28 @@ latency`'s own `sample_to_command`. Across hosts it also reads the driver's brid
 the rig's bridge's (ping round trips, one-way hops). Prints p50 / p99 / p99.9 of each
 and of every stage of `rig latency`, pooled over the repetitions, and the machine;
 writes OUT/summary.txt.
-Needs root, iproute2, util-linux and `pip install mcap`.
+Needs root, iproute2, util-linux and rigkit with mcap (`pip install "./python[recording]"`),
+checked before it starts. Stopped by Ctrl-C or SIGTERM, it stops every process it
+started and removes its hosts.
 """
 
 import argparse
 import csv
+import importlib.util
 import os
 import platform
-import shutil
-import signal
 import subprocess
 import sys
 import time
 
-from mcap.reader import make_reader
-import json
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: across_hosts.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit import script  # noqa: E402
+from rigkit import processes, recording  # noqa: E402
+from rigkit.hosts import Hosts  # noqa: E402
+
+WHO = "across_hosts.py"
 
 
 def quantiles(values):
@@ -48,15 +55,10 @@ def quantiles(values):
 
 def sample_to_command(mcap_path):
     """Per ACTION command: its t_publish_ns minus the answered sample's t_sample_ns."""
-    sampled, delays = {}, []
-    with open(mcap_path, "rb") as f:
-        for _, channel, message in make_reader(f).iter_messages(topics=["/driver/sample", "/driver/command"]):
-            m = json.loads(message.data)
-            if channel.topic == "/driver/sample":
-                sampled[m["seq"]] = m["t_sample_ns"]
-            elif m["kind"] == 1 and m["sample_seq"] in sampled:
-                delays.append(m["t_publish_ns"] - sampled[m["sample_seq"]])
-    return delays
+    rec = recording.read(mcap_path, [recording.DRIVER_SAMPLE, recording.DRIVER_COMMAND])
+    sampled = {m["seq"]: m["t_sample_ns"] for m in rec.of(recording.DRIVER_SAMPLE)}
+    return [m["t_publish_ns"] - sampled[m["sample_seq"]] for m in rec.of(recording.DRIVER_COMMAND)
+            if m["kind"] == 1 and m["sample_seq"] in sampled]
 
 
 def latency(rig, out, trials):
@@ -79,60 +81,13 @@ def stages(out):
     return found
 
 
-def sh(*args):
-    subprocess.run(args, check=True, capture_output=True)
-
-
-class Hosts:
-    """Two network namespaces joined by a veth pair, each with its own shared memory."""
-
-    def __init__(self):
-        self.ns = ["rigbench-a", "rigbench-b"]
-        for ns in self.ns:
-            subprocess.run(["ip", "netns", "del", ns], capture_output=True)
-            sh("ip", "netns", "add", ns)
-        sh("ip", "link", "add", "vbench-a", "type", "veth", "peer", "name", "vbench-b")
-        self.anchors = []
-        for ns, dev, addr in zip(self.ns, ["vbench-a", "vbench-b"], ["10.78.0.1", "10.78.0.2"]):
-            sh("ip", "link", "set", dev, "netns", ns)
-            sh("ip", "-n", ns, "addr", "add", addr + "/24", "dev", dev)
-            sh("ip", "-n", ns, "link", "set", dev, "up")
-            sh("ip", "-n", ns, "link", "set", "lo", "up")
-            self.anchors.append(subprocess.Popen(
-                ["ip", "netns", "exec", ns, "unshare", "--mount", "--propagation", "private", "sh", "-c",
-                 "mount -t tmpfs tmpfs /dev/shm && mkdir -p /tmp/iceoryx2 && "
-                 "mount -t tmpfs tmpfs /tmp/iceoryx2 && exec sleep infinity"]))
-        for a in self.anchors:
-            while not open(f"/proc/{a.pid}/cmdline", "rb").read().startswith(b"sleep"):
-                time.sleep(0.01)
-
-    def on(self, host, args):
-        return ["nsenter", "--target", str(self.anchors[host].pid), "--mount", "--net"] + args
-
-    def close(self):
-        for a in self.anchors:
-            a.kill()
-            a.wait()
-        for ns in self.ns:
-            subprocess.run(["ip", "netns", "del", ns], capture_output=True)
-
-
-def stop(p):
-    p.send_signal(signal.SIGINT)
-    try:
-        p.wait(timeout=10)
-    except subprocess.TimeoutExpired:
-        p.kill()
-        p.wait()
-
-
 def one_host(rig, out, trials, speed):
-    driver = subprocess.Popen([rig, "sim-driver", "--driver-id", "bench", "--speed", str(speed)],
-                              stderr=subprocess.DEVNULL)
+    driver = processes.start([rig, "sim-driver", "--driver-id", "bench", "--speed", str(speed)],
+                             stderr=subprocess.DEVNULL)
     try:
-        subprocess.run(latency(rig, out, trials), check=True, capture_output=True)
+        checked(processes.run(latency(rig, out, trials)))
     finally:
-        stop(driver)
+        processes.stop(driver)
     return sample_to_command(os.path.join(out, "run", "run.mcap")), stages(out)
 
 
@@ -141,23 +96,24 @@ def two_hosts(rig, out, trials, speed):
     users = os.path.join(out, "users.txt")
     with open(os.open(users, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600), "w") as f:
         f.write("rig:bench-password\n")
-    hosts = Hosts()
+    hosts = Hosts("rigbench", 78)
     procs = []
+    quiet = {"stderr": subprocess.DEVNULL}
     try:
-        endpoint = ["--driver", "bench", "--endpoint", "tcp/10.78.0.1:7447", "--credentials", users]
-        procs.append(subprocess.Popen(hosts.on(0, [rig, "sim-driver", "--driver-id", "bench", "--speed", str(speed)]),
-                                      stderr=subprocess.DEVNULL))
-        procs.append(subprocess.Popen(hosts.on(0, [rig, "bridge", "driver", *endpoint, "--timing-out",
-                                                   os.path.join(out, "delays.csv")]), stderr=subprocess.DEVNULL))
+        endpoint = ["--driver", "bench", "--endpoint", f"tcp/{hosts.addr['a']}:7447", "--credentials", users]
+        procs.append(processes.start(
+            hosts.command("a", [rig, "sim-driver", "--driver-id", "bench", "--speed", str(speed)]), **quiet))
+        procs.append(processes.start(hosts.command("a", [rig, "bridge", "driver", *endpoint, "--timing-out",
+                                                         os.path.join(out, "delays.csv")]), **quiet))
         time.sleep(0.5)
-        procs.append(subprocess.Popen(hosts.on(1, [rig, "bridge", "rig", *endpoint, "--same-clock", "--timing-out",
-                                                   os.path.join(out, "link.csv")]), stderr=subprocess.DEVNULL))
+        procs.append(processes.start(hosts.command("b", [rig, "bridge", "rig", *endpoint, "--same-clock",
+                                                         "--timing-out", os.path.join(out, "link.csv")]), **quiet))
         time.sleep(0.5)
-        subprocess.run(hosts.on(1, latency(rig, out, trials)), check=True, capture_output=True)
+        checked(processes.run(hosts.command("b", latency(rig, out, trials))))
     finally:
         for p in reversed(procs):
-            stop(p)
-        hosts.close()
+            processes.stop(p)
+        hosts.remove()
     with open(os.path.join(out, "delays.csv")) as f:
         arrived = [int(r["sample_to_actuation"]) for r in csv.DictReader(f)]
     link = {}
@@ -167,17 +123,33 @@ def two_hosts(rig, out, trials, speed):
     return sample_to_command(os.path.join(out, "run", "run.mcap")), arrived, link, stages(out)
 
 
+def checked(done):
+    """A finished `rig latency`: ends the script with its last line if it failed."""
+    if done.returncode != 0:
+        lines = (done.stdout + done.stderr).strip().splitlines()
+        script.fail(WHO, f"`{' '.join(done.args)}` exited with {done.returncode}: {lines[-1] if lines else ''}", 1)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out")
     ap.add_argument("--trials", type=int, default=20)
     ap.add_argument("--speed", type=float, default=1.0)
     ap.add_argument("--repetitions", type=int, default=3)
-    ap.add_argument("--rig", default="target/release/rig")
+    script.rig_option(ap, "target/release/rig")
     a = ap.parse_args()
-    if os.geteuid() != 0 or not shutil.which("nsenter"):
-        sys.exit("needs root and util-linux's nsenter (network namespaces)")
-    rig = os.path.abspath(a.rig)
+    script.need(WHO, modules=["mcap"], tools=["ip", "nsenter", "unshare"], root=True)
+    script.interrupt_on_sigterm()
+    rig = str(script.rig_binary(WHO, a.rig))
+    try:
+        measured = repetitions(a, rig)
+    except KeyboardInterrupt:
+        script.fail(WHO, "stopped: its processes stopped and its hosts removed", 130)
+    summary(a, *measured)
+
+
+def repetitions(a, rig):
+    """The one-host and two-host runs, alternating: what `summary` prints."""
     local, across, arrived, link, stage_one, stage_two = [], [], [], {}, {}, {}
     for r in range(a.repetitions):
         s, st = one_host(rig, os.path.join(a.out, f"one-{r}"), a.trials, a.speed)
@@ -192,6 +164,11 @@ def main():
         for k, v in st.items():
             stage_two.setdefault(k, []).extend(v)
         print(f"repetition {r + 1} of {a.repetitions} done", file=sys.stderr)
+    return local, across, arrived, link, stage_one, stage_two
+
+
+def summary(a, local, across, arrived, link, stage_one, stage_two):
+    """Prints the figures and writes OUT/summary.txt."""
     lines = [
         f"machine: {platform.node()}, {os.cpu_count()} CPUs, {platform.platform()}, load {os.getloadavg()}",
         f"{a.repetitions} repetitions each, alternating; {a.trials} trials of the default experiment; "

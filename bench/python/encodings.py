@@ -10,10 +10,11 @@ OUT/json-<c>.mcap and OUT/cdr-<c>.mcap, for each chunk compression c (none, lz4,
 the writer's default level 3), the same chunk size (1 MiB) and indexes as the rig's. It
 prints each file's size, the time to write it, and the time to read and decode every
 message of it again with the official readers, each the median of --repetitions runs.
-Needs `pip install mcap mcap-ros2-support`.
+Needs rigkit, mcap and mcap-ros2-support (`pip install "./python[recording]" mcap-ros2-support`).
 """
 
 import argparse
+import importlib.util
 import json
 import math
 import os
@@ -22,10 +23,17 @@ import statistics
 import sys
 import time
 
-from mcap.reader import make_reader
-from mcap.writer import CompressionType, Writer
-from mcap_ros2.decoder import DecoderFactory
-from mcap_ros2.writer import Writer as Ros2Writer
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: encodings.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import need  # noqa: E402
+
+need("encodings.py", modules=["mcap", "mcap_ros2"])
+
+from mcap.reader import make_reader  # noqa: E402
+from mcap.writer import CompressionType, Writer  # noqa: E402
+from mcap_ros2.decoder import DecoderFactory  # noqa: E402
+from mcap_ros2.writer import Writer as Ros2Writer  # noqa: E402
 
 
 def read(path):

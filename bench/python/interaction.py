@@ -1,20 +1,20 @@
 """The systems benchmark's headline: interaction until success, per system and learner —
-the rig's learners (seeds_report.seed_results) beside Stable-Baselines3's SAC
+the rig's learners (rigkit.seeds.seed_results) beside Stable-Baselines3's SAC
 (sb3_sac.py's curves.csv) and the field's published figures — as one table (Markdown and
 CSV rows) and one plot. Used by systems.py.
 
-A seed's interaction to success is `seeds_report.to_success`'s: the simulated seconds
+A seed's interaction to success is `rigkit.seeds.to_success`'s: the simulated seconds
 (and samples) of learning until its greedy policy first meets the experiment's success
 rule, and until it meets it at every later evaluation of the run; a row's figure is the
 median over its seeds, a seed that never got there counting as later than any that did
-(`seeds_report.median_to_success`: none if the median seed never did).
+(`rigkit.seeds.median_to_success`: none if the median seed never did).
 """
 
 import csv
 import statistics
 from pathlib import Path
 
-from seeds_report import median_to_success, to_success
+from rigkit.seeds import Seed, median_to_success, to_success
 
 SAC_LABEL = "SB3 SAC (rl-zoo)"
 
@@ -40,21 +40,21 @@ def median(values):
     return statistics.median(values) if values else None
 
 
-def rig_row(e, label, results):
+def rig_row(e, label, results: list[Seed]):
     """A row of the rig's learner `label` from its seeds' `seed_results`."""
     return {
         "experiment": e["name"], "system": e["system"], "held_out": bool(e.get("held_out")),
-        "learner": label, "seeds": len(results), "succeed": sum(r["succeeds"] for r in results),
-        "ever_succeeded": sum(r["first_success_s"] is not None for r in results),
-        "first_success_s": median_to_success([r["first_success_s"] for r in results]),
-        "first_success_samples": median_to_success([r["first_success_samples"] for r in results]),
-        "holds_s": median_to_success([r["holds_s"] for r in results]),
-        "holds_samples": median_to_success([r["holds_samples"] for r in results]),
-        "run_samples": median([round(r["curve"][-1][0] / r["ts"]) for r in results]),
-        "final_return": median([r["final"] for r in results]),
-        "wall_s": median([r["wall_s"] for r in results]),
-        "agent_ms_median": median([r["agent_ms"][0] for r in results if r["agent_ms"]]),
-        "agent_ms_p99": median([r["agent_ms"][1] for r in results if r["agent_ms"]]),
+        "learner": label, "seeds": len(results), "succeed": sum(r.succeeds for r in results),
+        "ever_succeeded": sum(r.first_success_s is not None for r in results),
+        "first_success_s": median_to_success([r.first_success_s for r in results]),
+        "first_success_samples": median_to_success([r.first_success_samples for r in results]),
+        "holds_s": median_to_success([r.holds_s for r in results]),
+        "holds_samples": median_to_success([r.holds_samples for r in results]),
+        "run_samples": median([round(r.curve[-1][0] / r.ts) for r in results]),
+        "final_return": median([r.final for r in results]),
+        "wall_s": median([r.wall_s for r in results]),
+        "agent_ms_median": median([r.agent_ms[0] for r in results if r.agent_ms]),
+        "agent_ms_p99": median([r.agent_ms[1] for r in results if r.agent_ms]),
     }
 
 

@@ -23,21 +23,27 @@ success rule. Needs numpy (and gymnasium[mujoco] for the MuJoCo task).
 """
 
 import argparse
+import importlib.util
 import math
 import sys
 import tomllib
 from pathlib import Path
 
-import numpy as np
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: known_controllers.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import need  # noqa: E402
+
+need("known_controllers.py", modules=["numpy"])
+
+import numpy as np  # noqa: E402
+from rigkit.adapter import load  # noqa: E402
+from rigkit.angle import wrap  # noqa: E402
+from rigkit.seeds import TaskTimes, meets  # noqa: E402
+from rigkit.task import Task  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "examples" / "python_driver"))
-sys.path.insert(0, str(ROOT / "examples" / "cartpole"))
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-import cartpole  # noqa: E402
-from seeds_report import meets, wrap  # noqa: E402
-from task import Task  # noqa: E402
+cartpole = load(str(ROOT / "examples" / "cartpole" / "cartpole.py"))
 
 
 def linearise(step, x0, u0, eps=1e-5):
@@ -153,14 +159,10 @@ def controllers(e, task: Task):
             pump = swing_up(task, lqr)
             rows = [("energy pump + LQR of the true model", lambda x0: model_trial(task, pump, x0))]
         return rows
-    import importlib.util
-
+    need("known_controllers.py", modules=["gymnasium"])
     import gymnasium
 
-    mapping_path = ROOT / e["driver"][e["driver"].index("--mapping") + 1]
-    spec = importlib.util.spec_from_file_location("mapping", mapping_path)
-    mapping = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mapping)
+    mapping = load(str(ROOT / e["driver"][e["driver"].index("--mapping") + 1]))
     env = gymnasium.make(mapping.ENV_ID)
 
     def env_step(x, u):
@@ -184,9 +186,9 @@ def main():
     for e in experiments:
         task = Task.read(str(ROOT / e["task"]))
         for label, trial in controllers(e, task):
-            angles = [i for i, a in enumerate(task.angles) if a]
+            times = TaskTimes(task.ts, task.trial_seconds, [i for i, a in enumerate(task.angles) if a])
             trials = [trial(x0) for x0 in task.starts]
-            mean, ok = meets(e["success"], task.ts, task.trial_seconds, angles, trials)
+            mean, ok = meets(e["success"], times, trials)
             rule = ", ".join(f"{k} = {v}" for k, v in e["success"].items())
             print(f"| {e['system']} | {label} | {mean:.2f} | {rule} | {'yes' if ok else 'no'} |", flush=True)
     return 0

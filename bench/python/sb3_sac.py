@@ -33,15 +33,23 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: sb3_sac.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import fail, need  # noqa: E402
+
+WHO = "sb3_sac.py"
+need(WHO, modules=["numpy", "gymnasium"])
+
+import numpy as np  # noqa: E402
+from rigkit.adapter import load  # noqa: E402
+from rigkit.seeds import TaskTimes, meets  # noqa: E402
+from rigkit.task import Task  # noqa: E402
+
+from interaction import read_sac  # noqa: E402  (beside this script)
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
-sys.path.insert(0, str(ROOT / "examples" / "python_driver"))
-sys.path.insert(0, str(HERE))
-
-from seeds_report import meets  # noqa: E402
-from task import Task  # noqa: E402
 
 # rl-baselines3-zoo, hyperparams/sac.yml (github.com/DLR-RM/rl-baselines3-zoo, commit
 # 22e3ff2450fd92033f7f032915e1f64894a09584; the file as of eec15dc22e1e): the entries of
@@ -75,25 +83,17 @@ EVAL_EVERY = {"Pendulum-v1": 2000, "MountainCarContinuous-v0": 1000, "InvertedPe
 HEADER = ["seed", "steps", "sim_s", "wall_s", "greedy_return", "success"]
 
 
-def load_mapping(path: Path):
-    """The experiment's mapping module (examples/gymnasium/README.md)."""
-    spec = importlib.util.spec_from_file_location("mapping", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def gymnasium_experiment(e):
     """(mapping module, task) of a matrix experiment served by the Gymnasium adapter; exits
     in one line for another."""
     driver = e["driver"]
     if not driver or not driver[0].endswith("gymnasium/adapter.py") or "--mapping" not in driver:
-        sys.exit(f"experiment {e['name']}: not a Gymnasium environment (its driver is not "
-                 "examples/gymnasium/adapter.py --mapping M)")
-    mapping = load_mapping(ROOT / driver[driver.index("--mapping") + 1])
+        fail(WHO, f"experiment {e['name']}: not a Gymnasium environment (its driver is not "
+             "examples/gymnasium/adapter.py --mapping M)")
+    mapping = load(str(ROOT / driver[driver.index("--mapping") + 1]))
     if mapping.ENV_ID not in HYPERPARAMETERS:
-        sys.exit(f"experiment {e['name']}: no rl-baselines3-zoo hyperparameters here for "
-                 f"{mapping.ENV_ID}; known: {sorted(HYPERPARAMETERS)}")
+        fail(WHO, f"experiment {e['name']}: no rl-baselines3-zoo hyperparameters here for "
+             f"{mapping.ENV_ID}; known: {sorted(HYPERPARAMETERS)}")
     return mapping, Task.read(str(ROOT / e["task"]))
 
 
@@ -139,7 +139,7 @@ def learn(e, mapping, task: Task, seed: int, steps: int):
     torch.set_num_threads(1)
     env_id = mapping.ENV_ID
     every = EVAL_EVERY[env_id]
-    angles = [i for i, a in enumerate(task.angles) if a]
+    times = TaskTimes(task.ts, task.trial_seconds, [i for i, a in enumerate(task.angles) if a])
     kwargs = {k: v for k, v in HYPERPARAMETERS[env_id].items() if k not in ("n_timesteps", "zoo_entry")}
     eval_env = gymnasium.make(env_id)
     curve, t0 = [], time.monotonic()
@@ -149,7 +149,7 @@ def learn(e, mapping, task: Task, seed: int, steps: int):
             if self.num_timesteps % every == 0:
                 act = lambda obs: self.model.predict(obs, deterministic=True)[0]  # noqa: E731
                 episodes = greedy_episodes(eval_env, mapping, task, act)
-                ret, ok = meets(e["success"], task.ts, task.trial_seconds, angles, episodes)
+                ret, ok = meets(e["success"], times, episodes)
                 n = self.num_timesteps
                 curve.append((n, n * task.ts, time.monotonic() - t0, ret, ok))
                 print(f"  seed {seed}, {n} steps: greedy {ret:.2f}, meets the rule: {'yes' if ok else 'no'}",
@@ -164,16 +164,11 @@ def learn(e, mapping, task: Task, seed: int, steps: int):
 def kept_runs(path: Path, steps: int):
     """The seeds an earlier call finished, {seed: curve}; exits in one line if they learned
     for another number of steps."""
-    runs = {}
     if not path.exists():
-        return runs
-    with open(path) as f:
-        for r in csv.DictReader(f):
-            runs.setdefault(int(r["seed"]), []).append(
-                (int(r["steps"]), float(r["sim_s"]), float(r["wall_s"]), float(r["greedy_return"]),
-                 r["success"] == "1"))
+        return {}
+    runs = read_sac(path)
     if other := sorted({c[-1][0] for c in runs.values()} - {steps}):
-        sys.exit(f"{path}: holds runs of {other[0]} steps, not {steps}: use another folder or the same --steps")
+        fail(WHO, f"{path}: holds runs of {other[0]} steps, not {steps}: use another folder or the same --steps")
     return runs
 
 
@@ -194,7 +189,7 @@ def run(out: Path, e, seeds: int, steps: int | None = None):
     steps = steps or budget(mapping.ENV_ID)
     every = EVAL_EVERY[mapping.ENV_ID]
     if steps < every or steps % every:
-        sys.exit(f"--steps must be a positive multiple of {every} (one evaluation each)")
+        fail(WHO, f"--steps must be a positive multiple of {every} (one evaluation each)")
     out.mkdir(parents=True, exist_ok=True)
     table = out / "curves.csv"
     runs = kept_runs(table, steps)

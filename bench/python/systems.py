@@ -27,25 +27,32 @@ gymnasium for the adapter); --sb3 needs stable-baselines3.
 
 import argparse
 import csv
+import importlib.util
 import os
 import re
 import shutil
 import statistics
-import subprocess
 import sys
 import tomllib
 from pathlib import Path
 
-import matplotlib
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: systems.py needs the rig's Python package rigkit: pip install ./python")
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from rigkit.script import fail, interrupt_on_sigterm, need, rig_binary, rig_option  # noqa: E402
+
+need("systems.py", modules=["iceoryx2", "mcap", "matplotlib"])
+
+from rigkit import plots, processes  # noqa: E402
+from rigkit.recording import RecordingError  # noqa: E402
+from rigkit.returns import ReturnsError  # noqa: E402
+from rigkit.seeds import Seed, seed_results  # noqa: E402
+
+import interaction  # noqa: E402  (beside this script)
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
-sys.path.insert(0, str(HERE))
-import interaction  # noqa: E402
-from seeds_report import seed_results  # noqa: E402
+WHO = "systems.py"
 
 SEEDS_SH = ROOT / "examples" / "python_driver" / "seeds.sh"
 
@@ -56,28 +63,31 @@ def slug(label: str) -> str:
 
 def read_matrix(path: Path):
     """The experiments of a matrix file, checked: one-line errors name the file and key."""
-    with open(path, "rb") as f:
-        experiments = tomllib.load(f).get("experiment", [])
+    try:
+        with open(path, "rb") as f:
+            experiments = tomllib.load(f).get("experiment", [])
+    except (OSError, tomllib.TOMLDecodeError) as err:
+        fail(WHO, f"{path}: {err}")
     keys, optional = {"name", "system", "task", "driver", "trials", "success", "learners"}, {"held_out"}
     for k, e in enumerate(experiments):
         where = f"{path}: experiment {k + 1} ({e.get('name', '?')})"
         missing, unknown = keys - e.keys(), e.keys() - keys - optional
         if missing or unknown:
-            sys.exit(f"{where}: missing keys {sorted(missing)}, unknown keys {sorted(unknown)}; "
-                     f"an experiment has {sorted(keys)} and optionally {sorted(optional)}")
+            fail(WHO, f"{where}: missing keys {sorted(missing)}, unknown keys {sorted(unknown)}; "
+                 f"an experiment has {sorted(keys)} and optionally {sorted(optional)}")
         if type(e.get("held_out", False)) is not bool:
-            sys.exit(f"{where}: held_out must be true or false, not {e['held_out']!r}")
+            fail(WHO, f"{where}: held_out must be true or false, not {e['held_out']!r}")
         s = e["success"]
         if sorted(s) not in (["return_at_least"], ["hold", "upright"]):
-            sys.exit(f"{where}: success must be {{ upright = A, hold = S }} or "
-                     f"{{ return_at_least = R }}, not {s}")
+            fail(WHO, f"{where}: success must be {{ upright = A, hold = S }} or "
+                 f"{{ return_at_least = R }}, not {s}")
         for learner in e["learners"]:
             if not {"flags", "label"} <= learner.keys() <= {"flags", "label", "trials"}:
-                sys.exit(f"{where}: a learner is {{ label = \"…\", flags = [\"…\"] }} and "
-                         f"optionally trials = N, not {learner}")
+                fail(WHO, f"{where}: a learner is {{ label = \"…\", flags = [\"…\"] }} and "
+                     f"optionally trials = N, not {learner}")
             t = learner.get("trials", e["trials"])
             if type(t) is not int or t < 1:
-                sys.exit(f"{where}: trials must be a whole number >= 1, not {t!r}")
+                fail(WHO, f"{where}: trials must be a whole number >= 1, not {t!r}")
     return experiments
 
 
@@ -99,39 +109,37 @@ def learn(e, learner, folder: Path, seeds: int, env):
     shutil.rmtree(folder / f"seed-{done + 1}", ignore_errors=True)
     print(f"{e['name']} × {learner['label']}: seeds {done + 1}..{seeds}", flush=True)
     trials = learner.get("trials", e["trials"])
-    run = subprocess.run(
+    # In a process group of its own: stopped (Ctrl-C, SIGTERM, an error here), the script,
+    # its driver and its run stop with it.
+    status = processes.call(
         [str(SEEDS_SH), str(folder), str(seeds - done), str(trials), e["task"], *e["driver"],
          "--", *learner["flags"]],
         cwd=ROOT, env={**env, "FIRST": str(done + 1)},
     )
-    if run.returncode != 0:
-        sys.exit(f"{e['name']} × {learner['label']}: a run failed (its error above); "
-                 f"the seeds finished are kept in {folder}: call again to go on")
+    if status != 0:
+        fail(WHO, f"{e['name']} × {learner['label']}: a run failed (its error above); "
+             f"the seeds finished are kept in {folder}: call again to go on", 1)
 
 
-def judged(e, folder: Path):
+def judged(e, folder: Path) -> list[Seed]:
     """The per-seed results of a learner's folder, by the experiment's success rule."""
     s = e["success"]
-    return seed_results(folder, s.get("return_at_least"), s.get("upright"), s.get("hold", 1.5))
+    try:
+        return seed_results(folder, s.get("return_at_least"), s.get("upright"), s.get("hold", 1.5))
+    except (OSError, RecordingError, ReturnsError) as err:
+        fail(WHO, str(err))
 
 
 def plot(e, curves, out: Path):
     """The experiment's learning curves: per learner the median greedy return over seeds
     at each evaluation against its median simulated seconds, the band min..max."""
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, ax = plots.figure()
     for label, results in curves:
-        n = min(len(r["curve"]) for r in results)
-        t = [statistics.median(r["curve"][k][0] for r in results) for k in range(n)]
-        ys = [[r["curve"][k][1] for r in results] for k in range(n)]
-        ax.plot(t, [statistics.median(y) for y in ys], "o-", markersize=3, label=f"{label} ({len(results)} seeds)")
-        ax.fill_between(t, [min(y) for y in ys], [max(y) for y in ys], alpha=0.2)
-    ax.set_xlabel("simulated seconds of learning")
-    ax.set_ylabel("greedy return")
-    ax.set_title(e["system"])
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(out / f"{e['name']}.png", dpi=110)
-    plt.close(fig)
+        n = min(len(r.curve) for r in results)
+        t = [statistics.median(r.curve[k][0] for r in results) for k in range(n)]
+        ys = [[r.curve[k][1] for r in results] for k in range(n)]
+        plots.band(ax, t, ys, f"{label} ({len(results)} seeds)", statistics.median, marker="o", markersize=3)
+    plots.finish(fig, ax, "simulated seconds of learning", "greedy return", e["system"], out / e["name"], dpi=110)
 
 
 def sac(e, args, rows, run: bool):
@@ -141,16 +149,17 @@ def sac(e, args, rows, run: bool):
     folder = args.out / e["name"] / "sb3-sac"
     gym = e["driver"][:1] == ["examples/gymnasium/adapter.py"]
     if run and args.sb3 and gym:
-        run = subprocess.run([args.python, str(HERE / "sb3_sac.py"), str(folder), "--experiment", e["name"],
-                              "--matrix", str(args.matrix), "--seeds", str(args.seeds)], cwd=ROOT)
-        if run.returncode != 0:
-            sys.exit(f"--sb3: SAC on {e['name']} failed (its error above); "
-                     f"its finished seeds are kept in {folder}: call again to go on")
+        status = processes.call([args.python, str(HERE / "sb3_sac.py"), str(folder), "--experiment", e["name"],
+                                 "--matrix", str(args.matrix), "--seeds", str(args.seeds)], cwd=ROOT)
+        if status != 0:
+            fail(WHO, f"--sb3: SAC on {e['name']} failed (its error above); "
+                 f"its finished seeds are kept in {folder}: call again to go on", 1)
     if (folder / "curves.csv").exists():
         rows.append(interaction.sac_row(e, interaction.read_sac(folder / "curves.csv"), args.seeds))
 
 
 def main():
+    interrupt_on_sigterm()
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("out", type=Path, help="the output folder (kept: a second call resumes)")
     p.add_argument("--matrix", type=Path, default=Path(__file__).resolve().parent / "systems.toml",
@@ -164,14 +173,12 @@ def main():
     p.add_argument("--trials", type=int, help="trials per run instead of each experiment's and learner's own (a short look)")
     p.add_argument("--sb3", action="store_true",
                    help="also run Stable-Baselines3's SAC on the Gymnasium experiments (bench/python/sb3_sac.py)")
-    p.add_argument("--rig", type=Path, default=ROOT / "target" / "release" / "rig",
-                   help="the rig binary [default: the release build]")
+    rig_option(p, ROOT / "target" / "release" / "rig")
     p.add_argument("--python", default=sys.executable, help="the interpreter for the drivers")
     args = p.parse_args()
+    args.rig = rig_binary(WHO, args.rig)
     if args.seeds < 1:
         p.error("--seeds must be at least 1")
-    if not args.rig.exists():
-        p.error(f"{args.rig}: no such rig binary (cargo build --release -p rig)")
     experiments = read_matrix(args.matrix)
     names = {e["name"] for e in experiments}
     labels = {l["label"] for e in experiments for l in e["learners"]}
@@ -181,20 +188,25 @@ def main():
     chosen = [n for n in args.learners.split(",") if n]
     if unknown := [n for n in chosen if n not in labels]:
         p.error(f"--learners: unknown learners {unknown}; the matrix has {sorted(labels)}")
+    selected = [] if args.report_only else [e for e in experiments if not only or e["name"] in only]
+    if any("adapter.py" in " ".join(e["driver"]) for e in selected):
+        need(WHO, modules=["gymnasium"])
+    if args.sb3 and selected:
+        need(WHO, modules=["gymnasium", "stable_baselines3"])
     args.out.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, "PYTHON": args.python, "RIG": str(args.rig.resolve())}
     rows = []
     # Runs what --only and --learners choose; reports every experiment × learner with a
     # seed in OUT.
     for e in experiments:
-        selected = not args.report_only and (not only or e["name"] in only)
         if args.trials is not None:
             e = {**e, "trials": args.trials,
                  "learners": [{**l, "trials": args.trials} for l in e["learners"]]}
+        run = any(e["name"] == s["name"] for s in selected)
         curves = []
         for learner in e["learners"]:
             folder = args.out / e["name"] / slug(learner["label"])
-            if selected and (not chosen or learner["label"] in chosen):
+            if run and (not chosen or learner["label"] in chosen):
                 learn(e, learner, folder, args.seeds, env)
             if seeds_done(folder):
                 results = judged(e, folder)[: args.seeds]
@@ -202,7 +214,7 @@ def main():
                 curves.append((learner["label"], results))
         if curves:
             plot(e, curves, args.out)
-        sac(e, args, rows, run=selected)
+        sac(e, args, rows, run=run)
     text = interaction.report(rows, args.out)
     interaction.plot(rows, args.out)
     (args.out / "table.md").write_text(text)
@@ -211,4 +223,7 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:
+        fail(WHO, "stopped (Ctrl-C or SIGTERM), its runs with it; the seeds finished are kept: call again to go on", 130)

@@ -11,11 +11,19 @@ time of the stepping loop alone and the time per step. Needs gymnasium and numpy
 """
 
 import argparse
+import importlib.util
 import sys
 import time
 
-import gymnasium
-import numpy as np
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: env_step.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import need  # noqa: E402
+
+need("env_step.py", modules=["gymnasium"])
+
+import gymnasium  # noqa: E402
+import numpy as np  # noqa: E402
 
 
 def main():

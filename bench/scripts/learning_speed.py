@@ -14,21 +14,25 @@ return (with exploration, as the thesis's Figures 5.5 and 5.9 plot it), smoothed
 * with --levels: the simulated minutes until the smoothed curve first reaches each
   common level (the same levels for every DIR, to compare learners on equal terms).
 """
-import csv
+import importlib.util
 import statistics as st
 import sys
 from collections import defaultdict
 
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: learning_speed.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit import returns  # noqa: E402
+from rigkit.script import fail  # noqa: E402
+
 
 def curve(d):
-    returns, sim_end = defaultdict(list), defaultdict(list)
-    with open(f"{d}/runs.csv") as f:
-        for row in csv.DictReader(f):
-            t = int(row["trial"])
-            returns[t].append(float(row["return"]))
-            sim_end[t].append(float(row["sim_time_s"]))
-    trials = sorted(returns)
-    mean = [st.mean(returns[t]) for t in trials]
+    ret, sim_end = defaultdict(list), defaultdict(list)
+    for row in returns.read(f"{d}/runs.csv"):
+        ret[row.trial].append(row.ret)
+        sim_end[row.trial].append(row.sim_time_s)
+    trials = sorted(ret)
+    mean = [st.mean(ret[t]) for t in trials]
     smooth = [st.mean(mean[max(0, i - 9) : i + 1]) for i in range(len(mean))]
     minutes = [st.mean(sim_end[t]) / 60 for t in trials]
     return trials, mean, smooth, minutes
@@ -43,10 +47,13 @@ def main(argv):
             levels = [float(v) for v in next(it).split(",")]
         else:
             dirs.append(a)
-    if not dirs:
+    if not dirs or "-h" in dirs or "--help" in dirs:
         sys.exit(__doc__)
     for d in dirs:
-        trials, mean, smooth, minutes = curve(d)
+        try:
+            trials, mean, smooth, minutes = curve(d)
+        except returns.ReturnsError as e:
+            fail("learning_speed.py", str(e))
         n = len(trials)
         final = st.mean(mean[-max(1, n // 10) :])
         tol = 0.1 * abs(final)

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """The soak benchmark: a learning run across two hosts under a link that fails.
 
-Usage (as root, with iproute2, util-linux and nftables; Python with `mcap`):
+Usage (as root, with iproute2, util-linux and nftables; Python with rigkit and `mcap`:
+`pip install "./python[recording]"`):
 
     bench/scripts/soak.py [--minutes N | --seconds S] [--rig PATH] [--out DIR]
                           [--seed K] [--speed X] [--trials T]
@@ -28,92 +29,41 @@ DIR/figures.json:
 * trials in `returns.csv` with a gap in their recorded samples (must be 0): a learning
   trial whose recorded attempt has a sample flagged GAP, or two consecutive samples more
   than 1.5 periods apart.
+
+What it needs is checked before it starts (one line naming what is missing). Stopped by
+Ctrl-C or SIGTERM, or when one of its helper threads (the faults, the watch of
+returns.csv) fails, it stops every process it started and removes its hosts before it
+exits (130 when stopped, 1 when a helper failed).
 """
 import argparse
 import bisect
+import importlib.util
 import json
 import os
 import random
 import re
-import signal
+import shutil
 import subprocess
 import sys
 import threading
 import time
 from pathlib import Path
 
-from mcap.reader import make_reader
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: soak.py needs the rig's Python package rigkit: pip install ./python")
 
+from rigkit import script  # noqa: E402
+from rigkit import processes, recording, returns  # noqa: E402
+from rigkit.hosts import Hosts  # noqa: E402
+from rigkit.recording import END, GAP, GREEDY, SHUTDOWN, START  # noqa: E402
+
+WHO = "soak.py"
+NEEDS = {"modules": ["mcap"], "tools": ["ip", "nft", "nsenter", "unshare"], "root": True}
 DRIVER = "soak"
 PORT = 7447
-GAP, START, END, GREEDY, SHUTDOWN = 512, 1, 2, 4, 8
 # A rig numbers a session's commands on from its clock at the session's start [ns], one
 # by one: numbers within this span after one of a session's are that session's.
 OWN_SESSION_SPAN = 10**6
-
-
-def sh(*args, check=True):
-    """Runs a command, raising with its stderr when it fails."""
-    out = subprocess.run(args, capture_output=True, text=True)
-    if check and out.returncode != 0:
-        raise RuntimeError(f"{' '.join(args)}: {out.stderr.strip()}")
-    return out
-
-
-class Hosts:
-    """Hosts A (driver) and B (rig) on a veth pair, and C: B's network, its own memory."""
-
-    def __init__(self, subnet):
-        tag = str(os.getpid() % 100000)
-        self.ns = {"a": f"soaka{tag}", "b": f"soakb{tag}"}
-        self.dev = {"a": f"sva{tag}", "b": f"svb{tag}"}
-        self.addr = {"a": f"10.{subnet}.0.1", "b": f"10.{subnet}.0.2"}
-        self.anchors = {}
-        for h in "ab":
-            sh("ip", "netns", "add", self.ns[h])
-        sh("ip", "link", "add", self.dev["a"], "type", "veth", "peer", "name", self.dev["b"])
-        for h in "ab":
-            ns, dev = self.ns[h], self.dev[h]
-            sh("ip", "link", "set", dev, "netns", ns)
-            sh("ip", "-n", ns, "addr", "add", f"{self.addr[h]}/24", "dev", dev)
-            sh("ip", "-n", ns, "link", "set", dev, "up")
-            sh("ip", "-n", ns, "link", "set", "lo", "up")
-        for h, ns in [("a", self.ns["a"]), ("b", self.ns["b"]), ("c", self.ns["b"])]:
-            self.anchors[h] = subprocess.Popen(
-                ["ip", "netns", "exec", ns, "unshare", "--mount", "--propagation", "private",
-                 "sh", "-c", "mount -t tmpfs tmpfs /dev/shm && mkdir -p /tmp/iceoryx2 && "
-                 "mount -t tmpfs tmpfs /tmp/iceoryx2 && exec sleep infinity"],
-                stdin=subprocess.DEVNULL)
-        for p in self.anchors.values():
-            for _ in range(1000):
-                if Path(f"/proc/{p.pid}/cmdline").read_bytes().startswith(b"sleep"):
-                    break
-                time.sleep(0.01)
-
-    def command(self, host, args):
-        """`args` run on `host`."""
-        return ["nsenter", "--target", str(self.anchors[host].pid), "--mount", "--net", *args]
-
-    def drop(self, table, rule):
-        """Both hosts drop the TCP packets they send that `rule` matches (nftables)."""
-        for h in "ab":
-            nft = ["ip", "netns", "exec", self.ns[h], "nft"]
-            sh(*nft, "add", "table", "inet", table)
-            sh(*nft, "add", "chain", "inet", table, "out",
-               "{ type filter hook output priority 0; }")
-            sh(*nft, "add", "rule", "inet", table, "out", *rule.split())
-
-    def undrop(self, table):
-        for h in "ab":
-            sh("ip", "netns", "exec", self.ns[h], "nft", "delete", "table", "inet", table,
-               check=False)
-
-    def remove(self):
-        for p in self.anchors.values():
-            p.kill()
-            p.wait()
-        for ns in self.ns.values():
-            sh("ip", "netns", "del", ns, check=False)
 
 
 class Soak:
@@ -122,7 +72,7 @@ class Soak:
         self.rng = random.Random(args.seed)
         self.out = Path(args.out).resolve()
         self.run_dir = self.out / "run"
-        self.hosts = Hosts(args.subnet)
+        self.hosts = Hosts("soak", args.subnet, {"a": "a", "b": "b", "c": "b"})
         self.endpoint = f"tcp/{self.hosts.addr['a']}:{PORT}"
         self.procs = []
         self.lock = threading.Lock()
@@ -133,12 +83,16 @@ class Soak:
         self.attempts = []  # (start monotonic ns, exit code, last line)
         self.rows = []  # (monotonic ns, rows of returns.csv)
 
-    def rig(self, host, args, log=None, **kw):
+    def rig(self, host, args, log=None, timeout=None):
+        """`rig ARGS` on `host`: run to its end (its output captured; stopped, with what it
+        started, on a timeout or when the script stops), or, with a `log` file, started
+        and kept until the script ends."""
         cmd = self.hosts.command(host, [self.args.rig, *args])
         if log is None:
-            return subprocess.run(cmd, capture_output=True, text=True, **kw)
-        p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=open(log, "w"),
-                             stdin=subprocess.DEVNULL)
+            return processes.run(cmd, timeout=timeout)
+        with open(log, "w") as sink:
+            p = processes.start(cmd, stdout=subprocess.DEVNULL, stderr=sink,
+                                stdin=subprocess.DEVNULL)
         self.procs.append(p)
         return p
 
@@ -179,18 +133,22 @@ class Soak:
         seconds = self.rng.uniform(0.1, 5.0)
         self.link_ok.clear()
         t0 = time.monotonic_ns()
-        self.hosts.drop("soakcut", "meta l4proto tcp counter drop")
-        time.sleep(seconds)
-        self.hosts.undrop("soakcut")
+        try:
+            self.hosts.drop("soakcut", "meta l4proto tcp counter drop")
+            time.sleep(seconds)
+        finally:
+            self.hosts.undrop("soakcut")
+            self.link_ok.set()
         self.events["cut"].append({"start_ns": t0, "end_ns": time.monotonic_ns(),
                                    "seconds": round(seconds, 3)})
-        self.link_ok.set()
 
     def loss(self):
         percent, seconds = self.rng.randint(10, 40), self.rng.uniform(0.5, 3.0)
-        self.hosts.drop("soakloss", f"meta l4proto tcp numgen random mod 100 < {percent} drop")
-        time.sleep(seconds)
-        self.hosts.undrop("soakloss")
+        try:
+            self.hosts.drop("soakloss", f"meta l4proto tcp numgen random mod 100 < {percent} drop")
+            time.sleep(seconds)
+        finally:
+            self.hosts.undrop("soakloss")
         self.events["loss"].append({"percent": percent, "seconds": round(seconds, 3)})
 
     def probe(self):
@@ -215,7 +173,7 @@ class Soak:
             code, said = out.returncode, (out.stdout + out.stderr).strip().splitlines()
         except subprocess.TimeoutExpired:
             code, said = None, ["did not end within 60 s"]
-        stop(bridge)
+        processes.stop(bridge)
         # Its bridge is told who holds the driver; the run itself sees its reset unanswered.
         told = Path(self.out / f"second-bridge-{n}.log").read_text()
         self.events["second_rig"].append({"exit": code, "said": said[-1] if said else "",
@@ -225,7 +183,7 @@ class Soak:
         """Notes when `returns.csv` grows."""
         last = -1
         while not self.stop.wait(0.2):
-            rows = count_rows(self.run_dir / "returns.csv")
+            rows = returns.count(self.run_dir / "returns.csv")
             if rows != last:
                 self.rows.append((time.monotonic_ns(), rows))
                 last = rows
@@ -237,7 +195,7 @@ class Soak:
         resume = ["run", *base, "--resume", str(self.run_dir)]
         args, stuck = first, 0
         while time.monotonic() < hard_limit and stuck < 5:
-            before = count_rows(self.run_dir / "returns.csv")
+            before = returns.count(self.run_dir / "returns.csv")
             t0 = time.monotonic_ns()
             out = self.rig("b", args)
             lines = (out.stdout + out.stderr).strip().splitlines()
@@ -248,11 +206,19 @@ class Soak:
             if out.returncode == 0:
                 return True
             # Five stops in a row without a trial done: something other than the faults.
-            stuck = stuck + 1 if count_rows(self.run_dir / "returns.csv") == before else 0
+            stuck = stuck + 1 if returns.count(self.run_dir / "returns.csv") == before else 0
             args = resume
             self.link_ok.wait()
             time.sleep(1.0)
         return False
+
+    def close(self):
+        """Every process stopped, newest first (as Ctrl-C would), the hosts removed."""
+        for proc in reversed(self.procs):
+            processes.stop(proc)
+        self.hosts.undrop("soakcut")
+        self.hosts.undrop("soakloss")
+        self.hosts.remove()
 
     def figures(self, done):
         log = self.driver_log.read_text()
@@ -261,13 +227,13 @@ class Soak:
         # When the last trial was done: the first moment the final row count was seen.
         last_growth = min((t for t, r in self.rows if r == self.rows[-1][1]), default=0)
         gaps = read_csv(self.run_dir / "gaps.csv")
-        trials = {int(r["trial"]) for r in read_csv(self.run_dir / "returns.csv")}
+        trials = {r.trial for r in returns.read(self.run_dir / "returns.csv")}
         foreign, gap_trials, checked = recorded(self.run_dir / "run.mcap",
                                                 self.args.period_ms * 1e6 / self.args.speed,
                                                 trials)
         return {
             "done": done,
-            "trials": count_rows(self.run_dir / "returns.csv"),
+            "trials": len(trials),
             "cuts": len(self.events["cut"]),
             "cuts_survived": sum(c["end_ns"] < last_growth for c in self.events["cut"]),
             "longest_cut_s": max((c["seconds"] for c in self.events["cut"]), default=0.0),
@@ -288,34 +254,6 @@ class Soak:
         }
 
 
-def stop(p):
-    """SIGINT to `p` (its child, when started through nsenter), then waits."""
-    for pid in children(p.pid) or [p.pid]:
-        try:
-            os.kill(pid, signal.SIGINT)
-        except ProcessLookupError:
-            pass
-    try:
-        p.wait(timeout=10)
-    except subprocess.TimeoutExpired:
-        p.kill()
-        p.wait()
-
-
-def children(pid):
-    try:
-        return [int(c) for c in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
-    except OSError:
-        return []
-
-
-def count_rows(path):
-    try:
-        return max(0, len(Path(path).read_text().splitlines()) - 1)
-    except OSError:
-        return 0
-
-
 def read_csv(path):
     import csv
     try:
@@ -329,24 +267,14 @@ def recorded(path, period_ns, trials):
     """From the recording: commands of another session that the driver applied while the
     run held it, and the learning trials of `trials` (those in returns.csv) whose
     recorded attempt has a gap; and how many of `trials` the recording holds."""
-    sent, applied, measured, timing = {}, [], {}, {}
     if not Path(path).exists():
         return None, None, 0
-    with open(path, "rb") as f:
-        for _, channel, message in make_reader(f).iter_messages():
-            topic = channel.topic
-            if topic not in ("/driver/command", "/driver/sample", "/plant/measurement",
-                             "/timing/plant/measurement"):
-                continue
-            m = json.loads(message.data)
-            if topic == "/driver/command":
-                sent[m["seq"]] = m["t_publish_ns"]
-            elif topic == "/driver/sample":
-                applied.append((m["t_sample_ns"], m["last_command"]))
-            elif topic == "/plant/measurement":
-                measured[m["seq"]] = (m["trial"], m["flags"])
-            else:
-                timing[m["seq"]] = m["t_sample_ns"]
+    rec = recording.read(path, [recording.DRIVER_COMMAND, recording.DRIVER_SAMPLE,
+                                recording.MEASUREMENT, recording.PLANT_TIMING])
+    sent = {m["seq"]: m["t_publish_ns"] for m in rec.of(recording.DRIVER_COMMAND)}
+    applied = [(m["t_sample_ns"], m["last_command"]) for m in rec.of(recording.DRIVER_SAMPLE)]
+    measured = {m["seq"]: (m["trial"], m["flags"]) for m in rec.of(recording.MEASUREMENT)}
+    timing = {m["seq"]: m["t_sample_ns"] for m in rec.of(recording.PLANT_TIMING)}
     foreign = foreign_commands(sent, applied, lease_ns(period_ns))
     # The last attempt of each learning trial is the one in returns.csv.
     attempt, last = [], {}
@@ -414,7 +342,7 @@ def main():
     span = p.add_mutually_exclusive_group()
     span.add_argument("--minutes", type=float, help="minutes of faults (default 30)")
     span.add_argument("--seconds", type=float, help="seconds of faults (the CI's short soak)")
-    p.add_argument("--rig", default="target/release/rig", help="the rig binary")
+    script.rig_option(p, "target/release/rig")
     p.add_argument("--out", default="out/soak", help="the output folder (replaced)")
     p.add_argument("--seed", type=int, default=1, help="seed of the faults' moments and kinds")
     p.add_argument("--speed", type=float, default=1.0, help="the driver's speed (sim-driver)")
@@ -424,46 +352,42 @@ def main():
                    help="the task's sampling period at speed 1 [ms]")
     p.add_argument("--subnet", type=int, default=78, help="hosts at 10.SUBNET.0.1 and .2")
     args = p.parse_args()
-    args.rig = str(Path(args.rig).resolve())
-    if not os.access(args.rig, os.X_OK):
-        sys.exit(f"error: --rig {args.rig}: no such executable (cargo build --release -p rig --features bridge)")
+    script.need(WHO, **NEEDS)
+    script.interrupt_on_sigterm()
+    args.rig = str(script.rig_binary(WHO, args.rig))
     seconds = args.seconds if args.seconds is not None else 60 * (args.minutes or 30)
     if args.trials is None:
         # A pendulum trial (3 s at speed 1) and its share of greedy evaluations.
         args.trials = max(4, int(seconds * args.speed / 4.0))
-    if os.geteuid() != 0:
-        sys.exit("error: the soak makes network namespaces: run it as root")
-    out = Path(args.out)
-    if out.exists():
-        subprocess.run(["rm", "-rf", str(out)], check=True)
-    soak = Soak(args)
+    shutil.rmtree(args.out, ignore_errors=True)
+    helpers = script.Helpers(WHO)
+    try:
+        soak = Soak(args)
+    except KeyboardInterrupt:
+        script.fail(WHO, "stopped while making the hosts (removed again)", 130)
     try:
         soak.start()
         t0 = time.monotonic()
-        watcher = threading.Thread(target=soak.watch_rows, daemon=True)
-        watcher.start()
-        chaos = threading.Thread(target=soak.chaos, args=(t0 + seconds,), daemon=True)
-        chaos.start()
+        helpers.start("the watch of returns.csv", soak.watch_rows)
+        chaos = helpers.start("the faults", soak.chaos, t0 + seconds)
         done = soak.learn(t0 + 3 * seconds + 300)
         soak.stop.set()
         chaos.join()
         soak.link_ok.wait()
         time.sleep(0.5)
-        for proc in reversed(soak.procs):
-            stop(proc)
+        helpers.closing()
+        soak.close()
         figures = soak.figures(done)
         figures["seconds_of_faults"] = seconds
         figures["wall_s"] = round(time.monotonic() - t0, 1)
         figures["seed"] = args.seed
+    except KeyboardInterrupt:
+        helpers.check()
+        script.fail(WHO, "stopped: its processes stopped and its hosts removed", 130)
     finally:
+        helpers.closing()
         soak.stop.set()
-        for proc in soak.procs:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
-        soak.hosts.undrop("soakcut")
-        soak.hosts.undrop("soakloss")
-        soak.hosts.remove()
+        soak.close()
     (soak.out / "figures.json").write_text(json.dumps(figures, indent=1) + "\n")
     (soak.out / "events.json").write_text(json.dumps(
         {"faults": soak.events, "runs": soak.attempts}, indent=1) + "\n")

@@ -6,10 +6,8 @@ command before it), and the run's own commands a resume dropped from the recordi
 not. Exits non-zero with the failed case."""
 
 import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from soak import foreign_commands, lease_ns  # noqa: E402
+from soak import foreign_commands, lease_ns  # the script beside this one
 
 MS = 1_000_000
 PERIOD = 30 * MS

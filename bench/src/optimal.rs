@@ -38,7 +38,7 @@ use std::time::{Duration, Instant};
 use plant::{Plant, Task};
 use rayon::prelude::*;
 
-use runtime::experiment::Sample;
+use runtime::response::ResponseSample;
 
 /// Allowed state-grid sizes (nodes per dimension).
 pub const GRID_RANGE: std::ops::RangeInclusive<usize> = 21..=4001;
@@ -128,7 +128,7 @@ pub struct Optimum {
     /// of the optimal return).
     pub simulated_return: f64,
     /// That trial, sample by sample (`t`, the state before the step, applied action, reward).
-    pub trajectory: Vec<Sample>,
+    pub trajectory: Vec<ResponseSample>,
     /// The largest `|φ̇|` along the trajectory (including its final state) \[rad/s\].
     pub max_speed: f64,
     /// Time to compute the transition table.
@@ -309,7 +309,7 @@ pub fn pendulum_optimum(options: &OptimumOptions) -> Result<Optimum, OptimumErro
         }
         let reward = plant.step(&[best.1]);
         max_speed = max_speed.max(plant.state()[1].abs());
-        trajectory.push(Sample {
+        trajectory.push(ResponseSample {
             t: k as f64 * task.ts,
             x,
             u: plant.applied_action().to_vec(),
@@ -333,7 +333,7 @@ pub fn pendulum_optimum(options: &OptimumOptions) -> Result<Optimum, OptimumErro
 /// Writes the trajectory as CSV: `t,angle,velocity,u,reward`.
 pub fn write_trajectory(
     path: &std::path::Path,
-    trajectory: &[Sample],
+    trajectory: &[ResponseSample],
 ) -> Result<(), runtime::error::FileError> {
     use std::fmt::Write;
     let mut text = String::from("t,angle,velocity,u,reward\n");

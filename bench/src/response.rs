@@ -7,9 +7,9 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use runtime::experiment::Sample;
 use runtime::report::plot::{Drawing, colours, draw_legend, padded_range, render, tick_label};
 use runtime::report::{DrawError, PlotError};
+use runtime::response::ResponseSample;
 
 /// Plots the time responses `(label, samples)` into a PNG and an SVG image.
 ///
@@ -20,7 +20,7 @@ pub fn plot_responses(
     png: &Path,
     svg: &Path,
     title: &str,
-    responses: &[(&str, &[Sample])],
+    responses: &[(&str, &[ResponseSample])],
     labels: (&str, &str),
 ) -> Result<(), PlotError> {
     if responses.is_empty() {
@@ -33,7 +33,8 @@ pub fn plot_responses(
                 format!("response '{label}' is empty"),
             ));
         }
-        let finite = |s: &Sample| s.t.is_finite() && s.x[0].is_finite() && s.u[0].is_finite();
+        let finite =
+            |s: &ResponseSample| s.t.is_finite() && s.x[0].is_finite() && s.u[0].is_finite();
         if !r.iter().all(finite) {
             let why = format!("response '{label}' has a non-finite value");
             return Err(PlotError::data(title, why));
@@ -53,12 +54,12 @@ pub fn plot_responses(
 /// [`plot_responses`]' input.
 struct Responses<'a> {
     title: &'a str,
-    responses: &'a [(&'a str, &'a [Sample])],
+    responses: &'a [(&'a str, &'a [ResponseSample])],
     labels: (&'a str, &'a str),
 }
 
 /// Which number of a sample a panel shows.
-type Component = fn(&Sample) -> f64;
+type Component = fn(&ResponseSample) -> f64;
 
 impl Drawing for Responses<'_> {
     fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> Result<(), DrawError>

@@ -78,7 +78,7 @@ impl std::fmt::Display for SessionId {
 
 /// Who put a command: the user it was put as and the address it came from.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Peer {
+pub struct CommandSource {
     /// The user (authenticated: the access control lets each user put on its own keys
     /// only).
     pub user: String,
@@ -86,7 +86,7 @@ pub struct Peer {
     pub address: String,
 }
 
-impl std::fmt::Display for Peer {
+impl std::fmt::Display for CommandSource {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "user {} at {}", self.user, self.address)
     }
@@ -120,7 +120,7 @@ pub struct Holder {
     /// The session.
     pub id: SessionId,
     /// Who it is.
-    pub peer: Peer,
+    pub peer: CommandSource,
     /// Since when it holds the driver (monotonic ns).
     pub since: u64,
     /// When it was last heard from.
@@ -195,7 +195,7 @@ impl Tenure {
         claim: &Claim,
         reset: Option<u64>,
         now: u64,
-        peer: impl FnOnce() -> Peer,
+        peer: impl FnOnce() -> CommandSource,
     ) -> Verdict {
         let id = claim.id();
         let granted = self.holder.is_none();
@@ -338,8 +338,8 @@ impl Claimant {
 mod tests {
     use super::*;
 
-    fn peer(user: &str) -> Peer {
-        Peer {
+    fn peer(user: &str) -> CommandSource {
+        CommandSource {
             user: user.into(),
             address: format!("tcp/10.0.0.1:{}", user.len()),
         }

@@ -13,7 +13,7 @@ use zenoh::Wait;
 use zenoh::pubsub::Publisher;
 use zenoh::sample::Sample;
 
-use crate::claim::{Claim, Peer, Tenure, Verdict};
+use crate::claim::{Claim, CommandSource, Tenure, Verdict};
 use crate::driver_side::{DriverSide, Shared};
 use crate::message::{Topic, from_bytes, to_bytes, user_of};
 use crate::{Counts, publisher};
@@ -204,14 +204,14 @@ impl<'a> Gate<'a> {
 
 /// Who put a command of `claim` as `user`: the user, and the address of the link to its
 /// peer.
-fn peer_of(session: &zenoh::Session, claim: &Claim, user: String) -> Peer {
+fn peer_of(session: &zenoh::Session, claim: &Claim, user: String) -> CommandSource {
     let address = session
         .info()
         .links()
         .wait()
         .find(|l| l.zid().to_le_bytes() == claim.peer)
         .map_or_else(|| "an unknown address".to_string(), |l| l.dst().to_string());
-    Peer { user, address }
+    CommandSource { user, address }
 }
 
 /// `--timing-out`'s file, with its header.

@@ -16,9 +16,7 @@
 //! reporting when it is done ([`status::READY`] with [`DriverSample::reset_id`]).
 //! Trials, rewards and learning are the rig's: the driver never sees them.
 //!
-//! The rig's end of the contract ([`DriverLink`], [`DriverWatch`], [`wait_info`],
-//! [`running`], [`how_to_serve`]) is defined in the crate's `link` and `serving` modules
-//! and re-exported here.
+//! A driver serves it with [`crate::kit`]; the rig's end of it is [`crate::link`].
 
 use std::time::Duration;
 
@@ -27,9 +25,6 @@ use iceoryx2::prelude::*;
 use wire::{Bus, MAX_U, MAX_X, Qos};
 
 use crate::error::{Error, InfoError, SampleError};
-
-pub use crate::link::{DriverLink, DriverWatch, running, wait_info};
-pub use crate::serving::how_to_serve;
 
 // A task's states and actions fit the messages: the plant's bounds are the wire's (a
 // build fails where they part).

@@ -147,7 +147,7 @@ impl Error {
     }
 }
 
-/// Why a driver's info does not fit the rig's task ([`crate::check_info`]).
+/// Why a driver's info does not fit the rig's task ([`crate::link::check_info`]).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum Unfit {
     /// The info breaks the contract.
@@ -293,7 +293,7 @@ pub enum SampleError {
     },
 }
 
-/// How a driver's info differs from the rig's task ([`crate::fits_task`]).
+/// How a driver's info differs from the rig's task ([`crate::link::fits_task`]).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum TaskMismatch {
     /// Another task name.

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use driver::conformance::{CheckOptions, check};
+use driver::link::conformance::{CheckOptions, check};
 use driver::{Serving, Simulated, serve_lockstep};
 use plant::{SystemName, Task};
 

@@ -1,5 +1,5 @@
 //! `docs/driver.md` is the contract a driver author reads: its layout tables, service
-//! settings and constants must be the Rust structs' (and the Python example's messages
+//! settings and constants must be the Rust structs' (and the Python package's messages
 //! must be the doc's), so that the page cannot drift from the code.
 
 use std::collections::BTreeMap;
@@ -11,10 +11,7 @@ use driver::contract::{
 use wire::type_name_of;
 
 const DOC: &str = include_str!("../../docs/driver.md");
-const PY_MESSAGES: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/../examples/python_driver/messages.py"
-);
+const PY_MESSAGES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../python/rigkit/messages.py");
 
 /// One row of a layout table: field, offset, size, type.
 type Row = (String, usize, usize, String);

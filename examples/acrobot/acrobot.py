@@ -30,17 +30,14 @@ line), both wrapped to [-pi, pi): upright is x = 0.
 
 import math
 
+from rigkit.angle import wrap
+
 M1 = M2 = 1.0  # link masses [kg]
 L1 = 1.0  # the first link's length [m]
 LC1 = LC2 = 0.5  # pivot to each link's centre of mass [m]
 I1 = I2 = 1.0  # moments of inertia [kg m^2]
 G = 9.8
 MAX_VEL_1, MAX_VEL_2 = 4.0 * math.pi, 9.0 * math.pi
-
-
-def wrap(a: float) -> float:
-    """Angle to [-pi, pi)."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def terms(s):

@@ -7,12 +7,13 @@ gymnasium, the second check is skipped and said so.
     python3 examples/acrobot/check_model.py
 """
 
+import importlib.util
 import math
 import random
 import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: check_model.py needs the rig's Python package rigkit: pip install ./python")
 
 from acrobot import Acrobot, derivative  # noqa: E402
 

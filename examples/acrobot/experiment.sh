@@ -9,7 +9,8 @@
 #   examples/acrobot/experiment.sh OUT TASK [RUNS] [TRIALS] [-- rig run flags...]
 #   examples/acrobot/experiment.sh out/acrobot examples/acrobot/acrobot.toml 5 400 -- --algo mlac
 #
-# PYTHON (default python3) must import iceoryx2 0.10.0 and mcap.
+# PYTHON (default python3) must import rigkit with iceoryx2 0.10.0 and mcap
+# (pip install "./python[driver,recording]").
 set -euo pipefail
 usage="usage: experiment.sh OUT TASK [RUNS] [TRIALS] [-- rig run flags...]"
 out=${1:?$usage} task=${2:?$usage}

@@ -17,13 +17,20 @@ sqrt(G) B), the controller a learner with discount G would converge to.
 Needs numpy.
 """
 
+import argparse
+import importlib.util
 import itertools
 import sys
-from pathlib import Path
 
-import numpy as np
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: lqr_region.py needs the rig's Python package rigkit: pip install ./python")
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+from rigkit.script import need  # noqa: E402
+
+need("lqr_region.py", modules=["numpy"])
+
+import numpy as np  # noqa: E402
+
 import acrobot  # noqa: E402
 
 TS = 0.05  # the sampling time [s], --ts
@@ -78,29 +85,40 @@ def region(k, bound: float) -> float:
     return best
 
 
-def flag(name: str, default):
-    """The value after `name` on the command line, or `default`."""
-    if name in sys.argv:
-        return float(sys.argv[sys.argv.index(name) + 1])
-    return default
-
-
 def starts(k, bound: float, scale: float) -> str:
     """Which of the balance task's start states, scaled by `scale`, the LQR balances."""
     ok = [balances(k, scale * t1, bound, scale * t2) for t1, t2 in STARTS]
     return f"{sum(ok)}/{len(ok)} start states x{scale:g}"
 
 
+def arguments():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
+    p.add_argument("--ts", type=float, default=TS, metavar="S", help=f"the sampling time [s] [default: {TS}]")
+    p.add_argument("--bound", type=float, metavar="B",
+                   help="one torque bound [N m] [default: 6, 10 and 20 in turn]")
+    p.add_argument("--starts", type=float, metavar="F",
+                   help="also check the balance task's start states scaled by F [default: not]")
+    p.add_argument("--gamma", type=float, default=1.0, metavar="G",
+                   help="the discounted LQR: sum of G^k times the cost [default: 1, undiscounted]")
+    p.add_argument("--sweep", action="store_true",
+                   help="the largest region over 243 weightings at +-6 N m instead")
+    args = p.parse_args()
+    if not args.ts > 0.0:
+        p.error(f"--ts {args.ts}: must be positive")
+    if not 0.0 < args.gamma <= 1.0:
+        p.error(f"--gamma {args.gamma}: must be in (0, 1]")
+    return args
+
+
 def main():
     global TS, SAMPLES
-    TS = flag("--ts", TS)
+    args = arguments()
+    TS = args.ts
     SAMPLES = round(3.0 / TS)
-    only = flag("--bound", None)
-    scale = flag("--starts", None)
+    only, scale = args.bound, args.starts
     a, b = linearised()
-    gamma = flag("--gamma", 1.0)
-    a, b = np.sqrt(gamma) * a, np.sqrt(gamma) * b
-    if "--sweep" in sys.argv:
+    a, b = np.sqrt(args.gamma) * a, np.sqrt(args.gamma) * b
+    if args.sweep:
         weights = itertools.product((1, 5, 50), (0.1, 1, 10), (0.01, 0.1, 1), (0.01, 0.1, 1), (0.01, 1, 100))
         best = max((region(lqr(a, b, np.diag(w[:4]), np.array([[w[4]]])), 6.0), w) for w in weights)
         print(f"+-6 N m, 243 weightings: at most theta1 = {best[0]:.3f} rad (Q, R = {best[1]})")

@@ -7,17 +7,20 @@ after a first push towards q2* = alpha for 0.25 s — over 100 gain sets (alpha,
 from hanging at rest, the torque saturated to the bound and held for 50 ms.
 
     python3 examples/acrobot/pump.py
+    python3 examples/acrobot/pump.py --bound 4 --gains=-2.5,10,1   # one bound, one gain set
 
 Prints, per bound, the earliest time the tip comes within 0.1 m of its highest point (2 m
 above the pivot) within 10 s, and the gains that do it.
 """
 
+import argparse
+import importlib.util
 import itertools
 import math
 import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: pump.py needs the rig's Python package rigkit: pip install ./python")
 
 from acrobot import Acrobot, elbow_drift, elbow_inertia  # noqa: E402
 
@@ -44,9 +47,29 @@ def swing_up(bound: float, alpha: float, kp: float, kd: float):
     return None
 
 
+BOUNDS = [1.0, 2.0, 3.0, 4.0, 6.0]
+GAINS = list(itertools.product([-0.5, -1.0, -1.5, -2.0, -2.5], [5, 10, 20, 50, 100], [1, 2, 5, 10]))
+
+
+def gain_set(text: str):
+    """ALPHA,K_P,K_D."""
+    try:
+        alpha, kp, kd = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: three numbers ALPHA,K_P,K_D") from None
+    return alpha, kp, kd
+
+
 def main():
-    gains = list(itertools.product([-0.5, -1.0, -1.5, -2.0, -2.5], [5, 10, 20, 50, 100], [1, 2, 5, 10]))
-    for bound in [1.0, 2.0, 3.0, 4.0, 6.0]:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
+    p.add_argument("--bound", type=float, action="append", metavar="B",
+                   help=f"a torque bound [N m], repeatable [default: {', '.join(f'{b:g}' for b in BOUNDS)}]")
+    p.add_argument("--gains", type=gain_set, action="append", metavar="ALPHA,K_P,K_D",
+                   help="a gain set, repeatable [default: the 100 of alpha in -0.5..-2.5, "
+                   "k_p in 5..100, k_d in 1..10]")
+    args = p.parse_args()
+    gains = args.gains or GAINS
+    for bound in args.bound or BOUNDS:
         found = [(t, g) for g in gains if (t := swing_up(bound, *g)) is not None]
         if found:
             t, g = min(found)

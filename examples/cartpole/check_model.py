@@ -10,11 +10,8 @@ failure; without gymnasium, the second check is skipped and said so.
 import math
 import random
 import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-
-from cartpole import CartPole, derivative, energy  # noqa: E402
+from cartpole import CartPole, derivative, energy
 
 
 def energy_drift() -> float:

@@ -11,14 +11,17 @@ The driver id defaults to the task's name, the one `rig run --task` looks for. S
 with Ctrl-C or SIGTERM.
 """
 
+import importlib.util
 import sys
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python_driver"))  # the contract's modules
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: driver.py needs the rig's Python package rigkit: pip install ./python")
 
 from cartpole import CartPole  # noqa: E402
-from model_driver import run  # noqa: E402
+from rigkit.model_driver import run  # noqa: E402
+
+HERE = Path(__file__).resolve().parent
 
 if __name__ == "__main__":
     sys.exit(

@@ -11,14 +11,15 @@ The driver id defaults to the task's name, the one `rig run --task` looks for. S
 with Ctrl-C or SIGTERM.
 """
 
+import importlib.util
 import sys
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python_driver"))  # the contract's modules
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: driver.py needs the rig's Python package rigkit: pip install ./python")
 
 from furuta import DAMPING, DEFAULT_DAMPING, Furuta  # noqa: E402
-from model_driver import run  # noqa: E402
+from rigkit.model_driver import run  # noqa: E402
 
 DAMPING_OPTION = (
     "--damping",
@@ -36,7 +37,7 @@ if __name__ == "__main__":
         run(
             __doc__,
             lambda args: Furuta(args.damping),
-            default_task=HERE / "furuta.toml",
+            default_task=Path(__file__).resolve().parent / "furuta.toml",
             shape=(4, 1),
             what=lambda args: f"QUBE-Servo 2 rotary pendulum, {args.damping} damping",
             options=[DAMPING_OPTION],

@@ -8,7 +8,8 @@
 #   examples/furuta/experiment.sh OUT RUNS TRIALS [rig run flags...]
 #   examples/furuta/experiment.sh out/furuta-mlac 5 600 --config examples/furuta/mlac-llr.toml
 #
-# PYTHON (default python3) must import iceoryx2 0.10.0; RIG (default the release build)
+# PYTHON (default python3) must import rigkit with iceoryx2 0.10.0 (pip install
+# "./python[driver]"); RIG (default the release build)
 # is the rig; TASK (default furuta.toml next to this script) the task file; DAMPING
 # (default the driver's, gym-brt) the model's damping set (furuta.py); FIRST (default 1)
 # the first seed, so that several experiment.sh can share the seeds of one OUT.

@@ -42,6 +42,8 @@ steps of at most 1 ms.
 
 import math
 
+from rigkit.angle import wrap
+
 # Motor
 R_M, K_T, K_M = 8.4, 0.042, 0.042
 # Rotary arm
@@ -60,11 +62,6 @@ J_A = J_R + M_P * L_R**2
 K = M_P * L_P**2 / 4.0
 J_B = J_P + K
 C = M_P * L_R * L_CM  # coupling
-
-
-def wrap(a: float) -> float:
-    """Angle to [-pi, pi)."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def derivative(x, u: float, damping=DAMPING[DEFAULT_DAMPING]):

@@ -14,11 +14,18 @@ pendulum's speed there, and the gains. A check of the swing-up task's feasibilit
 (docs/results/furuta.md).
 
     python3 examples/furuta/pump.py
+    python3 examples/furuta/pump.py --damping gym-brt --bound 5   # one damping set, one bound
 """
 
+import argparse
+import importlib.util
 import math
+import sys
 
-import furuta
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: pump.py needs the rig's Python package rigkit: pip install ./python")
+
+import furuta  # noqa: E402
 
 TS, TRIAL = 0.02, 4.0
 GAINS = [(k_e, k_t) for k_e in (300.0, 700.0, 1000.0, 1500.0) for k_t in (8.0, 12.0, 16.0, 20.0)]
@@ -40,11 +47,20 @@ def pump(damping: str, v_max: float, k_e: float, k_theta: float):
     return closest, when, speed, arm
 
 
-if __name__ == "__main__":
-    for damping in ("manual", "gym-brt"):
+BOUNDS = (3.0, 5.0, 10.0)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
+    p.add_argument("--damping", choices=sorted(furuta.DAMPING), action="append",
+                   help="a damping set of furuta.py, repeatable [default: manual, then gym-brt]")
+    p.add_argument("--bound", type=float, action="append", metavar="V",
+                   help=f"a voltage bound [V], repeatable [default: {', '.join(f'{b:g}' for b in BOUNDS)}]")
+    args = p.parse_args()
+    for damping in args.damping or ("manual", "gym-brt"):
         d_r, d_p = furuta.DAMPING[damping]
         print(f"{damping} damping (D_r = {d_r:g}, D_p = {d_p:g} N m s/rad):")
-        for v in (3.0, 5.0, 10.0):
+        for v in args.bound or BOUNDS:
             runs = [(pump(damping, v, k_e, k_t), k_e, k_t) for k_e, k_t in GAINS]
             inside = [r for r in runs if r[0][3] < 2.0]
             (closest, when, speed, arm), k_e, k_t = min(inside, key=lambda r: r[0][0])
@@ -53,3 +69,8 @@ if __name__ == "__main__":
                 f"(|alpha_dot| {speed:.1f} rad/s, arm within {arm:.2f} rad; "
                 f"k_E {k_e:g}, k_theta {k_t:g})"
             )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

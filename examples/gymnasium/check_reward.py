@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Checks that a task file's reward is the environment's: steps the environment from
 random states with random actions and compares each reward with the task's rho(x, u)
-(task.py: the quadratic form and any further terms, as the rig computes it) of the
+(rigkit.task: the quadratic form and any further terms, as the rig computes it) of the
 mapped state before the step and the action clipped to the bounds.
 
     python3 examples/gymnasium/check_reward.py --mapping examples/gymnasium/pendulum_v1.py
@@ -10,25 +10,29 @@ Prints the largest difference and exits 1 if it exceeds 1e-9.
 """
 
 import argparse
+import importlib.util
 import random
 import sys
 from pathlib import Path
 
-import gymnasium
-import numpy as np
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: check_reward.py needs the rig's Python package rigkit: pip install ./python")
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "python_driver"))
-sys.path.insert(0, str(HERE))
+from rigkit.script import need  # noqa: E402
 
-from adapter import load  # noqa: E402
-from task import Task  # noqa: E402
+need("check_reward.py", modules=["gymnasium", "iceoryx2"])
+
+import gymnasium  # noqa: E402
+import numpy as np  # noqa: E402
+
+from rigkit.adapter import load  # noqa: E402
+from rigkit.task import Task  # noqa: E402
 
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--mapping", required=True)
-    p.add_argument("--steps", type=int, default=2000)
+    p.add_argument("--mapping", required=True, help="the mapping module (rigkit.adapter)")
+    p.add_argument("--steps", type=int, default=2000, help="environment steps [default: 2000]")
     args = p.parse_args()
     mapping = load(args.mapping)
     task = Task.read(str(Path(args.mapping).resolve().parent / mapping.TASK))

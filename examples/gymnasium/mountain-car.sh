@@ -9,7 +9,8 @@
 #
 #   examples/gymnasium/mountain-car.sh OUT [RUNS] [TRIALS] [-- rig run flags...]
 #
-# PYTHON (default python3) must import iceoryx2 0.10.0, gymnasium 1.4.0 and mcap.
+# PYTHON (default python3) must import rigkit with iceoryx2 0.10.0, gymnasium 1.4.0 and
+# mcap (pip install "./python[gymnasium,recording]").
 set -euo pipefail
 out=${1:?usage: mountain-car.sh OUT [RUNS] [TRIALS] [-- rig run flags...]}
 runs=${2:-5} trials=${3:-400}

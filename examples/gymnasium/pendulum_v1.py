@@ -4,9 +4,9 @@ The environment's state is [theta, theta_dot] (theta from upright, not wrapped);
 observation [cos, sin, theta_dot] is float32, so the mapping reads the float64 state.
 """
 
-import math
-
 import numpy as np
+
+from rigkit.angle import wrap
 
 ENV_ID = "Pendulum-v1"
 TASK = "pendulum-v1.toml"
@@ -14,7 +14,7 @@ TASK = "pendulum-v1.toml"
 
 def state(env):
     th, thdot = env.unwrapped.state
-    return [(th + math.pi) % (2.0 * math.pi) - math.pi, thdot]
+    return [wrap(float(th)), float(thdot)]
 
 
 def place(env, x0):

@@ -15,7 +15,7 @@ time, piecewise between action arrivals.
 
 It advertises the task it serves — by default the rig's shipped pendulum task,
 plant/tasks/pendulum.toml; `--task FILE` another task file of the pendulum's shape, whose
-sampling time and action bounds it then keeps — with the task's hash (task.py). With
+sampling time and action bounds it then keeps — with the task's hash (rigkit.task). With
 `--clock lockstep` it is a simulator rather than a stand-in for hardware: it publishes
 sample k+1 only after the action for sample k arrived, integrating exactly one period,
 and resets by placing the pendulum at the start state (docs/driver.md, "Lockstep").
@@ -25,20 +25,29 @@ Stop it with Ctrl-C or SIGTERM (it finishes the current period and exits).
 
 import argparse
 import ctypes
+import importlib.util
 import math
-import os
 import random
 import signal
-import struct
 import sys
 import time
-
 from pathlib import Path
 
-import iceoryx2 as iox2
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: driver.py needs the rig's Python package rigkit: pip install ./python")
+
+from rigkit.script import need  # noqa: E402
+
+need("driver.py", modules=["iceoryx2"])
+
+import iceoryx2 as iox2  # noqa: E402
+
+from rigkit import realtime  # noqa: E402
+from rigkit.angle import wrap  # noqa: E402
+from rigkit.lockstep import Services, info, serve  # noqa: E402
 
 # DriverSample, DriverCommand and the constants of docs/driver.md.
-from messages import (  # the modules next to this file
+from rigkit.messages import (  # noqa: E402
     ACTION,
     READY,
     REALTIME,
@@ -48,8 +57,7 @@ from messages import (  # the modules next to this file
     DriverCommand,
     DriverSample,
 )
-from lockstep import Services, info, serve
-from task import Task, TaskError
+from rigkit.task import Task, TaskError  # noqa: E402
 
 # The rig's pendulum task, shipped with it.
 PENDULUM_TASK = Path(__file__).resolve().parents[2] / "plant" / "tasks" / "pendulum.toml"
@@ -104,11 +112,6 @@ class Pendulum:
 ENCODER_COUNTS = 4096
 
 
-def wrap(a):
-    """Angle to [-π, π)."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
-
-
 def finite(values):
     return all(math.isfinite(v) for v in values)
 
@@ -148,7 +151,7 @@ class Driver:
         io = Services(args.driver_id, sample_type)
         self.io = io
         self.sample_pub, self.sample_note = io.sample_pub, io.sample_note
-        self.commands, self.command_events, self.waitset = io.commands, io.command_events, io.waitset
+        self.commands = io.commands
         self.stopping = False
 
     def publish(self, pub, notifier, msg):
@@ -271,25 +274,8 @@ class Driver:
             self.command(cmd)
 
     def wait_until(self, deadline):
-        """Handles commands as they arrive until monotonic time `deadline`.
-
-        The WaitSet wakes on a command within ~0.2 ms, but its timeout overshoots by up
-        to several ms on a loaded machine (Listener.timed_wait's by ~8 ms always): sleep
-        the last 12 ms in steps of 0.2 ms instead, polling for commands between them.
-        """
-        while not self.stopping:
-            now = time.monotonic_ns()
-            if now >= deadline:
-                return
-            left = deadline - now
-            if left > 13_000_000:
-                self.waitset.wait_and_process_with_timeout(
-                    iox2.Duration.from_nanos(left - 12_000_000)
-                )
-                self.command_events.try_wait()  # consume the wake-up
-            else:
-                time.sleep(min(left, 200_000) * 1e-9)
-            self.drain_commands()
+        """Handles commands as they arrive until monotonic time `deadline`."""
+        self.io.sleep_until(deadline, self.drain_commands, lambda: self.stopping)
 
     def measured(self):
         """The state as the samples report it (an encoder's counts with --sensor angle)."""
@@ -425,8 +411,8 @@ def main():
     )
     p.add_argument("--verbose", action="store_true", help="log resets and faults")
     args = p.parse_args()
-    if args.cpu_wakeup_us is not None and not 0 <= args.cpu_wakeup_us <= 2**31 - 1:
-        p.error(f"--cpu-wakeup-us {args.cpu_wakeup_us}: must be in [0, 2147483647]")
+    if args.cpu_wakeup_us is not None and not 0 <= args.cpu_wakeup_us <= realtime.MAX_WAKEUP_US:
+        p.error(f"--cpu-wakeup-us {args.cpu_wakeup_us}: must be in [0, {realtime.MAX_WAKEUP_US}]")
     if not (math.isfinite(args.speed) and 0.0 < args.speed <= 1000.0):
         p.error(f"--speed {args.speed}: must be in (0, 1000]")
     if args.clock == "lockstep" and args.speed != 1.0:
@@ -437,9 +423,10 @@ def main():
         p.error(f"--task: {e}")
     if (task.n, task.m) != (2, 1):
         p.error(f"--task {args.task}: {task.n} states and {task.m} actions; this driver is a pendulum (2 and 1)")
-    ok = all(ch.isascii() and (ch.isalnum() or ch in "-_") for ch in args.driver_id)
-    if not args.driver_id or not ok:
-        p.error(f"--driver-id {args.driver_id!r}: letters, digits, '-' and '_' only")
+    try:
+        realtime.check_driver_id(args.driver_id)
+    except ValueError as e:
+        p.error(f"--driver-id {e}")
 
     try:
         driver = Driver(args, task)
@@ -470,8 +457,7 @@ def main():
     )
     if args.realtime_priority is not None:
         try:
-            param = os.sched_param(args.realtime_priority)
-            os.sched_setscheduler(0, os.SCHED_FIFO, param)
+            realtime.set_priority(args.realtime_priority)
         except (OSError, ValueError) as e:
             print(
                 f"driver: --realtime-priority {args.realtime_priority}: {e} "
@@ -483,8 +469,7 @@ def main():
     wakeup_limit = None  # the request holds while the file stays open
     if args.cpu_wakeup_us is not None:
         try:
-            wakeup_limit = open("/dev/cpu_dma_latency", "wb", buffering=0)
-            wakeup_limit.write(struct.pack("=i", args.cpu_wakeup_us))
+            wakeup_limit = realtime.hold_cpu_wakeup_limit(args.cpu_wakeup_us)
         except OSError as e:
             print(
                 f"driver: --cpu-wakeup-us {args.cpu_wakeup_us}: cannot hold the limit "

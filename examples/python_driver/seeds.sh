@@ -10,13 +10,14 @@
 #   examples/python_driver/seeds.sh out/acrobot 5 400 examples/acrobot/acrobot.toml \
 #     examples/acrobot/driver.py -- --algo mlac
 #
-# PYTHON (default python3) must import iceoryx2 0.10.0 (and what the driver needs); RIG
+# PYTHON (default python3) must import rigkit with iceoryx2 0.10.0 (pip install
+# "./python[driver]"; and what the driver needs); RIG
 # (default the release build) is the rig; FIRST (default 1) the first seed. OUT's
 # runs.csv and wall.csv are appended to when they exist. A run that fails stops the
 # script, and its driver with it.
 set -euo pipefail
 if [ $# -lt 5 ]; then
-  sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//' >&2
+  sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//' >&2
   exit 2
 fi
 out=$1 runs=$2 trials=$3 task=$4

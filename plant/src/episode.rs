@@ -148,7 +148,7 @@ impl Episode {
         &self.plant
     }
 
-    /// The plant, to integrate or to ask its safety supervisor.
+    /// The plant, to integrate or to ask its safety layer.
     pub fn plant_mut(&mut self) -> &mut Plant {
         &mut self.plant
     }

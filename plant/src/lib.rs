@@ -64,7 +64,7 @@ pub trait Dynamics: Send + Sync {
 
 /// The simulated plant: one sample period of a [`Task`]'s system per [`Plant::step`].
 ///
-/// Every action passes the plant's [`safety::Supervisor`]: saturated to the task's bounds
+/// Every action passes the plant's [`safety::SafetyLayer`]: saturated to the task's bounds
 /// (Eq. 6.11's `sat`), or, with a non-finite component, replaced by zero, the safe action;
 /// both counted. A task with an [`OperatingRange`] ends its trial when the state leaves
 /// the range (§6.4.2), a task with a [`Goal`] when the state reaches it:
@@ -73,7 +73,7 @@ pub struct Plant {
     task: std::sync::Arc<Task>,
     x: Vec<f64>,
     applied: Vec<f64>,
-    safety: safety::Supervisor,
+    safety: safety::SafetyLayer,
     /// The reward of the terminal transition — the operating range's penalty, the goal's
     /// reward — once the trial has ended there.
     terminated: Option<f64>,
@@ -89,7 +89,7 @@ impl Plant {
         let x = task.initial_states[0].clone();
         let applied = vec![0.0; task.action_dim()];
         Self {
-            safety: safety::Supervisor::new(&task),
+            safety: safety::SafetyLayer::new(&task),
             task,
             x,
             applied,
@@ -136,8 +136,8 @@ impl Plant {
         &self.applied
     }
 
-    /// The plant's safety supervisor (its counts; its watchdog, in real time).
-    pub fn safety(&mut self) -> &mut safety::Supervisor {
+    /// The plant's safety layer (its counts; its watchdog, in real time).
+    pub fn safety(&mut self) -> &mut safety::SafetyLayer {
         &mut self.safety
     }
 

@@ -1,24 +1,24 @@
 //! Safety on the plant's side of the loop, whoever computes the actions — the simulated
-//! plant here, or a Rust driver for real hardware. One [`Supervisor`] per actuator:
+//! plant here, or a Rust driver for real hardware. One [`SafetyLayer`] per actuator:
 //!
-//! * every action passes [`Supervisor::admit`] before it reaches the actuator: clamped
+//! * every action passes [`SafetyLayer::admit`] before it reaches the actuator: clamped
 //!   to the task's limits (counted); an action with a non-finite component is rejected
 //!   whole and the safe action (zero) applies instead (counted);
-//! * [`Supervisor::period`] at every sample instant runs the stale-action [`Watchdog`]:
+//! * [`SafetyLayer::period`] at every sample instant runs the stale-action [`Watchdog`]:
 //!   no fresh action for a whole period ⇒ the safe action until actions resume;
-//! * [`Supervisor::check`] on every new state: leaving the task's operating range
+//! * [`SafetyLayer::check`] on every new state: leaving the task's operating range
 //!   (§6.4.2: the arm's ±1.2 rad) ends the trial with the thesis's penalty — and, not a
 //!   safety matter but decided at the same place by every plant, reaching the task's
 //!   goal ends it with the goal's reward;
-//! * [`Supervisor::counts`] reports all of it.
+//! * [`SafetyLayer::counts`] reports all of it.
 //!
 //! A Rust driver for a DC motor would, per sample instant `t_k`:
 //!
 //! ```
-//! use plant::safety::Supervisor;
+//! use plant::safety::SafetyLayer;
 //! use plant::{SystemName, Task};
 //! let task = Task::new(SystemName::Arm64);
-//! let mut safety = Supervisor::new(&task);
+//! let mut safety = SafetyLayer::new(&task);
 //! let mut torque = [0.0; 2];
 //! // An action arrived during the last period (say from `rig plant --driver`):
 //! safety.admit(&[0.5, f64::NAN], &mut torque);
@@ -36,7 +36,7 @@
 
 use crate::{Goal, OperatingRange, Task};
 
-/// What [`Supervisor::admit`] did with an action.
+/// What [`SafetyLayer::admit`] did with an action.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Admission {
     /// Within the limits: applied as it is.
@@ -88,10 +88,10 @@ impl std::fmt::Display for SafetyCounts {
     }
 }
 
-/// The plant side's safety supervisor: limits, non-finite actions, the stale-action
+/// The plant side's safety layer: limits, non-finite actions, the stale-action
 /// watchdog and the operating range of one task (see the module documentation).
 #[derive(Clone, Debug)]
-pub struct Supervisor {
+pub struct SafetyLayer {
     low: Vec<f64>,
     high: Vec<f64>,
     range: Option<OperatingRange>,
@@ -101,8 +101,8 @@ pub struct Supervisor {
     counts: SafetyCounts,
 }
 
-impl Supervisor {
-    /// The supervisor of `task`'s action limits and operating range, with a watchdog of
+impl SafetyLayer {
+    /// The safety layer of `task`'s action limits and operating range, with a watchdog of
     /// one period (`docs/driver.md`).
     pub fn new(task: &Task) -> Self {
         Self {

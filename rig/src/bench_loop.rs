@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args as Flags;
-use runtime::process::{Layout, Wait, WaitKind};
+use runtime::process::{CpuLayout, Wait, WaitKind};
 
 #[derive(Flags)]
 pub struct Args {
@@ -27,7 +27,7 @@ pub struct Args {
     /// `recorder-alone`; as `rig run --cpus`) [default: as `rig run` places a lockstep
     /// run that waits so].
     #[arg(long, value_enum, value_name = "LAYOUT")]
-    cpus: Option<Layout>,
+    cpus: Option<CpuLayout>,
     /// Also time `rig run --plant external` against drivers in lockstep: `rig sim-driver
     /// --clock lockstep` and, with `--python`, the Python example driver and the
     /// Gymnasium adapter (Pendulum-v1, beside its own env.step loop in Python).
@@ -58,7 +58,7 @@ pub fn main(args: &Args) -> ExitCode {
         repetitions: args.repetitions as usize,
         samples: args.samples as usize,
         waiting,
-        layout: args.cpus.unwrap_or_else(|| Layout::lockstep(waiting)),
+        layout: args.cpus.unwrap_or_else(|| CpuLayout::lockstep(waiting)),
         external: args.external.then(|| bench::loop_bench::ExternalOptions {
             python: args.python.clone(),
             root: args.root.clone(),

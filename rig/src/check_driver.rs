@@ -5,7 +5,7 @@ use std::process::ExitCode;
 use std::sync::Arc;
 
 use clap::Args as Flags;
-use driver::conformance::{CheckOptions, check};
+use driver::link::conformance::{CheckOptions, check};
 
 use crate::external::{DriverArgs, TaskArgs};
 
@@ -49,7 +49,7 @@ pub fn main(args: &Args) -> ExitCode {
         let rate_seconds =
             runtime::clock::seconds("--rate-seconds", args.rate_seconds)?.as_secs_f64();
         Ok(CheckOptions {
-            serve: driver::contract::how_to_serve(&task, &d.id, args.task.named().as_deref()),
+            serve: driver::link::how_to_serve(&task, &d.id, args.task.named().as_deref()),
             driver: d.id,
             task: Arc::new(task),
             timeout: d.timeout,

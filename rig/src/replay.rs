@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use clap::Args as Flags;
 use observer::config::ObserverKind;
 use runtime::replay::observers::{self, StateErrors};
-use runtime::replay::{Outcome, Recording, ReplayError, replay};
+use runtime::replay::{Recording, ReplayEnd, ReplayError, replay};
 
 #[derive(Flags)]
 pub struct Args {
@@ -59,7 +59,7 @@ fn run(args: &Args) -> Result<bool, ReplayError> {
     let outcome = replay(&rec, &bar);
     bar.finish_and_clear();
     let identical = match outcome? {
-        Outcome::Identical { counts } => {
+        ReplayEnd::Identical { counts } => {
             let total: usize = counts.iter().map(|c| c.1).sum();
             let each: Vec<String> = counts.iter().map(|(t, c)| format!("{t} {c}")).collect();
             println!(
@@ -69,7 +69,7 @@ fn run(args: &Args) -> Result<bool, ReplayError> {
             );
             true
         }
-        Outcome::Differs(d) => {
+        ReplayEnd::Differs(d) => {
             println!("first difference: {d}");
             false
         }

@@ -9,7 +9,7 @@ use anyhow::{Context, Result, anyhow};
 use clap::Args as Flags;
 use runtime::clock::{Clock, Timing};
 use runtime::config::ExperimentConfig;
-use runtime::process::{Layout, WaitKind};
+use runtime::process::{CpuLayout, WaitKind};
 use runtime::run::{NodeCommand, RunOptions, RunSummary, run_with};
 
 use crate::external::DriverArgs;
@@ -60,8 +60,8 @@ pub struct Args {
     /// and the trial is run again (listed in gaps.csv). `learn`: the trial goes on and
     /// learns across the gap, counted only as deadline misses — for a simulation run
     /// faster than the machine can keep the period.
-    #[arg(long, value_enum, default_value_t = Gaps::Cut)]
-    gaps: Gaps,
+    #[arg(long, value_enum, default_value_t = GapPolicy::Cut)]
+    gaps: GapPolicy,
     /// Continue the run in DIR after a crash, a killed process or Ctrl-C: from its last
     /// trial that is complete in returns.csv, in the agent's checkpoints
     /// (DIR/checkpoints) and in run.mcap. The configuration is DIR/config.toml; of the
@@ -161,7 +161,7 @@ pub enum PlantSource {
 
 /// What a gap in the loop's timing does (`--gaps`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Gaps {
+pub enum GapPolicy {
     /// The trial's attempt ends at the gap and is run again.
     Cut,
     /// The trial learns across the gap.
@@ -211,7 +211,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
     let mut scheduling = args.scheduling;
     match scheduling.layout() {
         Some(layout) => layout.check()?,
-        None if lockstep => scheduling.cpus = Some(Layout::lockstep(waiting)),
+        None if lockstep => scheduling.cpus = Some(CpuLayout::lockstep(waiting)),
         None => {}
     }
     let opts = RunOptions {
@@ -227,7 +227,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         waiting,
         // Known once the driver's info says which clock it keeps.
         lockstep_waiting: external.then(|| args.wait.waiting(LOCKSTEP_WAIT)),
-        learn_across_gaps: args.gaps == Gaps::Learn,
+        learn_across_gaps: args.gaps == GapPolicy::Learn,
     };
     Ok((cfg, opts))
 }
@@ -317,9 +317,12 @@ mod tests {
     #[test]
     fn plant_and_gaps_are_named_choices() {
         let a = parse(&[]).unwrap();
-        assert_eq!((a.plant, a.gaps), (PlantSource::Simulated, Gaps::Cut));
+        assert_eq!((a.plant, a.gaps), (PlantSource::Simulated, GapPolicy::Cut));
         let a = parse(&["--plant", "sim", "--gaps", "learn"]).unwrap();
-        assert_eq!((a.plant, a.gaps), (PlantSource::Simulated, Gaps::Learn));
+        assert_eq!(
+            (a.plant, a.gaps),
+            (PlantSource::Simulated, GapPolicy::Learn)
+        );
         let a = parse(&["--plant", "external"]).unwrap();
         assert_eq!(a.plant, PlantSource::External);
         assert!(parse(&["--gaps", "skip"]).is_err());

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, anyhow};
 use clap::Args;
-use runtime::config::{ExperimentConfig, Overrides, resolve};
+use runtime::config::{ExperimentConfig, Overrides, resolve, resolve_with_choice};
 
 /// Which experiment: the preset for (system, algorithm, approximator), a TOML file
 /// overriding any of its keys, and flags overriding both.
@@ -21,7 +21,9 @@ pub struct Selection {
 }
 
 /// The experiment `s` selects: preset ← `--config` file ← flags, validated; the error
-/// names the file or says it came from the command line or the preset.
+/// names the file or says it came from the command line or the preset. Where the task
+/// chose the learner (none named, [`agent::preset::by_task`]), one line on stderr says
+/// which and why.
 pub fn resolve_selection(s: &Selection) -> Result<ExperimentConfig> {
     let text = match &s.config {
         Some(p) => Some(
@@ -37,10 +39,15 @@ pub fn resolve_selection(s: &Selection) -> Result<ExperimentConfig> {
         }),
         ..s.overrides.clone()
     };
-    resolve(s.config.as_deref().zip(text.as_deref()), &o).map_err(|e| match &e.file {
-        Some(_) => anyhow!(e),
-        None => anyhow!("{e} (from the command line or the preset)"),
-    })
+    let (config, choice) = resolve_with_choice(s.config.as_deref().zip(text.as_deref()), &o)
+        .map_err(|e| match &e.file {
+            Some(_) => anyhow!(e),
+            None => anyhow!("{e} (from the command line or the preset)"),
+        })?;
+    if let Some(choice) = choice {
+        eprintln!("{choice}");
+    }
+    Ok(config)
 }
 
 /// The experiment flags given besides `--trials` (which `rig run --resume` refuses).

@@ -19,7 +19,7 @@ use std::process::{Child, Command, Output, Stdio};
 use std::time::Duration;
 
 use common::hosts::{Host, Hosts};
-use common::{names_stages, ok, tmp};
+use common::{check_mcap, names_stages, ok, tmp};
 
 const RIG: &str = env!("CARGO_BIN_EXE_rig");
 const PORT: u16 = 7447;
@@ -503,27 +503,6 @@ fn recorded_link(path: &Path, field: &str) -> Vec<u64> {
         .collect();
     values.sort_unstable();
     values
-}
-
-/// `tests/python/check_mcap.py DIR` where Python has the official `mcap` reader.
-fn check_mcap(dir: &Path) {
-    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
-    let has = Command::new(&python).args(["-c", "import mcap"]).output();
-    if !has.is_ok_and(|o| o.status.success()) {
-        println!("check_mcap.py skipped: {python} cannot import mcap (pip install mcap)");
-        return;
-    }
-    let script = format!(
-        "{}/../tests/python/check_mcap.py",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let out = Command::new(&python).arg(script).arg(dir).output().unwrap();
-    assert!(
-        out.status.success(),
-        "check_mcap.py {}: {}",
-        dir.display(),
-        text(&out)
-    );
 }
 
 #[test]

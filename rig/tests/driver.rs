@@ -811,11 +811,7 @@ fn a_driver_holds_the_cpu_wakeup_limit_while_it_runs() {
     rust.args(["sim-driver", "--driver-id", &id]);
     holds_the_limit(rust);
     let Some(py) = python() else { return };
-    let mut python = std::process::Command::new(py);
-    python.arg(format!(
-        "{}/../examples/python_driver/driver.py",
-        env!("CARGO_MANIFEST_DIR")
-    ));
+    let mut python = common::python::script(&py, "examples/python_driver/driver.py");
     python.args(["--driver-id", &format!("{id}-py")]);
     holds_the_limit(python);
 }

@@ -11,16 +11,13 @@
 //! with MuJoCo for the environment; without them a test prints why and passes — CI
 //! installs them.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
 
 mod common;
 use common::drivers::{Driver, python, python_with};
+use common::python::root;
 use common::{ok, rig};
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
 
 /// `rig check-driver --driver ID --task TASK`, asserted to pass.
 fn check_driver(id: &str, task: &str) {
@@ -53,11 +50,9 @@ fn run(id: &str, task: &str, trials: &str, dir: &Path) -> String {
     std::fs::read_to_string(dir.join("returns.csv")).unwrap()
 }
 
+/// `python SCRIPT`, `script` relative to the repository's root.
 fn script(python: &str, path: &str) -> Output {
-    Command::new(python)
-        .arg(root().join(path))
-        .output()
-        .unwrap()
+    common::python::script(python, path).output().unwrap()
 }
 
 /// The cart-pole: its model check passes, and for each task its driver passes `rig

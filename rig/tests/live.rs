@@ -46,14 +46,15 @@ fn without_the_feature_the_live_view_is_refused_naming_the_build() {
 #[cfg(feature = "live")]
 mod with_the_view {
     use std::collections::{BTreeMap, HashMap, HashSet};
-    use std::net::TcpListener;
+    use std::io::{Read, Write};
+    use std::net::{TcpListener, TcpStream};
     use std::path::{Path, PathBuf};
     use std::process::{Child, Command, Stdio};
     use std::time::{Duration, Instant};
 
     use serde_json::Value;
 
-    use super::common::{messages, ok, rig};
+    use super::common::{messages, ok, rig, signal};
     use super::tmp;
 
     /// Node with the client's packages (`npm ci` in `tests/live` if they are missing), or
@@ -89,12 +90,22 @@ mod with_the_view {
             .port()
     }
 
-    /// The Node client viewing `port`, writing what it received to `out`.
-    fn viewer(node: &str, port: u16, out: &Path, stall: bool) -> Child {
+    /// The subprotocol names a client offers (`client.mjs --offer`), and the one the
+    /// server must answer with: the protocol's own name, the Foxglove SDK's, or both.
+    const OFFERS: [(&str, &str); 3] = [
+        ("spec", "foxglove.websocket.v1"),
+        ("sdk", "foxglove.sdk.v1"),
+        ("both", "foxglove.sdk.v1"),
+    ];
+
+    /// The Node client viewing `port`, offering `offer`, writing what it received to `out`.
+    fn viewer(node: &str, port: u16, out: &Path, offer: &str, stall: bool) -> Child {
         let mut c = Command::new(node);
         c.arg(client_dir().join("client.mjs"))
             .arg("--url")
             .arg(format!("ws://127.0.0.1:{port}"))
+            .arg("--offer")
+            .arg(offer)
             .arg("--out")
             .arg(out);
         if stall {
@@ -104,12 +115,17 @@ mod with_the_view {
     }
 
     /// Waits at most 60 s for `child`; asserts it succeeded.
-    fn finish(mut child: Child, what: &str) {
+    fn finish(child: Child, what: &str) {
+        let status = wait(child, what);
+        assert!(status.success(), "{what}: {status}");
+    }
+
+    /// Waits at most 60 s for `child` to end.
+    fn wait(mut child: Child, what: &str) -> std::process::ExitStatus {
         let t0 = Instant::now();
         loop {
             if let Some(status) = child.try_wait().unwrap() {
-                assert!(status.success(), "{what}: {status}");
-                return;
+                return status;
             }
             if t0.elapsed() > Duration::from_secs(60) {
                 let _ = child.kill();
@@ -119,9 +135,11 @@ mod with_the_view {
         }
     }
 
-    /// What the client received: its count of messages of other encodings per
-    /// `topic encoding schema`, and per JSON message its topic, log time, text and value.
+    /// What the client received: the subprotocol the server chose, its count of messages
+    /// of other encodings per `topic encoding schema`, and per JSON message its topic, log
+    /// time, text and value.
     struct Received {
+        protocol: String,
         others: BTreeMap<String, u64>,
         messages: Vec<(String, u64, String, Value)>,
     }
@@ -147,7 +165,11 @@ mod with_the_view {
                 )
             })
             .collect();
-        Received { others, messages }
+        Received {
+            protocol: head["protocol"].as_str().unwrap().to_string(),
+            others,
+            messages,
+        }
     }
 
     /// The fields of a JSON object as numbers (`null`: `None`).
@@ -175,6 +197,191 @@ mod with_the_view {
             .collect()
     }
 
+    /// A run's own record of what it sent: every recorded message, the stamps of every
+    /// action, and `returns.csv`.
+    struct Recording {
+        messages: BTreeMap<String, Vec<(u64, Vec<u8>)>>,
+        action_stamps: HashMap<u64, (u64, u64, u64)>,
+        trials: HashMap<u64, (f64, f64, Option<f64>)>,
+    }
+
+    impl Recording {
+        fn of(dir: &Path) -> Recording {
+            let messages = messages(&dir.join("run.mcap"));
+            let action_stamps = messages["/timing/agent/action"]
+                .iter()
+                .map(|(_, d)| {
+                    let v = numbers(&serde_json::from_slice(d).unwrap());
+                    let int = |k: &str| v[k].unwrap() as u64;
+                    let stamps = (
+                        int("t_sample_ns"),
+                        int("t_received_ns"),
+                        int("t_publish_ns"),
+                    );
+                    (int("seq"), stamps)
+                })
+                .collect();
+            Recording {
+                messages,
+                action_stamps,
+                trials: returns_csv(dir),
+            }
+        }
+
+        /// Asserts that every message `got` holds is the recording's, or derived from it
+        /// exactly, and that every channel arrived; returns the count per topic.
+        fn check(&self, got: &Received) -> BTreeMap<String, usize> {
+            let in_file: HashSet<(&str, u64, &[u8])> = self
+                .messages
+                .iter()
+                .flat_map(|(topic, ms)| ms.iter().map(move |(t, d)| (topic.as_str(), *t, &d[..])))
+                .collect();
+            let mut per_topic: BTreeMap<String, usize> = BTreeMap::new();
+            for (topic, log_time, raw, value) in &got.messages {
+                *per_topic.entry(topic.clone()).or_default() += 1;
+                // Decoded, the value is the text's; the text is the recording's, or derived
+                // from it exactly.
+                assert_eq!(numbers(value), numbers(&serde_json::from_str(raw).unwrap()));
+                let v = numbers(value);
+                match topic.as_str() {
+                    "/returns" => {
+                        let trial = v["trial"].unwrap() as u64;
+                        let (sim_time, ret, greedy) = self.trials[&trial];
+                        assert_eq!(v["sim_time_s"], Some(sim_time), "trial {trial}");
+                        assert_eq!(v["return"], Some(ret), "trial {trial}");
+                        assert_eq!(v["greedy"], greedy, "trial {trial}");
+                    }
+                    "/latency" => {
+                        let seq = v["seq"].unwrap() as u64;
+                        let (sample, received, publish) = self.action_stamps[&seq];
+                        let us = |from: u64, to: u64| (to as f64 - from as f64) / 1e3;
+                        assert_eq!(v["sample_to_action_us"], Some(us(sample, publish)));
+                        assert_eq!(v["agent_us"], Some(us(received, publish)));
+                    }
+                    _ => assert!(
+                        in_file.contains(&(topic.as_str(), *log_time, raw.as_bytes())),
+                        "{topic} at {log_time}: {raw} is not in the recording"
+                    ),
+                }
+            }
+            for topic in self.messages.keys() {
+                assert!(per_topic.contains_key(topic), "nothing on {topic}");
+            }
+            assert!(per_topic["/plant/measurement"] > 100, "{per_topic:?}");
+            assert!(per_topic.contains_key("/latency"), "{per_topic:?}");
+            let rows = per_topic.get("/returns").copied().unwrap_or(0);
+            assert!(rows >= 2, "{rows} rows of returns for 8 trials");
+            let pictures = got.others.get("/scene protobuf foxglove.SceneUpdate");
+            assert!(pictures.is_some_and(|&n| n > 0), "{:?}", got.others);
+            per_topic
+        }
+    }
+
+    /// A WebSocket handshake with the view at `port` offering `protocols`: the answer's
+    /// status line, the subprotocol it chose, and (if it switched) the text of its first
+    /// message.
+    fn handshake(port: u16, protocols: &str) -> (String, Option<String>, Option<String>) {
+        let mut s = TcpStream::connect(("127.0.0.1", port)).unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+        write!(
+            s,
+            "GET / HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nUpgrade: websocket\r\n\
+             Connection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n\
+             Sec-WebSocket-Version: 13\r\nSec-WebSocket-Protocol: {protocols}\r\n\r\n"
+        )
+        .unwrap();
+        let mut head = Vec::new();
+        let mut byte = [0u8];
+        while !head.ends_with(b"\r\n\r\n") {
+            s.read_exact(&mut byte).unwrap();
+            head.push(byte[0]);
+        }
+        let head = String::from_utf8(head).unwrap();
+        let status = head.lines().next().unwrap().to_string();
+        let chosen = head.lines().find_map(|l| {
+            let (name, value) = l.split_once(':')?;
+            name.eq_ignore_ascii_case("sec-websocket-protocol")
+                .then(|| value.trim().to_string())
+        });
+        if !status.contains(" 101 ") {
+            return (status, chosen, None);
+        }
+        // The server's first frame, unmasked text: its length in 7, 16 or 64 bits.
+        let mut h = [0u8; 2];
+        s.read_exact(&mut h).unwrap();
+        assert_eq!(h[0], 0x81, "a whole text frame");
+        let len = match h[1] {
+            126 => {
+                let mut l = [0u8; 2];
+                s.read_exact(&mut l).unwrap();
+                u16::from_be_bytes(l) as usize
+            }
+            127 => {
+                let mut l = [0u8; 8];
+                s.read_exact(&mut l).unwrap();
+                u64::from_be_bytes(l) as usize
+            }
+            n => n as usize,
+        };
+        let mut text = vec![0u8; len];
+        s.read_exact(&mut text).unwrap();
+        (status, chosen, Some(String::from_utf8(text).unwrap()))
+    }
+
+    /// Each offer is answered with a name it made, and the protocol's first message
+    /// follows; an offer of neither name is refused, as the server refuses it.
+    #[test]
+    fn a_client_offering_either_name_is_let_in() {
+        let dir = tmp("names");
+        let port = free_port();
+        let run = rig()
+            .args(["run", "--cpus", "shared", "--quiet", "--timing", "realtime"])
+            .args(["--trials", "20", "--live"])
+            .arg(format!("127.0.0.1:{port}"))
+            .arg("--out")
+            .arg(&dir)
+            .spawn()
+            .unwrap();
+        let t0 = Instant::now();
+        while TcpStream::connect(("127.0.0.1", port)).is_err() {
+            assert!(t0.elapsed() < Duration::from_secs(20), "no view on {port}");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let offers = [
+            ("foxglove.websocket.v1", Some("foxglove.websocket.v1")),
+            ("foxglove.sdk.v1", Some("foxglove.sdk.v1")),
+            (
+                "foxglove.websocket.v1, foxglove.sdk.v1",
+                Some("foxglove.sdk.v1"),
+            ),
+            (
+                "foxglove.sdk.v1, foxglove.websocket.v1",
+                Some("foxglove.sdk.v1"),
+            ),
+            (
+                "other, foxglove.websocket.v1",
+                Some("foxglove.websocket.v1"),
+            ),
+            ("foxglove.websocket.v2", None),
+        ];
+        for (offer, answer) in offers {
+            let (status, chosen, first) = handshake(port, offer);
+            assert_eq!(chosen.as_deref(), answer, "offering {offer}: {status}");
+            match answer {
+                Some(_) => {
+                    assert!(status.contains(" 101 "), "offering {offer}: {status}");
+                    let first = first.unwrap();
+                    assert!(first.contains(r#""op":"serverInfo""#), "{first}");
+                }
+                None => assert!(status.contains(" 400 "), "offering {offer}: {status}"),
+            }
+        }
+        signal(run.id(), "-TERM");
+        wait(run, "the run, interrupted");
+    }
+
+    /// Three viewers at once, offering the protocol's own name, the Foxglove SDK's, and
+    /// both: each is answered with a name it offered and receives every channel.
     #[test]
     fn the_foxglove_client_receives_every_channel_equal_to_the_recording() {
         let Some(node) = node() else { return };
@@ -199,68 +406,27 @@ mod with_the_view {
             .stderr(Stdio::piped())
             .spawn()
             .unwrap();
-        let client = viewer(&node, port, &dir.join("received.jsonl"), false);
+        let out = |offer: &str| dir.join(format!("received-{offer}.jsonl"));
+        let clients: Vec<Child> = OFFERS
+            .iter()
+            .map(|(offer, _)| viewer(&node, port, &out(offer), offer, false))
+            .collect();
         let run = run.wait_with_output().unwrap();
         ok(run);
-        finish(client, "the client");
+        for (client, (offer, _)) in clients.into_iter().zip(OFFERS) {
+            finish(client, &format!("the client offering {offer}"));
+        }
 
-        let got = received(&dir.join("received.jsonl"));
-        let recorded = messages(&dir.join("run.mcap"));
-        let in_file: HashSet<(&str, u64, &[u8])> = recorded
-            .iter()
-            .flat_map(|(topic, ms)| ms.iter().map(move |(t, d)| (topic.as_str(), *t, &d[..])))
-            .collect();
-        let action_stamps: HashMap<u64, (u64, u64, u64)> = recorded["/timing/agent/action"]
-            .iter()
-            .map(|(_, d)| {
-                let v = numbers(&serde_json::from_slice(d).unwrap());
-                let int = |k: &str| v[k].unwrap() as u64;
-                let stamps = (
-                    int("t_sample_ns"),
-                    int("t_received_ns"),
-                    int("t_publish_ns"),
-                );
-                (int("seq"), stamps)
-            })
-            .collect();
-        let trials = returns_csv(&dir);
-        let mut per_topic: BTreeMap<&str, usize> = BTreeMap::new();
-        for (topic, log_time, raw, value) in &got.messages {
-            *per_topic.entry(topic.as_str()).or_default() += 1;
-            // Decoded, the value is the text's; the text is the recording's, or derived
-            // from it exactly.
-            assert_eq!(numbers(value), numbers(&serde_json::from_str(raw).unwrap()));
-            let v = numbers(value);
-            match topic.as_str() {
-                "/returns" => {
-                    let trial = v["trial"].unwrap() as u64;
-                    let (sim_time, ret, greedy) = trials[&trial];
-                    assert_eq!(v["sim_time_s"], Some(sim_time), "trial {trial}");
-                    assert_eq!(v["return"], Some(ret), "trial {trial}");
-                    assert_eq!(v["greedy"], greedy, "trial {trial}");
-                }
-                "/latency" => {
-                    let (sample, received, publish) = action_stamps[&(v["seq"].unwrap() as u64)];
-                    let us = |from: u64, to: u64| (to as f64 - from as f64) / 1e3;
-                    assert_eq!(v["sample_to_action_us"], Some(us(sample, publish)));
-                    assert_eq!(v["agent_us"], Some(us(received, publish)));
-                }
-                _ => assert!(
-                    in_file.contains(&(topic.as_str(), *log_time, raw.as_bytes())),
-                    "{topic} at {log_time}: {raw} is not in the recording"
-                ),
-            }
+        let recording = Recording::of(&dir);
+        for (offer, answer) in OFFERS {
+            let got = received(&out(offer));
+            assert_eq!(got.protocol, answer, "offering {offer}");
+            let per_topic = recording.check(&got);
+            eprintln!(
+                "offering {offer}: received {per_topic:?}, others {:?}",
+                got.others
+            );
         }
-        eprintln!("received {per_topic:?}, others {:?}", got.others);
-        for topic in recorded.keys() {
-            assert!(per_topic.contains_key(topic.as_str()), "nothing on {topic}");
-        }
-        assert!(per_topic["/plant/measurement"] > 100, "{per_topic:?}");
-        assert!(per_topic.contains_key("/latency"), "{per_topic:?}");
-        let rows = per_topic.get("/returns").copied().unwrap_or(0);
-        assert!(rows >= 2, "{rows} rows of returns for 8 trials");
-        let pictures = got.others.get("/scene protobuf foxglove.SceneUpdate");
-        assert!(pictures.is_some_and(|&n| n > 0), "{:?}", got.others);
     }
 
     #[test]
@@ -275,7 +441,7 @@ mod with_the_view {
         let port = free_port();
         // The viewer first (it retries until the view serves): a lockstep run would end
         // before a viewer started after it had connected.
-        let client = viewer(&node, port, &dir.join("received.jsonl"), true);
+        let client = viewer(&node, port, &dir.join("received.jsonl"), "spec", true);
         let run = rig()
             .args(flags)
             .arg("--live")

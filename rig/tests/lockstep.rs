@@ -110,9 +110,9 @@ fn driven_task(dir: &Path) -> PathBuf {
 }
 
 /// A driver of a task file the rig does not simulate: the Python driver serves it (its
-/// name and hash computed by task.py from the same file), `rig check-driver --task`
-/// passes it, `rig run --plant external --task` learns against it with presets by
-/// rules, and a rig with another task — the built-in pendulum's, or a file of the same
+/// name and hash computed by rigkit.task from the same file), `rig check-driver --task`
+/// passes it, `rig run --plant external --task` learns against it with the learner the
+/// task chooses, and a rig with another task — the built-in pendulum's, or a file of the same
 /// name with another reward — is refused in one line naming both.
 #[test]
 fn a_driver_serves_a_task_file_and_a_rig_of_another_task_is_refused() {
@@ -152,11 +152,15 @@ fn a_driver_serves_a_task_file_and_a_rig_of_another_task_is_refused() {
     assert!(!refused.status.success());
     let e = stderr(&refused);
     assert!(e.contains("the two task files differ"), "{e}");
-    assert_eq!(e.trim().lines().count(), 1, "{e}");
+    // The learner the task chose (none is named), then the refusal in one line.
+    let (chosen, error): (Vec<&str>, Vec<&str>) =
+        e.trim().lines().partition(|l| l.starts_with("learner: "));
+    assert_eq!((chosen.len(), error.len()), (1, 1), "{e}");
 }
 
-/// The task's hash of examples/python_driver/task.py is the rig's, for every shipped
-/// task file and example (their canonical bytes written independently in two languages).
+/// The task's hash of the Python package's reader (`python3 -m rigkit.task`) is the
+/// rig's, for every shipped task file and example (their canonical bytes written
+/// independently in two languages).
 #[test]
 fn the_python_task_hash_is_the_rigs() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
@@ -168,9 +172,9 @@ fn the_python_task_hash_is_the_rigs() {
         .collect();
     files.sort();
     assert!(files.len() >= 6, "{files:?}");
-    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
-    let out = std::process::Command::new(&python)
-        .arg(root.join("examples/python_driver/task.py"))
+    let python = common::python::interpreter();
+    let out = common::python::command(&python)
+        .args(["-m", "rigkit.task"])
         .args(&files)
         .output();
     let out = match out {
@@ -178,7 +182,7 @@ fn the_python_task_hash_is_the_rigs() {
         Ok(o) => {
             // tomllib needs Python 3.11.
             println!(
-                "skipped: {python} cannot run task.py: {}",
+                "skipped: {python} cannot run rigkit.task: {}",
                 stderr(&o).trim()
             );
             return;
@@ -195,20 +199,13 @@ fn the_python_task_hash_is_the_rigs() {
     }
 }
 
-/// Runs examples/python_driver/task.py with `args` and `stdin`; `None` (the reason
-/// printed) when the Python cannot run it (tomllib needs Python 3.11).
+/// Runs `python3 -m rigkit.task` with `args` and `stdin`; `None` (the reason printed)
+/// when the Python cannot run it (tomllib needs Python 3.11, or tomli).
 fn task_py(args: &[&str], stdin: &str) -> Option<Output> {
     use std::io::Write;
-    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
-    let probe = std::process::Command::new(&python)
-        .args(["-c", "import tomllib"])
-        .output();
-    if !probe.is_ok_and(|o| o.status.success()) {
-        println!("skipped: {python} has no tomllib (Python 3.11 or later)");
-        return None;
-    }
-    let mut child = std::process::Command::new(&python)
-        .arg(root().join("examples/python_driver/task.py"))
+    let python = common::python::with("rigkit.task")?;
+    let mut child = common::python::command(&python)
+        .args(["-m", "rigkit.task"])
         .args(args)
         .stdin(std::process::Stdio::piped())
         .stdout(std::process::Stdio::piped())
@@ -224,7 +221,7 @@ fn task_py(args: &[&str], stdin: &str) -> Option<Output> {
     Some(child.wait_with_output().unwrap())
 }
 
-/// `task.py`'s ρ(x, u) is the rig's, bit for bit, for task files with and without the
+/// `rigkit.task`'s ρ(x, u) is the rig's, bit for bit, for task files with and without the
 /// terms beyond the quadratic form, at states inside and outside their goals and
 /// actions of both signs.
 #[test]
@@ -278,7 +275,7 @@ fn the_python_reward_is_the_rigs() {
     }
 }
 
-/// `task.py` refuses a task file the rig refuses for its keys, in one line naming the
+/// `rigkit.task` refuses a task file the rig refuses for its keys, in one line naming the
 /// file and the key: an unknown key (a misspelt `angel`, which it used to hash as if
 /// absent) and a missing one (a KeyError traceback before).
 #[test]
@@ -361,8 +358,7 @@ fn gymnasium_pendulum_v1_is_served_by_the_adapter() {
     let task = root().join("examples/gymnasium/pendulum-v1.toml");
     let task = task.to_str().unwrap();
     let mapping = root().join("examples/gymnasium/pendulum_v1.py");
-    let reward = std::process::Command::new(&python)
-        .arg(root().join("examples/gymnasium/check_reward.py"))
+    let reward = common::python::script(&python, "examples/gymnasium/check_reward.py")
         .arg("--mapping")
         .arg(&mapping)
         .output()
@@ -409,16 +405,8 @@ fn gymnasium_pendulum_v1_is_served_by_the_adapter() {
 /// The Python of the driver tests if it imports gymnasium; `None`, with the reason
 /// printed, if it does not (or there is none).
 fn python_with_gymnasium() -> Option<String> {
-    let python = common::drivers::python()?;
-    let probe = std::process::Command::new(&python)
-        .args(["-c", "import gymnasium"])
-        .output()
-        .unwrap();
-    if !probe.status.success() {
-        println!("skipped: {python} cannot import gymnasium (pip install gymnasium)");
-        return None;
-    }
-    Some(python)
+    common::drivers::python()?;
+    common::python::with("gymnasium")
 }
 
 /// The greedy returns of the run in `dir`, in trial order.
@@ -472,8 +460,7 @@ fn the_acrobot_is_a_task_file_and_a_python_driver() {
     let Some(python) = common::drivers::python() else {
         return;
     };
-    let model = std::process::Command::new(&python)
-        .arg(root().join("examples/acrobot/check_model.py"))
+    let model = common::python::script(&python, "examples/acrobot/check_model.py")
         .output()
         .unwrap();
     assert!(
@@ -724,7 +711,7 @@ fn cpu_of(pid: u32) -> std::time::Duration {
 /// driver whose rig has gone costs no CPU.
 #[test]
 fn a_lockstep_driver_tells_a_new_rig_at_once_and_idles_once_the_rig_is_gone() {
-    use driver::contract::{DriverWatch, wait_info};
+    use driver::link::{DriverWatch, wait_info};
     use std::time::{Duration, Instant};
     let dir = tmp("idle");
     for kind in drivers() {

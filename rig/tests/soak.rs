@@ -5,19 +5,11 @@
 
 mod common;
 
-use std::path::Path;
 use std::process::Command;
 
-/// `$RIG_PYTHON` (default `python3`) if it imports mcap; else says why not.
+/// `$RIG_PYTHON` (default `python3`) if it imports rigkit and mcap; else says why not.
 fn python_with_mcap() -> Option<String> {
-    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
-    let has_mcap = Command::new(&python).args(["-c", "import mcap"]).output();
-    if has_mcap.is_ok_and(|o| o.status.success()) {
-        Some(python)
-    } else {
-        println!("skipped: {python} cannot import mcap (pip install mcap==1.6.0)");
-        None
-    }
+    common::python::with("rigkit, mcap")
 }
 
 #[test]
@@ -36,9 +28,7 @@ fn a_short_soak_finishes_with_no_foreign_command_and_no_gap_learned() {
         return;
     }
     let out = common::tmp("soak", "short");
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../bench/scripts/soak.py");
-    let run = Command::new(&python)
-        .arg(script)
+    let run = common::python::script(&python, "bench/scripts/soak.py")
         .args([
             "--seconds",
             "20",
@@ -92,9 +82,9 @@ fn the_soak_counts_a_second_sessions_command_only_while_the_run_held_the_driver(
     let Some(python) = python_with_mcap() else {
         return;
     };
-    let script =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../bench/scripts/test_soak_figures.py");
-    let out = Command::new(&python).arg(script).output().unwrap();
+    let out = common::python::script(&python, "bench/scripts/test_soak_figures.py")
+        .output()
+        .unwrap();
     assert!(
         out.status.success(),
         "{}{}",

@@ -16,19 +16,7 @@ use common::{ok, rig, tmp};
 /// A Python with Optuna and the study's other packages (`tune/requirements.txt`), or
 /// `None` (and why).
 fn python() -> Option<String> {
-    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
-    let probe = Command::new(&python)
-        .args(["-c", "import optuna, matplotlib, tomli_w"])
-        .output();
-    match probe {
-        Ok(o) if o.status.success() => Some(python),
-        _ => {
-            println!(
-                "skipped: {python} cannot import optuna, matplotlib and tomli_w (pip install -r tune/requirements.txt, or set RIG_PYTHON)"
-            );
-            None
-        }
-    }
+    common::python::with("rigkit, optuna, matplotlib, tomli_w")
 }
 
 /// `rig tune ARGS` in `dir`.
@@ -37,7 +25,8 @@ fn tune(python: &str, dir: &Path, args: &[&str]) -> Command {
     cmd.arg("tune")
         .args(args)
         .current_dir(dir)
-        .env("RIG_PYTHON", python);
+        .env("RIG_PYTHON", python)
+        .env("PYTHONPATH", common::python::path());
     cmd
 }
 

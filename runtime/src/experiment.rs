@@ -1,4 +1,4 @@
-//! The in-process driver: one learning experiment (a "run": `trials` consecutive trials,
+//! The in-process runner: one learning experiment (a "run": `trials` consecutive trials,
 //! §3.6) with plant, observer and agent called directly, one sample at a time. Which
 //! trial comes next is the run's schedule ([`plant::schedule`]); a trial is an episode
 //! on the plant ([`plant::episode`]), as in the plant process.
@@ -32,17 +32,18 @@ use std::convert::Infallible;
 use std::sync::Arc;
 
 use agent::Agent;
-use agent::checkpoint::{Checkpoint, CheckpointError, Origin, Snapshot};
+use agent::checkpoint::{Checkpoint, Origin, Snapshot};
 use agent::horizon::Horizon;
-use observer::config::{ObserverConfig, ObserverMode, SensorKind};
 use observer::timing::{Front, Sample as AtSample, act};
-use plant::delay::Actuator;
 use plant::episode::{Episode, Step};
 use plant::schedule::{Schedule, Trial};
 use plant::sensor::Sensor;
 use plant::{Plant, Task};
 
+use crate::build::{actuator, front, sensor};
 use crate::config::ExperimentConfig;
+use crate::response::ResponseSample;
+use crate::resumable::{ResumeError, resumable_delays};
 
 /// The outcome of one learning trial.
 #[derive(Clone, Debug, PartialEq)]
@@ -57,18 +58,6 @@ pub struct TrialRecord {
     pub ret: f64,
     /// Return of the greedy evaluation trial after this one, if one was run.
     pub greedy: Option<f64>,
-}
-
-/// The sensor `o` asks for on `task`, its noise drawn from the run seed `run_seed`
-/// (stream [`plant::sensor::NOISE_STREAM`]) — the same in process and in the plant
-/// process of `rig run`, so both measure the same numbers.
-pub fn sensor(task: &Task, o: &ObserverConfig, run_seed: u64) -> Sensor {
-    match o.sensor {
-        SensorKind::Full => Sensor::Full,
-        SensorKind::Angle => {
-            Sensor::angle(&task.angle_mask, o.counts_per_rev, o.noise_std, run_seed)
-        }
-    }
 }
 
 /// One experiment's moving parts.
@@ -301,14 +290,14 @@ impl Experiment {
     /// One greedy trial from `x0`: the time response of the current policy (until the
     /// trial's end or until it terminates: the system left its operating range or reached
     /// its goal).
-    pub fn greedy_trajectory(&mut self, x0: &[f64]) -> Vec<Sample> {
+    pub fn greedy_trajectory(&mut self, x0: &[f64]) -> Vec<ResponseSample> {
         let mut u = vec![0.0; self.task.action_dim()];
         self.start(x0, true, &mut u);
         let mut acted_on = self.front_state();
         let mut out = Vec::with_capacity(self.task.steps_per_trial());
         loop {
             let step = self.episode.step(&u);
-            out.push(Sample {
+            out.push(ResponseSample {
                 t: (step.sample - 1) as f64 * self.task.ts,
                 x: std::mem::take(&mut acted_on),
                 u: self.episode.plant().applied_action().to_vec(),
@@ -352,79 +341,11 @@ fn start_sample(
     act(agent, greedy, &t, u);
 }
 
-/// The observer `cfg` asks for on `task`, in the configured timing.
-pub fn front(task: &Arc<Task>, cfg: &ExperimentConfig) -> Front {
-    let o = cfg.observer();
-    Front::new(
-        task.clone(),
-        observer::build(task.clone(), o, cfg.agent().model.as_ref()),
-        o.mode == ObserverMode::Predictive,
-    )
-}
-
-/// The actuation of run seed `run_seed` of `cfg`: its timing and its delays (a validated
-/// configuration's delay file has been read once already).
-pub fn actuator(task: &Task, cfg: &ExperimentConfig, run_seed: u64) -> Actuator {
-    let delays = cfg
-        .run()
-        .delays_for_run(task, run_seed)
-        .unwrap_or_else(|e| panic!("run.delay_from: {e}"));
-    Actuator::new(
-        task.action_dim(),
-        cfg.observer().mode == ObserverMode::Predictive,
-        delays,
-    )
-}
-
-/// A run with delays drawn from `run.delay_from` cannot be resumed: a checkpoint does not
-/// hold where the delay stream stands.
-pub fn resumable_delays(cfg: &ExperimentConfig) -> Result<(), ResumeError> {
-    if cfg.run().delay_from.is_empty() {
-        Ok(())
-    } else {
-        Err(ResumeError::DelayStream(cfg.run().delay_from.clone()))
-    }
-}
-
-/// Why a run cannot continue from a checkpoint ([`Experiment::resume`]).
-#[derive(Debug, thiserror::Error)]
-pub enum ResumeError {
-    /// A run with a sensor or observer other than the default, whose state a checkpoint
-    /// does not hold.
-    #[error(
-        "a checkpoint holds the agent's state only; resuming needs the default sensor and observer"
-    )]
-    Observer,
-    /// A run with delays drawn from the file `run.delay_from` names.
-    #[error(
-        "cannot resume a run with run.delay_from = {0:?}: checkpoints do not hold where its delay stream stands; start a new run"
-    )]
-    DelayStream(String),
-    /// A checkpoint that cannot be read or does not fit the run.
-    #[error(transparent)]
-    Checkpoint(#[from] CheckpointError),
-}
-
-/// One sample of a time response.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Sample {
-    /// Time since the trial start \[s\].
-    pub t: f64,
-    /// The state the agent acted on at this sample: direct timing `x̂_k`, from which the
-    /// applied action was computed; predictive timing `x̂_{k+1|k}`, for the next interval's
-    /// action (the applied one was computed a sample earlier).
-    pub x: Vec<f64>,
-    /// Applied action.
-    pub u: Vec<f64>,
-    /// `ρ(x_k, u_k)`.
-    pub reward: f64,
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::config::{Overrides, resolve};
-    use observer::config::ObserverKind;
+    use observer::config::{ObserverKind, SensorKind};
 
     fn angle_config(observer: ObserverKind, noise: &str) -> ExperimentConfig {
         let text = format!("[observer]\nnoise_std = {noise}\n");

@@ -36,12 +36,13 @@ use rayon::prelude::*;
 
 use crate::config::ExperimentConfig;
 use crate::error::{AtFile, FileError};
-use crate::experiment::{Experiment, Sample, TrialRecord};
+use crate::experiment::{Experiment, TrialRecord};
 use crate::lock::LockError;
 use crate::output::responses::{write_acted_on, write_responses};
 use crate::output::runs::{OrderedWriter, RUNS_HEADER, curves};
 use crate::output::{progress_bar, write_atomic};
 use crate::report::{self, CurveError, CurvePoint, PlotError, Series, SeriesStyle};
+use crate::response::ResponseSample;
 use plant::config::ConfigError;
 
 /// Why `rig learn` stopped.
@@ -103,7 +104,7 @@ pub struct LearnSummary {
     pub wall: Duration,
     /// Each run's final greedy policy: one trial from the task's first start state (the
     /// time responses written to `responses.csv`), in run order.
-    pub responses: Vec<Vec<Sample>>,
+    pub responses: Vec<Vec<ResponseSample>>,
     /// Each run's [`crate::experiment::ActedOnError`] RMSE per state component, in run
     /// order (empty for an experiment `rig reproduce` read back instead of running).
     pub acted_on_rmse: Vec<Vec<f64>>,
@@ -160,7 +161,7 @@ pub fn learn(cfg: &ExperimentConfig, opts: &LearnOptions) -> Result<LearnSummary
             .collect()
     });
     let records: Vec<TrialRecord> = results?.into_iter().flatten().collect();
-    let (responses, acted_on_rmse): (Vec<Vec<Sample>>, Vec<Vec<f64>>) = responses
+    let (responses, acted_on_rmse): (Vec<Vec<ResponseSample>>, Vec<Vec<f64>>) = responses
         .into_inner()
         .expect("responses poisoned")
         .into_values()

@@ -2,8 +2,11 @@
 //!
 //! - The experiment's [`config`]: the sections of plant, observer and agent composed,
 //!   resolved from preset, file and flags, validated, written as TOML.
-//! - In one process: [`experiment`] (one run, trial by trial) and [`learn`] (runs in
-//!   parallel, curves and plots through [`report`]).
+//! - In one process: [`experiment`] (one run, trial by trial; a greedy trial's
+//!   [`response`]) and [`learn`] (runs in parallel, curves and plots through [`report`]).
+//! - What the configuration builds around the agent, in process and in the nodes alike:
+//!   [`build`] (sensor, observer in its timing, actuator); whether a run is
+//!   [`resumable`] from a checkpoint.
 //! - The files the commands write: [`output`] (`runs.csv`, responses, atomic writes,
 //!   progress bars).
 //! - As processes over iceoryx2: the nodes in [`process`] (plant, observer, agent), the
@@ -12,6 +15,7 @@
 //!   command; [`replay`]: a recording's observer and agent run again, bit for bit.
 //! - The run's [`clock`]: lockstep, real time or an external driver, and its rules.
 
+pub mod build;
 pub mod clock;
 pub mod config;
 pub mod error;
@@ -23,5 +27,7 @@ pub mod process;
 pub mod record;
 pub mod replay;
 pub mod report;
+pub mod response;
+pub mod resumable;
 pub mod resume;
 pub mod run;

@@ -4,7 +4,14 @@
 // time, the message's text and its decoded value — to --out when the server
 // closes. Messages of other encodings (the protobuf /scene) are counted with their schema.
 //
-//   node tests/live/client.mjs --url ws://127.0.0.1:8765 --out received.jsonl [--stall]
+//   node tests/live/client.mjs --url ws://127.0.0.1:8765 --out received.jsonl \
+//        [--offer spec|sdk|both] [--stall]
+//
+// --offer: the subprotocol names the client offers — the client's own,
+// `foxglove.websocket.v1` (spec, the default: FoxgloveClient.SUPPORTED_SUBPROTOCOL), the
+// Foxglove SDK's name for the same protocol, `foxglove.sdk.v1` (sdk), or both, as current
+// Foxglove and Lichtblick releases do. The client exits with an error if the server
+// chose a name it did not offer.
 //
 // --stall: subscribe, then stop reading the socket (a viewer that hangs), until the
 // server closes; for measuring what such a viewer costs the loop.
@@ -15,24 +22,36 @@ import protocol from "@foxglove/ws-protocol";
 import { WebSocket } from "ws";
 
 const { FoxgloveClient } = protocol;
-const SUBPROTOCOL = "foxglove.sdk.v1";
+const SDK_SUBPROTOCOL = "foxglove.sdk.v1";
+const OFFERS = {
+  spec: [FoxgloveClient.SUPPORTED_SUBPROTOCOL],
+  sdk: [SDK_SUBPROTOCOL],
+  both: [FoxgloveClient.SUPPORTED_SUBPROTOCOL, SDK_SUBPROTOCOL],
+};
 
 const { values: args } = parseArgs({
   options: {
     url: { type: "string", default: "ws://127.0.0.1:8765" },
     out: { type: "string" },
     stall: { type: "boolean", default: false },
+    offer: { type: "string", default: "spec" },
     "connect-seconds": { type: "string", default: "20" },
   },
 });
 const deadline = Date.now() + 1000 * Number(args["connect-seconds"]);
+const offered = OFFERS[args.offer];
+if (!offered) {
+  console.error(`client: --offer ${args.offer}: one of ${Object.keys(OFFERS).join(", ")}`);
+  process.exit(2);
+}
 
 function connect() {
-  // The Foxglove SDK's server speaks the protocol as `foxglove.sdk.v1`, the same
-  // messages as the client's `foxglove.websocket.v1` under a new name.
-  const ws = new WebSocket(args.url, [SUBPROTOCOL]);
+  const ws = new WebSocket(args.url, offered);
   ws.on("error", () => {}); // retried below, or reported by the client
-  ws.once("unexpected-response", () => {});
+  ws.once("unexpected-response", (_request, response) => {
+    console.error(`client: ${args.url} refused ${offered}: HTTP ${response.statusCode}`);
+    process.exit(1);
+  });
   ws.once("close", () => {
     if (!opened) {
       if (Date.now() > deadline) {
@@ -44,6 +63,10 @@ function connect() {
   });
   ws.once("open", () => {
     opened = true;
+    if (!offered.includes(ws.protocol)) {
+      console.error(`client: the server chose ${ws.protocol}, not one of ${offered}`);
+      process.exit(1);
+    }
     view(ws);
   });
 }
@@ -95,7 +118,7 @@ function view(ws) {
   let stalled = false;
   const done = () => {
     if (args.out) {
-      const counts = JSON.stringify({ others });
+      const counts = JSON.stringify({ others, protocol: ws.protocol });
       writeFileSync(args.out, [counts, ...lines].join("\n") + "\n");
     }
     console.error(`client: ${lines.length} JSON messages, others ${JSON.stringify(others)}`);

@@ -35,38 +35,49 @@ Exit status 0 when every check passes, 1 with a message naming the first failure
 otherwise (2 for a usage error). The functions below can be imported and called one by
 one; each raises CheckError.
 
-Needs `pip install mcap` (written against mcap 1.6.0).
+Needs the rig's Python package with mcap: `pip install "./python[recording]"` (its
+readers: rigkit.recording, rigkit.returns; written against mcap 1.6.0).
 """
 
 from __future__ import annotations
 
-import csv
+import importlib.util
 import json
 import math
 import struct
 import sys
 import zlib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
-from mcap.exceptions import McapError
-from mcap.reader import NonSeekingReader, make_reader
-from mcap.records import Chunk, DataEnd, Footer
-from mcap.stream_reader import CRCValidationError, StreamReader
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: check_mcap.py needs the rig's Python package rigkit: pip install ./python")
 
-MEASUREMENT_TOPIC = "/plant/measurement"
-TRUTH_TOPIC = "/plant/truth"
-ESTIMATE_TOPIC = "/observer/estimate"
+from rigkit.script import need  # noqa: E402
+
+need("check_mcap.py", modules=["mcap"])
+
+from mcap.exceptions import McapError  # noqa: E402
+from mcap.reader import NonSeekingReader, make_reader  # noqa: E402
+from mcap.records import Chunk, DataEnd, Footer  # noqa: E402
+from mcap.stream_reader import CRCValidationError, StreamReader  # noqa: E402
+
+from rigkit import recording, returns  # noqa: E402
+from rigkit.angle import wrap  # noqa: E402
+from rigkit.recording import (  # noqa: E402
+    END as FLAG_TRIAL_END,
+    ESTIMATED_REWARD as FLAG_ESTIMATED_REWARD,
+    GAP as FLAG_GAP,
+    GREEDY as FLAG_GREEDY,
+    PRIMED as FLAG_PRIMED,
+    SHUTDOWN as FLAG_SHUTDOWN,
+    START as FLAG_TRIAL_START,
+)
+
+MEASUREMENT_TOPIC = recording.MEASUREMENT
+TRUTH_TOPIC = recording.TRUTH
+ESTIMATE_TOPIC = recording.ESTIMATE
 CONFIG_ATTACHMENT = "config.toml"
-RETURNS_HEADER = ["run", "trial", "sim_time_s", "return", "greedy_return"]
-
-FLAG_TRIAL_START = 1 << 0
-FLAG_TRIAL_END = 1 << 1
-FLAG_GREEDY = 1 << 2
-FLAG_SHUTDOWN = 1 << 3
-FLAG_PRIMED = 1 << 7
-FLAG_ESTIMATED_REWARD = 1 << 8
-FLAG_GAP = 1 << 9
 
 MAGIC_SIZE = 8
 # opcode (1) + record length (8) + summary_start (8) + summary_offset_start (8) + crc (4)
@@ -75,25 +86,6 @@ FOOTER_RECORD_SIZE = 1 + 8 + 8 + 8 + 4
 
 class CheckError(Exception):
     """A check failed; the message says which and why."""
-
-
-@dataclass
-class Recording:
-    """What the checks need from one MCAP file."""
-
-    channels: list = field(default_factory=list)  # mcap.records.Channel
-    schemas: dict = field(default_factory=dict)  # schema id -> mcap.records.Schema
-    attachment_names: list = field(default_factory=list)
-    metadata_names: list = field(default_factory=list)
-    message_count: int = 0
-    # Decoded JSON of every /plant/measurement message, in file order.
-    measurements: list = field(default_factory=list)
-    # Decoded JSON of every /plant/truth message (angle-only sensing), by seq.
-    truth: dict = field(default_factory=dict)
-    # Decoded JSON of every /observer/estimate message, in order.
-    estimates: list = field(default_factory=list)
-    # The `run` metadata record's entries.
-    run_metadata: dict = field(default_factory=dict)
 
 
 # ---------------------------------------------------------------------------------------
@@ -185,50 +177,13 @@ def check_container(path: Path) -> None:
             raise CheckError(f"{path}: attachment {index.name!r} fails its CRC")
 
 
-def read_recording(path: Path) -> Recording:
+def read_recording(path: Path) -> recording.Recording:
     """Reads the summary, attachments, metadata and every message of `path` with chunk
-    CRC validation (check 1); decodes the measurement messages."""
-    rec = Recording()
+    CRC validation (check 1); decodes the measurement, truth and estimate messages."""
     try:
-        with open(path, "rb") as f:
-            reader = make_reader(f, validate_crcs=True)
-            summary = reader.get_summary()
-            if summary is None:
-                raise CheckError(f"{path}: the file has no summary section")
-            rec.channels = [summary.channels[k] for k in sorted(summary.channels)]
-            rec.schemas = dict(summary.schemas)
-            rec.attachment_names = [a.name for a in reader.iter_attachments()]
-            for m in reader.iter_metadata():
-                rec.metadata_names.append(m.name)
-                if m.name == "run":
-                    rec.run_metadata = dict(m.metadata)
-            for _schema, channel, message in reader.iter_messages(log_time_order=False):
-                rec.message_count += 1
-                if channel.topic in (MEASUREMENT_TOPIC, TRUTH_TOPIC, ESTIMATE_TOPIC):
-                    try:
-                        decoded = json.loads(message.data)
-                    except ValueError as e:
-                        raise CheckError(
-                            f"{path}: {channel.topic} message {message.sequence} "
-                            f"is not JSON: {e}"
-                        ) from e
-                    if channel.topic == MEASUREMENT_TOPIC:
-                        rec.measurements.append(decoded)
-                    elif channel.topic == ESTIMATE_TOPIC:
-                        rec.estimates.append(decoded)
-                    else:
-                        rec.truth[decoded.get("seq")] = decoded
-    except CRCValidationError as e:
-        raise CheckError(f"{path}: {e}") from e
-    except McapError as e:
-        raise CheckError(f"{path}: unreadable: {type(e).__name__}: {e}") from e
-    stats = summary.statistics
-    if stats is not None and stats.message_count != rec.message_count:
-        raise CheckError(
-            f"{path}: read {rec.message_count} messages, "
-            f"the statistics record says {stats.message_count}"
-        )
-    return rec
+        return recording.read(path, [MEASUREMENT_TOPIC, TRUTH_TOPIC, ESTIMATE_TOPIC])
+    except recording.RecordingError as e:
+        raise CheckError(str(e)) from e
 
 
 # ---------------------------------------------------------------------------------------
@@ -276,7 +231,7 @@ def check_schema_data(name: str, data: bytes) -> None:
             raise CheckError(f"schema {name!r}: property {prop!r} is not flat ({sorted(nested)})")
 
 
-def check_channels(rec: Recording) -> None:
+def check_channels(rec: recording.Recording) -> None:
     """Check 2 for every channel; the measurement topic must be among them."""
     if not rec.channels:
         raise CheckError("the recording has no channels")
@@ -301,7 +256,7 @@ def check_channels(rec: Recording) -> None:
 # 3. attachment
 
 
-def check_attachment(rec: Recording) -> None:
+def check_attachment(rec: recording.Recording) -> None:
     """Check 3: the resolved configuration is attached."""
     if CONFIG_ATTACHMENT not in rec.attachment_names:
         raise CheckError(
@@ -313,26 +268,12 @@ def check_attachment(rec: Recording) -> None:
 # 4. returns
 
 
-def as_float(v) -> float:
-    """A JSON number as a float; `null` (the recorder's NaN/inf) as NaN."""
-    return math.nan if v is None else float(v)
+as_float = recording.number
 
 
 def same(a: float, b: float) -> bool:
     """Exact equality, NaN equal to NaN."""
     return a == b or (math.isnan(a) and math.isnan(b))
-
-
-def wrap(a: float) -> float:
-    """An angle wrapped to [-pi, pi), with the rig's floating-point operations
-    (`plant::angle::wrap`: Rust's `rem_euclid` is C's fmod plus the divisor if negative)."""
-    if -math.pi <= a < math.pi:
-        return a
-    r = math.fmod(a + math.pi, 2.0 * math.pi)
-    if r < 0.0:
-        r += 2.0 * math.pi
-    w = r - math.pi
-    return w - 2.0 * math.pi if w >= math.pi else w
 
 
 @dataclass
@@ -382,10 +323,7 @@ def final_state(m: dict, truth: dict) -> list:
         prefix, src = "x_", t
     else:
         prefix, src = "y_", m
-    x = []
-    while f"{prefix}{len(x)}" in src:
-        x.append(as_float(src[f"{prefix}{len(x)}"]))
-    return x
+    return recording.vector(src, prefix)
 
 
 def trial_returns(
@@ -473,27 +411,15 @@ def trial_returns(
 def read_returns_csv(path: Path) -> dict[int, tuple[float, float | None]]:
     """returns.csv as trial -> (return, greedy_return or None when blank)."""
     try:
-        with open(path, newline="") as f:
-            rows = list(csv.reader(f))
-    except OSError as e:
-        raise CheckError(f"cannot read {path}: {e}") from e
-    if not rows or rows[0] != RETURNS_HEADER:
-        raise CheckError(f"{path}: header {rows[:1]}, expected {RETURNS_HEADER}")
+        rows = returns.read(path)
+    except returns.ReturnsError as e:
+        raise CheckError(str(e)) from e
     out: dict[int, tuple[float, float | None]] = {}
-    runs = set()
-    for line, row in enumerate(rows[1:], start=2):
-        if len(row) != len(RETURNS_HEADER):
-            raise CheckError(f"{path}:{line}: {len(row)} columns, expected {len(RETURNS_HEADER)}")
-        run, trial, _t, ret, greedy = row
-        runs.add(run)
-        try:
-            trial_no = int(trial)
-            value = (float(ret), float(greedy) if greedy != "" else None)
-        except ValueError as e:
-            raise CheckError(f"{path}:{line}: {e}") from e
-        if trial_no in out:
-            raise CheckError(f"{path}:{line}: trial {trial_no} appears twice")
-        out[trial_no] = value
+    for line, row in enumerate(rows, start=2):
+        if row.trial in out:
+            raise CheckError(f"{path}:{line}: trial {row.trial} appears twice")
+        out[row.trial] = (row.ret, row.greedy)
+    runs = {row.run for row in rows}
     if len(runs) > 1:
         raise CheckError(f"{path}: rows of several runs {sorted(runs)}; one rig run has one")
     return out
@@ -552,15 +478,17 @@ def check_run(run_dir: Path, log=print) -> None:
     log("ok: every channel is json with a flat numeric jsonschema schema, no $ref")
     check_attachment(rec)
     log(f"ok: attachment {CONFIG_ATTACHMENT} present")
-    terminal = TerminalReward.from_metadata(rec.run_metadata)
-    source, truth, topic = rec.measurements, rec.truth, MEASUREMENT_TOPIC
-    if any(int(m.get("flags", 0)) & FLAG_ESTIMATED_REWARD for m in rec.measurements):
+    terminal = TerminalReward.from_metadata(rec.metadata.get("run", {}))
+    measurements = rec.of(MEASUREMENT_TOPIC)
+    truth = {t.get("seq"): t for t in rec.of(TRUTH_TOPIC)}
+    source, topic = measurements, MEASUREMENT_TOPIC
+    if any(int(m.get("flags", 0)) & FLAG_ESTIMATED_REWARD for m in measurements):
         # The driver measures positions only: the rewards are the observer's, computed
         # from its estimate x̂, which also gives x_N.
         topic, truth = ESTIMATE_TOPIC, {}
         source = [
             {**e, **{"y_" + k[2:]: v for k, v in e.items() if k.startswith("x_")}}
-            for e in rec.estimates
+            for e in rec.of(ESTIMATE_TOPIC)
         ]
     learning, greedy = trial_returns(source, terminal, truth)
     csv_path = run_dir / "returns.csv"

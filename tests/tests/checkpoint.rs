@@ -11,7 +11,8 @@ use agent::checkpoint::{Checkpoint, Snapshot};
 use agent::config::{Algo, ApproxKind, HorizonKind};
 use plant::SystemName;
 use runtime::config::ExperimentConfig;
-use runtime::experiment::{Experiment, ResumeError};
+use runtime::experiment::Experiment;
+use runtime::resumable::ResumeError;
 
 fn presets() -> Vec<ExperimentConfig> {
     let mut out = Vec::new();

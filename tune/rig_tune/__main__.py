@@ -3,32 +3,38 @@
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import sys
 import tempfile
 import warnings
 from pathlib import Path
 
-try:
-    import optuna
-except ImportError:
-    sys.exit("error: rig tune needs Optuna and its plots: python3 -m pip install -r tune/requirements.txt")
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: rig tune needs the rig's Python package rigkit: python3 -m pip install ./python")
+
+from rigkit import script  # noqa: E402
+
+script.need("rig tune", modules=["optuna", "matplotlib", "tomli_w"])
+
+import optuna  # noqa: E402
 
 # The heartbeat that fails a killed worker's trial is "experimental" in Optuna: used on
 # purpose. Optuna's own log lines would repeat what the progress says.
 warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
 optuna.logging.set_verbosity(optuna.logging.WARNING)
 
-from . import check, report, study
-from .cli import parser, selection
-from .config import RigError, accepted, rig_config, tunable, with_values
-from .objective import Objective
-from .runner import Runner, RunFailed
-from .space import Param, SpaceError, load, starting_space
+from . import check, report, study  # noqa: E402
+from .cli import parser, selection  # noqa: E402
+from .config import RigError, accepted, rig_config, tunable, with_values  # noqa: E402
+from .objective import Objective  # noqa: E402
+from .runner import Runner, RunFailed  # noqa: E402
+from .space import Param, SpaceError, load, starting_space  # noqa: E402
 
 INTERRUPTED = 130
 
 
 def main(argv: list[str]) -> int:
+    script.interrupt_on_sigterm()
     args = parser().parse_args(argv)
     try:
         if args.space_for:
@@ -87,6 +93,7 @@ def tune(args: argparse.Namespace, argv: list[str]) -> int:
     print(f"study {name} ({url.split('@')[-1]}): {done} of {args.n_trials} trials finished", flush=True)
     if done < args.n_trials:
         procs = study.start_workers(argv, args.workers, args.out)
+        study.forward_sigterm(procs)
         try:
             study.watch(s, args.n_trials, procs)
         except KeyboardInterrupt:

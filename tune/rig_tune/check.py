@@ -4,7 +4,7 @@ seeds the study never chose by, for the report."""
 from __future__ import annotations
 
 import argparse
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 from statistics import fmean
@@ -60,15 +60,30 @@ def run_arm(args: argparse.Namespace, runner: Runner, path: Path, out: Path) -> 
     the other against a driver of its own."""
     todo = seeds(args.check_seeds)
     if args.driver_cmd is None:
-        with ThreadPoolExecutor(max_workers=args.workers) as pool:
-            curves = list(pool.map(lambda s: runner.run(path, s, out / f"seed-{s}"), todo))
-        return {str(s): g for s, g in zip(todo, curves)}
+        return {str(s): g for s, g in zip(todo, in_parallel(runner, path, todo, out, args.workers))}
     driver = Driver(args.driver_cmd, f"tune-check-{out.name}", out / "driver.log")
     try:
         external = Runner(runner.trials, driver, runner.keep_recordings)
         return {str(s): external.run(path, s, out / f"seed-{s}") for s in todo}
     finally:
         driver.close()
+
+
+def in_parallel(runner: Runner, path: Path, todo: list[int], out: Path, workers: int) -> list[list[float]]:
+    """Runs of `path` on the seeds `todo`, `workers` at a time. The first to fail (or
+    Ctrl-C) stops the others at once, so that the check ends with its error instead of
+    after every run."""
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        futures = [pool.submit(runner.run, path, s, out / f"seed-{s}") for s in todo]
+        try:
+            done, _ = wait(futures, return_when=FIRST_EXCEPTION)
+            for f in done:
+                f.result()  # the first failure, raised
+            return [f.result() for f in futures]
+        except BaseException:
+            runner.cancelled.set()
+            pool.shutdown(cancel_futures=True)
+            raise
 
 
 def verdict(best: list[float], preset: list[float]) -> str:

@@ -4,16 +4,17 @@ evaluation as its rows reach `runs.csv` / `returns.csv`."""
 
 from __future__ import annotations
 
-import csv
-import io
 import shlex
 import shutil
 import signal
 import subprocess
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from rigkit import processes, returns
 
 from .config import last_line, rig
 
@@ -25,18 +26,22 @@ class RunFailed(Exception):
 
 
 class Stopped(Exception):
-    """A run stopped early because its follower asked (a pruned trial)."""
+    """A run stopped early because its follower asked (a pruned trial), or because its
+    runner was cancelled."""
 
 
 @dataclass
 class Runner:
     """How a study's runs are made: `trials` learning trials each (None: the
-    configuration's), against an external driver when there is one."""
+    configuration's), against an external driver when there is one. Setting `cancelled`
+    stops every run under way (`Stopped`), as another thread may need when one of several
+    runs in parallel has failed."""
 
     trials: int | None = None
     driver: Driver | None = None
     keep_recordings: bool = False
     extra: list[str] = field(default_factory=list)
+    cancelled: threading.Event = field(default_factory=threading.Event)
 
     def command(self, config: Path, seed: int, out: Path) -> list[str]:
         """The rig command of one run."""
@@ -64,26 +69,34 @@ class Runner:
         log = out / "rig.log"
         with open(log, "w") as sink:
             proc = subprocess.Popen(cmd, stdout=sink, stderr=subprocess.STDOUT)
-            follower = Follower(self.rows_file(out))
+            follower = returns.Follower(self.rows_file(out))
+            greedy: list[float] = []
             try:
                 while True:
                     done = proc.poll() is not None
-                    for g in follower.new_greedy():
-                        if on_greedy is not None and on_greedy(g):
+                    for row in follower.new_rows():
+                        if row.greedy is None:
+                            continue
+                        greedy.append(row.greedy)
+                        if on_greedy is not None and on_greedy(row.greedy):
                             raise Stopped()
                     if done:
                         break
+                    if self.cancelled.is_set():
+                        raise Stopped()
                     if self.driver is not None and not self.driver.alive():
                         raise RunFailed(self.driver.ended())
                     time.sleep(POLL_S)
+            except returns.ReturnsError as e:
+                raise RunFailed(str(e)) from None
             finally:
-                end(proc)
+                processes.stop(proc)  # a run still going stopped as Ctrl-C would
         if proc.returncode != 0:
             reason = last_line(log.read_text(errors="replace"))
             raise RunFailed(f"`{shlex.join(cmd)}` exited with {proc.returncode}: {reason}")
         if self.driver is not None and not self.keep_recordings:
             discard_recording(out)
-        return follower.greedy
+        return greedy
 
 
 def discard_recording(out: Path) -> None:
@@ -91,48 +104,6 @@ def discard_recording(out: Path) -> None:
     message and the checkpoints (megabytes a run, where a study makes hundreds)."""
     (out / "run.mcap").unlink(missing_ok=True)
     shutil.rmtree(out / "checkpoints", ignore_errors=True)
-
-
-def end(proc: subprocess.Popen, sig: int = signal.SIGINT) -> None:
-    """Stops a process still going (a run as Ctrl-C would), then waits for it."""
-    if proc.poll() is None:
-        proc.send_signal(sig)
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-
-
-class Follower:
-    """Reads the complete rows a run has appended to its rows file so far."""
-
-    def __init__(self, path: Path) -> None:
-        self.path = path
-        self.offset = 0
-        self.header: list[str] | None = None
-        self.greedy: list[float] = []
-
-    def new_greedy(self) -> list[float]:
-        """The greedy returns of the rows written since the last call."""
-        try:
-            with open(self.path, "rb") as f:
-                f.seek(self.offset)
-                chunk = f.read()
-        except FileNotFoundError:
-            return []
-        complete = chunk[: chunk.rfind(b"\n") + 1]
-        self.offset += len(complete)
-        new = []
-        for row in csv.reader(io.StringIO(complete.decode())):
-            if self.header is None:
-                self.header = row
-                continue
-            g = row[self.header.index("greedy_return")]
-            if g:
-                new.append(float(g))
-        self.greedy += new
-        return new
 
 
 class Driver:
@@ -167,5 +138,5 @@ class Driver:
             self.proc = self.start()
 
     def close(self) -> None:
-        end(self.proc, signal.SIGTERM)
+        processes.stop(self.proc, signal.SIGTERM)
         self.sink.close()

@@ -7,6 +7,7 @@ import argparse
 import hashlib
 import os
 import random
+import signal
 import subprocess
 import sys
 import time
@@ -16,6 +17,7 @@ from pathlib import Path
 import optuna
 import sqlalchemy.exc
 from optuna.trial import FrozenTrial, TrialState
+from rigkit import processes
 
 from .objective import Objective
 from .runner import Driver, Runner, RunFailed
@@ -144,6 +146,19 @@ def start_workers(argv: list[str], workers: int, out: Path) -> list[subprocess.P
     return procs
 
 
+def forward_sigterm(procs: list[subprocess.Popen]) -> None:
+    """SIGTERM (a timeout, a scheduler) acts as Ctrl-C: passed on to the workers, which a
+    terminal's Ctrl-C reaches by itself, then KeyboardInterrupt here."""
+
+    def stopping(signum: int, frame: object) -> None:
+        for p in procs:
+            if p.poll() is None:
+                p.send_signal(signal.SIGTERM)
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stopping)
+
+
 def describe(t: FrozenTrial) -> str:
     """One finished trial, as the progress shows it."""
     params = ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in t.params.items())
@@ -178,10 +193,6 @@ def watch(study: optuna.Study, target: int, procs: list[subprocess.Popen]) -> No
 
 
 def stop(procs: list[subprocess.Popen]) -> None:
-    """Waits for interrupted workers to mark their trials and exit."""
+    """Waits for interrupted workers to mark their trials and exit (killed after 30 s)."""
     for p in procs:
-        try:
-            p.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            p.kill()
-            p.wait()
+        processes.stop(p, None, patience=30)

@@ -9,7 +9,7 @@ use iceoryx2::port::{BackpressureAction, BackpressureInfo};
 
 use crate::PATIENCE;
 use crate::nodes::{DRIVER_RUN, node_name, peers};
-use crate::{Error, Qos, RUN_QOS, Recorded, Rx, Tx, Waiting, describe_service, type_name_of};
+use crate::{Error, Qos, RUN_QOS, RecordedSignal, Rx, Tx, Waiting, describe_service, type_name_of};
 
 /// One process's connection to a run.
 pub struct Bus {
@@ -136,12 +136,12 @@ impl Bus {
             })
     }
 
-    /// The run's [`Recorded`] signal (both ends; a process of a recorded run opens it
+    /// The run's [`RecordedSignal`] (both ends; a process of a recorded run opens it
     /// when it starts, so that the announcement, made once, reaches it).
-    pub fn recorded(&self) -> Result<Recorded, Error> {
+    pub fn recorded(&self) -> Result<RecordedSignal, Error> {
         let service = self.run_service("recorded");
         let event = self.event(&service)?;
-        Ok(Recorded {
+        Ok(RecordedSignal {
             notifier: event.notifier_builder().create()?,
             listener: event
                 .listener_builder()

@@ -32,7 +32,7 @@ pub use clock::now_ns;
 pub use error::Error;
 pub use messages::{Action, Estimate, Header, MAX_U, MAX_X, Measurement, Truth, flags, topic};
 pub use nodes::{DRIVER_RUN, Peer, node_name, peers};
-pub use ports::{Recorded, Rx, Tx};
+pub use ports::{RecordedSignal, Rx, Tx};
 pub use service::{
     BUFFER, PATIENCE, Qos, RUN_QOS, describe_service, payload_type_name, type_name_of,
 };

@@ -77,12 +77,12 @@ impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Tx<T> {
 /// The run's signal that the recorder has read every message (`rig/<run id>/recorded`):
 /// a process of a recorded run waits for it before it exits, since what a process sent
 /// may be gone from the recorder's queue once the process is ([`Bus::recorded`]).
-pub struct Recorded {
+pub struct RecordedSignal {
     pub(crate) notifier: Notifier<ipc::Service>,
     pub(crate) listener: Listener<ipc::Service>,
 }
 
-impl Recorded {
+impl RecordedSignal {
     /// Tells the run's processes that everything is recorded.
     pub fn announce(&self) -> Result<(), Error> {
         self.notifier.notify()?;

@@ -60,6 +60,21 @@ pub trait Differentiable: Approximator {
         let _ = lead;
         self.value_and_jacobian(x, y, jac);
     }
+
+    /// As [`Self::value_and_jacobian_near`], the same neighbours found through an index
+    /// over `x[..lead]` that a memory-based approximator keeps from the first such query
+    /// on, and fitted nearest first (newer first among equals): the planners' fits along a
+    /// plan. The fit's sums run in another order than the scan's, so the two agree to
+    /// rounding; VGBP keeps the scan, whose results are recorded bit for bit.
+    fn value_and_jacobian_near_indexed(
+        &self,
+        x: &[f64],
+        lead: usize,
+        y: &mut [f64],
+        jac: &mut [f64],
+    ) {
+        self.value_and_jacobian_near(x, lead, y, jac);
+    }
 }
 
 /// A scalar approximator with eligibility traces: the critic of Template 2.1.

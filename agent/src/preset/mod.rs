@@ -48,6 +48,7 @@ use plant::{SystemName, Task};
 use crate::config::{AgentConfig, Algo, ApproxKind, HorizonKind, LearningConfig};
 
 mod actor_critic;
+pub mod by_task;
 mod components;
 mod critic_only;
 mod finite;

@@ -68,7 +68,7 @@ pub use machine::MachineLoad;
 use runtime::clock::Clock;
 use runtime::config::Overrides;
 use runtime::output::write_atomic;
-use runtime::process::{CpuSet, Layout, Scheduling, Spin, Wakeup};
+use runtime::process::{CpuLayout, CpuSet, Scheduling, Spin, Wakeup};
 use runtime::report::plot::{Histogram, plot_histograms};
 use runtime::run::{NodeCommand, RunOptions, run};
 pub use sweep::{SweepPoint, sweep};
@@ -188,7 +188,7 @@ impl LatencyReport {
             .map_or("ordinary scheduling".to_string(), |p| {
                 format!("SCHED_FIFO {p}")
             });
-        let mut pinned = if self.scheduling.layout() == Some(Layout::PlantAlone) {
+        let mut pinned = if self.scheduling.layout() == Some(CpuLayout::PlantAlone) {
             ", plant pinned to its own CPU".to_string()
         } else {
             String::new()
@@ -261,7 +261,7 @@ pub fn latency(opts: &LatencyOptions) -> Result<LatencyReport, LatencyError> {
     // The baseline under the same policy: the ping-pong's partner process inherits it.
     runtime::process::set_rt_priority(opts.scheduling.rt_priority)?;
     let _wakeup = opts.wakeup.hold()?;
-    let plant_alone = opts.scheduling.layout() == Some(Layout::PlantAlone);
+    let plant_alone = opts.scheduling.layout() == Some(CpuLayout::PlantAlone);
     if plant_alone {
         runtime::process::cpus::pin(CpuSet::Others)?;
     }
@@ -402,7 +402,7 @@ fn run_realtime(
     let machine = before.zip(Counters::read()).map(|(b, a)| {
         b.until(
             &a,
-            (opts.scheduling.layout() == Some(Layout::PlantAlone))
+            (opts.scheduling.layout() == Some(CpuLayout::PlantAlone))
                 .then(runtime::process::cpus::last_cpu),
         )
     });

@@ -166,9 +166,9 @@ pub fn external_cases(
 /// runs' times leave its start out; `log` is its output.
 fn served(id: &str, log: &Path) -> Result<(), LoopError> {
     let bus = wire::Bus::join(&format!("benchwait{}", std::process::id()), "rig")?;
-    let watch = driver::contract::DriverWatch::open(&bus, id)?;
+    let watch = driver::link::DriverWatch::open(&bus, id)?;
     let timeout = std::time::Duration::from_secs(60);
-    driver::contract::wait_info(&bus, &watch.info, id, timeout, false, "").map_err(|source| {
+    driver::link::wait_info(&bus, &watch.info, id, timeout, false, "").map_err(|source| {
         LoopError::NotServed {
             id: id.to_owned(),
             log: log.to_owned(),

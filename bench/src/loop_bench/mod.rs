@@ -23,7 +23,7 @@ use std::process::{Child, Command, Stdio};
 
 use runtime::error::AtFile;
 use runtime::output::write_atomic;
-use runtime::process::Layout;
+use runtime::process::CpuLayout;
 use wire::{FOREVER, Waiting};
 
 mod error;
@@ -116,7 +116,7 @@ pub struct LoopOptions {
     /// How the processes wait for their next message.
     pub waiting: Waiting,
     /// Where the three processes and the recorder run.
-    pub layout: Layout,
+    pub layout: CpuLayout,
     /// Also runs against external drivers in lockstep, from here.
     pub external: Option<ExternalOptions>,
 }
@@ -125,7 +125,7 @@ pub struct LoopOptions {
 #[derive(Clone, Debug)]
 pub struct LoopReport {
     /// Where the processes ran.
-    pub layout: Layout,
+    pub layout: CpuLayout,
     /// `rig learn --runs 1`, per repetition.
     pub in_process: Vec<Timed>,
     /// `rig run`, per repetition.

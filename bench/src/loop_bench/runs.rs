@@ -8,7 +8,8 @@ use std::time::{Duration, Instant};
 use runtime::error::AtFile;
 use runtime::output::write_atomic;
 use runtime::process::{
-    AgentConfig, Layout, NodeConfig, ObserverConfig, PlantConfig, Scheduling, Settings, Wait,
+    AgentSettings, CpuLayout, NodeSettings, ObserverSettings, PlantSettings, Scheduling, Settings,
+    Wait,
 };
 use wire::Waiting;
 
@@ -96,7 +97,7 @@ pub fn three_processes(
     dir: &Path,
     trials: u32,
     waiting: Waiting,
-    layout: Layout,
+    layout: CpuLayout,
 ) -> Result<Timed, LoopError> {
     let t = trials.to_string();
     let d = dir.to_string_lossy();
@@ -116,7 +117,7 @@ pub fn unrecorded(
     dir: &Path,
     trials: u32,
     waiting: Waiting,
-    layout: Layout,
+    layout: CpuLayout,
 ) -> Result<(Timed, Vec<u64>), LoopError> {
     std::fs::create_dir_all(dir).at("cannot create", dir)?;
     let mut cfg = runtime::config::resolve(None, &Default::default())?;
@@ -129,14 +130,14 @@ pub fn unrecorded(
         cpus: Some(layout),
         ..Scheduling::default()
     };
-    let node = NodeConfig::new(&run_id, &config, scheduling, waiting);
-    let plant = PlantConfig {
+    let node = NodeSettings::new(&run_id, &config, scheduling, waiting);
+    let plant = PlantSettings {
         latency_out: Some(steps.clone()),
-        ..PlantConfig::new(node.clone())
+        ..PlantSettings::new(node.clone())
     };
     let settings = |role: &str| dir.join(format!("{role}.toml"));
-    AgentConfig::new(node.clone()).write(&settings("agent"))?;
-    ObserverConfig { node }.write(&settings("observer"))?;
+    AgentSettings::new(node.clone()).write(&settings("agent"))?;
+    ObserverSettings { node }.write(&settings("observer"))?;
     plant.write(&settings("plant"))?;
     let (cpu0, t0) = (children_cpu(), Instant::now());
     let mut kids = Kill(Vec::new());

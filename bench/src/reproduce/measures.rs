@@ -187,7 +187,7 @@ pub(super) fn measure(
 /// pendulum upright"): the reversals of the direction of rotation (sign changes of φ̇)
 /// before the pendulum first comes within 0.3 rad of upright (φ = 0); `None` if it never
 /// does in the trial.
-pub(super) fn swings(response: &[runtime::experiment::Sample]) -> Option<usize> {
+pub(super) fn swings(response: &[runtime::response::ResponseSample]) -> Option<usize> {
     let mut reversals = 0;
     let mut direction = 0.0;
     for s in response {
@@ -208,13 +208,13 @@ pub(super) fn swings(response: &[runtime::experiment::Sample]) -> Option<usize> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use runtime::experiment::Sample;
+    use runtime::response::ResponseSample;
 
-    fn response(states: &[(f64, f64)]) -> Vec<Sample> {
+    fn response(states: &[(f64, f64)]) -> Vec<ResponseSample> {
         states
             .iter()
             .enumerate()
-            .map(|(k, &(phi, omega))| Sample {
+            .map(|(k, &(phi, omega))| ResponseSample {
                 t: 0.03 * k as f64,
                 x: vec![phi, omega],
                 u: vec![0.0],

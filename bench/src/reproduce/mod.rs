@@ -150,7 +150,7 @@ pub fn reproduce(opts: &ReproduceOptions) -> Result<Vec<FigureResult>, Reproduce
             responses.push(summary.responses);
         }
         let t_plots = Instant::now();
-        let labelled: Vec<(&str, &[runtime::experiment::Sample])> = fig
+        let labelled: Vec<(&str, &[runtime::response::ResponseSample])> = fig
             .curves
             .iter()
             .zip(&responses)

@@ -3,7 +3,7 @@
 //!
 //! The hash is the first 8 bytes (little-endian `u64`) of the SHA-256 of the task's
 //! canonical bytes, which any language can write (`docs/tasks.md`, "The task's hash";
-//! `examples/python_driver/task.py` does): integers as `u64` and numbers as `f64`
+//! `rigkit.task`, `python/rigkit/task.py`, does): integers as `u64` and numbers as `f64`
 //! little-endian, flags as one byte, in this order —
 //!
 //! 1. the text `rig.task.v1` and a NUL byte; the name's bytes and a NUL byte;

@@ -192,7 +192,7 @@ impl Task {
     }
 
     /// The action the plant applies for `u`, into `out`: clamped to the action bounds, or
-    /// zero (the safe action) if a component is not finite ([`crate::safety::Supervisor`]).
+    /// zero (the safe action) if a component is not finite ([`crate::safety::SafetyLayer`]).
     pub fn saturate(&self, u: &[f64], out: &mut [f64]) -> crate::safety::Admission {
         crate::safety::limit(&self.action_low, &self.action_high, u, out)
     }

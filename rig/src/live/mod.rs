@@ -1,5 +1,7 @@
 //! The live view, `rig run --live [ADDR]`: the run's channels served over the Foxglove
 //! WebSocket protocol (the official `foxglove` crate's server) as they are recorded.
+//! Viewers connect through a [`Door`] that lets in clients offering either of the
+//! protocol's names ([`door`]).
 //!
 //! The recorder hands every channel and message to a [`Feed`] ([`runtime::record::Tap`]),
 //! in the recording's own JSON encoding and schemas, so that one layout serves the
@@ -14,7 +16,7 @@
 //! second.
 
 use std::collections::HashMap;
-use std::net::SocketAddr;
+use std::net::{Ipv4Addr, SocketAddr};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender, TrySendError, sync_channel};
@@ -29,9 +31,11 @@ use foxglove::{
 };
 use runtime::record::Tap;
 
+pub mod door;
 pub mod picture;
 pub mod watched;
 
+use door::Door;
 use picture::Body;
 use watched::{REFRESH, Watched};
 
@@ -117,23 +121,34 @@ impl std::fmt::Display for Served {
 /// The server and the thread that feeds it.
 pub struct LiveView {
     server: WebSocketServerHandle,
+    door: Door,
     thread: JoinHandle<Served>,
     dropped: Arc<AtomicU64>,
-    addr: SocketAddr,
 }
 
 impl LiveView {
     /// Starts the server on `addr` for a run of `task`; returns it and the feed to give
     /// the recorder ([`runtime::run::run_with`]).
     pub fn start(addr: SocketAddr, task: &plant::Task) -> Result<(LiveView, Box<dyn Tap>)> {
+        let refused =
+            |e: &dyn std::fmt::Display| anyhow!("--live {addr}: cannot serve the live view: {e}");
         let ctx = Context::new();
+        // The server on this host only, behind the door where the user asked.
         let server = WebSocketServer::new()
             .name(format!("rig {}", task.name))
-            .bind(addr.ip().to_string(), addr.port())
+            .bind(Ipv4Addr::LOCALHOST.to_string(), 0)
             .message_backlog_size(BACKLOG)
             .context(&ctx)
             .start_blocking()
-            .map_err(|e| anyhow!("--live {addr}: cannot serve the live view: {e}"))?;
+            .map_err(|e| refused(&e))?;
+        let inside = SocketAddr::new(Ipv4Addr::LOCALHOST.into(), server.port());
+        let door = match Door::open(addr, inside) {
+            Ok(door) => door,
+            Err(e) => {
+                let _ = server.stop();
+                return Err(refused(&e));
+            }
+        };
         let (queue, events) = sync_channel(QUEUE);
         let dropped = Arc::new(AtomicU64::new(0));
         let watched = Arc::new(Watched::default());
@@ -142,7 +157,6 @@ impl LiveView {
             .name("live view".into())
             .spawn(move || view.serve(&events))
             .context("cannot start the live view's thread")?;
-        let addr = SocketAddr::new(addr.ip(), server.port());
         let feed = Feed {
             queue,
             dropped: dropped.clone(),
@@ -150,16 +164,16 @@ impl LiveView {
         };
         let live = LiveView {
             server,
+            door,
             thread,
             dropped,
-            addr,
         };
         Ok((live, Box::new(feed)))
     }
 
     /// Where it listens.
     pub fn addr(&self) -> SocketAddr {
-        self.addr
+        self.door.addr()
     }
 
     /// After the run (the feed dropped with the recorder): serves what is left, stops the
@@ -178,6 +192,7 @@ impl LiveView {
             let _ = stopped.send(());
         });
         let _ = wait.recv_timeout(STOP);
+        self.door.close();
         served
     }
 }

@@ -4,51 +4,29 @@
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use super::python as py;
 use super::rig;
 
-/// The Python interpreter with the bindings, or `None` (and why) if there is none.
+/// The Python interpreter with the bindings (and the source tree's rigkit), or `None`
+/// (and why) if there is none.
 pub fn python() -> Option<String> {
-    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
-    let probe = Command::new(&python)
-        .args([
-            "-c",
-            "import importlib.metadata as m, iceoryx2; print(m.version('iceoryx2'))",
-        ])
-        .output();
-    match probe {
-        Ok(o) if o.status.success() && String::from_utf8_lossy(&o.stdout).trim() == "0.10.0" => {
-            Some(python)
-        }
-        Ok(o) => {
-            println!(
-                "skipped: {python} cannot import iceoryx2 0.10.0 (pip install iceoryx2==0.10.0, or set RIG_PYTHON): {}{}",
-                String::from_utf8_lossy(&o.stdout).trim(),
-                String::from_utf8_lossy(&o.stderr)
-                    .lines()
-                    .last()
-                    .unwrap_or("")
-            );
-            None
-        }
-        Err(e) => {
-            println!("skipped: cannot run {python} ({e})");
-            None
-        }
+    let install = "pip install \"./python[driver]\"";
+    let (python, version) = py::probe(
+        "import importlib.metadata as m, iceoryx2, rigkit; print(m.version('iceoryx2'))",
+        &format!("iceoryx2 0.10.0 and rigkit ({install})"),
+    )?;
+    if version != "0.10.0" {
+        println!("skipped: {python} has iceoryx2 {version}, not 0.10.0 ({install})");
+        return None;
     }
+    Some(python)
 }
 
 /// The Python interpreter with the bindings, if it can also import `modules`
 /// (comma-separated), or `None` (and why).
 pub fn python_with(modules: &str) -> Option<String> {
-    let python = python()?;
-    let has = Command::new(&python)
-        .args(["-c", &format!("import {modules}")])
-        .status()
-        .is_ok_and(|s| s.success());
-    if !has {
-        println!("skipped: {python} cannot import {modules}");
-    }
-    has.then_some(python)
+    python()?;
+    py::with(modules)
 }
 
 /// A driver process: the Python example (`examples/python_driver/driver.py`, official
@@ -104,9 +82,7 @@ impl Driver {
     /// The Python driver `script` (relative to the repository) with id `<name>-py<pid>`
     /// and flags `extra`.
     pub fn script(python: &str, script: &str, name: &str, extra: &[&str]) -> Self {
-        let mut c = Command::new(python);
-        c.arg(format!("{}/../{script}", env!("CARGO_MANIFEST_DIR")));
-        Self::spawn(c, &format!("{name}-py"), extra)
+        Self::spawn(py::script(python, script), &format!("{name}-py"), extra)
     }
 
     /// `command --driver-id <prefix><pid> extra…`, once the other tests' drivers are done.

@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 pub mod drivers;
 pub mod gaps;
 pub mod hosts;
+pub mod python;
 
 /// The flags of VGBP-LSTD on the §6.4.2 manipulator.
 pub const ARM64_VGBP_LSTD: [&str; 6] =
@@ -190,14 +191,14 @@ pub fn pipelined(mcap_path: &Path) -> usize {
 /// those of `returns.csv`), where `$RIG_PYTHON` (default `python3`) has `mcap`; says so
 /// and checks nothing where it has not.
 pub fn check_mcap(dir: &Path) {
-    let python = std::env::var("RIG_PYTHON").unwrap_or_else(|_| "python3".into());
-    let probe = Command::new(&python).args(["-c", "import mcap"]).output();
-    if !probe.is_ok_and(|o| o.status.success()) {
-        println!("check_mcap.py skipped: {python} cannot import mcap (pip install mcap==1.6.0)");
+    let Some(python) = python::with("mcap") else {
+        println!("check_mcap.py skipped");
         return;
-    }
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/python/check_mcap.py");
-    let out = Command::new(&python).arg(script).arg(dir).output().unwrap();
+    };
+    let out = python::script(&python, "tests/python/check_mcap.py")
+        .arg(dir)
+        .output()
+        .unwrap();
     assert!(
         out.status.success(),
         "check_mcap.py {}: {}{}",

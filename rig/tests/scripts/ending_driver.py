@@ -14,13 +14,12 @@ import math
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[3]
-sys.path.insert(0, str(ROOT / "examples" / "python_driver"))  # the contract's modules
+from rigkit import messages
+from rigkit.angle import wrap
+from rigkit.lockstep import Services, serve_until_signalled
+from rigkit.task import Task
 
-import lockstep  # noqa: E402
-import messages  # noqa: E402
-from lockstep import Services, serve_until_signalled  # noqa: E402
-from task import Task  # noqa: E402
+ROOT = Path(__file__).resolve().parents[3]
 
 
 class Still:
@@ -33,7 +32,6 @@ class Still:
         self.x, self.k = [0.0] * task.n, 0
 
     def place(self, x0):
-        wrap = lambda v: (v + math.pi) % (2 * math.pi) - math.pi  # noqa: E731
         self.x = [wrap(v) if a else v for v, a in zip(x0, self.task.angles)]
         self.k = 0
 
@@ -76,9 +74,7 @@ def main():
     p.add_argument("--old-version", action="store_true", help="publish a version 2 info")
     args = p.parse_args()
     task = Task.read(str(ROOT / "plant" / "tasks" / "pendulum.toml"))
-    if args.old_version:
-        lockstep.DriverInfo = OldInfo
-    services = Services(args.driver_id)
+    services = Services(args.driver_id, info_type=OldInfo if args.old_version else messages.DriverInfo)
     sim = Still(task, args.end_at, args.ending, args.nan_at)
     serve_until_signalled(services, task, sim, "ending driver", False)
     return 0

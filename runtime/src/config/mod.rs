@@ -12,7 +12,7 @@
 //! ([`ExperimentConfig::change_agent`], `change_run`, `change_observer`): every
 //! configuration there is satisfies every rule, and its learner is resolved once.
 
-mod layout;
+mod file;
 mod merge;
 mod resolve;
 #[cfg(test)]
@@ -20,7 +20,7 @@ mod task_tests;
 #[cfg(test)]
 mod tests;
 
-pub use resolve::{Overrides, resolve};
+pub use resolve::{Overrides, resolve, resolve_with_choice};
 
 use agent::checkpoint::{self, Origin};
 use std::sync::Arc;
@@ -33,15 +33,16 @@ use plant::{SystemName, Task, TaskFile};
 use serde::{Deserialize, Serialize};
 
 /// A complete experiment. Its TOML form keeps every key where a user writes it (see
-/// `layout`): the system and the learner's choices at the top level, then `[run]`, the
-/// agent's sections and `[observer]` (written only when it is not the default).
+/// `file::ExperimentFile`): the system and the learner's choices at the top level, then
+/// `[run]`, the agent's sections and `[observer]` (written only when it is not the
+/// default).
 ///
 /// The task is read and checked once, when the configuration is made (from a preset or
 /// from TOML); [`ExperimentConfig::task`] hands out that one. The sections are read
 /// through accessors and changed through methods that check the whole configuration
 /// again and resolve its learner ([`ExperimentConfig::learner`]) anew.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(try_from = "layout::Layout", into = "layout::Layout")]
+#[serde(try_from = "file::ExperimentFile", into = "file::ExperimentFile")]
 pub struct ExperimentConfig {
     /// The system learned on: the built-in system whose presets the learner starts from
     /// and whose task it learns, unless `task` gives another.

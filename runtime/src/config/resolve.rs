@@ -3,11 +3,12 @@
 use std::path::Path;
 
 use agent::config::{Algo, ApproxKind, EvictionRule, HorizonKind, LstdPrior};
+use agent::preset::by_task::{self, Choice};
 use observer::config::{ObserverConfig, ObserverKind, ObserverMode, ObserverModel, SensorKind};
 use plant::config::{ConfigError, RunConfig};
 use plant::{SystemName, TaskFile};
 
-use super::layout::Layout;
+use super::file::ExperimentFile;
 use super::merge::{add_optional_sections, add_schedule_keys, check_choice, choose, merge};
 use super::{ExperimentConfig, Sections};
 
@@ -149,7 +150,18 @@ struct PresetChoice {
     algo: Algo,
     approx: ApproxKind,
     horizon: HorizonKind,
+    /// No learner was named (no `algo`, `approx`, `horizon`, `[lqr]` or `[planning]`, by
+    /// file or flag) for a task file that is not one of the thesis's own: the task
+    /// chooses it ([`agent::preset::by_task`]).
+    by_task: Option<plant::Task>,
+    /// The task file given by `--task`.
+    task_file: Option<std::path::PathBuf>,
 }
+
+/// The keys of a configuration file that name a learner: with none of them (and no
+/// `--algo`, `--approx`, `--horizon`), a task the rig does not simulate gets the learner
+/// [`agent::preset::by_task`] chooses.
+const LEARNER_KEYS: [&str; 5] = ["algo", "approx", "horizon", "lqr", "planning"];
 
 impl PresetChoice {
     /// The command line's choices, else the file's top-level keys, else the defaults
@@ -169,7 +181,16 @@ impl PresetChoice {
             Some(t) if t.simulation.is_none() => Some(super::task_of(t)?),
             _ => None,
         };
+        let named = o.algo.is_some()
+            || o.approx.is_some()
+            || o.horizon.is_some()
+            || LEARNER_KEYS.iter().any(|k| user.contains_key(*k));
         Ok(Self {
+            by_task: match task {
+                Some(t) if !named && !is_thesis_task(t) => Some(super::task_of(t)?),
+                _ => None,
+            },
+            task_file: o.task.clone(),
             system: match task {
                 Some(t) => simulated_system(t, explicit.then_some(system))?,
                 None => system,
@@ -187,19 +208,31 @@ impl PresetChoice {
     }
 
     /// The preset as a TOML table with every key a user may set: also those it does not
-    /// write when they have their default values.
-    fn table(&self) -> Result<toml::Table, ConfigError> {
+    /// write when they have their default values; and the task's choice of learner, if it
+    /// made it.
+    fn table(&self) -> Result<(toml::Table, Option<Choice>), ConfigError> {
         let (algo, approx, horizon) = (self.algo, self.approx, self.horizon);
-        let preset = match &self.driven {
-            None => agent::preset::preset(self.system, algo, approx, horizon)?,
-            Some(task) => agent::preset::for_task(task, algo, approx, horizon)?,
+        let (preset, choice) = match (&self.by_task, &self.driven) {
+            (Some(task), _) => {
+                // The task's own keys are at fault: its file, when `--task` gave one.
+                let (preset, choice) = by_task::learner(task).map_err(|mut e| {
+                    e.file.clone_from(&self.task_file);
+                    e
+                })?;
+                (preset, Some(choice))
+            }
+            (None, None) => (
+                agent::preset::preset(self.system, algo, approx, horizon)?,
+                None,
+            ),
+            (None, Some(task)) => (agent::preset::for_task(task, algo, approx, horizon)?, None),
         };
         let sections = Sections {
             agent: preset.agent,
             run: preset.run,
             observer: ObserverConfig::default(),
         };
-        let layout = Layout::new(Some(self.system), sections, None);
+        let layout = ExperimentFile::new(Some(self.system), sections, None);
         let mut table = toml::Table::try_from(&layout).expect("a preset always serialises");
         // The observer section is written only when it differs from the default; a user's
         // file may still set any of its keys.
@@ -223,8 +256,16 @@ impl PresetChoice {
                 .entry("prior")
                 .or_insert_with(|| toml::Value::String("zero".into()));
         }
-        Ok(table)
+        Ok((table, choice))
     }
+}
+
+/// Whether `task` is one of the thesis's own, shipped in `plant/tasks/` (its presets are
+/// the thesis's, whatever the task would choose).
+fn is_thesis_task(task: &TaskFile) -> bool {
+    task.simulation
+        .as_ref()
+        .is_some_and(|sim| plant::task::builtin::task(sim.system).file == *task)
 }
 
 /// The built-in system whose presets a task file's learner starts from: the one it
@@ -290,6 +331,15 @@ pub fn resolve(
     file: Option<(&Path, &str)>,
     o: &Overrides,
 ) -> Result<ExperimentConfig, ConfigError> {
+    resolve_with_choice(file, o).map(|(config, _)| config)
+}
+
+/// [`resolve`], and the learner the task chose when none was named (a task the rig does
+/// not simulate, [`agent::preset::by_task`]): what `rig` says in one line.
+pub fn resolve_with_choice(
+    file: Option<(&Path, &str)>,
+    o: &Overrides,
+) -> Result<(ExperimentConfig, Option<Choice>), ConfigError> {
     let path = file.map(|(p, _)| p.to_path_buf());
     let with_file = |mut e: ConfigError| {
         if e.file.is_none() {
@@ -308,18 +358,19 @@ pub fn resolve(
     };
     let task = task_file(&mut user, o, path.as_deref()).map_err(with_file)?;
     let choice = PresetChoice::of(&user, o, task.as_ref()).map_err(with_file)?;
-    let mut merged = choice.table().map_err(with_file)?;
+    let (mut merged, chosen) = choice.table().map_err(with_file)?;
     add_optional_sections(&mut merged, &mut user);
     add_schedule_keys(&mut merged, &mut user).map_err(with_file)?;
     merge(&mut merged, user, "").map_err(with_file)?;
     check_choices(&merged).map_err(with_file)?;
-    let mut layout: Layout = toml::Value::Table(merged)
+    let mut layout: ExperimentFile = toml::Value::Table(merged)
         .try_into()
         .map_err(|e: toml::de::Error| with_file(ConfigError::new("", e.message())))?;
     (layout.system, layout.task) = (Some(choice.system), task);
     (layout.algo, layout.approx, layout.horizon) = (choice.algo, choice.approx, choice.horizon);
     o.apply(&mut layout.run, &mut layout.observer);
-    ExperimentConfig::try_from(layout).map_err(with_file)
+    let config = ExperimentConfig::try_from(layout).map_err(with_file)?;
+    Ok((config, chosen))
 }
 
 /// Checks the spellings of the choice keys in sections (`[observer]`, an LLR memory's

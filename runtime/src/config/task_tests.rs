@@ -28,6 +28,7 @@ fn without_simulation(dir: &Path) -> PathBuf {
     driven
 }
 
+/// `--task PATH`, no learner named: the task chooses it.
 fn with_task(path: &Path) -> Overrides {
     Overrides {
         task: Some(path.to_path_buf()),
@@ -35,10 +36,19 @@ fn with_task(path: &Path) -> Overrides {
     }
 }
 
+/// `--task PATH --algo mlac --approx llr`: the learner named.
+fn with_task_and_mlac(path: &Path) -> Overrides {
+    Overrides {
+        algo: Some(Algo::Mlac),
+        approx: Some(ApproxKind::Llr),
+        ..with_task(path)
+    }
+}
+
 #[test]
 fn a_task_file_gives_the_task_and_its_simulation_the_presets() {
     let dir = heavy_pendulum("gives");
-    let cfg = resolve(None, &with_task(&dir.join("heavy.toml"))).unwrap();
+    let cfg = resolve(None, &with_task_and_mlac(&dir.join("heavy.toml"))).unwrap();
     assert_eq!(
         cfg.system(),
         SystemName::Pendulum,
@@ -48,7 +58,7 @@ fn a_task_file_gives_the_task_and_its_simulation_the_presets() {
     let task = cfg.task();
     assert_eq!(task.reward.q, [8.0, 0.2]);
     assert_eq!(task.initial_states.len(), 2);
-    // The learner is the pendulum's preset.
+    // The learner named is the pendulum's preset.
     let preset = resolve(None, &Overrides::default()).unwrap();
     assert_eq!(cfg.agent(), &preset.agent);
     // config.toml carries the task: it resolves to itself wherever it is read.
@@ -62,7 +72,10 @@ fn a_task_file_gives_the_task_and_its_simulation_the_presets() {
     // A configuration file names it relative to its own folder.
     let file = dir.join("exp.toml");
     let from_key = resolve(
-        Some((&file, "task = \"heavy.toml\"\n")),
+        Some((
+            &file,
+            "task = \"heavy.toml\"\nalgo = \"mlac\"\napprox = \"llr\"\n",
+        )),
         &Overrides::default(),
     );
     assert_eq!(from_key.unwrap(), cfg);
@@ -126,7 +139,7 @@ fn task_errors_name_the_task_file_or_the_key() {
 fn a_task_without_a_simulation_takes_the_pendulum_presets_by_rules() {
     let dir = heavy_pendulum("driven");
     let driven = without_simulation(&dir);
-    let cfg = resolve(None, &with_task(&driven)).unwrap();
+    let cfg = resolve(None, &with_task_and_mlac(&driven)).unwrap();
     assert_eq!(cfg.system(), SystemName::Pendulum, "the presets' basis");
     let task = cfg.task();
     assert!(task.simulation.is_none());
@@ -208,4 +221,46 @@ fn a_configuration_with_a_bad_task_is_refused_when_read() {
     let bad = text.replace("state_weights = [8.0, 0.2]", "state_weights = [8.0]");
     let e = toml::from_str::<ExperimentConfig>(&bad).unwrap_err();
     assert!(e.message().contains("`task."), "{e}");
+}
+
+/// With no learner named, a task file that is not one of the thesis's chooses it — here a
+/// swing-up (it starts hanging): planning by the iterative LQR — whether it simulates a
+/// built-in system or not; a configuration file that names none keeps the choice and
+/// changes its values; config.toml names the learner, so it resolves to itself.
+#[test]
+fn a_task_file_without_a_named_learner_gets_the_one_it_chooses() {
+    let dir = heavy_pendulum("chooses");
+    for path in [dir.join("heavy.toml"), without_simulation(&dir)] {
+        let (cfg, choice) = resolve_with_choice(None, &with_task(&path)).unwrap();
+        let choice = choice.expect("the task chose");
+        assert_eq!(
+            choice.kind,
+            agent::preset::by_task::TaskKind::SwingUp,
+            "{choice}"
+        );
+        let (preset, _) = agent::preset::by_task::learner(&cfg.task()).unwrap();
+        assert_eq!(cfg.agent(), &preset.agent);
+        assert!(cfg.agent().planning.is_some());
+        let (again, said) = resolve_with_choice(
+            Some((Path::new("c.toml"), &cfg.to_toml())),
+            &Overrides::default(),
+        )
+        .unwrap();
+        assert_eq!((again, said), (cfg.clone(), None));
+        let file = "[learning]\ngamma = 0.99\n";
+        let (tuned, kept) =
+            resolve_with_choice(Some((Path::new("g.toml"), file)), &with_task(&path)).unwrap();
+        assert!(kept.is_some() && tuned.agent().planning.is_some());
+        assert_eq!(tuned.agent().learning.gamma, 0.99);
+    }
+    // The thesis's own task keeps the preset, silently.
+    let shipped =
+        std::env::temp_dir().join(format!("cfg-task-shipped-{}.toml", std::process::id()));
+    std::fs::write(&shipped, plant::task::builtin::text(SystemName::Pendulum)).unwrap();
+    let (cfg, choice) = resolve_with_choice(None, &with_task(&shipped)).unwrap();
+    assert_eq!(choice, None);
+    assert_eq!(
+        cfg.agent(),
+        resolve(None, &Overrides::default()).unwrap().agent()
+    );
 }

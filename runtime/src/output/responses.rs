@@ -6,7 +6,7 @@ use std::path::Path;
 
 use super::write_atomic;
 use crate::error::FileError;
-use crate::experiment::Sample;
+use crate::response::ResponseSample;
 
 /// Writes each run's acted-on error as `run,x_0,...` (shortest round-trip numbers).
 pub fn write_acted_on(path: &Path, rmse: &[Vec<f64>]) -> Result<(), FileError> {
@@ -27,7 +27,7 @@ pub fn write_acted_on(path: &Path, rmse: &[Vec<f64>]) -> Result<(), FileError> {
 
 /// Writes each run's time response as `run,t,x_0,...,u_0,...,reward` (shortest
 /// round-trip numbers).
-pub fn write_responses(path: &Path, responses: &[Vec<Sample>]) -> Result<(), FileError> {
+pub fn write_responses(path: &Path, responses: &[Vec<ResponseSample>]) -> Result<(), FileError> {
     let mut s = String::new();
     if let Some(first) = responses.iter().flatten().next() {
         let cols: Vec<String> = (0..first.x.len())
@@ -52,7 +52,7 @@ pub fn write_responses(path: &Path, responses: &[Vec<Sample>]) -> Result<(), Fil
 
 /// Reads what `write_responses` wrote for `runs` runs; `None` if the file is missing,
 /// malformed or incomplete.
-pub fn read_responses(path: &Path, runs: usize) -> Option<Vec<Vec<Sample>>> {
+pub fn read_responses(path: &Path, runs: usize) -> Option<Vec<Vec<ResponseSample>>> {
     let mut reader = csv::Reader::from_path(path).ok()?;
     let n = reader
         .headers()
@@ -70,7 +70,7 @@ pub fn read_responses(path: &Path, runs: usize) -> Option<Vec<Vec<Sample>>> {
             .map(|f| f.parse().ok())
             .collect::<Option<_>>()?;
         let last = v.len().checked_sub(1)?;
-        out.get_mut(run)?.push(Sample {
+        out.get_mut(run)?.push(ResponseSample {
             t: v[0],
             x: v.get(1..1 + n)?.to_vec(),
             u: v.get(1 + n..last)?.to_vec(),

@@ -9,12 +9,12 @@ use ::observer::timing::{Call, ToAgent, act};
 
 use wire::{Action, Estimate, flags, now_ns, topic};
 
-use super::{AgentConfig, NodeError, Result, SILENCE, STARTUP, pack};
+use super::{AgentSettings, NodeError, Result, SILENCE, STARTUP, pack};
 use crate::config::ExperimentConfig;
 use crate::resume::CheckpointWriter;
 
 /// Runs the agent side of a run until the plant announces its end.
-pub fn run(args: &AgentConfig) -> Result<()> {
+pub fn run(args: &AgentSettings) -> Result<()> {
     let node = &args.node;
     super::set_rt_priority(node.scheduling.rt_priority)?;
     node.scheduling.place(super::Part::Node)?;
@@ -24,7 +24,7 @@ pub fn run(args: &AgentConfig) -> Result<()> {
         .as_deref()
         .map(|dir| CheckpointWriter::new(dir, node.scheduling.layout(), args.keep_checkpoints))
         .transpose()?;
-    let mut learner = Learner::new(&cfg, node.run_index, args.resume.as_deref(), checkpoints)?;
+    let mut learner = AgentNode::new(&cfg, node.run_index, args.resume.as_deref(), checkpoints)?;
     let bus = node.join("agent")?;
     let estimates = bus.rx::<Estimate>(topic::ESTIMATE)?;
     let out = bus.tx::<Action>(topic::ACTION)?;
@@ -48,7 +48,7 @@ pub fn run(args: &AgentConfig) -> Result<()> {
 }
 
 /// The agent of the run, its checkpoints, and which learning trial is due.
-pub struct Learner {
+pub struct AgentNode {
     agent: Box<dyn Agent>,
     /// Which experiment and run this is (for checkpoints).
     origin: Origin,
@@ -64,7 +64,7 @@ pub struct Learner {
     m: usize,
 }
 
-impl Learner {
+impl AgentNode {
     /// The agent of run `run` of `cfg`, from the checkpoint `resume` if given, writing
     /// a checkpoint of every learning trial to `checkpoints` if given.
     pub fn new(

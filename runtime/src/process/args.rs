@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use wire::{FOREVER, Waiting};
 
 use super::node::Invalid;
-use super::{Layout, Part};
+use super::{CpuLayout, Part};
 
 /// The realtime plant's default spin before each sampling instant \[µs\] (`--spin-us`).
 pub const SPIN_US: u64 = 100;
@@ -37,14 +37,14 @@ pub struct Scheduling {
     /// default: recorder-alone in lockstep when the processes poll without end on a
     /// machine of 2 or 3 CPUs, otherwise shared; a node's: shared].
     #[cfg_attr(feature = "cli", arg(long, value_enum, value_name = "LAYOUT"))]
-    pub cpus: Option<Layout>,
+    pub cpus: Option<CpuLayout>,
 }
 
 impl Scheduling {
     /// The layout asked for (`--cpus`, `--pin-cpus`), if any.
-    pub fn layout(&self) -> Option<Layout> {
+    pub fn layout(&self) -> Option<CpuLayout> {
         if self.pin_cpus {
-            Some(Layout::PlantAlone)
+            Some(CpuLayout::PlantAlone)
         } else {
             self.cpus
         }
@@ -52,7 +52,7 @@ impl Scheduling {
 
     /// Places the calling process's `part` as [`Scheduling::layout`] says.
     pub fn place(&self, part: Part) -> Result<(), SystemError> {
-        self.layout().unwrap_or(Layout::Shared).place(part)
+        self.layout().unwrap_or(CpuLayout::Shared).place(part)
     }
 
     /// Refuses a priority outside 1–99 (a node's settings are not checked by a flag).

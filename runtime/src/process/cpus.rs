@@ -3,9 +3,9 @@
 //! Two layouts set one CPU apart — the last one online — and put the rest of the rig on
 //! the others:
 //!
-//! - [`Layout::PlantAlone`] (real time, `--pin-cpus`): the plant, the clock, alone, so
+//! - [`CpuLayout::PlantAlone`] (real time, `--pin-cpus`): the plant, the clock, alone, so
 //!   that the rig's own work does not disturb the sampling instants;
-//! - [`Layout::RecorderAlone`] (lockstep): the recorder and the checkpoint writer alone,
+//! - [`CpuLayout::RecorderAlone`] (lockstep): the recorder and the checkpoint writer alone,
 //!   so that their work does not take the CPU a polling loop process needs. On a machine
 //!   with fewer CPUs than the loop's three processes and the recorder, the loop then
 //!   shares its CPUs and hands each message on with a context switch instead of waiting
@@ -17,7 +17,7 @@ use wire::{FOREVER, Waiting};
 plant::choice! {
     /// Where the processes of a run are placed (`--cpus`).
     #[derive(Debug, PartialEq, Eq)]
-    pub enum Layout {
+    pub enum CpuLayout {
         /// Wherever the operating system puts them.
         Shared => "shared",
         /// The plant (the clock) alone on the last CPU; the observer, the agent and the
@@ -51,13 +51,13 @@ pub enum CpuSet {
     Others,
 }
 
-impl Layout {
+impl CpuLayout {
     /// The `--cpus` value of this layout.
     pub fn name(self) -> &'static str {
         match self {
-            Layout::Shared => "shared",
-            Layout::PlantAlone => "plant-alone",
-            Layout::RecorderAlone => "recorder-alone",
+            CpuLayout::Shared => "shared",
+            CpuLayout::PlantAlone => "plant-alone",
+            CpuLayout::RecorderAlone => "recorder-alone",
         }
     }
 
@@ -65,20 +65,20 @@ impl Layout {
     pub fn cpus(self, part: Part) -> Option<CpuSet> {
         use {CpuSet::*, Part::*};
         match (self, part) {
-            (Layout::Shared, _) => None,
-            (Layout::PlantAlone, Plant) => Some(Last),
-            (Layout::PlantAlone, Node | Recorder) => Some(Others),
+            (CpuLayout::Shared, _) => None,
+            (CpuLayout::PlantAlone, Plant) => Some(Last),
+            (CpuLayout::PlantAlone, Node | Recorder) => Some(Others),
             // A thread of the agent: on the agent's CPUs.
-            (Layout::PlantAlone, CheckpointWriter) => None,
-            (Layout::RecorderAlone, Plant | Node) => Some(Others),
-            (Layout::RecorderAlone, Recorder | CheckpointWriter) => Some(Last),
+            (CpuLayout::PlantAlone, CheckpointWriter) => None,
+            (CpuLayout::RecorderAlone, Plant | Node) => Some(Others),
+            (CpuLayout::RecorderAlone, Recorder | CheckpointWriter) => Some(Last),
         }
     }
 
     /// An error if this layout cannot be had here: one that sets a CPU apart on a
     /// machine with one CPU online.
     pub fn check(self) -> Result<(), SystemError> {
-        if self != Layout::Shared && online() < 2 {
+        if self != CpuLayout::Shared && online() < 2 {
             return Err(SystemError::OneCpu {
                 layout: Some(self.name()),
             });
@@ -87,7 +87,7 @@ impl Layout {
     }
 
     /// Pins the calling thread as this layout places `part` (nothing for
-    /// [`Layout::Shared`]).
+    /// [`CpuLayout::Shared`]).
     pub fn place(self, part: Part) -> Result<(), SystemError> {
         match self.cpus(part) {
             Some(set) => pin(set),
@@ -99,13 +99,13 @@ impl Layout {
     /// alone when the loop polls without end (it wants a CPU whenever it has a message)
     /// on a machine of two or three CPUs, fewer than the four processes, all of which
     /// this process may use; shared otherwise.
-    pub fn lockstep(waiting: Waiting) -> Layout {
+    pub fn lockstep(waiting: Waiting) -> CpuLayout {
         let polls = matches!(waiting, Waiting::Yield(b) | Waiting::Spin(b) if b == FOREVER);
         let n = online();
         if polls && (2..=3).contains(&n) && allowed().len() == n {
-            Layout::RecorderAlone
+            CpuLayout::RecorderAlone
         } else {
-            Layout::Shared
+            CpuLayout::Shared
         }
     }
 }
@@ -177,14 +177,14 @@ mod tests {
     fn each_layout_sets_one_part_apart() {
         use {CpuSet::*, Part::*};
         let parts = [Plant, Node, Recorder, CheckpointWriter];
-        let on = |l: Layout| parts.map(|p| l.cpus(p));
-        assert_eq!(on(Layout::Shared), [None; 4]);
+        let on = |l: CpuLayout| parts.map(|p| l.cpus(p));
+        assert_eq!(on(CpuLayout::Shared), [None; 4]);
         assert_eq!(
-            on(Layout::PlantAlone),
+            on(CpuLayout::PlantAlone),
             [Some(Last), Some(Others), Some(Others), None]
         );
         assert_eq!(
-            on(Layout::RecorderAlone),
+            on(CpuLayout::RecorderAlone),
             [Some(Others), Some(Others), Some(Last), Some(Last)]
         );
     }
@@ -193,15 +193,18 @@ mod tests {
     fn a_lockstep_run_sets_the_recorder_apart_only_when_it_polls_on_few_cpus() {
         let few = (2..=3).contains(&online()) && allowed().len() == online();
         let apart = if few {
-            Layout::RecorderAlone
+            CpuLayout::RecorderAlone
         } else {
-            Layout::Shared
+            CpuLayout::Shared
         };
-        assert_eq!(Layout::lockstep(Waiting::Yield(FOREVER)), apart);
-        assert_eq!(Layout::lockstep(Waiting::Spin(FOREVER)), apart);
-        assert_eq!(Layout::lockstep(Waiting::Block), Layout::Shared);
+        assert_eq!(CpuLayout::lockstep(Waiting::Yield(FOREVER)), apart);
+        assert_eq!(CpuLayout::lockstep(Waiting::Spin(FOREVER)), apart);
+        assert_eq!(CpuLayout::lockstep(Waiting::Block), CpuLayout::Shared);
         let bounded = std::time::Duration::from_micros(100);
-        assert_eq!(Layout::lockstep(Waiting::Yield(bounded)), Layout::Shared);
+        assert_eq!(
+            CpuLayout::lockstep(Waiting::Yield(bounded)),
+            CpuLayout::Shared
+        );
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! ([`wire`]), waits for its peers, and runs its component one sample at a time in
 //! lockstep — simulated time advances only when the action for the sample has arrived.
 //!
-//! The step order is exactly that of the in-process driver
+//! The step order is exactly that of the in-process runner
 //! ([`crate::experiment::Experiment`]), so a run over three processes gives the same
 //! numbers, bit for bit:
 //!
@@ -32,11 +32,11 @@ use std::time::Duration;
 
 pub use error::{NodeError, Result, SystemError};
 
-pub use cpus::{CpuSet, Layout, Part};
+pub use cpus::{CpuLayout, CpuSet, Part};
 pub use wakeup::{Wakeup, WakeupLimit};
 
 pub use args::{SPIN_US, Scheduling, Spin, Wait, WaitKind};
-pub use node::{AgentConfig, NodeConfig, ObserverConfig, PlantConfig, Settings};
+pub use node::{AgentSettings, NodeSettings, ObserverSettings, PlantSettings, Settings};
 
 /// How long a process waits for a message before deciding a peer has died.
 pub const SILENCE: Duration = Duration::from_secs(10);
@@ -113,10 +113,10 @@ pub fn batch_thread() {
 const LINGER: Duration = Duration::from_secs(10);
 
 /// A process's last duty in a recorded run (`receivers = 2`): after its last message it
-/// waits until the recorder announces that it has read everything ([`wire::Recorded`]),
-/// since what the process sent may be gone from the recorder's queue once the process
-/// is.
-pub struct Linger(Option<wire::Recorded>);
+/// waits until the recorder announces that it has read everything
+/// ([`wire::RecordedSignal`]), since what the process sent may be gone from the
+/// recorder's queue once the process is.
+pub struct Linger(Option<wire::RecordedSignal>);
 
 impl Linger {
     /// Opens the run's signal on `bus` if a recorder listens (`receivers` ≥ 2).

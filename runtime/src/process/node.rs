@@ -1,7 +1,7 @@
 //! What a node is given: one settings file per process (`rig plant|observer|agent
 //! --node FILE`), written by `rig run` into the run folder (`DIR/nodes/<role>.toml`) or
-//! by hand. Every node takes a [`NodeConfig`] (`[node]`); the plant and the agent add
-//! their own keys ([`PlantConfig`], [`AgentConfig`]). A node validates its settings
+//! by hand. Every node takes a [`NodeSettings`] (`[node]`); the plant and the agent add
+//! their own keys ([`PlantSettings`], [`AgentSettings`]). A node validates its settings
 //! itself: a node started by hand is checked as one `rig run` starts.
 
 use std::path::{Path, PathBuf};
@@ -69,7 +69,7 @@ pub enum Invalid {
 /// What every node takes (`[node]`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct NodeConfig {
+pub struct NodeSettings {
     /// Run id: the processes of one run share it; runs with different ids never see
     /// each other (letters, digits, '-', '_').
     pub run_id: String,
@@ -96,7 +96,7 @@ fn one() -> usize {
     1
 }
 
-impl NodeConfig {
+impl NodeSettings {
     /// The settings of a node of run `run_id` on configuration `config`, scheduled
     /// and waiting as given.
     pub fn new(run_id: &str, config: &Path, scheduling: Scheduling, waiting: Waiting) -> Self {
@@ -147,9 +147,9 @@ pub struct Continuation {
 /// The plant node's settings ([`super::plant::run`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct PlantConfig {
+pub struct PlantSettings {
     /// What every node takes.
-    pub node: NodeConfig,
+    pub node: NodeSettings,
     /// What moves the run from one sample to the next [default: lockstep].
     #[serde(default = "lockstep")]
     pub clock: Clock,
@@ -177,9 +177,9 @@ fn lockstep() -> Clock {
     Clock::Lockstep
 }
 
-impl PlantConfig {
+impl PlantSettings {
     /// The plant of `node` in lockstep, from the start of the run.
-    pub fn new(node: NodeConfig) -> Self {
+    pub fn new(node: NodeSettings) -> Self {
         Self {
             node,
             clock: Clock::Lockstep,
@@ -195,9 +195,9 @@ impl PlantConfig {
 /// The agent node's settings ([`super::agent::run`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct AgentConfig {
+pub struct AgentSettings {
     /// What every node takes.
-    pub node: NodeConfig,
+    pub node: NodeSettings,
     /// Answer every estimate with a zero action, without learning (for loop benchmarks).
     #[serde(default)]
     pub trivial: bool,
@@ -219,9 +219,9 @@ fn two() -> usize {
     2
 }
 
-impl AgentConfig {
+impl AgentSettings {
     /// The agent of `node`, learning, two checkpoints kept if any are written.
-    pub fn new(node: NodeConfig) -> Self {
+    pub fn new(node: NodeSettings) -> Self {
         Self {
             node,
             trivial: false,
@@ -235,15 +235,15 @@ impl AgentConfig {
 /// The observer node's settings ([`super::observer::run`]): what every node takes.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct ObserverConfig {
+pub struct ObserverSettings {
     /// What every node takes.
-    pub node: NodeConfig,
+    pub node: NodeSettings,
 }
 
 /// A node's settings file.
 pub trait Settings: Serialize + DeserializeOwned {
     /// What every node takes.
-    fn node(&self) -> &NodeConfig;
+    fn node(&self) -> &NodeSettings;
 
     /// Checks the role's own settings (the node's are checked by [`Settings::read`]).
     fn check(&self) -> Result<(), Invalid> {
@@ -284,8 +284,8 @@ pub trait Settings: Serialize + DeserializeOwned {
     }
 }
 
-impl Settings for PlantConfig {
-    fn node(&self) -> &NodeConfig {
+impl Settings for PlantSettings {
+    fn node(&self) -> &NodeSettings {
         &self.node
     }
 
@@ -299,14 +299,14 @@ impl Settings for PlantConfig {
     }
 }
 
-impl Settings for AgentConfig {
-    fn node(&self) -> &NodeConfig {
+impl Settings for AgentSettings {
+    fn node(&self) -> &NodeSettings {
         &self.node
     }
 }
 
-impl Settings for ObserverConfig {
-    fn node(&self) -> &NodeConfig {
+impl Settings for ObserverSettings {
+    fn node(&self) -> &NodeSettings {
         &self.node
     }
 }
@@ -321,23 +321,23 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let file = dir.join("plant.toml");
         std::fs::write(&file, "[node]\nrun_id = \"lab1\"\nconfig = \"c.toml\"\n").unwrap();
-        let plant = PlantConfig::read(&file).unwrap();
-        let node = NodeConfig::new(
+        let plant = PlantSettings::read(&file).unwrap();
+        let node = NodeSettings::new(
             "lab1",
             Path::new("c.toml"),
             Scheduling::default(),
             Waiting::Block,
         );
         // No `wait` in the file: the node blocks.
-        let unsaid = NodeConfig {
+        let unsaid = NodeSettings {
             wait: Wait::default(),
             ..node.clone()
         };
-        assert_eq!(plant, PlantConfig::new(unsaid));
+        assert_eq!(plant, PlantSettings::new(unsaid));
         assert_eq!(plant.node.waiting(), Waiting::Block);
         assert_eq!(plant.node.receivers, 1);
         // What `rig run` writes is read back as it was.
-        let resumed = PlantConfig {
+        let resumed = PlantSettings {
             clock: Clock::Realtime {
                 period: std::time::Duration::from_micros(2500),
             },
@@ -346,13 +346,13 @@ mod tests {
                 sim_time: 36.0,
                 first_seq: 4321,
             }),
-            ..PlantConfig::new(NodeConfig {
+            ..PlantSettings::new(NodeSettings {
                 receivers: 2,
                 ..node
             })
         };
         resumed.write(&file).unwrap();
-        assert_eq!(PlantConfig::read(&file).unwrap(), resumed);
+        assert_eq!(PlantSettings::read(&file).unwrap(), resumed);
         // A key the file may not have, a priority out of range: one line naming the file.
         for (text, says) in [
             (
@@ -369,7 +369,7 @@ mod tests {
             ),
         ] {
             std::fs::write(&file, text).unwrap();
-            let e = format!("{:#}", PlantConfig::read(&file).unwrap_err());
+            let e = format!("{:#}", PlantSettings::read(&file).unwrap_err());
             assert!(
                 e.contains("plant.toml") && e.contains(says) && e.lines().count() == 1,
                 "{e}"

@@ -2,13 +2,13 @@
 //!
 //! It sees the plant's sensor output only (`Measurement.y`; with an encoder the
 //! velocities are NaN — not measured), never the ground truth, and runs the observer
-//! the configuration asks for ([`::observer::build`], as the in-process driver does).
+//! the configuration asks for ([`::observer::build`], as the in-process runner does).
 
 use super::Result;
 use ::observer::timing::{Call, Front, Sample};
 use wire::{Estimate, Measurement, flags, now_ns, topic};
 
-use super::{ObserverConfig, SILENCE, STARTUP, pack};
+use super::{ObserverSettings, SILENCE, STARTUP, pack};
 
 /// The [`flags`] an estimate carries for agent call `call`: the measurement's, plus
 /// [`flags::LAST`] / [`flags::HOLD`] where predictive timing makes the agent's trial end
@@ -76,13 +76,13 @@ pub fn estimate(front: &mut Front, m: &Measurement) -> Estimate {
 }
 
 /// Runs the observer side of a run until the plant announces its end.
-pub fn run(settings: &ObserverConfig) -> Result<()> {
+pub fn run(settings: &ObserverSettings) -> Result<()> {
     let args = &settings.node;
     super::set_rt_priority(args.scheduling.rt_priority)?;
     args.scheduling.place(super::Part::Node)?;
     let cfg = args.experiment()?;
     let task = cfg.task();
-    let mut front = crate::experiment::front(&task, &cfg);
+    let mut front = crate::build::front(&task, &cfg);
     let bus = args.join("observer")?;
     let measurements = bus.rx::<Measurement>(topic::MEASUREMENT)?;
     let out = bus.tx::<Estimate>(topic::ESTIMATE)?;

@@ -15,7 +15,7 @@
 //!
 //! Each measurement goes through the observer process's step
 //! ([`crate::process::observer::estimate`]) and the estimate through the agent process's
-//! ([`crate::process::agent::Learner::action`]); each result is compared with the
+//! ([`crate::process::agent::AgentNode::action`]); each result is compared with the
 //! recorded message of the same sequence number, field by field and bit for bit
 //! ([`compare`]). The first difference ends the replay. [`observers`] runs another
 //! observer over the same measurements (`rig replay --observer`).
@@ -25,7 +25,7 @@ use std::path::PathBuf;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::error::chain;
-use crate::process::agent::Learner;
+use crate::process::agent::AgentNode;
 
 pub mod compare;
 pub mod observers;
@@ -110,7 +110,7 @@ pub enum ReplayError {
 
 /// How a replay ended.
 #[derive(Debug, PartialEq)]
-pub enum Outcome {
+pub enum ReplayEnd {
     /// Every estimate and action replayed as recorded.
     Identical {
         /// The messages compared, per topic.
@@ -138,23 +138,23 @@ pub fn progress_bar(samples: u64, shown: bool) -> ProgressBar {
 
 /// Replays `rec`'s observer and agent over its measurements, counting samples on
 /// `progress`; stops at the first difference.
-pub fn replay(rec: &Recording, progress: &ProgressBar) -> Result<Outcome, ReplayError> {
+pub fn replay(rec: &Recording, progress: &ProgressBar) -> Result<ReplayEnd, ReplayError> {
     let cfg = &rec.cfg;
     let task = cfg.task();
     let (n, m) = (task.state_dim(), task.action_dim());
-    let mut front = crate::experiment::front(&task, cfg);
+    let mut front = crate::build::front(&task, cfg);
     let mut learner =
-        Learner::new(cfg, 0, None, None).map_err(|e| ReplayError::Config(chain(&e)))?;
+        AgentNode::new(cfg, 0, None, None).map_err(|e| ReplayError::Config(chain(&e)))?;
     for x in &rec.measurements {
         progress.inc(1);
         let e = crate::process::observer::estimate(&mut front, x);
         let Some(recorded) = rec.estimates.get(&x.header.seq) else {
-            return Ok(Outcome::Differs(Difference::missing(
+            return Ok(ReplayEnd::Differs(Difference::missing(
                 ESTIMATE, &e.header, false,
             )));
         };
         if let Some(d) = compare::estimate(ESTIMATE, recorded, &e, n, m) {
-            return Ok(Outcome::Differs(d));
+            return Ok(ReplayEnd::Differs(d));
         }
         let a = learner
             .action(&e, false)
@@ -163,19 +163,19 @@ pub fn replay(rec: &Recording, progress: &ProgressBar) -> Result<Outcome, Replay
                 cause: chain(&err),
             })?;
         let Some(recorded) = rec.actions.get(&x.header.seq) else {
-            return Ok(Outcome::Differs(Difference::missing(
+            return Ok(ReplayEnd::Differs(Difference::missing(
                 ACTION, &a.header, false,
             )));
         };
         if let Some(d) = compare::action(ACTION, recorded, &a, m) {
-            return Ok(Outcome::Differs(d));
+            return Ok(ReplayEnd::Differs(d));
         }
     }
     Ok(unmatched(rec).map_or_else(
-        || Outcome::Identical {
+        || ReplayEnd::Identical {
             counts: vec![(ESTIMATE, rec.estimates.len()), (ACTION, rec.actions.len())],
         },
-        Outcome::Differs,
+        ReplayEnd::Differs,
     ))
 }
 

@@ -71,7 +71,7 @@ pub fn compare(rec: &Recording, kind: ObserverKind) -> Result<Vec<StateErrors>, 
         .map_err(|e| ReplayError::Config(format!("--observer {kind}: {e}")))?;
     let task = cfg.task();
     let n = task.state_dim();
-    let mut front: Front = crate::experiment::front(&task, &cfg);
+    let mut front: Front = crate::build::front(&task, &cfg);
     let mut bare = ::observer::build(task.clone(), cfg.observer(), cfg.agent().model.as_ref());
     let recorded = rec.cfg.observer();
     let mut baseline = ::observer::build(task.clone(), recorded, cfg.agent().model.as_ref());

@@ -10,7 +10,7 @@ use std::thread::JoinHandle;
 use agent::checkpoint::Checkpoint;
 
 use crate::lock::FolderLock;
-use crate::process::{Layout, Part};
+use crate::process::{CpuLayout, Part};
 
 /// The checkpoint directory of run directory `out`.
 pub fn checkpoint_dir(out: &Path) -> PathBuf {
@@ -88,7 +88,7 @@ pub struct CheckpointWriter {
 impl CheckpointWriter {
     /// A writer into `dir` (created if missing, and held: [`FolderLock`]), its thread
     /// placed as `layout` places the checkpoint writer, keeping the `keep` newest (0: all).
-    pub fn new(dir: &Path, layout: Option<Layout>, keep: usize) -> Result<Self, WriteError> {
+    pub fn new(dir: &Path, layout: Option<CpuLayout>, keep: usize) -> Result<Self, WriteError> {
         std::fs::create_dir_all(dir).at("cannot create", dir)?;
         let folder = FolderLock::acquire(dir)?;
         let (tx, rx) = mpsc::channel::<Checkpoint>();

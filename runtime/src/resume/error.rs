@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use agent::checkpoint::CheckpointError;
 
 use crate::error::FileError;
-use crate::experiment::ResumeError;
+use crate::resumable::ResumeError;
 
 /// Why `rig run --resume DIR` refuses a folder ([`super::prepare`]).
 #[derive(Debug, thiserror::Error)]

@@ -40,7 +40,7 @@ pub use checkpoints::{
 };
 pub use error::{PrepareError, WriteError};
 pub use recorded::RecordedMessage;
-use recorded::{Recorded, index, kept, read_recording, read_returns, same_plant};
+use recorded::{RecordingIndex, index, kept, read_recording, read_returns, same_plant};
 
 /// Where a resumed run continues, and what it keeps.
 pub struct ResumePoint {
@@ -132,7 +132,7 @@ fn resumable(out: &Path, cfg: &ExperimentConfig) -> Result<(), PrepareError> {
             observer: cfg.observer().observer.to_string(),
         });
     }
-    crate::experiment::resumable_delays(cfg).map_err(|why| PrepareError::Config { config, why })
+    crate::resumable::resumable_delays(cfg).map_err(|why| PrepareError::Config { config, why })
 }
 
 /// The last trial, at most `done`, that has a checkpoint (`available`; trial 0 needs
@@ -142,7 +142,7 @@ fn last_complete_trial(
     cfg: &ExperimentConfig,
     available: &[u32],
     done: u32,
-    recorded: &Recorded,
+    recorded: &RecordingIndex,
 ) -> Option<(u32, u64)> {
     let starts = cfg.task().initial_states.len();
     let evals = |t: u32| {

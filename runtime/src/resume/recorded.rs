@@ -149,7 +149,7 @@ pub(super) fn same_plant(
 }
 
 /// What the recording holds, per learning trial.
-pub(super) struct Recorded {
+pub(super) struct RecordingIndex {
     /// Per main topic, the sequence numbers present.
     seqs: [BTreeSet<u64>; 3],
     /// `(seq, trial, flags)` of every measurement, in file order.
@@ -158,8 +158,8 @@ pub(super) struct Recorded {
 
 const MAIN: [&str; 3] = ["/plant/measurement", "/observer/estimate", "/agent/action"];
 
-pub(super) fn index(messages: &[RecordedMessage]) -> Result<Recorded, PrepareError> {
-    let mut r = Recorded {
+pub(super) fn index(messages: &[RecordedMessage]) -> Result<RecordingIndex, PrepareError> {
+    let mut r = RecordingIndex {
         seqs: Default::default(),
         measurements: Vec::new(),
     };
@@ -179,7 +179,7 @@ pub(super) fn index(messages: &[RecordedMessage]) -> Result<Recorded, PrepareErr
     Ok(r)
 }
 
-impl Recorded {
+impl RecordingIndex {
     /// The first sequence number after trial `c` and its evaluations, if the recording
     /// holds all of them: every sample up to there on all three topics, and the ends of
     /// the learning trial and of its `evals` greedy trials.

@@ -74,7 +74,7 @@ pub enum RunError {
         "cannot keep the recorded trials: {} was recorded with another channel layout",
         path.display()
     )]
-    Layout {
+    Channels {
         /// The old recording.
         path: std::path::PathBuf,
         /// What the recorder refused.

@@ -19,7 +19,7 @@ use crate::resume::ResumePoint;
 pub const GAPS_HEADER: &str = "trial,greedy,step,seq,span_ms,late_ms";
 
 /// Streams `gaps.csv` from the plant's measurements.
-pub(super) struct Gaps {
+pub(super) struct GapLog {
     out: BufWriter<File>,
     /// Where `out` writes.
     path: PathBuf,
@@ -31,7 +31,7 @@ pub(super) struct Gaps {
     previous_ns: u64,
 }
 
-impl Gaps {
+impl GapLog {
     /// Creates `path` with its header — or, resuming at `point`, goes on after its rows
     /// (every attempt cut, also of trials that are now run again).
     pub(super) fn create(path: &Path, point: Option<&ResumePoint>) -> Result<Self> {

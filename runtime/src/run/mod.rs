@@ -25,7 +25,8 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use driver::contract::{DriverInfo, DriverWatch};
+use driver::contract::DriverInfo;
+use driver::link::DriverWatch;
 use wire::{Bus, Waiting};
 
 use crate::clock::{Clock, ClockError, ExternalDriver};
@@ -34,7 +35,7 @@ use crate::error::AtFile;
 use crate::experiment::TrialRecord;
 use crate::lock::FolderLock;
 use crate::output::{progress_bar, write_atomic};
-use crate::process::{Layout, Scheduling, Spin};
+use crate::process::{CpuLayout, Scheduling, Spin};
 use crate::record::Tap;
 use crate::resume;
 
@@ -52,7 +53,7 @@ pub use command::NodeCommand;
 use error::Result;
 pub use error::RunError;
 pub use gaps::GAPS_HEADER;
-use recording::{About, Recording};
+use recording::{About, RecordingWriter};
 use returns::Returns;
 use supervisor::Supervisor;
 
@@ -181,7 +182,7 @@ pub fn run_with(
         driver_reward: driver_info.is_some_and(|i| i.provides_reward()),
         point: point.as_ref(),
     };
-    let mut recording = Recording::open(&opts.out, &about)?;
+    let mut recording = RecordingWriter::open(&opts.out, &about)?;
     if let Some(tap) = tap {
         recording.live(tap)?;
     }
@@ -195,7 +196,7 @@ pub fn run_with(
         (Some(i), _) => Some(Duration::from_nanos(i.period_ns.saturating_mul(4))),
         (None, period) => period.map(|p| 4 * p),
     };
-    let gaps = gaps::Gaps::create(&opts.out.join("gaps.csv"), point.as_ref())?;
+    let gaps = gaps::GapLog::create(&opts.out.join("gaps.csv"), point.as_ref())?;
     let first_seq = point.as_ref().map_or(0, |p| p.first_seq);
     let mut sup = Supervisor::new(
         bus,
@@ -270,7 +271,7 @@ fn free_run_id(opts: &RunOptions) -> Result<String> {
 /// The options of a run against a driver whose info is `info`: with a driver that keeps
 /// the lockstep clock, the processes wait as [`RunOptions::lockstep_waiting`] says and,
 /// unless `--cpus` said, are placed as a lockstep run that waits so
-/// ([`Layout::lockstep`]); polling without end is refused with a driver in real time.
+/// ([`CpuLayout::lockstep`]); polling without end is refused with a driver in real time.
 fn driver_options(opts: &RunOptions, info: &DriverInfo) -> Result<RunOptions, ClockError> {
     let mut with = opts.clone();
     if info.lockstep()
@@ -278,7 +279,7 @@ fn driver_options(opts: &RunOptions, info: &DriverInfo) -> Result<RunOptions, Cl
     {
         with.waiting = w;
         if with.scheduling.layout().is_none() {
-            with.scheduling.cpus = Some(Layout::lockstep(w));
+            with.scheduling.cpus = Some(CpuLayout::lockstep(w));
         }
     }
     Clock::check_driver_waiting(info, with.waiting)?;
@@ -309,9 +310,9 @@ fn wait_for_driver(
     verbose: bool,
 ) -> Result<(DriverWatch, DriverInfo)> {
     let watch = DriverWatch::open(bus, &d.id)?;
-    let serve = driver::contract::how_to_serve(task, &d.id, None);
-    let info = driver::contract::wait_info(bus, &watch.info, &d.id, d.timeout, verbose, &serve)?;
-    driver::check_info(&d.id, &info, task)?;
+    let serve = driver::link::how_to_serve(task, &d.id, None);
+    let info = driver::link::wait_info(bus, &watch.info, &d.id, d.timeout, verbose, &serve)?;
+    driver::link::check_info(&d.id, &info, task)?;
     Ok((watch, info))
 }
 
@@ -364,15 +365,15 @@ mod tests {
         let opts = options(Waiting::Block, Some(polls));
         let with = driver_options(&opts, &info(clock::LOCKSTEP)).unwrap();
         assert_eq!(with.waiting, polls);
-        assert_eq!(with.scheduling.cpus, Some(Layout::lockstep(polls)));
+        assert_eq!(with.scheduling.cpus, Some(CpuLayout::lockstep(polls)));
         let with = driver_options(&opts, &info(clock::REALTIME)).unwrap();
         assert_eq!(with.waiting, Waiting::Block);
         assert_eq!(with.scheduling.cpus, None);
         // `--cpus` given stays.
         let mut placed = opts.clone();
-        placed.scheduling.cpus = Some(Layout::Shared);
+        placed.scheduling.cpus = Some(CpuLayout::Shared);
         let with = driver_options(&placed, &info(clock::LOCKSTEP)).unwrap();
-        assert_eq!(with.scheduling.cpus, Some(Layout::Shared));
+        assert_eq!(with.scheduling.cpus, Some(CpuLayout::Shared));
         // Polling without end asked for against a driver in real time is refused.
         let opts = options(polls, None);
         assert!(driver_options(&opts, &info(clock::LOCKSTEP)).is_ok());

@@ -29,7 +29,7 @@ use crate::resume::ResumePoint;
 /// The MCAP recording: one channel per topic, and one `/timing/...` channel per topic
 /// for the wall-clock timestamps, which differ from run to run by nature. Log time is
 /// simulated time.
-pub(super) struct Recording {
+pub(super) struct RecordingWriter {
     pub(super) rec: Recorder,
     pub(super) measurement: ChannelId,
     pub(super) estimate: ChannelId,
@@ -48,7 +48,7 @@ pub(super) struct Recording {
     pub(super) realtime: bool,
     /// The current sample's plant sample time (monotonic ns).
     pub(super) t_sample_ns: u64,
-    /// `/returns` and `/latency`, for a live view only ([`Recording::live`]).
+    /// `/returns` and `/latency`, for a live view only ([`RecordingWriter::live`]).
     pub(super) live: Option<(ChannelId, ChannelId)>,
     /// The log time of the last message of the loop recorded.
     pub(super) log_time_ns: u64,
@@ -137,7 +137,7 @@ pub(super) struct About<'a> {
     pub(super) point: Option<&'a ResumePoint>,
 }
 
-impl Recording {
+impl RecordingWriter {
     /// Creates `DIR/run.mcap` for the run `about` describes: its channels, the
     /// configuration attached, the metadata `run`, and, when resumed, the messages of the
     /// trials it keeps (the old recording is replaced).
@@ -146,7 +146,13 @@ impl Recording {
         let path = dir.join("run.mcap");
         // Written as `run.mcap.part` until finished: a resumed run's old recording,
         // which holds what it keeps, stays until copied.
-        let mut r = Self::create(&path, task.state_dim(), task.action_dim())?;
+        let mut rec = Recorder::create(&path)?;
+        // The configuration and the metadata before the channels: each closes the open
+        // chunk, and a chunk of channel records without a message is refused by some
+        // readers (Lichtblick 1.10's, when the messages start at log time 0).
+        rec.attach("config.toml", "application/toml", cfg.to_toml().as_bytes())?;
+        rec.metadata("run", &metadata(about))?;
+        let mut r = Self::create(rec, task.state_dim(), task.action_dim())?;
         r.realtime = about.realtime;
         if about.driver {
             r.add_driver()?;
@@ -154,9 +160,6 @@ impl Recording {
         if cfg.observer().sensor != ::observer::config::SensorKind::Full {
             r.add_truth()?;
         }
-        r.rec
-            .attach("config.toml", "application/toml", cfg.to_toml().as_bytes())?;
-        r.rec.metadata("run", &metadata(about))?;
         if let Some(p) = about.point {
             r.keep(p, &path)?;
         }
@@ -169,7 +172,7 @@ impl Recording {
         for m in &p.messages {
             self.rec
                 .write_encoded(&m.topic, m.log_time, m.publish_time, &m.data)
-                .map_err(|source| RunError::Layout {
+                .map_err(|source| RunError::Channels {
                     path: old.to_owned(),
                     source,
                 })?;
@@ -181,8 +184,8 @@ impl Recording {
         Ok(())
     }
 
-    pub(super) fn create(path: &Path, n: usize, m: usize) -> Result<Self, RecordError> {
-        let mut rec = Recorder::create(path)?;
+    /// The recording's channels in `rec`, for a task of `n` states and `m` actions.
+    pub(super) fn create(mut rec: Recorder, n: usize, m: usize) -> Result<Self, RecordError> {
         let state = |name| {
             vec![
                 vec![Field::number("reward")],

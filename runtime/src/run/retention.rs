@@ -23,7 +23,7 @@ pub(super) struct Retention {
 /// What was recorded before a drain: every sample before `recorded` on all three topics,
 /// and the first `rows` rows of this run's `returns.csv`.
 #[derive(Clone, Copy)]
-pub(super) struct Progress {
+pub(super) struct DrainMark {
     pub(super) recorded: u64,
     pub(super) rows: usize,
 }
@@ -38,7 +38,7 @@ impl Retention {
     /// the first sample after each) and the written-out recording are safe, and the
     /// checkpoints before the two newest of them are removed
     /// ([`resume::keep_from_newest`]).
-    pub(super) fn after_drain(&mut self, before: Progress, flushes: u64, ends: &[(u32, u64)]) {
+    pub(super) fn after_drain(&mut self, before: DrainMark, flushes: u64, ends: &[(u32, u64)]) {
         if flushes == self.flushes {
             return;
         }

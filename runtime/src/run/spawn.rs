@@ -10,7 +10,7 @@ use super::error::{Result, RunError};
 use crate::error::AtFile;
 
 use crate::process::node::Continuation;
-use crate::process::{AgentConfig, NodeConfig, ObserverConfig, PlantConfig, Settings};
+use crate::process::{AgentSettings, NodeSettings, ObserverSettings, PlantSettings, Settings};
 use crate::resume::ResumePoint;
 
 use super::RunOptions;
@@ -20,9 +20,9 @@ use super::supervisor::Children;
 /// The three processes' settings, of run `run_id` on configuration `config`; each waits
 /// for two receivers (the next process and the recorder).
 pub(super) struct Nodes {
-    plant: PlantConfig,
-    observer: ObserverConfig,
-    agent: AgentConfig,
+    plant: PlantSettings,
+    observer: ObserverSettings,
+    agent: AgentSettings,
 }
 
 impl Nodes {
@@ -34,11 +34,11 @@ impl Nodes {
         point: Option<&ResumePoint>,
         checkpoints: &Path,
     ) -> Self {
-        let node = NodeConfig {
+        let node = NodeSettings {
             receivers: 2,
-            ..NodeConfig::new(run_id, config, opts.scheduling, opts.waiting)
+            ..NodeSettings::new(run_id, config, opts.scheduling, opts.waiting)
         };
-        let plant = PlantConfig {
+        let plant = PlantSettings {
             clock: opts.clock.clone(),
             spin: opts.spin,
             learn_across_gaps: opts.learn_across_gaps,
@@ -48,16 +48,16 @@ impl Nodes {
                 sim_time: p.sim_time_s,
                 first_seq: p.first_seq,
             }),
-            ..PlantConfig::new(node.clone())
+            ..PlantSettings::new(node.clone())
         };
         // All kept: the supervisor removes those a resume can no longer need.
-        let agent = AgentConfig {
+        let agent = AgentSettings {
             checkpoints: Some(checkpoints.to_owned()),
             keep_checkpoints: 0,
             resume: point.and_then(|p| p.checkpoint.clone()),
-            ..AgentConfig::new(node.clone())
+            ..AgentSettings::new(node.clone())
         };
-        let observer = ObserverConfig { node };
+        let observer = ObserverSettings { node };
         Self {
             plant,
             observer,

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::Child;
 use std::time::{Duration, Instant};
 
-use driver::contract::DriverWatch;
+use driver::link::DriverWatch;
 use indicatif::ProgressBar;
 use wire::{Action, Bus, Estimate, Measurement, Truth, flags, topic};
 
@@ -14,10 +14,10 @@ use crate::experiment::TrialRecord;
 
 use super::command::Role;
 use super::error::{Result, RunError};
-use super::gaps::Gaps;
+use super::gaps::GapLog;
 use super::logs::Logs;
-use super::recording::Recording;
-use super::retention::{Progress, Retention};
+use super::recording::RecordingWriter;
+use super::retention::{DrainMark, Retention};
 use super::returns::Returns;
 
 /// How long the supervisor watches after a process exits early, to see which process
@@ -90,10 +90,10 @@ pub(super) struct Supervisor {
     pub(super) batch: Vec<Measurement>,
     /// Ground truth drained ahead of its measurement.
     pub(super) truth_queue: std::collections::VecDeque<Truth>,
-    pub(super) recording: Recording,
+    pub(super) recording: RecordingWriter,
     pub(super) returns: Returns,
     /// The trial attempts cut short by gaps.
-    pub(super) gaps: Gaps,
+    pub(super) gaps: GapLog,
     pub(super) children: Children,
     /// Their output.
     pub(super) logs: Logs,
@@ -104,7 +104,7 @@ pub(super) struct Supervisor {
     /// The external driver's traffic, recorded.
     pub(super) driver: Option<DriverWatch>,
     /// The announcement that everything is recorded, which the processes wait for.
-    pub(super) recorded: wire::Recorded,
+    pub(super) recorded: wire::RecordedSignal,
     /// Realtime and external driver: how long to go on recording after a process died,
     /// so that the recording shows the plant's reaction (its watchdog, or the driver's,
     /// applying the safe action within two periods).
@@ -122,8 +122,8 @@ impl Supervisor {
     /// that no message is missed); the processes come later ([`Self::children`]).
     pub(super) fn new(
         bus: Bus,
-        recording: Recording,
-        (returns, gaps): (Returns, Gaps),
+        recording: RecordingWriter,
+        (returns, gaps): (Returns, GapLog),
         out: &Path,
         first_seq: u64,
         driver: Option<DriverWatch>,
@@ -163,7 +163,7 @@ impl Supervisor {
     /// Records everything waiting, then removes the checkpoints no resume can need any
     /// more; returns whether the run's end came by.
     pub(super) fn drain(&mut self, bar: &ProgressBar) -> Result<bool> {
-        let before = Progress {
+        let before = DrainMark {
             recorded: self.continuity.iter().map(|c| c.next).min().unwrap_or(0),
             rows: self.returns.ends.len(),
         };

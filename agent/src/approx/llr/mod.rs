@@ -9,6 +9,10 @@
 //!   The two most recent searches are remembered and kept exact across insertions, and a
 //!   new search is warm-started from the nearest remembered one: the farthest of its
 //!   remembered neighbours from the new query bounds the new search from the start.
+//!   The neighbours nearest in the leading inputs only (a process model's, by the state:
+//!   [`Differentiable::value_and_jacobian_near`]) are found by a scan — VGBP's — or, for
+//!   the planners, through a second tree over those inputs, kept from its first query on
+//!   (`near.rs`).
 //! * **Fit**: `β = Y Xᵀ (X Xᵀ)⁻¹` solved as a centred ridge regression in coordinates
 //!   relative to the query: with `dᵢ = W (xᵢ − x_q)` (angles wrapped), the slope is
 //!   `B = (Σ d̃ d̃ᵀ + εI)⁻¹ Σ d̃ ỹᵀ` (tilde: minus the mean) and the prediction
@@ -43,6 +47,7 @@
 
 mod fit;
 mod memory;
+mod near;
 mod neighbours;
 mod persist;
 #[cfg(test)]
@@ -52,7 +57,7 @@ mod traces;
 use std::cell::{Cell, RefCell};
 use std::collections::VecDeque;
 
-use super::kdtree::{Candidate, KdTree, MAX_DIM, MAX_K, dist2};
+use super::kdtree::{Candidate, KdTree, MAX_DIM, MAX_K};
 use super::{Approximator, Differentiable, MAX_OUT};
 use fit::{Fit, LastFit};
 use neighbours::{CACHE_SLACK, Cached};
@@ -143,6 +148,9 @@ pub struct Llr {
     traced: Vec<(u32, u64)>,
     /// Changes to the stored inputs or outputs so far: a fit depends on nothing else.
     version: u64,
+    /// The index of the neighbours nearest in the leading inputs, from the first query
+    /// through it on ([`near`]).
+    near: RefCell<Option<near::NearIndex>>,
     /// The last fit (see [`Llr::fitted`]). MLAC asks for `π(x_k)` and then shifts the
     /// actor at `x_k`, which fits there again.
     last_fit: RefCell<LastFit>,
@@ -199,6 +207,7 @@ impl Llr {
             cache: RefCell::new([None, None]),
             traced: Vec::new(),
             version: 0,
+            near: RefCell::new(None),
             last_fit: RefCell::new(LastFit {
                 key: [0; MAX_DIM],
                 // No memory version reaches this: nothing is remembered yet.
@@ -321,22 +330,36 @@ impl Differentiable for Llr {
             return self.value_and_jacobian(x, y, jac);
         }
         let q = self.scale(x);
-        let mut all: Vec<Candidate> = (0..self.len as u32)
-            .map(|slot| Candidate {
-                d2: dist2(&self.coords(slot)[..lead], &q[..lead], &self.period[..lead]),
-                seq: self.seq[slot as usize],
-                slot,
-            })
-            .collect();
-        let k = self.k.min(all.len());
-        if k > 0 && k < all.len() {
-            all.select_nth_unstable_by(k - 1, |a, b| a.d2.total_cmp(&b.d2).then(b.seq.cmp(&a.seq)));
-        }
         let mut fit = Fit {
             y: [0.0; MAX_OUT],
             jac: [0.0; MAX_OUT * MAX_DIM],
         };
-        self.fit_local(&q, &all[..k], &mut fit);
+        self.fit_near_by_scan(&q, lead, &mut fit);
+        y.copy_from_slice(&fit.y[..self.m]);
+        jac.copy_from_slice(&fit.jac[..self.m * self.n]);
+    }
+
+    /// The same K samples, found through an index over `x[..lead]` (built at the first
+    /// such query, kept from then on) and fitted nearest first ([`near`]).
+    fn value_and_jacobian_near_indexed(
+        &self,
+        x: &[f64],
+        lead: usize,
+        y: &mut [f64],
+        jac: &mut [f64],
+    ) {
+        if lead >= self.n {
+            return self.value_and_jacobian(x, y, jac);
+        }
+        let q = self.scale(x);
+        let mut nb = self.neighbours.take();
+        self.near_ranked(&q, lead, &mut nb);
+        let mut fit = Fit {
+            y: [0.0; MAX_OUT],
+            jac: [0.0; MAX_OUT * MAX_DIM],
+        };
+        self.fit_local(&q, &nb, &mut fit);
+        self.neighbours.set(nb);
         y.copy_from_slice(&fit.y[..self.m]);
         jac.copy_from_slice(&fit.jac[..self.m * self.n]);
     }

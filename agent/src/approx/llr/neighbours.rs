@@ -20,7 +20,7 @@ pub(super) struct Cached {
 /// searches. Measured (best 1000-step chunk of an MLAC/LLR replay on full memories,
 /// rebuild after `x · N` insertions): x = ¼ 6.9–7.0 µs, ½ 6.6–6.7, 1 6.55–6.7,
 /// 4 6.5–6.6, never 6.9.
-const REBUILD_AFTER: usize = 4;
+pub(super) const REBUILD_AFTER: usize = 4;
 
 /// How many neighbours beyond K + 1 a search keeps, so that a remembered search survives
 /// this many insertions (each can remove one of its samples).
@@ -130,6 +130,7 @@ impl Llr {
     /// `replaced` in `slot`; rebuilds the tree, balanced, after [`REBUILD_AFTER`] times
     /// as many insertions as samples.
     pub(super) fn index(&mut self, slot: u32, seq: u64, replaced: bool) {
+        self.index_near(slot, seq, replaced);
         if self.search == Search::Scan {
             return;
         }

@@ -69,6 +69,7 @@ impl crate::checkpoint::Persist for Llr {
                 self.tree.rebuild(&self.inputs, &self.seq);
             }
             *self.cache.borrow_mut() = [None, None];
+            *self.near.get_mut() = None;
             self.version += 1;
             self.last_fit.borrow_mut().version = u64::MAX;
             Ok(())

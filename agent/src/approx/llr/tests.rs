@@ -1,9 +1,10 @@
 use super::super::Traced;
+use super::super::kdtree::dist2;
 use super::*;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-fn params(n: usize, m: usize, memory: usize, k: usize) -> LlrParams {
+pub(super) fn params(n: usize, m: usize, memory: usize, k: usize) -> LlrParams {
     LlrParams {
         memory,
         neighbours: k,

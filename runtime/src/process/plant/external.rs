@@ -30,18 +30,19 @@ use std::time::Duration;
 
 use crate::process::{NodeError, Result};
 use ::plant::episode::{Step, TimeLimit};
-use ::plant::safety::{SafetyCounts, Supervisor};
+use ::plant::safety::{SafetyCounts, SafetyLayer};
 use ::plant::schedule::Trial;
-use driver::contract::{DriverInfo, DriverLink, DriverSample, status};
+use driver::contract::{DriverInfo, DriverSample, status};
+use driver::link::DriverLink;
 use wire::{flags, now_ns};
 
-use super::super::{PlantConfig, SILENCE, STARTUP};
+use super::super::{PlantSettings, SILENCE, STARTUP};
 use super::link::{Link, TrialHeader, end_flags};
 use super::{Ended, Gap, Trials};
 use crate::clock::ExternalDriver;
 
 /// The episode master for an external driver.
-pub struct Bridge {
+pub struct ExternalPlant {
     link: Link,
     driver: DriverLink,
     info: DriverInfo,
@@ -51,7 +52,7 @@ pub struct Bridge {
     silence: Duration,
     /// The rig's side of safety: actions are clamped (non-finite ones never reach the
     /// driver) and the operating range is watched here too; the driver does its own.
-    safety: Supervisor,
+    safety: SafetyLayer,
     /// Whether the driver measures positions only (NaN velocities), as its first sample
     /// of the run showed.
     positions_only: Option<bool>,
@@ -61,23 +62,27 @@ pub struct Bridge {
     cut_gaps: bool,
 }
 
-impl Bridge {
+impl ExternalPlant {
     /// Connects to driver `d`: waits for its info (its `timeout`), checks it against the
     /// task, then waits for the observer (and recorder) to listen.
-    pub(super) fn connect(mut link: Link, d: &ExternalDriver, args: &PlantConfig) -> Result<Self> {
+    pub(super) fn connect(
+        mut link: Link,
+        d: &ExternalDriver,
+        args: &PlantSettings,
+    ) -> Result<Self> {
         let driver_id = d.id.as_str();
         let driver = DriverLink::connect(&link.bus, driver_id)?;
         let timeout = d.timeout;
-        let serve = driver::contract::how_to_serve(&link.task, driver_id, None);
+        let serve = driver::link::how_to_serve(&link.task, driver_id, None);
         let info = driver.wait_info(&link.bus, timeout, false, &serve)?;
-        driver::check_info(driver_id, &info, &link.task)?;
+        driver::link::check_info(driver_id, &info, &link.task)?;
         link.out
             .wait_for_receivers(args.node.receivers, STARTUP, &link.bus)?;
         if info.provides_reward() {
             link.run_flags |= flags::DRIVER_REWARD;
         }
         Ok(Self {
-            safety: Supervisor::new(&link.task),
+            safety: SafetyLayer::new(&link.task),
             limit: TimeLimit::new(link.task.steps_per_trial()),
             silence: info.silence_limit(d.timeout),
             reset_timeout: d.reset_timeout,
@@ -156,7 +161,7 @@ impl Bridge {
     }
 }
 
-impl Bridge {
+impl ExternalPlant {
     /// Resets the driver to `x0` and publishes the start sample (`header`) when it is
     /// READY there. Returns the READY sample, the reset's id and when the start sample
     /// was published.
@@ -248,7 +253,7 @@ impl Bridge {
     }
 }
 
-impl Trials for Bridge {
+impl Trials for ExternalPlant {
     fn trial(&mut self, trial: &Trial) -> Result<Ended> {
         let header = TrialHeader::new(trial, self.link.task.ts);
         let (mut s, reset_id, mut t_publish) = self.start(&trial.x0, &header)?;

@@ -12,19 +12,19 @@ use super::link::{Link, TrialHeader, end_flags};
 use super::{Ended, Trials};
 
 /// The simulated system in lockstep.
-pub(super) struct Lockstep {
+pub(super) struct LockstepPlant {
     episode: Episode,
     link: Link,
 }
 
-impl Lockstep {
+impl LockstepPlant {
     /// Trials of `episode`, published on `link`.
     pub(super) fn new(link: Link, episode: Episode) -> Self {
         Self { episode, link }
     }
 }
 
-impl Trials for Lockstep {
+impl Trials for LockstepPlant {
     fn trial(&mut self, trial: &Trial) -> Result<Ended> {
         let header = TrialHeader::new(trial, self.link.task.ts);
         let mut u = vec![0.0; self.link.task.action_dim()];

@@ -28,7 +28,7 @@ use ::plant::safety::SafetyCounts;
 use ::plant::schedule::{Schedule, Trial};
 
 use super::node::Continuation;
-use super::{PlantConfig, STARTUP, Scheduling};
+use super::{PlantSettings, STARTUP, Scheduling};
 use crate::clock::Clock;
 use crate::config::ExperimentConfig;
 use link::Link;
@@ -48,16 +48,16 @@ pub const CYCLES_HEADER: &str = "seq,t_sample_ns,t_woke_ns,t_action_ns";
 /// samples run.
 ///
 /// What is published is the configured sensor's output (`[observer] sensor`,
-/// [`crate::experiment::sensor`], its noise from the run seed exactly as in process); the
+/// [`crate::build::sensor`], its noise from the run seed exactly as in process); the
 /// true state stays here and, when the sensor does not measure all of it, goes out on
 /// the evaluation topic [`wire::topic::TRUTH`], for the supervisor alone.
-pub fn run(args: &PlantConfig) -> Result<()> {
+pub fn run(args: &PlantSettings) -> Result<()> {
     schedule_clock(&args.node.scheduling)?;
     let cfg = args.node.experiment()?;
     args.clock.check(&cfg, args.node.waiting())?;
     let task = cfg.task();
     let run_seed = ::agent::seed::run_seed(cfg.run().seed, args.node.run_index);
-    let sensor = crate::experiment::sensor(&task, cfg.observer(), run_seed);
+    let sensor = crate::build::sensor(&task, cfg.observer(), run_seed);
     let resume = args.resume.unwrap_or(Continuation {
         after_trial: 0,
         sim_time: 0.0,
@@ -176,7 +176,7 @@ impl Gap {
 }
 
 /// Runs trials: the simulation in lockstep or in real time, or an external driver
-/// ([`external::Bridge`]).
+/// ([`external::ExternalPlant`]).
 trait Trials {
     /// Runs an attempt at `trial`.
     fn trial(&mut self, trial: &Trial) -> Result<Ended>;
@@ -189,14 +189,14 @@ trait Trials {
 /// What runs the trials that `args` and `cfg` ask for, once the peers listen on `link`.
 fn runner(
     link: Link,
-    args: &PlantConfig,
+    args: &PlantSettings,
     cfg: &ExperimentConfig,
     run_seed: u64,
 ) -> Result<Box<dyn Trials>> {
     let period = match &args.clock {
         Clock::External(d) => {
-            let bridge = external::Bridge::connect(link, d, args)?;
-            return Ok(Box::new(bridge.cutting_gaps(!args.learn_across_gaps)));
+            let external = external::ExternalPlant::connect(link, d, args)?;
+            return Ok(Box::new(external.cutting_gaps(!args.learn_across_gaps)));
         }
         Clock::Lockstep => None,
         Clock::Realtime { period } => Some(*period),
@@ -204,11 +204,11 @@ fn runner(
     link.out
         .wait_for_receivers(args.node.receivers, STARTUP, &link.bus)?;
     let task = link.task.clone();
-    let actuator = crate::experiment::actuator(&task, cfg, run_seed);
+    let actuator = crate::build::actuator(&task, cfg, run_seed);
     let episode = Episode::new(Plant::new(task.clone()), actuator);
     Ok(match period {
         Some(period) => Box::new(
-            realtime::Realtime::new(
+            realtime::RealtimePlant::new(
                 link,
                 episode,
                 (task.ts, period),
@@ -217,13 +217,13 @@ fn runner(
             )
             .cutting_gaps(!args.learn_across_gaps),
         ),
-        None => Box::new(lockstep::Lockstep::new(link, episode)),
+        None => Box::new(lockstep::LockstepPlant::new(link, episode)),
     })
 }
 
 /// Writes the run's timing files: every sample's publish-to-action time
 /// (`latency_out`) and, in real time, every sample's timing (`cycles_out`).
-fn write_timing(link: &Link, args: &PlantConfig) -> Result<()> {
+fn write_timing(link: &Link, args: &PlantSettings) -> Result<()> {
     if let Some(path) = &args.latency_out {
         let text: String = link.latencies.iter().map(|ns| format!("{ns}\n")).collect();
         write(path, &text)?;

@@ -7,7 +7,7 @@
 //! next interval (none arrived: the previous one is held). An interval in which the
 //! action for its sample did not arrive is a missed deadline. The reward of an interval
 //! is `ρ(x_k, u)` with the action in effect at its end. An interval without any action
-//! trips the plant's watchdog ([`plant::safety::Supervisor::period`]): zero from its end
+//! trips the plant's watchdog ([`plant::safety::SafetyLayer::period`]): zero from its end
 //! on, until an action arrives. A late answer to the previous trial's last sample is
 //! dropped, not applied in this one. Nothing is allocated per interval.
 //!
@@ -32,7 +32,7 @@ use super::link::{Link, TrialHeader, end_flags};
 use super::{Ended, Gap, Trials};
 
 /// Absolute sampling deadlines on the monotonic clock.
-struct Clock {
+struct Deadlines {
     period_ns: u64,
     /// The next sampling instant \[ns\].
     next_ns: u64,
@@ -112,10 +112,10 @@ impl Held {
 }
 
 /// The simulated system in real time.
-pub(super) struct Realtime {
+pub(super) struct RealtimePlant {
     episode: Episode,
     link: Link,
-    clock: Clock,
+    clock: Deadlines,
     /// Keep every sample's timing ([`Link::cycles`]).
     record_cycles: bool,
     /// Predictive timing (`observer.mode`): the action that answers sample `k` is
@@ -125,7 +125,7 @@ pub(super) struct Realtime {
     cut_gaps: bool,
 }
 
-impl Realtime {
+impl RealtimePlant {
     /// Trials of `episode` in real time, a sample every `period` of the monotonic clock
     /// for a task of sampling time `ts` \[s\], published on `link`; the clock starts a
     /// period from now.
@@ -137,7 +137,7 @@ impl Realtime {
         record_cycles: bool,
     ) -> Self {
         let period_ns = period.as_nanos() as u64;
-        let clock = Clock {
+        let clock = Deadlines {
             period_ns,
             next_ns: now_ns() + period_ns,
             speed: crate::clock::Clock::speed(ts, period),
@@ -239,7 +239,7 @@ impl Realtime {
     }
 }
 
-impl Trials for Realtime {
+impl Trials for RealtimePlant {
     fn trial(&mut self, trial: &Trial) -> Result<Ended> {
         let steps = self.link.task.steps_per_trial();
         self.episode.reset(&trial.x0);
