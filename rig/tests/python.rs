@@ -59,3 +59,20 @@ fn the_python_package_type_checks() {
     );
     assert!(said.starts_with("Success: no issues found"), "{said}");
 }
+
+/// `rig tune`'s Python side (tune/rig_tune) type-checks strictly too, against the
+/// package it imports.
+#[test]
+fn the_tune_helpers_type_check() {
+    let Some(py) = python::with("mypy, optuna, matplotlib") else {
+        return;
+    };
+    let out = python::command(&py)
+        .args(["-m", "mypy", "--no-incremental", "--strict", "rig_tune"])
+        .current_dir(python::root().join("tune"))
+        .output()
+        .unwrap();
+    let said = text(&out);
+    assert!(out.status.success(), "mypy --strict tune/rig_tune:\n{said}");
+    assert!(said.starts_with("Success: no issues found"), "{said}");
+}
