@@ -1,8 +1,9 @@
 //! The rig's Python package, `rigkit` (python/), from `cargo test`: its pytest suite
 //! (python/tests: the package's modules, every example script shortened, the bench
 //! scripts that must end cleanly), given this rig as `RIG`, and its type check (mypy,
-//! strict, python/pyproject.toml; and of `rig tune`'s helpers, tune/rig_tune). The package is the source tree's (`PYTHONPATH`, set by
-//! `common::python`), installed or not. Needs pytest (and mypy) importable by
+//! strict, python/pyproject.toml), and that of `rig tune`'s helpers (tune/rig_tune). The
+//! package is the source tree's (`PYTHONPATH`, set by `common::python`), installed or
+//! not. Needs pytest (and mypy) importable by
 //! `$RIG_PYTHON` (default `python3`): `pip install "./python[test]"`; without them each
 //! test prints why and passes — CI installs them.
 
