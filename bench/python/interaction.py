@@ -95,7 +95,7 @@ def fmt(v, spec):
 
 def interaction(s, n):
     """'s s / n samples' of a median, or 'not reached'."""
-    return "not reached" if s is None else f"{s:.0f} s / {n:.0f}"
+    return "not reached" if s is None else f"{s:.{2 if s < 10 else 0}f} s / {n:.0f}"
 
 
 def table(rows) -> list:

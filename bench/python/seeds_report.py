@@ -39,6 +39,11 @@ from rigkit.returns import ReturnsError  # noqa: E402
 from rigkit.seeds import seed_results  # noqa: E402
 
 
+def seconds(s: float | None) -> str:
+    """Simulated seconds to success: 'never', to 0.01 s below 10 s, else whole."""
+    return "never" if s is None else f"{s:.{2 if s < 10 else 0}f}"
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("out", type=Path, help="the experiment's folder (seeds.sh's OUT)")
@@ -63,7 +68,7 @@ def main():
         step = "—" if r.agent_ms is None else "{:.3f} / {:.3f} ms".format(*r.agent_ms)
         print(
             f"| {r.seed} | {r.trials} | {r.final:.2f} | {'yes' if r.succeeds else 'no'} "
-            f"| {'never' if first is None else f'{first:.0f}'} | {'never' if holds is None else f'{holds:.0f}'} "
+            f"| {seconds(first)} | {seconds(holds)} "
             f"| {r.learning_mean:.2f} | {r.wall_s:.1f} s | {step} |"
         )
     notes = [n for r in results for n in r.notes]
