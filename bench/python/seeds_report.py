@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """The per-seed table of an experiment written by examples/python_driver/seeds.sh: for
 each seed, the greedy return at the last evaluation, whether it succeeds, the simulated
-seconds of learning until the first evaluation that succeeds, the mean return of its
+seconds of learning until the first evaluation that succeeds and until the first one
+from which every later one succeeds too (success held to the end), the mean return of its
 last 100 learning trials (with exploration, from the learning trials' starts) and the
 run's wall time, and the agent's step per sample (from receiving the estimate to
 publishing the action, the recording's `/timing/agent/action`: the learner's compute,
@@ -38,6 +39,11 @@ from rigkit.returns import ReturnsError  # noqa: E402
 from rigkit.seeds import seed_results  # noqa: E402
 
 
+def seconds(s: float | None) -> str:
+    """Simulated seconds to success: 'never', to 0.01 s below 10 s, else whole."""
+    return "never" if s is None else f"{s:.{2 if s < 10 else 0}f}"
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("out", type=Path, help="the experiment's folder (seeds.sh's OUT)")
@@ -53,16 +59,17 @@ def main():
         fail("seeds_report.py", str(e))
     print(
         "| seed | trials | greedy return at the last evaluation | succeeds | simulated s to first success "
-        "| mean return, last 100 learning trials | wall time | agent's step, median / 99 % |"
+        "| simulated s to success held to the end | mean return, last 100 learning trials | wall time "
+        "| agent's step, median / 99 % |"
     )
-    print("|---:|---:|---:|---|---:|---:|---:|---:|")
+    print("|---:|---:|---:|---|---:|---:|---:|---:|---:|")
     for r in results:
-        first = r.first_success_s
+        first, holds = r.first_success_s, r.holds_s
         step = "—" if r.agent_ms is None else "{:.3f} / {:.3f} ms".format(*r.agent_ms)
         print(
             f"| {r.seed} | {r.trials} | {r.final:.2f} | {'yes' if r.succeeds else 'no'} "
-            f"| {'never' if first is None else f'{first:.0f}'} | {r.learning_mean:.2f} | {r.wall_s:.1f} s "
-            f"| {step} |"
+            f"| {seconds(first)} | {seconds(holds)} "
+            f"| {r.learning_mean:.2f} | {r.wall_s:.1f} s | {step} |"
         )
     notes = [n for r in results for n in r.notes]
     if notes:

@@ -1,22 +1,28 @@
 #!/usr/bin/env python3
 """The systems a lab brings, learned: every experiment of a matrix file (default
 bench/python/systems.toml) × its learners × SEEDS seeds, in lockstep against the
-experiment's Python driver; one table of success rates, simulated seconds of interaction
-to success, wall times and the agent's compute per sample, the learning curves, and
-beside them the published figures of the field and (with --sb3) Stable-Baselines3's SAC
-run here on Gymnasium's Pendulum-v1 with the same seeds (bench/python/sb3_pendulum.py).
+experiment's Python driver; one table per kind of system — those the default learner's
+rules were chosen on, and the held-out ones (`held_out = true`), out of sample — of
+success rates, interaction until the greedy policy first meets the experiment's success
+rule and until it holds it to the end of the run (simulated seconds and samples, the
+median over the seeds), the final greedy return, wall times and the agent's step per
+sample (median and 99th percentile); the learning curves; one plot of the interaction to
+success per system (interaction.py); and beside them the field's published figures and,
+on the Gymnasium experiments, Stable-Baselines3's SAC with rl-baselines3-zoo's tuned
+hyperparameters, run here with the same seeds and judged by the same rule (sb3_sac.py).
 
     python3 bench/python/systems.py OUT                      # everything, 5 seeds
     python3 bench/python/systems.py OUT --only furuta-balance --seeds 2
-    python3 bench/python/systems.py OUT --sb3                # and the Pendulum-v1 comparison
+    python3 bench/python/systems.py OUT --sb3                # and SAC on the Gymnasium ones
 
 Resumable: a learner's seeds already in OUT/<experiment>/<learner>/wall.csv are kept
 and the next seed starts where they stop (an interrupted seed is run again from its
-start; --sb3's finished runs are kept the same way). Writes OUT/table.md (the whole
-report), OUT/table.csv and OUT/<experiment>.png (median greedy return over the seeds
-against simulated seconds of learning, the band from the worst to the best seed). Needs
-iceoryx2 0.10.0, mcap and matplotlib (and what each driver imports: gymnasium for the
-adapter); --sb3 needs stable-baselines3.
+start); SAC's finished seeds in OUT/<experiment>/sb3-sac/curves.csv are kept the same way,
+and reported whenever they are there. Writes OUT/table.md (the whole report),
+OUT/table.csv, OUT/interaction.png and OUT/<experiment>.png (median greedy return over
+the seeds against simulated seconds of learning, the band from the worst to the best
+seed). Needs iceoryx2 0.10.0, mcap and matplotlib (and what each driver imports:
+gymnasium for the adapter); --sb3 needs stable-baselines3.
 """
 
 import argparse
@@ -42,19 +48,13 @@ from rigkit.recording import RecordingError  # noqa: E402
 from rigkit.returns import ReturnsError  # noqa: E402
 from rigkit.seeds import Seed, seed_results  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[2]
+import interaction  # noqa: E402  (beside this script)
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
 WHO = "systems.py"
 
 SEEDS_SH = ROOT / "examples" / "python_driver" / "seeds.sh"
-
-# The field's published figures for the same kinds of task, quoted beside the table.
-PUBLISHED = [
-    ("PILCO (Deisenroth & Rasmussen, ICML 2011)", "cart-pole swing-up and balance",
-     "17.5 s of interaction to success"),
-    ("rl-baselines3-zoo, tuned SAC (its benchmark table)", "Gymnasium Pendulum-v1",
-     "return −157 ± 89 after 20 000 steps"),
-]
-
 
 def slug(label: str) -> str:
     """A folder name for a learner's label."""
@@ -68,13 +68,15 @@ def read_matrix(path: Path):
             experiments = tomllib.load(f).get("experiment", [])
     except (OSError, tomllib.TOMLDecodeError) as err:
         fail(WHO, f"{path}: {err}")
-    keys = {"name", "system", "task", "driver", "trials", "success", "learners"}
+    keys, optional = {"name", "system", "task", "driver", "trials", "success", "learners"}, {"held_out"}
     for k, e in enumerate(experiments):
         where = f"{path}: experiment {k + 1} ({e.get('name', '?')})"
-        missing, unknown = keys - e.keys(), e.keys() - keys
+        missing, unknown = keys - e.keys(), e.keys() - keys - optional
         if missing or unknown:
             fail(WHO, f"{where}: missing keys {sorted(missing)}, unknown keys {sorted(unknown)}; "
-                 f"an experiment has {sorted(keys)}")
+                 f"an experiment has {sorted(keys)} and optionally {sorted(optional)}")
+        if type(e.get("held_out", False)) is not bool:
+            fail(WHO, f"{where}: held_out must be true or false, not {e['held_out']!r}")
         s = e["success"]
         if sorted(s) not in (["return_at_least"], ["hold", "upright"]):
             fail(WHO, f"{where}: success must be {{ upright = A, hold = S }} or "
@@ -128,25 +130,6 @@ def judged(e, folder: Path) -> list[Seed]:
         fail(WHO, str(err))
 
 
-def median_or_none(values):
-    return statistics.median(values) if values else None
-
-
-def summary_row(e, learner, results):
-    """One row of the table: success rate, seconds to success, final return, wall time,
-    the agent's step."""
-    firsts = [r.first_success_s for r in results if r.first_success_s is not None]
-    return {
-        "experiment": e["name"], "system": e["system"], "learner": learner["label"],
-        "seeds": len(results), "succeed": sum(r.succeeds for r in results),
-        "sim_s_to_success": median_or_none(firsts), "ever_succeeded": len(firsts),
-        "final_return": median_or_none([r.final for r in results]),
-        "wall_s": median_or_none([r.wall_s for r in results]),
-        "agent_ms_median": median_or_none([r.agent_ms[0] for r in results if r.agent_ms]),
-        "agent_ms_p99": median_or_none([r.agent_ms[1] for r in results if r.agent_ms]),
-    }
-
-
 def plot(e, curves, out: Path):
     """The experiment's learning curves: per learner the median greedy return over seeds
     at each evaluation against its median simulated seconds, the band min..max."""
@@ -159,37 +142,20 @@ def plot(e, curves, out: Path):
     plots.finish(fig, ax, "simulated seconds of learning", "greedy return", e["system"], out / e["name"], dpi=110)
 
 
-def fmt(v, spec):
-    return "—" if v is None else format(v, spec)
-
-
-def report(rows, out: Path, sb3: Path | None) -> str:
-    """The Markdown report: the table, the published figures, the SB3 comparison."""
-    lines = [
-        "| system | learner | seeds succeeding | simulated s to first success (median of those that did) "
-        "| greedy return at the end (median) | wall time per run (median) "
-        "| agent's step per sample, median / 99 % (medians of the seeds) |",
-        "|---|---|---:|---:|---:|---:|---:|",
-    ]
-    for r in rows:
-        lines.append(
-            f"| {r['system']} | {r['learner']} | {r['succeed']} of {r['seeds']} "
-            f"| {fmt(r['sim_s_to_success'], '.0f')} ({r['ever_succeeded']} ever) "
-            f"| {fmt(r['final_return'], '.2f')} | {fmt(r['wall_s'], '.1f')} s "
-            f"| {fmt(r['agent_ms_median'], '.3f')} / {fmt(r['agent_ms_p99'], '.3f')} ms |"
-        )
-    lines += ["", "Published figures for the same kinds of task:", "",
-              "| source | task | figure |", "|---|---|---|"]
-    lines += [f"| {a} | {b} | {c} |" for a, b, c in PUBLISHED]
-    if sb3 is not None:
-        lines += ["", "Gymnasium Pendulum-v1, the rig's learners and Stable-Baselines3's SAC "
-                  "(bench/python/sb3_pendulum.py, the same seeds):", "",
-                  (sb3 / "summary.md").read_text().strip()]
-    with open(out / "table.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]) if rows else ["experiment"])
-        w.writeheader()
-        w.writerows(rows)
-    return "\n".join(lines) + "\n"
+def sac(e, args, rows, run: bool):
+    """SB3's SAC on a Gymnasium experiment: its seeds run (if `run` and --sb3; sb3_sac.py,
+    finished seeds kept) and its row added to `rows` where OUT/<experiment>/sb3-sac holds
+    any."""
+    folder = args.out / e["name"] / "sb3-sac"
+    gym = e["driver"][:1] == ["examples/gymnasium/adapter.py"]
+    if run and args.sb3 and gym:
+        status = processes.call([args.python, str(HERE / "sb3_sac.py"), str(folder), "--experiment", e["name"],
+                                 "--matrix", str(args.matrix), "--seeds", str(args.seeds)], cwd=ROOT)
+        if status != 0:
+            fail(WHO, f"--sb3: SAC on {e['name']} failed (its error above); "
+                 f"its finished seeds are kept in {folder}: call again to go on", 1)
+    if (folder / "curves.csv").exists():
+        rows.append(interaction.sac_row(e, interaction.read_sac(folder / "curves.csv"), args.seeds))
 
 
 def main():
@@ -200,8 +166,13 @@ def main():
                    help="the experiments (default bench/python/systems.toml)")
     p.add_argument("--seeds", type=int, default=5, help="seeds per experiment × learner (1..N) [default: 5]")
     p.add_argument("--only", default="", help="comma-separated experiment names to run (default all)")
+    p.add_argument("--learners", default="",
+                   help="comma-separated learner labels to run, e.g. default (default all)")
+    p.add_argument("--report-only", action="store_true",
+                   help="run nothing: the report of what OUT holds (while other calls run seeds into it)")
     p.add_argument("--trials", type=int, help="trials per run instead of each experiment's and learner's own (a short look)")
-    p.add_argument("--sb3", action="store_true", help="also run bench/python/sb3_pendulum.py, 20 000 steps")
+    p.add_argument("--sb3", action="store_true",
+                   help="also run Stable-Baselines3's SAC on the Gymnasium experiments (bench/python/sb3_sac.py)")
     rig_option(p, ROOT / "target" / "release" / "rig")
     p.add_argument("--python", default=sys.executable, help="the interpreter for the drivers")
     args = p.parse_args()
@@ -210,39 +181,42 @@ def main():
         p.error("--seeds must be at least 1")
     experiments = read_matrix(args.matrix)
     names = {e["name"] for e in experiments}
+    labels = {l["label"] for e in experiments for l in e["learners"]}
     only = [n for n in args.only.split(",") if n]
     if unknown := [n for n in only if n not in names]:
         p.error(f"--only: unknown experiments {unknown}; the matrix has {sorted(names)}")
-    chosen = [e for e in experiments if not only or e["name"] in only]
-    if any("adapter.py" in " ".join(e["driver"]) for e in chosen):
+    chosen = [n for n in args.learners.split(",") if n]
+    if unknown := [n for n in chosen if n not in labels]:
+        p.error(f"--learners: unknown learners {unknown}; the matrix has {sorted(labels)}")
+    selected = [] if args.report_only else [e for e in experiments if not only or e["name"] in only]
+    if any("adapter.py" in " ".join(e["driver"]) for e in selected):
         need(WHO, modules=["gymnasium"])
-    if args.sb3:
+    if args.sb3 and selected:
         need(WHO, modules=["gymnasium", "stable_baselines3"])
     args.out.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, "PYTHON": args.python, "RIG": str(args.rig.resolve())}
     rows = []
-    for e in chosen:
+    # Runs what --only and --learners choose; reports every experiment × learner with a
+    # seed in OUT.
+    for e in experiments:
         if args.trials is not None:
             e = {**e, "trials": args.trials,
                  "learners": [{**l, "trials": args.trials} for l in e["learners"]]}
+        run = any(e["name"] == s["name"] for s in selected)
         curves = []
         for learner in e["learners"]:
             folder = args.out / e["name"] / slug(learner["label"])
-            learn(e, learner, folder, args.seeds, env)
-            results = judged(e, folder)[: args.seeds]
-            rows.append(summary_row(e, learner, results))
-            curves.append((learner["label"], results))
-        plot(e, curves, args.out)
-    sb3 = None
-    if args.sb3:
-        sb3 = args.out / "pendulum-v1"
-        status = processes.call([args.python, str(ROOT / "bench" / "python" / "sb3_pendulum.py"), str(sb3),
-                                 "--seeds", str(args.seeds), "--steps", "20000", "--rig", str(args.rig.resolve()),
-                                 "--python", args.python], cwd=ROOT)
-        if status != 0:
-            fail(WHO, f"--sb3: the Pendulum-v1 comparison failed (its error above); "
-                 f"its finished runs are kept in {sb3}: call again to go on", 1)
-    text = report(rows, args.out, sb3)
+            if run and (not chosen or learner["label"] in chosen):
+                learn(e, learner, folder, args.seeds, env)
+            if seeds_done(folder):
+                results = judged(e, folder)[: args.seeds]
+                rows.append(interaction.rig_row(e, learner["label"], results))
+                curves.append((learner["label"], results))
+        if curves:
+            plot(e, curves, args.out)
+        sac(e, args, rows, run=run)
+    text = interaction.report(rows, args.out)
+    interaction.plot(rows, args.out)
     (args.out / "table.md").write_text(text)
     print(text)
     return 0

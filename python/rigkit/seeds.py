@@ -1,7 +1,7 @@
 """The folder of a seeds experiment (examples/python_driver/seeds.sh: OUT/seed-K/ a run's
 folder per seed, OUT/wall.csv each run's wall time) judged seed by seed: the greedy
-return at the last evaluation, whether it succeeds, when it first did, the agent's step
-per sample. bench/python/seeds_report.py prints it; systems.py and furuta_report.py use
+return at the last evaluation, whether it succeeds, when it first did and from when it
+held to the end of the run (`to_success`), the agent's step per sample. bench/python/seeds_report.py prints it; systems.py and furuta_report.py use
 it. Success is one of
 
   return_at_least R   the evaluation's greedy return (the mean over the task's start
@@ -37,18 +37,25 @@ Trial = list[list[float]]
 
 @dataclass
 class Seed:
-    """One seed's verdict (see the module): `final` is the greedy return at the last
-    evaluation, `first_success_s` the simulated seconds of learning until the first
-    evaluation that succeeds (None: none did), `learning_mean` the mean return of the
+    """One seed's verdict (see the module): `ts` the task's sampling time, `final` the
+    greedy return at the last evaluation, `first_success_s` the simulated seconds of
+    learning until the first evaluation that succeeds (None: none did), `holds_s` until
+    the first evaluation from which every later one succeeds too (None: the last one
+    fails), `first_success_samples` and `holds_samples` the same in samples of
+    learning, `learning_mean` the mean return of the
     last 100 learning trials, `agent_ms` the agent's step per sample (median and 99th
     percentile, ms; None without timing), `curve` [(simulated s, greedy return)] of
     every evaluation, `notes` (with `upright`) when each last greedy trial is upright."""
 
     seed: int
+    ts: float
     trials: int
     final: float
     succeeds: bool
     first_success_s: float | None
+    holds_s: float | None
+    first_success_samples: int | None
+    holds_samples: int | None
     learning_mean: float
     wall_s: float
     agent_ms: tuple[float, float] | None
@@ -111,6 +118,43 @@ def upright_times(trial: Trial, task: TaskTimes, tol: float) -> tuple[float | No
     return first, sum(up) / len(up)
 
 
+def meets(success: dict[str, float], task: TaskTimes, trials: list[tuple[Trial, float]]) -> tuple[float, bool]:
+    """(the mean return, whether a success rule holds) of one greedy evaluation, its
+    trials `[(states, return)]` one per start state: `success` is an experiment's rule,
+    {"return_at_least": R} or {"upright": A, "hold": S} (bench/python/systems.toml)."""
+    mean = sum(r for _, r in trials) / len(trials)
+    if "return_at_least" in success:
+        return mean, mean >= success["return_at_least"]
+    return mean, all(upright_at_end(s, task, success["upright"], success["hold"]) for s, _ in trials)
+
+
+def to_success(evals: list[tuple[float, bool]]) -> tuple[float | None, float | None]:
+    """(first, holds) of a run's evaluations `[(interaction so far, succeeds)]` in order:
+    the interaction until the first evaluation that succeeds, and until the first one
+    from which every later evaluation succeeds too (it meets the criterion and holds it
+    to the end of the run); None for one that never comes."""
+    first = next((t for t, good in evals if good), None)
+    holds = None
+    for t, good in reversed(evals):
+        if not good:
+            break
+        holds = t
+    return first, holds
+
+
+def median_to_success(values: list[float | None]) -> float | None:
+    """The median over seeds of `to_success`'s figures, a seed that never got there
+    counting as later than any that did: None if the median seed never did."""
+    if not values:
+        return None
+    ranked = sorted(values, key=lambda v: (v is None, v or 0))
+    n = len(ranked)
+    middle = ranked[(n - 1) // 2 : n // 2 + 1]
+    if any(v is None for v in middle):
+        return None
+    return sum(v for v in middle if v is not None) / len(middle)
+
+
 def judge(
     out: Path, seed: int, wall_s: float, return_at_least: float | None,
     upright: float | None, hold: float,
@@ -127,11 +171,11 @@ def judge(
     rec = recording.read(run / "run.mcap", topics)
     steps = sorted(float(s) for s in recording.agent_steps_ns(rec.of(recording.AGENT_TIMING)))
     notes = []
+    task = task_of(run)
     if upright is None:
         assert return_at_least is not None
         good = [e.greedy is not None and e.greedy >= return_at_least for e in evals]
     else:
-        task = task_of(run)
         greedy = greedy_states(rec.of(recording.MEASUREMENT))
         good = [all(upright_at_end(t, task, upright, hold) for t in greedy[e.trial]) for e in evals]
         for k, trial in enumerate(greedy[evals[-1].trial]):
@@ -142,12 +186,17 @@ def judge(
             )
     last = evals[-1]
     assert last.greedy is not None
+    first, holds = to_success([(e.sim_time_s, g) for e, g in zip(evals, good)])
     return Seed(
         seed=seed,
+        ts=task.ts,
         trials=last.trial,
         final=last.greedy,
         succeeds=good[-1],
-        first_success_s=next((e.sim_time_s for e, g in zip(evals, good) if g), None),
+        first_success_s=first,
+        holds_s=holds,
+        first_success_samples=None if first is None else round(first / task.ts),
+        holds_samples=None if holds is None else round(holds / task.ts),
         learning_mean=statistics.mean(r.ret for r in rows[-100:]),
         wall_s=wall_s,
         agent_ms=(percentile(steps, 50) / 1e6, percentile(steps, 99) / 1e6) if steps else None,

@@ -2,7 +2,7 @@
 (examples/acrobot/pump.py, lqr_region.py, examples/furuta/pump.py) against the figures
 their READMEs quote, and the experiment scripts (a seed or two of a few trials against
 the rig, RIG) to their tables. The drivers, the adapter and check_model.py /
-check_reward.py are run by the rig's tests (rig/tests/lockstep.rs, furuta.rs)."""
+check_reward.py are run by the rig's tests (rig/tests/lockstep.rs, furuta.rs, held_out.rs)."""
 
 import csv
 from pathlib import Path

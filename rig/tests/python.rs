@@ -1,8 +1,9 @@
 //! The rig's Python package, `rigkit` (python/), from `cargo test`: its pytest suite
 //! (python/tests: the package's modules, every example script shortened, the bench
 //! scripts that must end cleanly), given this rig as `RIG`, and its type check (mypy,
-//! strict, python/pyproject.toml). The package is the source tree's (`PYTHONPATH`, set by
-//! `common::python`), installed or not. Needs pytest (and mypy) importable by
+//! strict, python/pyproject.toml), and that of `rig tune`'s helpers (tune/rig_tune). The
+//! package is the source tree's (`PYTHONPATH`, set by `common::python`), installed or
+//! not. Needs pytest (and mypy) importable by
 //! `$RIG_PYTHON` (default `python3`): `pip install "./python[test]"`; without them each
 //! test prints why and passes — CI installs them.
 
@@ -57,5 +58,22 @@ fn the_python_package_type_checks() {
         out.status.success(),
         "mypy (python/pyproject.toml):\n{said}"
     );
+    assert!(said.starts_with("Success: no issues found"), "{said}");
+}
+
+/// `rig tune`'s Python side (tune/rig_tune) type-checks strictly too, against the
+/// package it imports.
+#[test]
+fn the_tune_helpers_type_check() {
+    let Some(py) = python::with("mypy, optuna, matplotlib") else {
+        return;
+    };
+    let out = python::command(&py)
+        .args(["-m", "mypy", "--no-incremental", "--strict", "rig_tune"])
+        .current_dir(python::root().join("tune"))
+        .output()
+        .unwrap();
+    let said = text(&out);
+    assert!(out.status.success(), "mypy --strict tune/rig_tune:\n{said}");
     assert!(said.starts_with("Success: no issues found"), "{said}");
 }

@@ -3,7 +3,8 @@
 //! table.csv (with the agent's step per sample, from the recordings) and curve are
 //! written, a second call with one seed more keeps the first seed's run and adds the
 //! second, and a bad matrix file is refused in one line naming the file and the keys;
-//! the Pendulum-v1 comparison keeps its finished runs. What the learners reach in full
+//! Stable-Baselines3 SAC's comparison keeps its finished seeds and is reported beside
+//! the learners. What the learners reach in full
 //! runs is the benchmark's (docs/results/systems.md).
 //!
 //! Needs iceoryx2 0.10.0, mcap and matplotlib importable by `$RIG_PYTHON` (default
@@ -13,17 +14,11 @@ use std::path::{Path, PathBuf};
 use std::process::Output;
 
 mod common;
-use common::drivers::python;
+use common::drivers::python_with;
 
 /// The interpreter, if it has the benchmark's modules.
 fn interpreter() -> Option<String> {
-    interpreter_with("mcap, matplotlib")
-}
-
-/// The interpreter, if it can import `modules` (comma-separated).
-fn interpreter_with(modules: &str) -> Option<String> {
-    python()?;
-    common::python::with(modules)
+    python_with("mcap, matplotlib")
 }
 
 /// `systems.py OUT` with `args`, the rig under test.
@@ -157,67 +152,94 @@ fn refused(python: &str, text: &str) -> String {
     err
 }
 
-/// `sb3_pendulum.py OUT --seeds 1 --steps 2000` with `args`, the rig under test.
-fn comparison(python: &str, out: &Path, args: &[&str]) -> Output {
-    common::python::script(python, "bench/python/sb3_pendulum.py")
+/// `sb3_sac.py OUT --experiment NAME` with `args`.
+fn sac(python: &str, out: &Path, name: &str, args: &[&str]) -> Output {
+    common::python::script(python, "bench/python/sb3_sac.py")
         .arg(out)
-        .args(["--seeds", "1", "--steps", "2000", "--python", python])
+        .args(["--experiment", name])
         .args(args)
         .output()
         .unwrap()
 }
 
-/// The Pendulum-v1 comparison keeps what an earlier call finished: here Stable-Baselines3's
-/// seed (CI does not install it; its evaluation is written as an earlier call would have),
-/// and on a second call the rig's runs too. Runs of another length, or a rig that is not
-/// there, are refused in one line.
+/// Seed 1 of SAC on Pendulum-v1 as an earlier call of `sb3_sac.py --steps 4000` would
+/// have left it: success at 2000 steps, lost at 4000 (CI does not install
+/// Stable-Baselines3, so the test never learns with it).
+const KEPT_SAC: &str = "seed,steps,sim_s,wall_s,greedy_return,success\n\
+                        1,2000,100,61.500,-150.25,1\n1,4000,200,130.000,-900.5,0\n";
+
+/// SAC's comparison keeps the seeds an earlier call finished, refuses a folder of another
+/// length and an experiment that is not a Gymnasium environment in one line each; and
+/// `systems.py` reports kept SAC seeds as a row beside the rig's learners, its
+/// interaction to success from their evaluations.
 #[test]
-fn the_pendulum_comparison_keeps_the_runs_an_earlier_call_finished() {
-    let Some(python) = interpreter_with("mcap, matplotlib, gymnasium") else {
+fn the_sac_comparison_keeps_finished_seeds_and_is_reported_beside_the_learners() {
+    let Some(python) = python_with("mcap, matplotlib, gymnasium") else {
         return;
     };
-    let out = common::tmp("systems", "sb3").join("out");
-    std::fs::create_dir_all(&out).unwrap();
-    let kept = "learner,seed,steps,wall_s,greedy_return\nSB3 SAC,1,2000,61.500,-150.25\n";
-    std::fs::write(out.join("curves.csv"), kept).unwrap();
-    let rig = ["--rig", env!("CARGO_BIN_EXE_rig")];
+    let dir = common::tmp("systems", "sac");
+    let folder = dir.join("out/pendulum-v1/sb3-sac");
+    std::fs::create_dir_all(&folder).unwrap();
+    std::fs::write(folder.join("curves.csv"), KEPT_SAC).unwrap();
 
-    let first = common::ok(comparison(&python, &out, &rig));
-    let text = String::from_utf8_lossy(&first.stdout);
-    assert!(text.contains("SB3 SAC seed 1: kept"), "{text}");
-    assert!(
-        text.contains("| SB3 SAC | 1 of 1 | 2000 | 61.5 s | -150.2 | 61.5 s |"),
-        "{text}"
-    );
-    for learner in ["rig MLAC/LLR", "rig SAC/LLR"] {
-        assert!(text.contains(&format!("| {learner} | ")), "{text}");
-    }
-    let curves = std::fs::read_to_string(out.join("curves.csv")).unwrap();
-    assert!(curves.starts_with(kept), "{curves}");
-    assert_eq!(curves.lines().count(), 4, "{curves}");
-    let returns = out.join("rig-mlac-1/returns.csv");
-    let modified = || std::fs::metadata(&returns).unwrap().modified().unwrap();
-    let ran = modified();
-
-    let again = common::ok(comparison(&python, &out, &rig));
-    let text = String::from_utf8_lossy(&again.stdout);
-    assert_eq!(text.matches(": kept from ").count(), 3, "{text}");
-    assert_eq!(modified(), ran, "the rig's run kept, not run again");
+    let kept = common::ok(sac(
+        &python,
+        &folder,
+        "pendulum-v1",
+        &["--seeds", "1", "--steps", "4000"],
+    ));
+    let text = String::from_utf8_lossy(&kept.stdout);
+    assert!(text.contains("seed 1: kept from"), "{text}");
     assert_eq!(
-        std::fs::read_to_string(out.join("curves.csv")).unwrap(),
-        curves
+        std::fs::read_to_string(folder.join("curves.csv")).unwrap(),
+        KEPT_SAC
     );
+    for (name, args, says) in [
+        (
+            "pendulum-v1",
+            ["--seeds", "1", "--steps", "2000"],
+            "holds runs of 4000 steps",
+        ),
+        (
+            "acrobot-balance",
+            ["--seeds", "1", "--steps", "2000"],
+            "not a Gymnasium environment",
+        ),
+    ] {
+        let refused = sac(&python, &folder, name, &args);
+        let err = String::from_utf8_lossy(&refused.stderr);
+        assert!(!refused.status.success());
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(err.contains(says), "{err}");
+    }
 
-    let longer = comparison(&python, &out, &[&rig[..], &["--steps", "4000"]].concat());
-    let err = String::from_utf8_lossy(&longer.stderr);
-    assert!(!longer.status.success());
-    assert_eq!(err.trim().lines().count(), 1, "{err}");
-    assert!(err.contains("holds runs of 2000 steps"), "{err}");
-    let absent = comparison(&python, &out, &["--rig", "/nonexistent/rig"]);
-    let err = String::from_utf8_lossy(&absent.stderr);
-    assert!(!absent.status.success());
+    let matrix = dir.join("matrix.toml");
+    std::fs::write(
+        &matrix,
+        r#"[[experiment]]
+name = "pendulum-v1"
+system = "Pendulum-v1"
+task = "examples/gymnasium/pendulum-v1.toml"
+driver = ["examples/gymnasium/adapter.py", "--mapping", "examples/gymnasium/pendulum_v1.py"]
+trials = 2
+success = { upright = 0.3, hold = 1.5 }
+learners = [{ label = "MLAC/LLR", flags = ["--algo", "mlac", "--approx", "llr", "--eval-every", "2"] }]
+"#,
+    )
+    .unwrap();
+    let m = matrix.to_str().unwrap();
+    let report = common::ok(systems(
+        &python,
+        &dir.join("out"),
+        &["--matrix", m, "--seeds", "1"],
+    ));
+    let table = String::from_utf8_lossy(&report.stdout);
+    assert!(table.contains("| Pendulum-v1 | MLAC/LLR | "), "{table}");
     assert!(
-        err.contains("/nonexistent/rig: no such rig binary"),
-        "{err}"
+        table.contains(
+            "| Pendulum-v1 | SB3 SAC (rl-zoo) | 0 of 1 | 1 | 100 s / 2000 | not reached | -900.50 |"
+        ),
+        "{table}"
     );
+    assert!(dir.join("out/interaction.png").metadata().unwrap().len() > 0);
 }

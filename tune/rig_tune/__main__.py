@@ -8,6 +8,7 @@ import sys
 import tempfile
 import warnings
 from pathlib import Path
+from typing import Any
 
 if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: rig tune needs the rig's Python package rigkit: python3 -m pip install ./python")
@@ -60,7 +61,7 @@ def space_for(args: argparse.Namespace) -> int:
     return 0
 
 
-def searchable(base: dict, space: list[Param], source: Path, scratch: Path) -> None:
+def searchable(base: dict[str, Any], space: list[Param], source: Path, scratch: Path) -> None:
     """Refuses a space whose ends the rig would refuse, before any trial runs."""
     for p in space:
         for v in p.extremes():
@@ -106,7 +107,7 @@ def tune(args: argparse.Namespace, argv: list[str]) -> int:
 
 
 def conclude(
-    args: argparse.Namespace, s: optuna.Study, base: dict, url: str, eval_every: int, runner: Runner
+    args: argparse.Namespace, s: optuna.Study, base: dict[str, Any], url: str, eval_every: int, runner: Runner
 ) -> int:
     """The check and the report, once the study has its trials."""
     trials = s.get_trials(deepcopy=False)

@@ -6,8 +6,10 @@ from __future__ import annotations
 import argparse
 import os
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 from statistics import fmean, stdev
+from typing import Any
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
@@ -27,7 +29,7 @@ def write(args: argparse.Namespace, study: optuna.Study, url: str, arms: list[Ar
     lines += importances(study, plots)
     lines += optuna_plots(study, plots)
     lines += trials_table(study)
-    path = args.out / "report.md"
+    path: Path = args.out / "report.md"
     path.write_text("\n".join(lines) + "\n")
     return path
 
@@ -104,7 +106,7 @@ def optuna_plots(study: optuna.Study, plots: Path) -> list[str]:
             "", save(optuna.visualization.matplotlib.plot_intermediate_values, study, plots / "intermediate.png"), ""]
 
 
-def save(plot, study: optuna.Study, path: Path) -> str:
+def save(plot: Callable[[optuna.Study], Any], study: optuna.Study, path: Path) -> str:
     """One of Optuna's matplotlib plots as a PNG, and its Markdown image line."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)

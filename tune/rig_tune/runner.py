@@ -118,7 +118,7 @@ class Driver:
         self.sink = open(log, "w")
         self.proc = self.start()
 
-    def start(self) -> subprocess.Popen:
+    def start(self) -> subprocess.Popen[bytes]:
         return subprocess.Popen(self.argv, stdout=self.sink, stderr=subprocess.STDOUT)
 
     def alive(self) -> bool:

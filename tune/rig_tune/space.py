@@ -21,6 +21,7 @@ import math
 import textwrap
 import tomllib
 from dataclasses import dataclass
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -49,18 +50,24 @@ class Param:
         """The value of this key in `trial`."""
         if self.choices:
             return trial.suggest_categorical(self.key, list(self.choices))
+        low, high = self.bounds()
         if self.integer:
             return trial.suggest_int(
-                self.key, int(self.low), int(self.high), step=int(self.step or 1), log=self.log
+                self.key, int(low), int(high), step=int(self.step or 1), log=self.log
             )
-        return trial.suggest_float(self.key, self.low, self.high, step=self.step, log=self.log)
+        return trial.suggest_float(self.key, low, high, step=self.step, log=self.log)
+
+    def bounds(self) -> tuple[float, float]:
+        """`(low, high)` of a numeric key (`numeric` always sets both)."""
+        assert self.low is not None and self.high is not None, f"{self.key}: not numeric"
+        return self.low, self.high
 
     def extremes(self) -> list[Any]:
         """The values the rig must accept for this key to be searchable."""
         if self.choices:
             return list(self.choices)
         cast = int if self.integer else float
-        return [cast(self.low), cast(self.high)]
+        return [cast(v) for v in self.bounds()]
 
 
 def load(path: Path, keys: dict[str, Any]) -> list[Param]:
@@ -106,7 +113,7 @@ def parse(path: Path, key: str, spec: Any, keys: dict[str, Any]) -> Param:
     return numeric(fail, key, spec, integer=spec.get("int", isinstance(preset, int)))
 
 
-def choice(fail, key: str, spec: dict[str, Any]) -> Param:
+def choice(fail: Callable[[str], Exception], key: str, spec: dict[str, Any]) -> Param:
     """A key that takes one of a list."""
     others = [f for f in spec if f != "choices"]
     if others:
@@ -121,7 +128,7 @@ def choice(fail, key: str, spec: dict[str, Any]) -> Param:
     return Param(key, choices=tuple(values))
 
 
-def numeric(fail, key: str, spec: dict[str, Any], integer: Any) -> Param:
+def numeric(fail: Callable[[str], Exception], key: str, spec: dict[str, Any], integer: Any) -> Param:
     """A key that takes a number in [low, high]."""
     for field in ("low", "high"):
         if field not in spec:

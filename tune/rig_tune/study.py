@@ -54,7 +54,7 @@ def storage(args: argparse.Namespace) -> optuna.storages.RDBStorage:
 def name(args: argparse.Namespace, base_text: str, space_text: str) -> str:
     """The study's name: given, or the same for the same task, learner, space and runs."""
     if args.study:
-        return args.study
+        return str(args.study)
     what = "\n".join([base_text, space_text, str(args.seeds), str(args.last), str(args.trials)])
     digest = hashlib.sha256(what.encode()).hexdigest()[:10]
     return f"rig-tune-{digest}"
@@ -133,7 +133,7 @@ def work(args: argparse.Namespace, study_name: str, objective: Objective, evalua
             driver.close()
 
 
-def start_workers(argv: list[str], workers: int, out: Path) -> list[subprocess.Popen]:
+def start_workers(argv: list[str], workers: int, out: Path) -> list[subprocess.Popen[bytes]]:
     """The worker processes: this command again, each with its index."""
     logs = out / "workers"
     logs.mkdir(parents=True, exist_ok=True)
@@ -146,7 +146,7 @@ def start_workers(argv: list[str], workers: int, out: Path) -> list[subprocess.P
     return procs
 
 
-def forward_sigterm(procs: list[subprocess.Popen]) -> None:
+def forward_sigterm(procs: list[subprocess.Popen[bytes]]) -> None:
     """SIGTERM (a timeout, a scheduler) acts as Ctrl-C: passed on to the workers, which a
     terminal's Ctrl-C reaches by itself, then KeyboardInterrupt here."""
 
@@ -172,7 +172,7 @@ def describe(t: FrozenTrial) -> str:
     return f"trial {t.number}: {what} ({params})"
 
 
-def watch(study: optuna.Study, target: int, procs: list[subprocess.Popen]) -> None:
+def watch(study: optuna.Study, target: int, procs: list[subprocess.Popen[bytes]]) -> None:
     """Prints each trial as it ends and the study's count, until the workers exit."""
     seen: set[int] = set()
     while True:
@@ -192,7 +192,7 @@ def watch(study: optuna.Study, target: int, procs: list[subprocess.Popen]) -> No
         time.sleep(PROGRESS_S)
 
 
-def stop(procs: list[subprocess.Popen]) -> None:
+def stop(procs: list[subprocess.Popen[bytes]]) -> None:
     """Waits for interrupted workers to mark their trials and exit (killed after 30 s)."""
     for p in procs:
         processes.stop(p, None, patience=30)

@@ -22,6 +22,13 @@ pub fn python() -> Option<String> {
     Some(python)
 }
 
+/// The Python interpreter with the bindings, if it can also import `modules`
+/// (comma-separated), or `None` (and why).
+pub fn python_with(modules: &str) -> Option<String> {
+    python()?;
+    py::with(modules)
+}
+
 /// A driver process: the Python example (`examples/python_driver/driver.py`, official
 /// iceoryx2 bindings) or `rig sim-driver` (Rust, the driver kit).
 #[derive(Clone, Debug)]
