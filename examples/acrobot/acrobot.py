@@ -30,6 +30,7 @@ line), both wrapped to [-pi, pi): upright is x = 0.
 
 import math
 
+from rigkit import rk4
 from rigkit.angle import wrap
 
 M1 = M2 = 1.0  # link masses [kg]
@@ -78,15 +79,6 @@ def derivative(s, tau: float):
     return [dq1, dq2, ddq1, ddq2]
 
 
-def rk4(s, tau: float, h: float):
-    """One fourth-order Runge-Kutta step of h seconds."""
-    k1 = derivative(s, tau)
-    k2 = derivative([a + 0.5 * h * k for a, k in zip(s, k1)], tau)
-    k3 = derivative([a + 0.5 * h * k for a, k in zip(s, k2)], tau)
-    k4 = derivative([a + h * k for a, k in zip(s, k3)], tau)
-    return [a + h / 6.0 * (p + 2.0 * q + 2.0 * r + w) for a, p, q, r, w in zip(s, k1, k2, k3, k4)]
-
-
 class Acrobot:
     """The acrobot's state, stepped with a torque held."""
 
@@ -99,11 +91,8 @@ class Acrobot:
         self.s = [wrap(x0[0] + math.pi), wrap(x0[1]), x0[2], x0[3]]
 
     def step(self, u, dt):
-        n = max(1, math.ceil(dt / self.H_MAX - 1e-9))
-        s = self.s
-        for _ in range(n):
-            s = rk4(s, u[0], dt / n)
-        q1, q2, dq1, dq2 = s
+        tau = u[0]
+        q1, q2, dq1, dq2 = rk4.integrate(lambda s: derivative(s, tau), self.s, dt, self.H_MAX)
         self.s = [
             q1,
             q2,

@@ -25,13 +25,11 @@ the task's operating range (the rig ends a trial there), not the model's.
 
 import math
 
+from rigkit import rk4
+from rigkit.angle import wrap
+
 M_C, M_P, L, G = 1.0, 0.1, 0.5, 9.8
 M = M_C + M_P
-
-
-def wrap(a: float) -> float:
-    """Angle to [-pi, pi)."""
-    return (a + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def derivative(x, f: float):
@@ -65,15 +63,8 @@ class CartPole:
         self.x = [x0[0], wrap(x0[1]), x0[2], x0[3]]
 
     def step(self, u, dt):
-        n = max(1, math.ceil(dt / self.H_MAX - 1e-9))
-        h = dt / n
-        x, f = self.x, u[0]
-        for _ in range(n):
-            k1 = derivative(x, f)
-            k2 = derivative([xi + 0.5 * h * ki for xi, ki in zip(x, k1)], f)
-            k3 = derivative([xi + 0.5 * h * ki for xi, ki in zip(x, k2)], f)
-            k4 = derivative([xi + h * ki for xi, ki in zip(x, k3)], f)
-            x = [xi + h / 6.0 * (a + 2 * b + 2 * c + d) for xi, a, b, c, d in zip(x, k1, k2, k3, k4)]
+        f = u[0]
+        x = rk4.integrate(lambda s: derivative(s, f), self.x, dt, self.H_MAX)
         self.x = [x[0], wrap(x[1]), x[2], x[3]]
 
     def state(self):

@@ -42,6 +42,7 @@ steps of at most 1 ms.
 
 import math
 
+from rigkit import rk4
 from rigkit.angle import wrap
 
 # Motor
@@ -95,15 +96,8 @@ class Furuta:
         self.x = [x0[0], wrap(x0[1]), x0[2], x0[3]]
 
     def step(self, u, dt):
-        n = max(1, math.ceil(dt / self.H_MAX - 1e-9))
-        h = dt / n
-        x, v, d = self.x, u[0], self.damping
-        for _ in range(n):
-            k1 = derivative(x, v, d)
-            k2 = derivative([xi + 0.5 * h * ki for xi, ki in zip(x, k1)], v, d)
-            k3 = derivative([xi + 0.5 * h * ki for xi, ki in zip(x, k2)], v, d)
-            k4 = derivative([xi + h * ki for xi, ki in zip(x, k3)], v, d)
-            x = [xi + h / 6.0 * (a + 2 * b + 2 * c + d) for xi, a, b, c, d in zip(x, k1, k2, k3, k4)]
+        v, d = u[0], self.damping
+        x = rk4.integrate(lambda s: derivative(s, v, d), self.x, dt, self.H_MAX)
         # The arm turns freely here (the rig's operating range stops it): only the
         # pendulum's angle wraps.
         self.x = [x[0], wrap(x[1]), x[2], x[3]]
