@@ -179,7 +179,7 @@ def plot(rows, out: Path, learners=("default", SAC_LABEL)):
     ax.set_xscale("log")
     ax.set_xlabel("samples of interaction until success (median over seeds)")
     ax.grid(axis="x", which="major", alpha=0.3)
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.3), ncol=2)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=2)
     fig.tight_layout()
     fig.savefig(out / "interaction.png", dpi=110, bbox_inches="tight")
     plt.close(fig)
