@@ -526,7 +526,7 @@ mod tests {
             limits: vec![(-1.0, 1.0)],
             penalty: -1e4,
         };
-        let first = |mut p: Ilqr, x: f64| {
+        let first = |p: Ilqr, x: f64| {
             let mut u = [0.0];
             p.act(&[x], &[0.0], &constant(0.0), &mut u);
             u[0]
