@@ -29,7 +29,7 @@ use foxglove::{
     Channel, ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, WebSocketServer,
     WebSocketServerHandle,
 };
-use runtime::record::Tap;
+use runtime::record::{Tap, channels};
 
 pub mod door;
 pub mod picture;
@@ -264,8 +264,8 @@ impl View {
     fn channel(&mut self, topic: &str, schema_name: String, schema: Vec<u8>) {
         let index = self.channels.len();
         match topic {
-            "/plant/truth" => self.state = Some((index, "x_")),
-            "/plant/measurement" if self.state.is_none() => self.state = Some((index, "y_")),
+            channels::TRUTH => self.state = Some((index, "x_")),
+            channels::MEASUREMENT if self.state.is_none() => self.state = Some((index, "y_")),
             _ => {}
         }
         let channel = ChannelBuilder::new(topic)

@@ -77,7 +77,9 @@ const CHUNK_SIZE: u64 = 1024 * 1024;
 /// log and publish time.
 const MESSAGE_RECORD: u64 = 1 + 8 + 2 + 4 + 8 + 8;
 
+pub mod channels;
 mod error;
+pub mod reader;
 mod schema;
 mod tap;
 #[cfg(test)]

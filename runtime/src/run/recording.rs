@@ -7,23 +7,12 @@ use std::path::Path;
 use super::error::{Result, RunError};
 use crate::error::AtFile;
 use driver::contract::{DriverCommand, DriverSample, LinkSample};
-
-/// The integer fields of `/driver/link`, in [`LinkSample`]'s order (the offset, signed,
-/// follows as a number).
-const LINK_INTS: [&str; 7] = [
-    "seq",
-    "t_received_ns",
-    "sample_hop_ns",
-    "command_round_trip_ns",
-    "command_hop_ns",
-    "ping_round_trip_ns",
-    "clock_uncertainty_ns",
-];
 use wire::{Action, Estimate, Header, Measurement, Truth};
 
 use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
-use crate::record::{ChannelId, Field, FieldKind, RecordError, Recorder, Tap, Value};
+use crate::record::channels::{self, fields, schema};
+use crate::record::{ChannelId, RecordError, Recorder, Tap, Value};
 use crate::resume::ResumePoint;
 
 /// The MCAP recording: one channel per topic, and one `/timing/...` channel per topic
@@ -103,22 +92,6 @@ pub(super) fn join<T: std::fmt::Display>(values: impl IntoIterator<Item = T>) ->
         .join(",")
 }
 
-pub(super) fn header_fields(extra: Vec<Vec<Field>>) -> Vec<Field> {
-    let mut f: Vec<Field> = ["seq", "trial", "step", "flags"]
-        .iter()
-        .map(|n| Field::integer(n))
-        .collect();
-    f.push(Field::number("t_sim"));
-    f.extend(extra.into_iter().flatten());
-    f
-}
-
-pub(super) fn timing_fields(names: &[&str]) -> Vec<Field> {
-    std::iter::once(Field::integer("seq"))
-        .chain(names.iter().map(|n| Field::integer(n)))
-        .collect()
-}
-
 /// What a run's recording describes beside its messages.
 pub(super) struct About<'a> {
     pub(super) cfg: &'a ExperimentConfig,
@@ -143,7 +116,7 @@ impl RecordingWriter {
     /// trials it keeps (the old recording is replaced).
     pub(super) fn open(dir: &Path, about: &About) -> Result<Self> {
         let (cfg, task) = (about.cfg, about.task);
-        let path = dir.join("run.mcap");
+        let path = dir.join(crate::record::reader::NAME);
         // Written as `run.mcap.part` until finished: a resumed run's old recording,
         // which holds what it keeps, stays until copied.
         let mut rec = Recorder::create(&path)?;
@@ -186,47 +159,17 @@ impl RecordingWriter {
 
     /// The recording's channels in `rec`, for a task of `n` states and `m` actions.
     pub(super) fn create(mut rec: Recorder, n: usize, m: usize) -> Result<Self, RecordError> {
-        let state = |name| {
-            vec![
-                vec![Field::number("reward")],
-                Field::array(name, n, FieldKind::Number),
-                Field::array("u_applied", m, FieldKind::Number),
-            ]
+        use channels::{ACTION, ESTIMATE, MEASUREMENT, TIMING};
+        let measurement =
+            rec.channel(MEASUREMENT, schema::MEASUREMENT, &fields::measurement(n, m))?;
+        let estimate = rec.channel(ESTIMATE, schema::ESTIMATE, &fields::estimate(n, m))?;
+        let action = rec.channel(ACTION, schema::ACTION, &fields::action(m))?;
+        let timing = |rec: &mut Recorder, i: usize, stamps: &[&str]| {
+            rec.channel(TIMING[i], schema::TIMING[i], &fields::timing(stamps))
         };
-        let mut measured = state("y");
-        measured.push(Field::array("u_next", m, FieldKind::Number));
-        measured.push(vec![Field::number("delay_s")]);
-        let measurement = rec.channel(
-            "/plant/measurement",
-            "rig.Measurement",
-            &header_fields(measured),
-        )?;
-        let estimate = rec.channel(
-            "/observer/estimate",
-            "rig.Estimate",
-            &header_fields(state("x")),
-        )?;
-        let action = rec.channel(
-            "/agent/action",
-            "rig.Action",
-            &header_fields(vec![Field::array("u", m, FieldKind::Number)]),
-        )?;
-        let stamps = ["t_sample_ns", "t_received_ns", "t_publish_ns"];
-        let t_measurement = rec.channel(
-            "/timing/plant/measurement",
-            "rig.Timing.Measurement",
-            &timing_fields(&["t_sample_ns", "t_publish_ns", "t_action_ns"]),
-        )?;
-        let t_estimate = rec.channel(
-            "/timing/observer/estimate",
-            "rig.Timing.Estimate",
-            &timing_fields(&stamps),
-        )?;
-        let t_action = rec.channel(
-            "/timing/agent/action",
-            "rig.Timing.Action",
-            &timing_fields(&stamps),
-        )?;
+        let t_measurement = timing(&mut rec, 0, &fields::MEASUREMENT_STAMPS)?;
+        let t_estimate = timing(&mut rec, 1, &fields::STAMPS)?;
+        let t_action = timing(&mut rec, 2, &fields::STAMPS)?;
         Ok(Self {
             rec,
             measurement,
@@ -253,19 +196,12 @@ impl RecordingWriter {
     /// share of it, in µs.
     pub(super) fn live(&mut self, tap: Box<dyn Tap>) -> Result<(), RecordError> {
         self.rec.set_tap(tap);
-        let returns = [
-            Field::integer("trial"),
-            Field::number("return"),
-            Field::number("greedy"),
-            Field::number("sim_time_s"),
-        ];
-        let returns = self.rec.live_channel("/returns", "rig.Returns", &returns)?;
-        let latency = [
-            Field::integer("seq"),
-            Field::number("sample_to_action_us"),
-            Field::number("agent_us"),
-        ];
-        let latency = self.rec.live_channel("/latency", "rig.Latency", &latency)?;
+        let returns =
+            self.rec
+                .live_channel(channels::RETURNS, schema::RETURNS, &fields::returns())?;
+        let latency =
+            self.rec
+                .live_channel(channels::LATENCY, schema::LATENCY, &fields::latency())?;
         self.live = Some((returns, latency));
         Ok(())
     }
@@ -358,8 +294,8 @@ impl RecordingWriter {
 
     /// Adds the channel of the plant's ground truth.
     pub(super) fn add_truth(&mut self) -> Result<(), RecordError> {
-        let fields = header_fields(vec![Field::array("x", self.n, FieldKind::Number)]);
-        self.truth = Some(self.rec.channel("/plant/truth", "rig.Truth", &fields)?);
+        let fields = fields::truth(self.n);
+        self.truth = Some(self.rec.channel(channels::TRUTH, schema::TRUTH, &fields)?);
         Ok(())
     }
 
@@ -392,24 +328,21 @@ impl RecordingWriter {
     /// Adds the channels of an external driver's samples and commands.
     pub(super) fn add_driver(&mut self) -> Result<(), RecordError> {
         let (n, m) = (self.n, self.m);
-        let ints =
-            |names: &[&str]| -> Vec<Field> { names.iter().map(|f| Field::integer(f)).collect() };
-        let mut sample = ints(&["seq", "t_sample_ns", "status", "reset_id", "last_command"]);
-        sample.extend(Field::array("x", n, FieldKind::Number));
-        sample.extend(Field::array("u_applied", m, FieldKind::Number));
-        sample.extend(ints(&["clamped", "rejected", "watchdog_trips"]));
-        let mut command = ints(&["seq", "kind", "sample_seq", "t_publish_ns"]);
-        command.extend(Field::array("u", m, FieldKind::Number));
-        command.extend(Field::array("x0", n, FieldKind::Number));
-        let s = self
-            .rec
-            .channel("/driver/sample", "rig.DriverSample", &sample)?;
-        let c = self
-            .rec
-            .channel("/driver/command", "rig.DriverCommand", &command)?;
-        let mut link = ints(&LINK_INTS);
-        link.push(Field::number("clock_offset_ns"));
-        let l = self.rec.channel("/driver/link", "rig.LinkSample", &link)?;
+        let s = self.rec.channel(
+            channels::DRIVER_SAMPLE,
+            schema::DRIVER_SAMPLE,
+            &fields::driver_sample(n, m),
+        )?;
+        let c = self.rec.channel(
+            channels::DRIVER_COMMAND,
+            schema::DRIVER_COMMAND,
+            &fields::driver_command(n, m),
+        )?;
+        let l = self.rec.channel(
+            channels::DRIVER_LINK,
+            schema::DRIVER_LINK,
+            &fields::driver_link(),
+        )?;
         self.driver = Some((s, c, l));
         Ok(())
     }
