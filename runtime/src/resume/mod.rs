@@ -116,7 +116,7 @@ pub fn prepare(
         first_seq,
         checkpoint,
         records: rows[..c as usize].to_vec(),
-        messages: kept(messages, first_seq),
+        messages: kept(messages, first_seq, c),
         notes,
     })
 }

@@ -8,7 +8,7 @@ use super::error::PrepareError;
 use wire::flags;
 
 use crate::experiment::TrialRecord;
-use crate::record::channels::{DRIVER_PREFIX, Head, Keep, LOOP, MEASUREMENT};
+use crate::record::channels::{DRIVER_PREFIX, Head, Keep, LOOP, MEASUREMENT, row_trial};
 use crate::record::reader::{NAME, PART, RecordedMessage, RunFile};
 
 /// Reads the rows of a `returns.csv`, but a last line cut short (a row being written when
@@ -173,11 +173,12 @@ impl RecordingIndex {
     }
 }
 
-/// The recorded messages before sample `first_seq`, which the resumed run keeps: the
-/// loop's topics and their timing by sequence number (without the shutdown), the other
-/// channels (an external driver's traffic, the ground truth) up to the last kept
-/// measurement's log time.
-pub(super) fn kept(messages: Vec<RecordedMessage>, first_seq: u64) -> Vec<RecordedMessage> {
+/// The recorded messages before sample `first_seq`, after trial `c`, which the resumed
+/// run keeps: the loop's topics, their timing and latency by sequence number (without the
+/// shutdown), the rows of `returns.csv` of trials up to `c`, a picture per kept
+/// measurement, the other channels (an external driver's traffic, the ground truth) up
+/// to the last kept measurement's log time.
+pub(super) fn kept(messages: Vec<RecordedMessage>, first_seq: u64, c: u32) -> Vec<RecordedMessage> {
     let last_log_time = messages
         .iter()
         .filter(|m| m.topic == MEASUREMENT)
@@ -187,13 +188,23 @@ pub(super) fn kept(messages: Vec<RecordedMessage>, first_seq: u64) -> Vec<Record
         })
         .max()
         .unwrap_or(0);
+    let loop_kept = |h: Head| h.seq < first_seq && h.flags & flags::SHUTDOWN == 0;
+    let measurements = messages
+        .iter()
+        .filter(|m| m.topic == MEASUREMENT)
+        .filter(|m| Head::of(&m.data).is_ok_and(loop_kept))
+        .count();
+    let mut pictures = 0;
     let keep = |m: &RecordedMessage| -> bool {
         let head = || Head::of(&m.data).ok();
         match Keep::of(&m.topic) {
-            Keep::Loop => {
-                head().is_some_and(|h| h.seq < first_seq && h.flags & flags::SHUTDOWN == 0)
-            }
+            Keep::Loop => head().is_some_and(loop_kept),
             Keep::Sample => head().is_some_and(|h| h.seq < first_seq),
+            Keep::Row => row_trial(&m.data).is_some_and(|t| t <= u64::from(c)),
+            Keep::Picture => {
+                pictures += 1;
+                pictures <= measurements
+            }
             Keep::Logged => first_seq > 0 && m.log_time <= last_log_time,
         }
     };
@@ -223,5 +234,46 @@ mod tests {
             "{notes:?}"
         );
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    fn message(topic: &str, log_time: u64, data: &str) -> RecordedMessage {
+        RecordedMessage {
+            topic: topic.into(),
+            log_time,
+            publish_time: log_time,
+            data: data.as_bytes().to_vec(),
+        }
+    }
+
+    #[test]
+    fn a_resumed_run_keeps_the_rows_of_its_trials_a_picture_per_kept_sample_and_their_latency() {
+        use crate::record::channels::{LATENCY, RETURNS, SCENE};
+        let sample = |seq: u64, trial: u64| {
+            let data = format!(r#"{{"seq":{seq},"trial":{trial},"flags":0}}"#);
+            [
+                message(MEASUREMENT, 10 * seq, &data),
+                message(SCENE, 10 * seq, "picture"),
+                message(LATENCY, 10 * seq, &format!(r#"{{"seq":{seq}}}"#)),
+            ]
+        };
+        let mut messages: Vec<RecordedMessage> =
+            (0..4).flat_map(|s| sample(s, 1 + s / 2)).collect();
+        messages.push(message(RETURNS, 15, r#"{"trial":1,"return":-3.5}"#));
+        messages.push(message(RETURNS, 35, r#"{"trial":2,"return":-2.5}"#));
+        // Resumed after trial 1: its two samples, their pictures and latency, its row.
+        let kept = kept(messages, 2, 1);
+        let topics: Vec<(&str, u64)> = kept.iter().map(|m| (&m.topic[..], m.log_time)).collect();
+        assert_eq!(
+            topics,
+            [
+                (MEASUREMENT, 0),
+                (SCENE, 0),
+                (LATENCY, 0),
+                (MEASUREMENT, 10),
+                (SCENE, 10),
+                (LATENCY, 10),
+                (RETURNS, 15)
+            ]
+        );
     }
 }

@@ -1,5 +1,6 @@
 //! The run's MCAP recording: one channel per topic, the wall-clock stamps on their
-//! own `/timing/...` channels, log time simulated (lockstep) or the plant's (realtime).
+//! own `/timing/...` channels, the trials' returns, the loop's latency and the system's
+//! picture; log time simulated (lockstep) or the plant's (realtime).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -7,11 +8,12 @@ use std::path::Path;
 use super::error::{Result, RunError};
 use crate::error::AtFile;
 use driver::contract::{DriverCommand, DriverSample, LinkSample};
-use wire::{Action, Estimate, Header, Measurement, Truth};
+use wire::{Action, Estimate, Header, Measurement, Truth, flags};
 
 use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
 use crate::record::channels::{self, fields, schema};
+use crate::record::scene::{Scene, SceneMaker};
 use crate::record::{ChannelId, RecordError, Recorder, Tap, Value};
 use crate::resume::ResumePoint;
 
@@ -37,10 +39,22 @@ pub(super) struct RecordingWriter {
     pub(super) realtime: bool,
     /// The current sample's plant sample time (monotonic ns).
     pub(super) t_sample_ns: u64,
-    /// `/returns` and `/latency`, for a live view only ([`RecordingWriter::live`]).
-    pub(super) live: Option<(ChannelId, ChannelId)>,
+    /// `/returns`: a row of `returns.csv` per trial ([`Self::trial`]).
+    returns: ChannelId,
+    /// `/latency`: per action the time from the sample to the action and the agent's
+    /// share of it, in µs.
+    latency: ChannelId,
+    /// `/scene`: the system drawn from each sample's state, when the application draws it.
+    scene: Option<Pictures>,
     /// The log time of the last message of the loop recorded.
     pub(super) log_time_ns: u64,
+}
+
+/// The system's pictures: their channel, their painter, the picture being encoded.
+struct Pictures {
+    channel: ChannelId,
+    scene: Box<dyn Scene>,
+    buf: Vec<u8>,
 }
 
 /// The recording's metadata `run`.
@@ -108,6 +122,8 @@ pub(super) struct About<'a> {
     pub(super) driver_reward: bool,
     /// Where a resumed run continues.
     pub(super) point: Option<&'a ResumePoint>,
+    /// Draws the system's pictures for `/scene` (none without).
+    pub(super) scene: Option<SceneMaker>,
 }
 
 impl RecordingWriter {
@@ -127,6 +143,9 @@ impl RecordingWriter {
         rec.metadata("run", &metadata(about))?;
         let mut r = Self::create(rec, task.state_dim(), task.action_dim())?;
         r.realtime = about.realtime;
+        if let Some(make) = about.scene {
+            r.add_scene(make(task))?;
+        }
         if about.driver {
             r.add_driver()?;
         }
@@ -170,6 +189,8 @@ impl RecordingWriter {
         let t_measurement = timing(&mut rec, 0, &fields::MEASUREMENT_STAMPS)?;
         let t_estimate = timing(&mut rec, 1, &fields::STAMPS)?;
         let t_action = timing(&mut rec, 2, &fields::STAMPS)?;
+        let returns = rec.channel(channels::RETURNS, schema::RETURNS, &fields::returns())?;
+        let latency = rec.channel(channels::LATENCY, schema::LATENCY, &fields::latency())?;
         Ok(Self {
             rec,
             measurement,
@@ -185,33 +206,47 @@ impl RecordingWriter {
             values: Vec::new(),
             realtime: false,
             t_sample_ns: 0,
-            live: None,
+            returns,
+            latency,
+            scene: None,
             log_time_ns: 0,
         })
     }
 
-    /// Hands every message to `tap` too (a live view), and declares the channels only it
-    /// receives: `/returns`, a row of `returns.csv` per trial ([`Self::trial`]), and
-    /// `/latency`, per action the time from the sample to the action and the agent's
-    /// share of it, in µs.
-    pub(super) fn live(&mut self, tap: Box<dyn Tap>) -> Result<(), RecordError> {
+    /// Hands every channel and message to `tap` too (a live view).
+    pub(super) fn live(&mut self, tap: Box<dyn Tap>) {
         self.rec.set_tap(tap);
-        let returns =
-            self.rec
-                .live_channel(channels::RETURNS, schema::RETURNS, &fields::returns())?;
-        let latency =
-            self.rec
-                .live_channel(channels::LATENCY, schema::LATENCY, &fields::latency())?;
-        self.live = Some((returns, latency));
+    }
+
+    /// Adds `/scene`, the system drawn by `scene` from each sample's state.
+    fn add_scene(&mut self, scene: Box<dyn Scene>) -> Result<(), RecordError> {
+        let channel = self
+            .rec
+            .encoded_channel(channels::SCENE, &scene.encoding())?;
+        self.scene = Some(Pictures {
+            channel,
+            scene,
+            buf: Vec::new(),
+        });
         Ok(())
     }
 
-    /// A trial's row of `returns.csv` on `/returns` (live view only); its greedy return
-    /// `null` when it had no evaluation.
-    pub(super) fn trial(&mut self, r: &TrialRecord) -> Result<(), RecordError> {
-        let Some((ch, _)) = self.live else {
+    /// The picture of the state `x` of the sample with header `h`, at log time `t` (no
+    /// picture of the shutdown, which has no state).
+    fn picture(&mut self, h: &Header, x: &[f64], t: u64) -> Result<(), RecordError> {
+        let Some(p) = &mut self.scene else {
             return Ok(());
         };
+        if h.flags & flags::SHUTDOWN != 0 {
+            return Ok(());
+        }
+        p.scene.draw(x, t, &mut p.buf);
+        self.rec.write_bytes(p.channel, t, t, &p.buf)
+    }
+
+    /// A trial's row of `returns.csv` on `/returns`, at log time `t`; its greedy return
+    /// `null` when it had no evaluation.
+    pub(super) fn trial(&mut self, r: &TrialRecord, t: u64) -> Result<(), RecordError> {
         self.values.clear();
         self.values.extend([
             Value::Int(r.trial.into()),
@@ -219,15 +254,11 @@ impl RecordingWriter {
             Value::Num(r.greedy.unwrap_or(f64::NAN)),
             Value::Num(r.sim_time_s),
         ]);
-        let t = self.log_time_ns;
-        self.rec.write(ch, t, t, &self.values)
+        self.rec.write(self.returns, t, t, &self.values)
     }
 
-    /// An action's latency on `/latency` (live view only).
+    /// An action's latency on `/latency`.
     fn latency(&mut self, msg: &Action, t: u64) -> Result<(), RecordError> {
-        let Some((_, ch)) = self.live else {
-            return Ok(());
-        };
         let us = |from: u64, to: u64| (to as f64 - from as f64) / 1e3;
         self.values.clear();
         self.values.extend([
@@ -235,7 +266,7 @@ impl RecordingWriter {
             Value::Num(us(msg.t_sample_ns, msg.t_publish_ns)),
             Value::Num(us(msg.t_received_ns, msg.t_publish_ns)),
         ]);
-        self.rec.write(ch, t, t, &self.values)
+        self.rec.write(self.latency, t, t, &self.values)
     }
 
     /// Starts a message with the header fields; returns its log time (simulated, ns).
@@ -289,7 +320,12 @@ impl RecordingWriter {
             self.t_measurement,
             msg.header.seq,
             &[msg.t_sample_ns, msg.t_publish_ns, msg.t_action_ns],
-        )
+        )?;
+        // The state measured is drawn, unless the truth is recorded.
+        match self.truth {
+            Some(_) => Ok(()),
+            None => self.picture(&msg.header, &msg.y[..self.n], t),
+        }
     }
 
     /// Adds the channel of the plant's ground truth.
@@ -307,7 +343,8 @@ impl RecordingWriter {
         self.t_sample_ns = msg.t_sample_ns;
         let t = self.header(&msg.header);
         self.nums(&msg.x[..self.n]);
-        self.rec.write(ch, t, t, &self.values)
+        self.rec.write(ch, t, t, &self.values)?;
+        self.picture(&msg.header, &msg.x[..self.n], t)
     }
 
     pub(super) fn estimate(&mut self, msg: &Estimate) -> Result<(), RecordError> {

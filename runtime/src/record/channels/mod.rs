@@ -37,6 +37,8 @@ pub const DRIVER_PREFIX: &str = "/driver/";
 pub const RETURNS: &str = "/returns";
 /// Per action, the time from its sample to it and the agent's share.
 pub const LATENCY: &str = "/latency";
+/// The system drawn from each sample's state (`super::scene`).
+pub const SCENE: &str = "/scene";
 
 /// The schema of each channel, by name (channels of one kind share one).
 pub mod schema {
@@ -87,13 +89,27 @@ impl Head {
     }
 }
 
-/// Which of a recording's messages a run resumed before sample `first_seq` keeps.
+/// The trial of a `/returns` message.
+pub fn row_trial(data: &[u8]) -> Option<u64> {
+    #[derive(Deserialize)]
+    struct Row {
+        trial: u64,
+    }
+    serde_json::from_slice::<Row>(data).ok().map(|r| r.trial)
+}
+
+/// Which of a recording's messages a run resumed before sample `first_seq`, after trial
+/// `c`, keeps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Keep {
     /// A message of the loop: those of the samples before, but the shutdown.
     Loop,
-    /// A message of a sample (its timing): those of the samples before.
+    /// A message of a sample (its timing, its latency): those of the samples before.
     Sample,
+    /// A row of `returns.csv`: those of trials up to `c`.
+    Row,
+    /// A picture, one per measurement but the shutdown: as many as measurements are kept.
+    Picture,
     /// Any other: those logged up to the last kept measurement.
     Logged,
 }
@@ -101,12 +117,13 @@ pub enum Keep {
 impl Keep {
     /// How the messages of `topic` are kept.
     pub fn of(topic: &str) -> Keep {
-        if LOOP.contains(&topic) {
-            Keep::Loop
-        } else if TIMING.contains(&topic) {
-            Keep::Sample
-        } else {
-            Keep::Logged
+        match topic {
+            _ if LOOP.contains(&topic) => Keep::Loop,
+            _ if TIMING.contains(&topic) => Keep::Sample,
+            LATENCY => Keep::Sample,
+            RETURNS => Keep::Row,
+            SCENE => Keep::Picture,
+            _ => Keep::Logged,
         }
     }
 }
