@@ -157,17 +157,22 @@ fn a_run_against_the_python_driver_replays_identical() {
     replays_identical(&dir);
 }
 
+/// Resumes the run in `dir` to 9 trials; its recording replays identical.
+fn resumed_to_9_replays_identical(dir: &Path) {
+    ok(rig()
+        .args(["run", "--cpus", "shared", "--trials", "9", "--resume"])
+        .arg(dir)
+        .output()
+        .unwrap());
+    replays_identical(dir);
+}
+
 /// A resumed run's recording holds the whole run: it replays from its start.
 #[test]
 fn a_resumed_run_replays_identical() {
     let dir = tmp("resumed");
     run(&dir, &["--trials", "5"]);
-    ok(rig()
-        .args(["run", "--cpus", "shared", "--trials", "9", "--resume"])
-        .arg(&dir)
-        .output()
-        .unwrap());
-    replays_identical(&dir);
+    resumed_to_9_replays_identical(&dir);
 }
 
 /// A run killed (`kill -9` of every process at once) and resumed after its last trial
@@ -274,12 +279,7 @@ fn a_recording_without_the_returns_latency_and_pictures_replays_and_resumes() {
     rewrite_topics(&original, &dir.join("run.mcap"), older, |_, _| {}, |_| {});
     assert!(!common::messages(&dir.join("run.mcap")).contains_key("/scene"));
     replays_identical(&dir);
-    ok(rig()
-        .args(["run", "--cpus", "shared", "--trials", "9", "--resume"])
-        .arg(&dir)
-        .output()
-        .unwrap());
-    replays_identical(&dir);
+    resumed_to_9_replays_identical(&dir);
     let msgs = common::messages(&dir.join("run.mcap"));
     let trials: Vec<u64> = msgs["/returns"]
         .iter()
