@@ -4,7 +4,8 @@
 # headless Chromium (bench/scripts/lichtblick/view.mjs). It connects to a running
 # `rig run --live --timing realtime --speed 10`, imports docs/live-layout.json and takes
 # screenshots seconds apart; then it opens a finished run's run.mcap with the same layout.
-# It exits 1 if it did not see the system drawn, a value in every plot or the 3D panel move.
+# It exits 1 if it did not see the system drawn, a value in every plot or the 3D panel move
+# (live), or, on the recording, every panel's topics, a value in every plot and the system.
 #
 #   bench/scripts/lichtblick.sh --lichtblick SRC [--out DIR]   # builds the app (minutes)
 #   bench/scripts/lichtblick.sh --app DIR [--out DIR]          # a built web app
@@ -27,7 +28,7 @@ while [ $# -gt 0 ]; do
     --lichtblick) src="$(cd "$2" && pwd)"; shift 2 ;;
     --app) app="$(cd "$2" && pwd)"; shift 2 ;;
     --out) mkdir -p "$2"; out="$(cd "$2" && pwd)"; shift 2 ;;
-    -h|--help) sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "lichtblick.sh: unknown argument $1 (--help)" >&2; exit 2 ;;
   esac
 done

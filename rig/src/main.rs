@@ -24,6 +24,7 @@ mod live;
 mod live;
 mod node;
 mod optimal;
+mod picture;
 mod replay;
 mod reproduce;
 mod run;

@@ -73,9 +73,10 @@ pub struct Args {
     #[arg(long, value_name = "DIR", conflicts_with = "out")]
     resume: Option<PathBuf>,
     /// Serve the run live over the Foxglove WebSocket protocol at ADDR (host:port;
-    /// without ADDR 127.0.0.1:8765, this host only): every channel of run.mcap, the
+    /// without ADDR 127.0.0.1:8765, this host only): every channel of run.mcap, with the
     /// trials' returns (/returns), the loop's latency (/latency) and the system drawn
-    /// from its state (/scene). Open docs/live-layout.json in Foxglove or Lichtblick.
+    /// from its state (/scene). Open docs/live-layout.json in Foxglove or Lichtblick,
+    /// live or on the recording.
     /// The loop never waits for a viewer: one too slow misses messages. In a rig built
     /// with the `live` feature (`cargo run --release -p rig --features live`).
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = LIVE_ADDR)]
@@ -228,6 +229,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         // Known once the driver's info says which clock it keeps.
         lockstep_waiting: external.then(|| args.wait.waiting(LOCKSTEP_WAIT)),
         learn_across_gaps: args.gaps == GapPolicy::Learn,
+        scene: Some(crate::picture::scene),
     };
     Ok((cfg, opts))
 }

@@ -64,10 +64,11 @@ fn recording(path: &Path) -> Messages {
     out
 }
 
-/// The run messages (plant, observer, agent), without the wall-clock timing channels.
+/// The run messages (plant, observer, agent, the returns, the system's pictures), without
+/// the wall-clock timing channels and the latency taken of them.
 fn run_messages(path: &Path) -> Messages {
     let mut m = recording(path);
-    m.retain(|topic, _| !topic.starts_with("/timing/"));
+    m.retain(|topic, _| !topic.starts_with("/timing/") && topic != "/latency");
     m
 }
 

@@ -157,17 +157,22 @@ fn a_run_against_the_python_driver_replays_identical() {
     replays_identical(&dir);
 }
 
+/// Resumes the run in `dir` to 9 trials; its recording replays identical.
+fn resumed_to_9_replays_identical(dir: &Path) {
+    ok(rig()
+        .args(["run", "--cpus", "shared", "--trials", "9", "--resume"])
+        .arg(dir)
+        .output()
+        .unwrap());
+    replays_identical(dir);
+}
+
 /// A resumed run's recording holds the whole run: it replays from its start.
 #[test]
 fn a_resumed_run_replays_identical() {
     let dir = tmp("resumed");
     run(&dir, &["--trials", "5"]);
-    ok(rig()
-        .args(["run", "--cpus", "shared", "--trials", "9", "--resume"])
-        .arg(&dir)
-        .output()
-        .unwrap());
-    replays_identical(&dir);
+    resumed_to_9_replays_identical(&dir);
 }
 
 /// A run killed (`kill -9` of every process at once) and resumed after its last trial
@@ -198,11 +203,32 @@ fn a_run_killed_and_resumed_replays_identical() {
     replays_identical(&dir);
 }
 
-/// Copies the recording `src` to `dst`, every message through `edit(topic, message)` and
-/// the metadata `run` through `about` (left out when `about` empties it).
+/// A run of `trials` trials into the folder `name`, its recording moved aside to
+/// `original.mcap`: the folder and that file.
+fn recorded_aside(name: &str, trials: &str) -> (PathBuf, PathBuf) {
+    let dir = tmp(name);
+    run(&dir, &["--trials", trials]);
+    let original = dir.join("original.mcap");
+    std::fs::rename(dir.join("run.mcap"), &original).unwrap();
+    (dir, original)
+}
+
+/// Copies the recording `src` to `dst`, every JSON message through `edit(topic,
+/// message)` and the metadata `run` through `about` (left out when `about` empties it).
 fn rewrite(
     src: &Path,
     dst: &Path,
+    edit: impl FnMut(&str, &mut serde_json::Map<String, serde_json::Value>),
+    about: impl FnMut(&mut BTreeMap<String, String>),
+) {
+    rewrite_topics(src, dst, |_| true, edit, about);
+}
+
+/// [`rewrite`], with the messages of the topics `keep` refuses left out.
+fn rewrite_topics(
+    src: &Path,
+    dst: &Path,
+    keep: impl Fn(&str) -> bool,
     mut edit: impl FnMut(&str, &mut serde_json::Map<String, serde_json::Value>),
     mut about: impl FnMut(&mut BTreeMap<String, String>),
 ) {
@@ -212,6 +238,13 @@ fn rewrite(
         mcap::Writer::new(std::io::BufWriter::new(std::fs::File::create(dst).unwrap())).unwrap();
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
+        if !keep(&m.channel.topic) {
+            continue;
+        }
+        if m.channel.message_encoding != "json" {
+            w.write(&m).unwrap();
+            continue;
+        }
         let mut v: serde_json::Map<String, serde_json::Value> =
             serde_json::from_slice(&m.data).unwrap();
         edit(&m.channel.topic, &mut v);
@@ -235,14 +268,37 @@ fn rewrite(
     w.finish().unwrap();
 }
 
+/// A recording of an earlier version, without `/returns`, `/latency` and `/scene`, replays
+/// identical, and resumes: the resumed run records the rows of the trials it keeps with
+/// its first new one.
+#[test]
+fn a_recording_without_the_returns_latency_and_pictures_replays_and_resumes() {
+    let (dir, original) = recorded_aside("older", "5");
+    let added = ["/returns", "/latency", "/scene"];
+    let older = |t: &str| !added.contains(&t);
+    rewrite_topics(&original, &dir.join("run.mcap"), older, |_, _| {}, |_| {});
+    assert!(!common::messages(&dir.join("run.mcap")).contains_key("/scene"));
+    replays_identical(&dir);
+    resumed_to_9_replays_identical(&dir);
+    let msgs = common::messages(&dir.join("run.mcap"));
+    let trials: Vec<u64> = msgs["/returns"]
+        .iter()
+        .map(|(_, d)| {
+            serde_json::from_slice::<serde_json::Value>(d).unwrap()["trial"]
+                .as_u64()
+                .unwrap()
+        })
+        .collect();
+    assert_eq!(trials, (1..=9).collect::<Vec<_>>());
+    // Pictures of the samples run after the resume: 4 trials of 101.
+    assert_eq!(msgs["/scene"].len(), 4 * 101);
+}
+
 /// One estimate's `x_1` moved to the next `f64` (one bit), or one action's `u_0`:
 /// reported at that topic, sample and field with both values in full precision, exit 1.
 #[test]
 fn a_tampered_recording_is_reported_at_its_first_difference() {
-    let dir = tmp("tampered");
-    run(&dir, &["--trials", "3"]);
-    let original = dir.join("original.mcap");
-    std::fs::rename(dir.join("run.mcap"), &original).unwrap();
+    let (dir, original) = recorded_aside("tampered", "3");
     for (topic, field) in [("/observer/estimate", "x_1"), ("/agent/action", "u_0")] {
         let mut was = 0.0;
         rewrite(
@@ -271,10 +327,7 @@ fn a_tampered_recording_is_reported_at_its_first_difference() {
 /// one line on standard error naming the file and what it needs, exit 2.
 #[test]
 fn an_old_or_foreign_recording_is_refused_in_one_line() {
-    let dir = tmp("refused");
-    run(&dir, &["--trials", "2"]);
-    let original = dir.join("original.mcap");
-    std::fs::rename(dir.join("run.mcap"), &original).unwrap();
+    let (dir, original) = recorded_aside("refused", "2");
     let path = dir.join("run.mcap");
     let refused = |needle: &str| {
         let out = replay(&dir, &[]);

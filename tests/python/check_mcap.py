@@ -5,13 +5,22 @@ Opens DIR/run.mcap with the official Python `mcap` package and checks that
   1. the file is complete and intact: summary section present, every chunk CRC, the
      data-section CRC, the summary CRC and every attachment CRC computed and valid;
   2. every channel has message encoding `json` and a `jsonschema` schema that is a flat
-     object of `number`/`integer` properties with no `$ref` (so Foxglove plots it);
+     object of `number`/`integer` properties with no `$ref` (so Foxglove plots it) — but
+     `/scene`, protobuf `foxglove.SceneUpdate`; `/returns`, `/latency` and `/scene` are
+     there;
   3. the attachment `config.toml` is present;
   4. the per-trial returns recomputed from the `/plant/measurement` messages equal
      DIR/returns.csv (`run,trial,sim_time_s,return,greedy_return`) exactly — from the
      `/observer/estimate` messages (their `reward` and `x`) instead when the measurements
      have flag bit 8 (ESTIMATED_REWARD: a driver that measures positions only, whose
      rewards the observer computes from its estimate).
+  5. what a viewer shows besides: `/returns` holds the rows of DIR/returns.csv, in order,
+     exactly; `/latency` one message per action, the time from its sample to it and the
+     agent's share, exactly as the `/timing/agent/action` stamps give them; `/scene` a
+     picture per sample (of `/plant/truth` when recorded, else of the measurement; none
+     of the shutdown), decoded with the official protobuf decoder (mcap-protobuf-support):
+     the entity `system` in frame `world` at the sample's log time, with points all
+     finite — for the pendulum, its tip at (sin phi, 0, cos phi) of the state's angle.
 
 Returns (check 4): a measurement message has fields `trial` (learning trial, from 1),
 `step` (0 = the trial's start state; the `reward` of step k >= 1 is r_k = rho(x_{k-1},
@@ -36,7 +45,8 @@ otherwise (2 for a usage error). The functions below can be imported and called 
 one; each raises CheckError.
 
 Needs the rig's Python package with mcap: `pip install "./python[recording]"` (its
-readers: rigkit.recording, rigkit.returns; written against mcap 1.6.0).
+readers: rigkit.recording, rigkit.returns; written against mcap 1.6.0 and
+mcap-protobuf-support 0.6.0).
 """
 
 from __future__ import annotations
@@ -55,9 +65,10 @@ if importlib.util.find_spec("rigkit") is None:
 
 from rigkit.script import need  # noqa: E402
 
-need("check_mcap.py", modules=["mcap"])
+need("check_mcap.py", modules=["mcap", "mcap_protobuf"])
 
 from mcap.exceptions import McapError  # noqa: E402
+from mcap_protobuf.decoder import DecoderFactory  # noqa: E402
 from mcap.reader import NonSeekingReader, make_reader  # noqa: E402
 from mcap.records import Chunk, DataEnd, Footer  # noqa: E402
 from mcap.stream_reader import CRCValidationError, StreamReader  # noqa: E402
@@ -78,6 +89,11 @@ MEASUREMENT_TOPIC = recording.MEASUREMENT
 TRUTH_TOPIC = recording.TRUTH
 ESTIMATE_TOPIC = recording.ESTIMATE
 CONFIG_ATTACHMENT = "config.toml"
+RETURNS_TOPIC = "/returns"
+LATENCY_TOPIC = "/latency"
+SCENE_TOPIC = "/scene"
+SCENE_SCHEMA = "foxglove.SceneUpdate"
+AGENT_TIMING_TOPIC = recording.AGENT_TIMING
 
 MAGIC_SIZE = 8
 # opcode (1) + record length (8) + summary_start (8) + summary_offset_start (8) + crc (4)
@@ -181,7 +197,11 @@ def read_recording(path: Path) -> recording.Recording:
     """Reads the summary, attachments, metadata and every message of `path` with chunk
     CRC validation (check 1); decodes the measurement, truth and estimate messages."""
     try:
-        return recording.read(path, [MEASUREMENT_TOPIC, TRUTH_TOPIC, ESTIMATE_TOPIC])
+        return recording.read(
+            path,
+            [MEASUREMENT_TOPIC, TRUTH_TOPIC, ESTIMATE_TOPIC, RETURNS_TOPIC, LATENCY_TOPIC,
+             AGENT_TIMING_TOPIC],
+        )
     except recording.RecordingError as e:
         raise CheckError(str(e)) from e
 
@@ -236,6 +256,9 @@ def check_channels(rec: recording.Recording) -> None:
     if not rec.channels:
         raise CheckError("the recording has no channels")
     for ch in rec.channels:
+        if ch.topic == SCENE_TOPIC:
+            check_scene_channel(rec, ch)
+            continue
         if ch.message_encoding != "json":
             raise CheckError(
                 f"channel {ch.topic}: message encoding {ch.message_encoding!r}, not 'json'"
@@ -248,8 +271,21 @@ def check_channels(rec: recording.Recording) -> None:
                 f"channel {ch.topic}: schema encoding {schema.encoding!r}, not 'jsonschema'"
             )
         check_schema_data(schema.name, schema.data)
-    if MEASUREMENT_TOPIC not in {ch.topic for ch in rec.channels}:
-        raise CheckError(f"no channel {MEASUREMENT_TOPIC}")
+    topics = {ch.topic for ch in rec.channels}
+    for topic in (MEASUREMENT_TOPIC, RETURNS_TOPIC, LATENCY_TOPIC, SCENE_TOPIC):
+        if topic not in topics:
+            raise CheckError(f"no channel {topic}")
+
+
+def check_scene_channel(rec: recording.Recording, ch) -> None:
+    """`/scene`: protobuf messages of the schema foxglove.SceneUpdate."""
+    schema = rec.schemas.get(ch.schema_id)
+    got = (ch.message_encoding, schema and schema.encoding, schema and schema.name)
+    if got != ("protobuf", "protobuf", SCENE_SCHEMA):
+        raise CheckError(
+            f"channel {SCENE_TOPIC}: (message encoding, schema encoding, schema) {got}, "
+            f"not ('protobuf', 'protobuf', {SCENE_SCHEMA!r})"
+        )
 
 
 # ---------------------------------------------------------------------------------------
@@ -460,6 +496,83 @@ def compare_returns(
 # ---------------------------------------------------------------------------------------
 
 
+# 5. what a viewer shows besides: returns, latency, the system's picture
+
+
+def check_returns_channel(rows: list, csv_path: Path) -> None:
+    """`/returns` holds the rows of returns.csv, in order, exactly."""
+    try:
+        csv_rows = returns.read(csv_path)
+    except returns.ReturnsError as e:
+        raise CheckError(str(e)) from e
+    if len(rows) != len(csv_rows):
+        raise CheckError(f"{RETURNS_TOPIC}: {len(rows)} rows, {csv_path.name} has {len(csv_rows)}")
+    for got, want in zip(rows, csv_rows):
+        greedy = as_float(got.get("greedy"))
+        fields = (int(got["trial"]), as_float(got["return"]), as_float(got["sim_time_s"]))
+        if fields[0] != want.trial or not (same(fields[1], want.ret) and same(fields[2], want.sim_time_s)):
+            raise CheckError(f"{RETURNS_TOPIC}: {got} is not the row of trial {want.trial} of {csv_path.name}")
+        if (want.greedy is None) != math.isnan(greedy) or (
+            want.greedy is not None and not same(greedy, want.greedy)
+        ):
+            raise CheckError(f"{RETURNS_TOPIC}: trial {want.trial} greedy {greedy!r}, {csv_path.name} says {want.greedy!r}")
+
+
+def check_latency(latency: list, stamps: list) -> None:
+    """`/latency`: per action, its sample to its publication and the agent's share (µs),
+    as the recorded stamps give them."""
+    if len(latency) != len(stamps) or not latency:
+        raise CheckError(f"{LATENCY_TOPIC}: {len(latency)} messages for {len(stamps)} actions")
+    for got, s in zip(latency, stamps):
+        want = (
+            int(s["seq"]),
+            (float(s["t_publish_ns"]) - float(s["t_sample_ns"])) / 1e3,
+            (float(s["t_publish_ns"]) - float(s["t_received_ns"])) / 1e3,
+        )
+        values = (int(got["seq"]), as_float(got["sample_to_action_us"]), as_float(got["agent_us"]))
+        if values != want or not 0 <= values[2] <= values[1]:
+            raise CheckError(f"{LATENCY_TOPIC}: {got}, the stamps {s} give {want}")
+
+
+def check_scene(path: Path, state_topic: str, system: str) -> int:
+    """`/scene`: a picture per message of `state_topic` (but the shutdown), decoded with
+    the official protobuf decoder; returns how many."""
+    pictures, states = [], []
+    decoders = DecoderFactory()
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        for schema, channel, message in reader.iter_messages(
+            topics=[SCENE_TOPIC, state_topic], log_time_order=False
+        ):
+            if channel.topic == SCENE_TOPIC:
+                decode = decoders.decoder_for(channel.message_encoding, schema)
+                pictures.append((message.log_time, decode(message.data)))
+                continue
+            state = json.loads(message.data)
+            if not int(state.get("flags", 0)) & FLAG_SHUTDOWN:
+                states.append((message.log_time, state))
+    if len(pictures) != len(states):
+        raise CheckError(f"{SCENE_TOPIC}: {len(pictures)} pictures for {len(states)} samples")
+    for (log_time, scene), (state_log_time, state) in zip(pictures, states):
+        where = f"{SCENE_TOPIC} at sample seq {state.get('seq')}"
+        [entity] = scene.entities
+        stamp = entity.timestamp.seconds * 10**9 + entity.timestamp.nanos
+        got = (entity.id, entity.frame_id, stamp, log_time)
+        if got != ("system", "world", state_log_time, state_log_time):
+            raise CheckError(f"{where}: (entity, frame, stamp, log time) {got}, sample at {state_log_time}")
+        points = [(p.x, p.y, p.z) for line in entity.lines for p in line.points]
+        points += [(c.pose.position.x, c.pose.position.y, c.pose.position.z) for c in entity.cubes]
+        if not points or not all(math.isfinite(v) for p in points for v in p):
+            raise CheckError(f"{where}: points {points}")
+        if system == "pendulum":
+            phi = as_float(state.get("x_0", state.get("y_0")))
+            phi = phi if math.isfinite(phi) else 0.0
+            tip = (math.sin(phi), 0.0, math.cos(phi))
+            if any(abs(a - b) > 1e-12 for a, b in zip(points[1], tip)):
+                raise CheckError(f"{where}: the pendulum's tip at {points[1]}, its angle {phi} puts it at {tip}")
+    return len(pictures)
+
+
 def check_run(run_dir: Path, log=print) -> None:
     """Every check on the run directory `run_dir`; raises CheckError at the first failure
     and calls `log` with a line per check passed."""
@@ -475,7 +588,8 @@ def check_run(run_dir: Path, log=print) -> None:
         f"{rec.message_count} messages on {len(rec.channels)} channels"
     )
     check_channels(rec)
-    log("ok: every channel is json with a flat numeric jsonschema schema, no $ref")
+    log("ok: every channel is json with a flat numeric jsonschema schema, no $ref, "
+        f"but {SCENE_TOPIC}, protobuf {SCENE_SCHEMA}")
     check_attachment(rec)
     log(f"ok: attachment {CONFIG_ATTACHMENT} present")
     terminal = TerminalReward.from_metadata(rec.metadata.get("run", {}))
@@ -498,6 +612,15 @@ def check_run(run_dir: Path, log=print) -> None:
         f"from {topic}"
         + (" (with the terminal reward of a finite horizon)" if terminal else "")
         + f" equal {csv_path.name} exactly"
+    )
+    check_returns_channel(rec.of(RETURNS_TOPIC), csv_path)
+    check_latency(rec.of(LATENCY_TOPIC), rec.of(AGENT_TIMING_TOPIC))
+    drawn = TRUTH_TOPIC if rec.of(TRUTH_TOPIC) else MEASUREMENT_TOPIC
+    pictures = check_scene(path, drawn, rec.metadata.get("run", {}).get("system", ""))
+    log(
+        f"ok: {RETURNS_TOPIC} holds the {len(rec.of(RETURNS_TOPIC))} rows of {csv_path.name}, "
+        f"{LATENCY_TOPIC} the latency of every action, {SCENE_TOPIC} {pictures} pictures, "
+        "one per sample"
     )
 
 

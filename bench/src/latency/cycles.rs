@@ -7,6 +7,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use runtime::error::AtFile;
+use runtime::record::channels::{DRIVER_PREFIX, TIMING};
+use runtime::record::reader::{NAME, RunFile};
 
 use super::error::LatencyError;
 
@@ -105,13 +107,13 @@ pub(super) fn timing(
 
 /// The `/timing/...` and `/driver/...` messages of `DIR/run.mcap`, per topic.
 pub(super) fn messages(run_dir: &Path) -> Result<Messages, LatencyError> {
-    let path = run_dir.join("run.mcap");
-    let bytes = std::fs::read(&path).at("cannot read", &path)?;
+    let path = run_dir.join(NAME);
+    let file = RunFile::read(&path).at("cannot read", &path)?;
     let mut msgs = Messages::new();
-    for m in mcap::MessageStream::new(&bytes)? {
+    for m in file.messages()? {
         let m = m?;
         let topic = &m.channel.topic;
-        if topic.starts_with("/timing/") || topic.starts_with("/driver/") {
+        if TIMING.contains(&topic.as_str()) || topic.starts_with(DRIVER_PREFIX) {
             msgs.entry(topic.clone())
                 .or_default()
                 .push(m.data.into_owned());
@@ -128,17 +130,9 @@ pub(super) fn read(
     period_ns: u64,
 ) -> Result<Cycles, LatencyError> {
     let msgs = messages(run_dir)?;
-    let meas = timing(&msgs, "/timing/plant/measurement", &["t_publish_ns"])?;
-    let est = timing(
-        &msgs,
-        "/timing/observer/estimate",
-        &["t_received_ns", "t_publish_ns"],
-    )?;
-    let act = timing(
-        &msgs,
-        "/timing/agent/action",
-        &["t_received_ns", "t_publish_ns"],
-    )?;
+    let meas = timing(&msgs, TIMING[0], &["t_publish_ns"])?;
+    let est = timing(&msgs, TIMING[1], &["t_received_ns", "t_publish_ns"])?;
+    let act = timing(&msgs, TIMING[2], &["t_received_ns", "t_publish_ns"])?;
     let text = std::fs::read_to_string(cycles_path).at("cannot read", cycles_path)?;
     let mut c = Cycles::new(&STAMPS, &STAGES);
     for line in text.lines().skip(1) {

@@ -14,6 +14,7 @@ use std::fmt::Write as _;
 
 use super::error::LatencyError;
 use driver::contract::kind;
+use runtime::record::channels::{DRIVER_COMMAND, DRIVER_LINK, DRIVER_SAMPLE, TIMING};
 
 use super::cycles::{Cycles, Messages, int, json, timing};
 
@@ -95,24 +96,12 @@ pub(super) fn read(msgs: &Messages, period_ns: u64) -> Result<(Cycles, Reach), L
     let samples = samples(msgs)?;
     let (link, reach) = link(msgs)?;
     // The measurement built from a driver sample carries its t_k.
-    let meas: BTreeMap<u64, Vec<u64>> = timing(
-        msgs,
-        "/timing/plant/measurement",
-        &["t_sample_ns", "t_publish_ns"],
-    )?
-    .into_iter()
-    .map(|(seq, v)| (v[0], vec![seq, v[1]]))
-    .collect();
-    let est = timing(
-        msgs,
-        "/timing/observer/estimate",
-        &["t_received_ns", "t_publish_ns"],
-    )?;
-    let act = timing(
-        msgs,
-        "/timing/agent/action",
-        &["t_received_ns", "t_publish_ns"],
-    )?;
+    let meas: BTreeMap<u64, Vec<u64>> = timing(msgs, TIMING[0], &["t_sample_ns", "t_publish_ns"])?
+        .into_iter()
+        .map(|(seq, v)| (v[0], vec![seq, v[1]]))
+        .collect();
+    let est = timing(msgs, TIMING[1], &["t_received_ns", "t_publish_ns"])?;
+    let act = timing(msgs, TIMING[2], &["t_received_ns", "t_publish_ns"])?;
     let acknowledged = acknowledging(&samples, &link);
     let mut c = Cycles::new(&DRIVER_STAMPS, &DRIVER_STAGES);
     for cmd in commands(msgs)? {
@@ -216,12 +205,12 @@ struct Command {
 /// The ACTION commands of `/driver/command`, in order.
 fn commands(msgs: &Messages) -> Result<Vec<Command>, LatencyError> {
     let mut out = Vec::new();
-    for v in json(msgs, "/driver/command")? {
+    for v in json(msgs, DRIVER_COMMAND)? {
         if v["kind"].as_u64() == Some(kind::ACTION) {
             out.push(Command {
-                seq: int(&v, "seq", "/driver/command")?,
-                sample_seq: int(&v, "sample_seq", "/driver/command")?,
-                t_publish: int(&v, "t_publish_ns", "/driver/command")?,
+                seq: int(&v, "seq", DRIVER_COMMAND)?,
+                sample_seq: int(&v, "sample_seq", DRIVER_COMMAND)?,
+                t_publish: int(&v, "t_publish_ns", DRIVER_COMMAND)?,
             });
         }
     }
@@ -230,10 +219,10 @@ fn commands(msgs: &Messages) -> Result<Vec<Command>, LatencyError> {
 
 /// The driver samples of `/driver/sample`, by sequence number.
 fn samples(msgs: &Messages) -> Result<BTreeMap<u64, Sample>, LatencyError> {
-    json(msgs, "/driver/sample")?
+    json(msgs, DRIVER_SAMPLE)?
         .iter()
         .map(|v| {
-            let t = "/driver/sample";
+            let t = DRIVER_SAMPLE;
             Ok((
                 int(v, "seq", t)?,
                 Sample {
@@ -248,10 +237,10 @@ fn samples(msgs: &Messages) -> Result<BTreeMap<u64, Sample>, LatencyError> {
 /// The link's timing per sample (`/driver/link`; none with a driver on this host) and
 /// how the samples reached the rig.
 fn link(msgs: &Messages) -> Result<(BTreeMap<u64, LinkTiming>, Reach), LatencyError> {
-    if !msgs.contains_key("/driver/link") {
+    if !msgs.contains_key(DRIVER_LINK) {
         return Ok((BTreeMap::new(), Reach::Local));
     }
-    let t = "/driver/link";
+    let t = DRIVER_LINK;
     let mut out = BTreeMap::new();
     let mut uncertainty = Vec::new();
     let mut one_clock = false;

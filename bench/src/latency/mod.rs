@@ -397,6 +397,7 @@ fn run_realtime(
             lockstep_waiting: None,
             // The loop's timing is measured, gaps and all.
             learn_across_gaps: true,
+            scene: None,
         },
     )?;
     let machine = before.zip(Counters::read()).map(|(b, a)| {

@@ -4,18 +4,16 @@
 //! protocol's names ([`door`]).
 //!
 //! The recorder hands every channel and message to a [`Feed`] ([`runtime::record::Tap`]),
-//! in the recording's own JSON encoding and schemas, so that one layout serves the
-//! recording and the live view. The feed copies a message only when a viewer subscribes
-//! to its channel ([`watched`]: a run served to nobody costs next to nothing), into a
-//! bounded queue, and returns: when the queue is full (the view's thread is behind) the
-//! message is dropped and counted, never waited for, so the loop never waits for a viewer. The
-//! view's thread logs each message on its Foxglove channel; the server's queue per client
-//! (of [`BACKLOG`] messages) drops its oldest when a viewer reads too slowly. Besides the
-//! recording's channels: `/returns` and `/latency` (from the recorder) and `/scene`, the
-//! system drawn from its state ([`picture`]) at most [`PICTURES_PER_SECOND`] times a
-//! second.
+//! in the recording's own encodings and schemas, so that one layout serves the recording
+//! and the live view: the loop's channels, `/returns`, `/latency` and `/scene`, the
+//! system's picture (`crate::picture`). The feed copies a message only when a viewer
+//! subscribes to its channel ([`watched`]: a run served to nobody costs next to nothing),
+//! into a bounded queue, and returns: when the queue is full (the view's thread is behind)
+//! the message is dropped and counted, never waited for, so the loop never waits for a
+//! viewer. The view's thread logs each message on its Foxglove channel — of `/scene` at
+//! most [`PICTURES_PER_SECOND`] a second, the latest —; the server's queue per client (of
+//! [`BACKLOG`] messages) drops its oldest when a viewer reads too slowly.
 
-use std::collections::HashMap;
 use std::net::{Ipv4Addr, SocketAddr};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -24,19 +22,18 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context as _, Result, anyhow};
-use foxglove::schemas::SceneUpdate;
 use foxglove::{
-    Channel, ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, WebSocketServer,
+    ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, WebSocketServer,
     WebSocketServerHandle,
 };
 use runtime::record::Tap;
+use runtime::record::channels::SCENE;
+use runtime::record::scene::Encoding;
 
 pub mod door;
-pub mod picture;
 pub mod watched;
 
 use door::Door;
-use picture::Body;
 use watched::{REFRESH, Watched};
 
 /// The messages waiting between the recorder and the view's thread; beyond them, a
@@ -55,8 +52,7 @@ const STOP: Duration = Duration::from_secs(2);
 enum Event {
     Channel {
         topic: String,
-        schema_name: String,
-        schema: Vec<u8>,
+        encoding: Encoding,
     },
     Message {
         index: usize,
@@ -73,12 +69,11 @@ pub struct Feed {
 }
 
 impl Tap for Feed {
-    fn channel(&mut self, topic: &str, schema_name: &str, schema: &[u8]) {
+    fn channel(&mut self, topic: &str, encoding: &Encoding) {
         // Channels are declared before the loop starts: waiting here holds nothing back.
         let _ = self.queue.send(Event::Channel {
             topic: topic.to_owned(),
-            schema_name: schema_name.to_owned(),
-            schema: schema.to_vec(),
+            encoding: encoding.clone(),
         });
     }
 
@@ -104,7 +99,8 @@ pub struct Served {
     pub messages: u64,
     /// Messages dropped because the view's thread was behind.
     pub dropped: u64,
-    /// Pictures of the system drawn.
+    /// Pictures of the system served (of `/scene`, at most [`PICTURES_PER_SECOND`] a
+    /// second).
     pub pictures: u64,
 }
 
@@ -152,7 +148,7 @@ impl LiveView {
         let (queue, events) = sync_channel(QUEUE);
         let dropped = Arc::new(AtomicU64::new(0));
         let watched = Arc::new(Watched::default());
-        let view = View::new(ctx, Body::of(task), watched.clone());
+        let view = View::new(ctx, watched.clone());
         let thread = std::thread::Builder::new()
             .name("live view".into())
             .spawn(move || view.serve(&events))
@@ -197,36 +193,29 @@ impl LiveView {
     }
 }
 
-/// The view's thread: the channels, and the system's picture.
+/// The view's thread: the channels, and the latest picture of the system.
 struct View {
     ctx: Arc<Context>,
     channels: Vec<Arc<RawChannel>>,
-    scene: Channel<SceneUpdate>,
-    body: Body,
-    /// The channel the picture's state comes from, and its fields' prefix: the plant's
-    /// ground truth if recorded, else its measurement.
-    state: Option<(usize, &'static str)>,
-    /// The last state's message not drawn yet.
+    /// The channel of the system's pictures, `/scene`.
+    scene: Option<usize>,
+    /// The latest picture not served yet: its log time and message.
     latest: Option<(u64, Vec<u8>)>,
-    drawn: Option<Instant>,
+    /// When a picture was last served.
+    shown: Option<Instant>,
     served: Served,
     /// The feed's flags, set from the server's subscriptions.
     watched: Arc<Watched>,
 }
 
 impl View {
-    fn new(ctx: Arc<Context>, body: Body, watched: Arc<Watched>) -> View {
-        let scene = ChannelBuilder::new("/scene")
-            .context(&ctx)
-            .build::<SceneUpdate>();
+    fn new(ctx: Arc<Context>, watched: Arc<Watched>) -> View {
         View {
             ctx,
             channels: Vec::new(),
-            scene,
-            body,
-            state: None,
+            scene: None,
             latest: None,
-            drawn: None,
+            shown: None,
             served: Served::default(),
             watched,
         }
@@ -245,11 +234,7 @@ impl View {
                 Err(RecvTimeoutError::Disconnected) => break,
             };
             match event {
-                Event::Channel {
-                    topic,
-                    schema_name,
-                    schema,
-                } => self.channel(&topic, schema_name, schema),
+                Event::Channel { topic, encoding } => self.channel(&topic, encoding),
                 Event::Message {
                     index,
                     log_time_ns,
@@ -257,20 +242,18 @@ impl View {
                 } => self.message(index, log_time_ns, data),
             }
         }
-        self.draw();
+        self.show();
         self.served
     }
 
-    fn channel(&mut self, topic: &str, schema_name: String, schema: Vec<u8>) {
-        let index = self.channels.len();
-        match topic {
-            "/plant/truth" => self.state = Some((index, "x_")),
-            "/plant/measurement" if self.state.is_none() => self.state = Some((index, "y_")),
-            _ => {}
+    fn channel(&mut self, topic: &str, e: Encoding) {
+        if topic == SCENE {
+            self.scene = Some(self.channels.len());
         }
+        let schema = Schema::new(e.schema_name, e.schema_encoding, e.schema);
         let channel = ChannelBuilder::new(topic)
-            .message_encoding("json")
-            .schema(Schema::new(schema_name, "jsonschema", schema))
+            .message_encoding(e.message_encoding)
+            .schema(schema)
             .context(&self.ctx)
             .build_raw()
             .expect("a topic is declared once");
@@ -279,48 +262,37 @@ impl View {
     }
 
     /// Sets the feed's flags from the server's subscriptions: a channel is wanted when a
-    /// viewer subscribes to it, the picture's state channel also when one subscribes to
-    /// the picture.
+    /// viewer subscribes to it.
     fn refresh(&self) {
-        let scene = self.scene.has_sinks();
         for (i, channel) in self.channels.iter().enumerate() {
-            let drawn = scene && self.state.is_some_and(|(s, _)| s == i);
-            self.watched.set(i, channel.has_sinks() || drawn);
+            self.watched.set(i, channel.has_sinks());
         }
     }
 
     fn message(&mut self, index: usize, log_time_ns: u64, data: Vec<u8>) {
+        if self.scene == Some(index) {
+            self.latest = Some((log_time_ns, data));
+            let period = Duration::from_secs(1) / PICTURES_PER_SECOND;
+            if self.shown.is_none_or(|t| t.elapsed() >= period) {
+                self.show();
+            }
+            return;
+        }
         let Some(channel) = self.channels.get(index) else {
             return;
         };
         channel.log_with_meta(&data, PartialMetadata::with_log_time(log_time_ns));
         self.served.messages += 1;
-        if self.state.is_some_and(|(i, _)| i == index) {
-            self.latest = Some((log_time_ns, data));
-            let period = Duration::from_secs(1) / PICTURES_PER_SECOND;
-            if self.drawn.is_none_or(|t| t.elapsed() >= period) {
-                self.draw();
-            }
-        }
     }
 
-    /// Draws the latest state, if any is new.
-    fn draw(&mut self) {
-        let (Some((log_time_ns, data)), Some((_, prefix))) = (self.latest.take(), self.state)
-        else {
+    /// Serves the latest picture, if any is new.
+    fn show(&mut self) {
+        let (Some((log_time_ns, data)), Some(i)) = (self.latest.take(), self.scene) else {
             return;
         };
-        let Ok(fields) = serde_json::from_slice::<HashMap<String, Option<f64>>>(&data) else {
-            return;
-        };
-        let x: Vec<f64> = (0..)
-            .map_while(|i| fields.get(&format!("{prefix}{i}")))
-            .map(|v| v.unwrap_or(f64::NAN))
-            .collect();
-        let update = self.body.draw(&x, log_time_ns);
-        self.scene
-            .log_with_meta(&update, PartialMetadata::with_log_time(log_time_ns));
+        self.channels[i].log_with_meta(&data, PartialMetadata::with_log_time(log_time_ns));
+        self.served.messages += 1;
         self.served.pictures += 1;
-        self.drawn = Some(Instant::now());
+        self.shown = Some(Instant::now());
     }
 }

@@ -187,11 +187,12 @@ pub fn pipelined(mcap_path: &Path) -> usize {
 }
 
 /// Checks the recording in run folder `dir` with `tests/python/check_mcap.py` (the
-/// official Python `mcap` reader: the file is whole, its CRCs hold, and its returns are
-/// those of `returns.csv`), where `$RIG_PYTHON` (default `python3`) has `mcap`; says so
-/// and checks nothing where it has not.
+/// official Python `mcap` reader: the file is whole, its CRCs hold, its returns are those
+/// of `returns.csv`, its `/returns`, `/latency` and `/scene` are there and hold what
+/// they should), where `$RIG_PYTHON` (default `python3`) has `mcap` and
+/// `mcap_protobuf`; says so and checks nothing where it has not.
 pub fn check_mcap(dir: &Path) {
-    let Some(python) = python::with("mcap") else {
+    let Some(python) = python::with("mcap, mcap_protobuf") else {
         println!("check_mcap.py skipped");
         return;
     };

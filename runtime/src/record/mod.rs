@@ -43,10 +43,13 @@
 //!   (`RecordLengthLimitExceeded`). With the default `log_time_order=True` the Python
 //!   reader sorts all messages before yielding any, so it yields none.
 //!
+//! A channel of messages encoded elsewhere ([`Recorder::encoded_channel`]: the system's
+//! picture, a protobuf `foxglove.SceneUpdate`, [`scene`]) takes its schema as given and
+//! its messages as they are ([`Recorder::write_bytes`]).
+//!
 //! A [`Tap`] given to [`Recorder::set_tap`] receives every channel and every message as
 //! it is written, in the same encoding; channels declared with [`Recorder::live_channel`]
-//! go to the tap only, so that a live view's extra channels leave the file's bytes as they
-//! are.
+//! go to the tap only, and leave the file's bytes as they are.
 //!
 //! [`Recorder::flush`] closes the current chunk and writes it out, which bounds what a
 //! crash can lose; without it a chunk closes every 1 MiB of messages, written out the
@@ -77,13 +80,17 @@ const CHUNK_SIZE: u64 = 1024 * 1024;
 /// log and publish time.
 const MESSAGE_RECORD: u64 = 1 + 8 + 2 + 4 + 8 + 8;
 
+pub mod channels;
 mod error;
+pub mod reader;
+pub mod scene;
 mod schema;
 mod tap;
 #[cfg(test)]
 mod tests;
 
 pub use error::RecordError;
+use scene::Encoding;
 pub use schema::{Field, FieldKind, Value};
 use schema::{json_schema, json_string};
 pub use tap::Tap;
@@ -97,8 +104,8 @@ struct Channel {
     id: Option<u16>,
     /// The topic, for error messages.
     topic: String,
-    /// The schema's name, for a tap set later.
-    schema_name: String,
+    /// The schema and the messages' encoding, for a tap set later.
+    encoding: Encoding,
     /// Per field, its kind and its JSON key with separators: `"seq":`, `,"x_0":`, ...
     fields: Vec<(FieldKind, Box<[u8]>)>,
     /// The MCAP sequence number of the next message.
@@ -187,7 +194,7 @@ impl Recorder {
     /// `tap` too.
     pub fn set_tap(&mut self, mut tap: Box<dyn Tap>) {
         for c in &self.channels {
-            tap.channel(&c.topic, &c.schema_name, &self.schemas[&c.schema_name]);
+            tap.channel(&c.topic, &c.encoding);
         }
         self.tap = Some(tap);
     }
@@ -200,9 +207,6 @@ impl Recorder {
         fields: &[Field],
         in_file: bool,
     ) -> Result<ChannelId, RecordError> {
-        if self.channels.iter().any(|c| c.topic == topic) {
-            return Err(RecordError::TopicTwice(topic.to_owned()));
-        }
         let mut seen = HashSet::new();
         for f in fields {
             if f.name.is_empty() {
@@ -215,33 +219,12 @@ impl Recorder {
                 });
             }
         }
-        let schema = json_schema(fields);
-        match self.schemas.get(schema_name) {
-            Some(existing) if *existing != schema => {
-                return Err(RecordError::SchemaTwice(schema_name.to_owned()));
-            }
-            Some(_) => {}
-            None => {
-                self.schemas.insert(schema_name.to_owned(), schema.clone());
-            }
-        }
-        let id = match in_file {
-            true => {
-                let schema_id = self
-                    .writer
-                    .add_schema(schema_name, SCHEMA_ENCODING, &schema)?;
-                Some(self.writer.add_channel(
-                    schema_id,
-                    topic,
-                    MESSAGE_ENCODING,
-                    &BTreeMap::new(),
-                )?)
-            }
-            false => None,
+        let encoding = Encoding {
+            schema_name: schema_name.to_owned(),
+            schema_encoding: SCHEMA_ENCODING.to_owned(),
+            schema: json_schema(fields),
+            message_encoding: MESSAGE_ENCODING.to_owned(),
         };
-        if let Some(tap) = &mut self.tap {
-            tap.channel(topic, schema_name, &schema);
-        }
         let fields = fields
             .iter()
             .enumerate()
@@ -255,14 +238,81 @@ impl Recorder {
                 (f.kind, key.into_boxed_slice())
             })
             .collect();
+        self.add(topic, encoding, fields, in_file)
+    }
+
+    /// Declares a channel whose messages come encoded ([`write_bytes`](Self::write_bytes)),
+    /// with the schema and encodings of `encoding` (the system's picture:
+    /// [`scene::Scene`]). Topics must be unique.
+    pub fn encoded_channel(
+        &mut self,
+        topic: &str,
+        encoding: &Encoding,
+    ) -> Result<ChannelId, RecordError> {
+        self.add(topic, encoding.clone(), Vec::new(), true)
+    }
+
+    /// Adds a channel: its schema once per name, in the file or for the tap only.
+    fn add(
+        &mut self,
+        topic: &str,
+        encoding: Encoding,
+        fields: Vec<(FieldKind, Box<[u8]>)>,
+        in_file: bool,
+    ) -> Result<ChannelId, RecordError> {
+        if self.channels.iter().any(|c| c.topic == topic) {
+            return Err(RecordError::TopicTwice(topic.to_owned()));
+        }
+        let name = &encoding.schema_name;
+        match self.schemas.get(name) {
+            Some(existing) if *existing != encoding.schema => {
+                return Err(RecordError::SchemaTwice(name.clone()));
+            }
+            Some(_) => {}
+            None => {
+                self.schemas.insert(name.clone(), encoding.schema.clone());
+            }
+        }
+        let id = match in_file {
+            true => {
+                let schema_id =
+                    self.writer
+                        .add_schema(name, &encoding.schema_encoding, &encoding.schema)?;
+                Some(self.writer.add_channel(
+                    schema_id,
+                    topic,
+                    &encoding.message_encoding,
+                    &BTreeMap::new(),
+                )?)
+            }
+            false => None,
+        };
+        if let Some(tap) = &mut self.tap {
+            tap.channel(topic, &encoding);
+        }
         self.channels.push(Channel {
             id,
             topic: topic.to_owned(),
-            schema_name: schema_name.to_owned(),
+            encoding,
             fields,
             sequence: 0,
         });
         Ok(ChannelId(self.channels.len() - 1))
+    }
+
+    /// Records one message already encoded on `channel` (one of
+    /// [`encoded_channel`](Self::encoded_channel)), with its next sequence number.
+    pub fn write_bytes(
+        &mut self,
+        channel: ChannelId,
+        log_time_ns: u64,
+        publish_time_ns: u64,
+        data: &[u8],
+    ) -> Result<(), RecordError> {
+        if channel.0 >= self.channels.len() {
+            return Err(RecordError::UnknownChannel(channel));
+        }
+        self.put(channel.0, log_time_ns, publish_time_ns, data)
     }
 
     /// Records one message on `channel`: `values` are the channel's fields, in order (a

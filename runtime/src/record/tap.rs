@@ -5,10 +5,11 @@
 /// file. Its calls must return at once: the recorder drains the loop's topics, and a tap
 /// that waits would hold the loop back. A slow consumer drops messages instead.
 pub trait Tap: Send {
-    /// A channel was declared: its topic, its schema's name and its JSON Schema. Channels
-    /// are numbered 0, 1, 2, … in the order declared (those of the file and those only
-    /// for the tap alike, [`Recorder::live_channel`](super::Recorder::live_channel)).
-    fn channel(&mut self, topic: &str, schema_name: &str, schema: &[u8]);
-    /// A message on channel `index`: the JSON object the file holds, and its log time.
+    /// A channel was declared: its topic, its schema and its messages' encoding (JSON
+    /// with a JSON Schema, but for messages encoded elsewhere: the system's picture).
+    /// Channels are numbered 0, 1, 2, … in the order declared (those of the file and those
+    /// only for the tap alike, [`Recorder::live_channel`](super::Recorder::live_channel)).
+    fn channel(&mut self, topic: &str, encoding: &super::scene::Encoding);
+    /// A message on channel `index`: the message the file holds, and its log time.
     fn message(&mut self, index: usize, log_time_ns: u64, data: &[u8]);
 }

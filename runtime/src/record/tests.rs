@@ -409,9 +409,10 @@ type Declared = (String, String, Vec<u8>);
 type Tapped = (usize, u64, Vec<u8>);
 
 impl Tap for Kept {
-    fn channel(&mut self, topic: &str, schema_name: &str, schema: &[u8]) {
+    fn channel(&mut self, topic: &str, encoding: &scene::Encoding) {
         let mut k = self.0.lock().unwrap();
-        k.0.push((topic.into(), schema_name.into(), schema.to_vec()));
+        let (name, schema) = (&encoding.schema_name, &encoding.schema);
+        k.0.push((topic.into(), name.clone(), schema.clone()));
     }
 
     fn message(&mut self, index: usize, log_time_ns: u64, data: &[u8]) {

@@ -31,9 +31,9 @@ pub mod compare;
 pub mod observers;
 pub mod recording;
 
+use crate::record::channels::{ACTION, ESTIMATE};
 pub use compare::Difference;
 pub use recording::Recording;
-use recording::{ACTION, ESTIMATE};
 
 /// The recording format `rig run` writes (metadata `recording_format`) and `rig replay`
 /// reads: the loop's channels with `rig.Measurement.v4`'s fields (`u_next`, `delay_s`),

@@ -4,20 +4,13 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use serde_json::{Map, Value as Json};
-use wire::{Action, Estimate, Header, MAX_U, MAX_X, Measurement, Truth};
+use wire::{Action, Estimate, Measurement, Truth};
 
 use super::{FORMAT, ReplayError};
 use crate::config::{ExperimentConfig, Overrides, resolve};
-
-/// The loop's topics, as `rig run` records them.
-pub const MEASUREMENT: &str = "/plant/measurement";
-/// The observer's estimates.
-pub const ESTIMATE: &str = "/observer/estimate";
-/// The agent's actions.
-pub const ACTION: &str = "/agent/action";
-/// The true state, recorded with a sensor that does not measure it.
-pub const TRUTH: &str = "/plant/truth";
+use crate::record::channels::decode::{FieldError, Flat};
+use crate::record::channels::{ACTION, ESTIMATE, MEASUREMENT, TRUTH};
+use crate::record::reader::{NAME, PART, RunFile};
 
 /// What a recording holds that a replay needs.
 pub struct Recording {
@@ -40,15 +33,15 @@ pub struct Recording {
 impl Recording {
     /// Reads `dir/run.mcap`, the recording of a finished `rig run`.
     pub fn read(dir: &Path) -> Result<Self, ReplayError> {
-        let path = dir.join("run.mcap");
+        let path = dir.join(NAME);
         if !path.exists() {
-            return Err(if dir.join("run.mcap.part").exists() {
+            return Err(if dir.join(PART).exists() {
                 ReplayError::Unfinished { dir: dir.into() }
             } else {
                 ReplayError::NoRecording { path }
             });
         }
-        let bytes = std::fs::read(&path).map_err(|e| ReplayError::Io {
+        let file = RunFile::read(&path).map_err(|e| ReplayError::Io {
             path: path.clone(),
             cause: e.to_string(),
         })?;
@@ -56,24 +49,18 @@ impl Recording {
             path: path.clone(),
             why,
         };
-        let summary = mcap::Summary::read(&bytes)
+        let summary = file
+            .summary()
             .map_err(|e| foreign(format!("not a readable MCAP file ({e})")))?
             .ok_or_else(|| foreign("an MCAP file without a summary".into()))?;
-        let about = summary
-            .metadata_indexes
-            .iter()
-            .filter(|i| i.name == "run")
-            .find_map(|i| mcap::read::metadata(&bytes, i).ok())
-            .ok_or_else(|| foreign("it has no metadata `run`".into()))?
-            .metadata;
+        let about = file
+            .metadata(&summary, "run")
+            .ok_or_else(|| foreign("it has no metadata `run`".into()))?;
         check_format(&path, &about)?;
-        let config = summary
-            .attachment_indexes
-            .iter()
-            .filter(|i| i.name == "config.toml")
-            .find_map(|i| mcap::read::attachment(&bytes, i).ok())
+        let config = file
+            .attachment(&summary, "config.toml")
             .ok_or_else(|| foreign("it has no attachment config.toml".into()))?;
-        let cfg = configuration(&path, &config.data)?;
+        let cfg = configuration(&path, &config)?;
         let mut rec = Recording {
             path,
             cfg,
@@ -83,15 +70,15 @@ impl Recording {
             actions: BTreeMap::new(),
             truth: BTreeMap::new(),
         };
-        rec.decode(&bytes)?;
+        rec.decode(&file)?;
         Ok(rec)
     }
 
-    /// Decodes the loop's messages of `bytes`.
-    fn decode(&mut self, bytes: &[u8]) -> Result<(), ReplayError> {
+    /// Decodes the loop's messages of `file`.
+    fn decode(&mut self, file: &RunFile) -> Result<(), ReplayError> {
         let task = self.cfg.task();
         let (n, m) = (task.state_dim(), task.action_dim());
-        let stream = mcap::MessageStream::new(bytes).map_err(|e| self.unreadable("", 0, e))?;
+        let stream = file.messages().map_err(|e| self.unreadable("", 0, e))?;
         for (i, msg) in stream.enumerate() {
             let msg = msg.map_err(|e| self.unreadable("", i, e))?;
             let topic = msg.channel.topic.as_str();
@@ -156,111 +143,4 @@ fn configuration(path: &Path, toml: &[u8]) -> Result<ExperimentConfig, ReplayErr
     let text = String::from_utf8_lossy(toml);
     resolve(Some((&name, &text)), &Overrides::default())
         .map_err(|e| ReplayError::Config(e.to_string()))
-}
-
-/// Why a message's field could not be decoded.
-#[derive(Debug, thiserror::Error)]
-enum FieldError {
-    #[error("no field {0}")]
-    Missing(String),
-    #[error("field {0} is not {1}")]
-    Type(String, &'static str),
-    #[error("not a JSON object: {0}")]
-    Json(String),
-}
-
-/// One recorded message: a flat JSON object of numbers (`null` for NaN).
-struct Flat(Map<String, Json>);
-
-impl Flat {
-    fn parse(data: &[u8]) -> Result<Self, FieldError> {
-        serde_json::from_slice(data)
-            .map(Flat)
-            .map_err(|e| FieldError::Json(e.to_string()))
-    }
-
-    fn get(&self, key: &str) -> Result<&Json, FieldError> {
-        self.0
-            .get(key)
-            .ok_or_else(|| FieldError::Missing(key.into()))
-    }
-
-    fn int(&self, key: &str) -> Result<u64, FieldError> {
-        self.get(key)?
-            .as_u64()
-            .ok_or_else(|| FieldError::Type(key.into(), "an unsigned integer"))
-    }
-
-    /// A number; `null` is NaN (the recorder writes NaN and ±∞ so).
-    fn num(&self, key: &str) -> Result<f64, FieldError> {
-        match self.get(key)? {
-            Json::Null => Ok(f64::NAN),
-            v => v
-                .as_f64()
-                .ok_or_else(|| FieldError::Type(key.into(), "a number")),
-        }
-    }
-
-    /// The fields `name_0 .. name_{len-1}`, the rest zero.
-    fn array<const N: usize>(&self, name: &str, len: usize) -> Result<[f64; N], FieldError> {
-        let mut a = [0.0; N];
-        for (i, v) in a.iter_mut().enumerate().take(len) {
-            *v = self.num(&format!("{name}_{i}"))?;
-        }
-        Ok(a)
-    }
-
-    fn header(&self) -> Result<Header, FieldError> {
-        Ok(Header {
-            seq: self.int("seq")?,
-            trial: self.int("trial")?,
-            step: self.int("step")?,
-            flags: self.int("flags")?,
-            t_sim: self.num("t_sim")?,
-        })
-    }
-
-    fn measurement(&self, n: usize, m: usize) -> Result<Measurement, FieldError> {
-        Ok(Measurement {
-            header: self.header()?,
-            n_x: n as u64,
-            n_u: m as u64,
-            reward: self.num("reward")?,
-            y: self.array::<MAX_X>("y", n)?,
-            u_applied: self.array::<MAX_U>("u_applied", m)?,
-            u_next: self.array::<MAX_U>("u_next", m)?,
-            delay_s: self.num("delay_s")?,
-            ..Measurement::default()
-        })
-    }
-
-    fn estimate(&self, n: usize, m: usize) -> Result<Estimate, FieldError> {
-        Ok(Estimate {
-            header: self.header()?,
-            n_x: n as u64,
-            n_u: m as u64,
-            reward: self.num("reward")?,
-            x: self.array::<MAX_X>("x", n)?,
-            u_applied: self.array::<MAX_U>("u_applied", m)?,
-            ..Estimate::default()
-        })
-    }
-
-    fn action(&self, m: usize) -> Result<Action, FieldError> {
-        Ok(Action {
-            header: self.header()?,
-            n_u: m as u64,
-            u: self.array::<MAX_U>("u", m)?,
-            ..Action::default()
-        })
-    }
-
-    fn truth(&self, n: usize) -> Result<Truth, FieldError> {
-        Ok(Truth {
-            header: self.header()?,
-            n_x: n as u64,
-            x: self.array::<MAX_X>("x", n)?,
-            ..Truth::default()
-        })
-    }
 }

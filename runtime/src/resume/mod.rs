@@ -34,12 +34,12 @@ mod checkpoints;
 mod error;
 mod recorded;
 
+pub use crate::record::reader::RecordedMessage;
 pub use checkpoints::{
     CheckpointWriter, checkpoint_dir, checkpoint_path, checkpoints, discard_after,
     keep_from_newest, prune,
 };
 pub use error::{PrepareError, WriteError};
-pub use recorded::RecordedMessage;
 use recorded::{RecordingIndex, index, kept, read_recording, read_returns, same_plant};
 
 /// Where a resumed run continues, and what it keeps.
@@ -116,7 +116,7 @@ pub fn prepare(
         first_seq,
         checkpoint,
         records: rows[..c as usize].to_vec(),
-        messages: kept(messages, first_seq),
+        messages: kept(messages, first_seq, c),
         notes,
     })
 }

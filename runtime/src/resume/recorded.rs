@@ -5,31 +5,11 @@ use std::collections::BTreeSet;
 use std::path::Path;
 
 use super::error::PrepareError;
-use serde::Deserialize;
 use wire::flags;
 
 use crate::experiment::TrialRecord;
-
-/// One message of a recording, as stored.
-pub struct RecordedMessage {
-    /// Its topic.
-    pub topic: String,
-    /// Log time \[ns\].
-    pub log_time: u64,
-    /// Publish time \[ns\].
-    pub publish_time: u64,
-    /// The JSON message.
-    pub data: Vec<u8>,
-}
-
-#[derive(Deserialize)]
-struct Head {
-    seq: u64,
-    #[serde(default)]
-    trial: u64,
-    #[serde(default)]
-    flags: u64,
-}
+use crate::record::channels::{DRIVER_PREFIX, Head, Keep, LOOP, MEASUREMENT, row_trial};
+use crate::record::reader::{NAME, PART, RecordedMessage, RunFile};
 
 /// Reads the rows of a `returns.csv`, but a last line cut short (a row being written when
 /// the disk filled up), which `notes` then mentions.
@@ -97,35 +77,23 @@ pub(super) fn read_recording(
     out: &Path,
     notes: &mut Vec<String>,
 ) -> Result<Vec<RecordedMessage>, PrepareError> {
-    let full = out.join("run.mcap");
-    let part = out.join("run.mcap.part");
+    let full = out.join(NAME);
+    let part = out.join(PART);
     let path = if full.exists() { full } else { part };
-    let bytes = std::fs::read(&path).map_err(|source| PrepareError::NoRecording {
+    let file = RunFile::read(&path).map_err(|source| PrepareError::NoRecording {
         path: path.clone(),
         source,
     })?;
-    let stream = mcap::MessageStream::new(&bytes).map_err(|source| PrepareError::NotMcap {
+    let (messages, cut) = file.readable().map_err(|source| PrepareError::NotMcap {
         path: path.clone(),
         source,
     })?;
-    let mut messages = Vec::new();
-    for m in stream {
-        match m {
-            Ok(m) => messages.push(RecordedMessage {
-                topic: m.channel.topic.clone(),
-                log_time: m.log_time,
-                publish_time: m.publish_time,
-                data: m.data.into_owned(),
-            }),
-            Err(e) => {
-                notes.push(format!(
-                    "{} ends in an unfinished chunk ({e}); kept the {} messages before it",
-                    path.display(),
-                    messages.len()
-                ));
-                break;
-            }
-        }
+    if let Some(e) = cut {
+        notes.push(format!(
+            "{} ends in an unfinished chunk ({e}); kept the {} messages before it",
+            path.display(),
+            messages.len()
+        ));
     }
     Ok(messages)
 }
@@ -138,7 +106,7 @@ pub(super) fn same_plant(
     messages: &[RecordedMessage],
     external: bool,
 ) -> Result<(), PrepareError> {
-    let recorded = messages.iter().any(|m| m.topic.starts_with("/driver/"));
+    let recorded = messages.iter().any(|m| m.topic.starts_with(DRIVER_PREFIX));
     if recorded == external {
         return Ok(());
     }
@@ -156,18 +124,16 @@ pub(super) struct RecordingIndex {
     measurements: Vec<(u64, u64, u64)>,
 }
 
-const MAIN: [&str; 3] = ["/plant/measurement", "/observer/estimate", "/agent/action"];
-
 pub(super) fn index(messages: &[RecordedMessage]) -> Result<RecordingIndex, PrepareError> {
     let mut r = RecordingIndex {
         seqs: Default::default(),
         measurements: Vec::new(),
     };
     for m in messages {
-        let Some(i) = MAIN.iter().position(|t| *t == m.topic) else {
+        let Some(i) = LOOP.iter().position(|t| *t == m.topic) else {
             continue;
         };
-        let h: Head = serde_json::from_slice(&m.data).map_err(|source| PrepareError::Message {
+        let h = Head::of(&m.data).map_err(|source| PrepareError::Message {
             topic: m.topic.clone(),
             source,
         })?;
@@ -207,28 +173,39 @@ impl RecordingIndex {
     }
 }
 
-/// The recorded messages before sample `first_seq`, which the resumed run keeps: the
-/// loop's topics and their timing by sequence number (without the shutdown), the other
-/// channels (an external driver's traffic, the ground truth) up to the last kept
-/// measurement's log time.
-pub(super) fn kept(messages: Vec<RecordedMessage>, first_seq: u64) -> Vec<RecordedMessage> {
+/// The recorded messages before sample `first_seq`, after trial `c`, which the resumed
+/// run keeps: the loop's topics, their timing and latency by sequence number (without the
+/// shutdown), the rows of `returns.csv` of trials up to `c`, a picture per kept
+/// measurement, the other channels (an external driver's traffic, the ground truth) up
+/// to the last kept measurement's log time.
+pub(super) fn kept(messages: Vec<RecordedMessage>, first_seq: u64, c: u32) -> Vec<RecordedMessage> {
     let last_log_time = messages
         .iter()
-        .filter(|m| m.topic == MAIN[0])
+        .filter(|m| m.topic == MEASUREMENT)
         .filter_map(|m| {
-            let h: Head = serde_json::from_slice(&m.data).ok()?;
+            let h = Head::of(&m.data).ok()?;
             (h.seq < first_seq).then_some(m.log_time)
         })
         .max()
         .unwrap_or(0);
+    let loop_kept = |h: Head| h.seq < first_seq && h.flags & flags::SHUTDOWN == 0;
+    let measurements = messages
+        .iter()
+        .filter(|m| m.topic == MEASUREMENT)
+        .filter(|m| Head::of(&m.data).is_ok_and(loop_kept))
+        .count();
+    let mut pictures = 0;
     let keep = |m: &RecordedMessage| -> bool {
-        let head = || serde_json::from_slice::<Head>(&m.data).ok();
-        if MAIN.contains(&m.topic.as_str()) {
-            head().is_some_and(|h| h.seq < first_seq && h.flags & flags::SHUTDOWN == 0)
-        } else if m.topic.starts_with("/timing/") {
-            head().is_some_and(|h| h.seq < first_seq)
-        } else {
-            first_seq > 0 && m.log_time <= last_log_time
+        let head = || Head::of(&m.data).ok();
+        match Keep::of(&m.topic) {
+            Keep::Loop => head().is_some_and(loop_kept),
+            Keep::Sample => head().is_some_and(|h| h.seq < first_seq),
+            Keep::Row => row_trial(&m.data).is_some_and(|t| t <= u64::from(c)),
+            Keep::Picture => {
+                pictures += 1;
+                pictures <= measurements
+            }
+            Keep::Logged => first_seq > 0 && m.log_time <= last_log_time,
         }
     };
     messages.into_iter().filter(keep).collect()
@@ -257,5 +234,46 @@ mod tests {
             "{notes:?}"
         );
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    fn message(topic: &str, log_time: u64, data: &str) -> RecordedMessage {
+        RecordedMessage {
+            topic: topic.into(),
+            log_time,
+            publish_time: log_time,
+            data: data.as_bytes().to_vec(),
+        }
+    }
+
+    #[test]
+    fn a_resumed_run_keeps_the_rows_of_its_trials_a_picture_per_kept_sample_and_their_latency() {
+        use crate::record::channels::{LATENCY, RETURNS, SCENE};
+        let sample = |seq: u64, trial: u64| {
+            let data = format!(r#"{{"seq":{seq},"trial":{trial},"flags":0}}"#);
+            [
+                message(MEASUREMENT, 10 * seq, &data),
+                message(SCENE, 10 * seq, "picture"),
+                message(LATENCY, 10 * seq, &format!(r#"{{"seq":{seq}}}"#)),
+            ]
+        };
+        let mut messages: Vec<RecordedMessage> =
+            (0..4).flat_map(|s| sample(s, 1 + s / 2)).collect();
+        messages.push(message(RETURNS, 15, r#"{"trial":1,"return":-3.5}"#));
+        messages.push(message(RETURNS, 35, r#"{"trial":2,"return":-2.5}"#));
+        // Resumed after trial 1: its two samples, their pictures and latency, its row.
+        let kept = kept(messages, 2, 1);
+        let topics: Vec<(&str, u64)> = kept.iter().map(|m| (&m.topic[..], m.log_time)).collect();
+        assert_eq!(
+            topics,
+            [
+                (MEASUREMENT, 0),
+                (SCENE, 0),
+                (LATENCY, 0),
+                (MEASUREMENT, 10),
+                (SCENE, 10),
+                (LATENCY, 10),
+                (RETURNS, 15)
+            ]
+        );
     }
 }

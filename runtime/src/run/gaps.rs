@@ -13,6 +13,7 @@ use super::error::Result;
 use crate::error::AtFile;
 use wire::{Measurement, flags};
 
+use crate::record::channels::{Head, MEASUREMENT};
 use crate::resume::ResumePoint;
 
 /// The header of `gaps.csv`.
@@ -95,14 +96,10 @@ impl GapLog {
 
 /// The attempts cut short among the measurements a resumed run keeps.
 fn kept_cuts(p: &ResumePoint) -> u64 {
-    #[derive(serde::Deserialize)]
-    struct Head {
-        flags: u64,
-    }
     p.messages
         .iter()
-        .filter(|m| m.topic == "/plant/measurement")
-        .filter_map(|m| serde_json::from_slice::<Head>(&m.data).ok())
+        .filter(|m| m.topic == MEASUREMENT)
+        .filter_map(|m| Head::of(&m.data).ok())
         .filter(|h| h.flags & flags::GAP != 0)
         .count() as u64
 }

@@ -37,6 +37,8 @@ use crate::lock::FolderLock;
 use crate::output::{progress_bar, write_atomic};
 use crate::process::{CpuLayout, Scheduling, Spin};
 use crate::record::Tap;
+use crate::record::channels::RETURNS;
+use crate::record::scene::SceneMaker;
 use crate::resume;
 
 mod command;
@@ -89,6 +91,8 @@ pub struct RunOptions {
     /// Realtime and external driver: learn across gaps in the loop's timing instead of
     /// cutting the attempt short and running the trial again (`--gaps learn`).
     pub learn_across_gaps: bool,
+    /// Draws the system for the recording's `/scene` (`None`: no `/scene`).
+    pub scene: Option<SceneMaker>,
 }
 
 /// What a run produced.
@@ -117,8 +121,8 @@ pub fn run(cfg: &ExperimentConfig, opts: &RunOptions) -> Result<RunSummary> {
     run_with(cfg, opts, None)
 }
 
-/// [`run`], handing every message recorded to `tap` too, and the channels `/returns` and
-/// `/latency` besides (a live view: `rig run --live`; the recording stays as it is).
+/// [`run`], handing every channel and message recorded to `tap` too (a live view: `rig
+/// run --live`; the recording stays as it is).
 pub fn run_with(
     cfg: &ExperimentConfig,
     opts: &RunOptions,
@@ -181,10 +185,11 @@ pub fn run_with(
         driver: opts.clock.is_external(),
         driver_reward: driver_info.is_some_and(|i| i.provides_reward()),
         point: point.as_ref(),
+        scene: opts.scene,
     };
     let mut recording = RecordingWriter::open(&opts.out, &about)?;
     if let Some(tap) = tap {
-        recording.live(tap)?;
+        recording.live(tap);
     }
     let returns = Returns::create(
         &opts.out.join("returns.csv"),
@@ -210,6 +215,9 @@ pub fn run_with(
     if let Some(d) = opts.clock.driver() {
         sup.resume_flags = format!(" --plant external --driver {}", d.id);
     }
+    sup.rows_recorded = point.as_ref().map_or(0, |p| {
+        p.messages.iter().filter(|m| m.topic == RETURNS).count()
+    });
 
     let nodes = spawn::Nodes::new((&run_id, &config_path), opts, point.as_ref(), &checkpoints);
     (sup.children, sup.logs) = spawn::processes(&opts.out, &nodes, &opts.nodes)?;
@@ -349,6 +357,7 @@ mod tests {
             waiting,
             lockstep_waiting,
             learn_across_gaps: false,
+            scene: None,
         }
     }
 

@@ -1,5 +1,6 @@
 //! The run's MCAP recording: one channel per topic, the wall-clock stamps on their
-//! own `/timing/...` channels, log time simulated (lockstep) or the plant's (realtime).
+//! own `/timing/...` channels, the trials' returns, the loop's latency and the system's
+//! picture; log time simulated (lockstep) or the plant's (realtime).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -7,23 +8,13 @@ use std::path::Path;
 use super::error::{Result, RunError};
 use crate::error::AtFile;
 use driver::contract::{DriverCommand, DriverSample, LinkSample};
-
-/// The integer fields of `/driver/link`, in [`LinkSample`]'s order (the offset, signed,
-/// follows as a number).
-const LINK_INTS: [&str; 7] = [
-    "seq",
-    "t_received_ns",
-    "sample_hop_ns",
-    "command_round_trip_ns",
-    "command_hop_ns",
-    "ping_round_trip_ns",
-    "clock_uncertainty_ns",
-];
-use wire::{Action, Estimate, Header, Measurement, Truth};
+use wire::{Action, Estimate, Header, Measurement, Truth, flags};
 
 use crate::config::ExperimentConfig;
 use crate::experiment::TrialRecord;
-use crate::record::{ChannelId, Field, FieldKind, RecordError, Recorder, Tap, Value};
+use crate::record::channels::{self, fields, schema};
+use crate::record::scene::{Scene, SceneMaker};
+use crate::record::{ChannelId, RecordError, Recorder, Tap, Value};
 use crate::resume::ResumePoint;
 
 /// The MCAP recording: one channel per topic, and one `/timing/...` channel per topic
@@ -48,10 +39,22 @@ pub(super) struct RecordingWriter {
     pub(super) realtime: bool,
     /// The current sample's plant sample time (monotonic ns).
     pub(super) t_sample_ns: u64,
-    /// `/returns` and `/latency`, for a live view only ([`RecordingWriter::live`]).
-    pub(super) live: Option<(ChannelId, ChannelId)>,
+    /// `/returns`: a row of `returns.csv` per trial ([`Self::trial`]).
+    returns: ChannelId,
+    /// `/latency`: per action the time from the sample to the action and the agent's
+    /// share of it, in µs.
+    latency: ChannelId,
+    /// `/scene`: the system drawn from each sample's state, when the application draws it.
+    scene: Option<Pictures>,
     /// The log time of the last message of the loop recorded.
     pub(super) log_time_ns: u64,
+}
+
+/// The system's pictures: their channel, their painter, the picture being encoded.
+struct Pictures {
+    channel: ChannelId,
+    scene: Box<dyn Scene>,
+    buf: Vec<u8>,
 }
 
 /// The recording's metadata `run`.
@@ -103,22 +106,6 @@ pub(super) fn join<T: std::fmt::Display>(values: impl IntoIterator<Item = T>) ->
         .join(",")
 }
 
-pub(super) fn header_fields(extra: Vec<Vec<Field>>) -> Vec<Field> {
-    let mut f: Vec<Field> = ["seq", "trial", "step", "flags"]
-        .iter()
-        .map(|n| Field::integer(n))
-        .collect();
-    f.push(Field::number("t_sim"));
-    f.extend(extra.into_iter().flatten());
-    f
-}
-
-pub(super) fn timing_fields(names: &[&str]) -> Vec<Field> {
-    std::iter::once(Field::integer("seq"))
-        .chain(names.iter().map(|n| Field::integer(n)))
-        .collect()
-}
-
 /// What a run's recording describes beside its messages.
 pub(super) struct About<'a> {
     pub(super) cfg: &'a ExperimentConfig,
@@ -135,6 +122,8 @@ pub(super) struct About<'a> {
     pub(super) driver_reward: bool,
     /// Where a resumed run continues.
     pub(super) point: Option<&'a ResumePoint>,
+    /// Draws the system's pictures for `/scene` (none without).
+    pub(super) scene: Option<SceneMaker>,
 }
 
 impl RecordingWriter {
@@ -143,7 +132,7 @@ impl RecordingWriter {
     /// trials it keeps (the old recording is replaced).
     pub(super) fn open(dir: &Path, about: &About) -> Result<Self> {
         let (cfg, task) = (about.cfg, about.task);
-        let path = dir.join("run.mcap");
+        let path = dir.join(crate::record::reader::NAME);
         // Written as `run.mcap.part` until finished: a resumed run's old recording,
         // which holds what it keeps, stays until copied.
         let mut rec = Recorder::create(&path)?;
@@ -154,6 +143,9 @@ impl RecordingWriter {
         rec.metadata("run", &metadata(about))?;
         let mut r = Self::create(rec, task.state_dim(), task.action_dim())?;
         r.realtime = about.realtime;
+        if let Some(make) = about.scene {
+            r.add_scene(make(task))?;
+        }
         if about.driver {
             r.add_driver()?;
         }
@@ -186,47 +178,19 @@ impl RecordingWriter {
 
     /// The recording's channels in `rec`, for a task of `n` states and `m` actions.
     pub(super) fn create(mut rec: Recorder, n: usize, m: usize) -> Result<Self, RecordError> {
-        let state = |name| {
-            vec![
-                vec![Field::number("reward")],
-                Field::array(name, n, FieldKind::Number),
-                Field::array("u_applied", m, FieldKind::Number),
-            ]
+        use channels::{ACTION, ESTIMATE, MEASUREMENT, TIMING};
+        let measurement =
+            rec.channel(MEASUREMENT, schema::MEASUREMENT, &fields::measurement(n, m))?;
+        let estimate = rec.channel(ESTIMATE, schema::ESTIMATE, &fields::estimate(n, m))?;
+        let action = rec.channel(ACTION, schema::ACTION, &fields::action(m))?;
+        let timing = |rec: &mut Recorder, i: usize, stamps: &[&str]| {
+            rec.channel(TIMING[i], schema::TIMING[i], &fields::timing(stamps))
         };
-        let mut measured = state("y");
-        measured.push(Field::array("u_next", m, FieldKind::Number));
-        measured.push(vec![Field::number("delay_s")]);
-        let measurement = rec.channel(
-            "/plant/measurement",
-            "rig.Measurement",
-            &header_fields(measured),
-        )?;
-        let estimate = rec.channel(
-            "/observer/estimate",
-            "rig.Estimate",
-            &header_fields(state("x")),
-        )?;
-        let action = rec.channel(
-            "/agent/action",
-            "rig.Action",
-            &header_fields(vec![Field::array("u", m, FieldKind::Number)]),
-        )?;
-        let stamps = ["t_sample_ns", "t_received_ns", "t_publish_ns"];
-        let t_measurement = rec.channel(
-            "/timing/plant/measurement",
-            "rig.Timing.Measurement",
-            &timing_fields(&["t_sample_ns", "t_publish_ns", "t_action_ns"]),
-        )?;
-        let t_estimate = rec.channel(
-            "/timing/observer/estimate",
-            "rig.Timing.Estimate",
-            &timing_fields(&stamps),
-        )?;
-        let t_action = rec.channel(
-            "/timing/agent/action",
-            "rig.Timing.Action",
-            &timing_fields(&stamps),
-        )?;
+        let t_measurement = timing(&mut rec, 0, &fields::MEASUREMENT_STAMPS)?;
+        let t_estimate = timing(&mut rec, 1, &fields::STAMPS)?;
+        let t_action = timing(&mut rec, 2, &fields::STAMPS)?;
+        let returns = rec.channel(channels::RETURNS, schema::RETURNS, &fields::returns())?;
+        let latency = rec.channel(channels::LATENCY, schema::LATENCY, &fields::latency())?;
         Ok(Self {
             rec,
             measurement,
@@ -242,40 +206,47 @@ impl RecordingWriter {
             values: Vec::new(),
             realtime: false,
             t_sample_ns: 0,
-            live: None,
+            returns,
+            latency,
+            scene: None,
             log_time_ns: 0,
         })
     }
 
-    /// Hands every message to `tap` too (a live view), and declares the channels only it
-    /// receives: `/returns`, a row of `returns.csv` per trial ([`Self::trial`]), and
-    /// `/latency`, per action the time from the sample to the action and the agent's
-    /// share of it, in µs.
-    pub(super) fn live(&mut self, tap: Box<dyn Tap>) -> Result<(), RecordError> {
+    /// Hands every channel and message to `tap` too (a live view).
+    pub(super) fn live(&mut self, tap: Box<dyn Tap>) {
         self.rec.set_tap(tap);
-        let returns = [
-            Field::integer("trial"),
-            Field::number("return"),
-            Field::number("greedy"),
-            Field::number("sim_time_s"),
-        ];
-        let returns = self.rec.live_channel("/returns", "rig.Returns", &returns)?;
-        let latency = [
-            Field::integer("seq"),
-            Field::number("sample_to_action_us"),
-            Field::number("agent_us"),
-        ];
-        let latency = self.rec.live_channel("/latency", "rig.Latency", &latency)?;
-        self.live = Some((returns, latency));
+    }
+
+    /// Adds `/scene`, the system drawn by `scene` from each sample's state.
+    fn add_scene(&mut self, scene: Box<dyn Scene>) -> Result<(), RecordError> {
+        let channel = self
+            .rec
+            .encoded_channel(channels::SCENE, &scene.encoding())?;
+        self.scene = Some(Pictures {
+            channel,
+            scene,
+            buf: Vec::new(),
+        });
         Ok(())
     }
 
-    /// A trial's row of `returns.csv` on `/returns` (live view only); its greedy return
-    /// `null` when it had no evaluation.
-    pub(super) fn trial(&mut self, r: &TrialRecord) -> Result<(), RecordError> {
-        let Some((ch, _)) = self.live else {
+    /// The picture of the state `x` of the sample with header `h`, at log time `t` (no
+    /// picture of the shutdown, which has no state).
+    fn picture(&mut self, h: &Header, x: &[f64], t: u64) -> Result<(), RecordError> {
+        let Some(p) = &mut self.scene else {
             return Ok(());
         };
+        if h.flags & flags::SHUTDOWN != 0 {
+            return Ok(());
+        }
+        p.scene.draw(x, t, &mut p.buf);
+        self.rec.write_bytes(p.channel, t, t, &p.buf)
+    }
+
+    /// A trial's row of `returns.csv` on `/returns`, at log time `t`; its greedy return
+    /// `null` when it had no evaluation.
+    pub(super) fn trial(&mut self, r: &TrialRecord, t: u64) -> Result<(), RecordError> {
         self.values.clear();
         self.values.extend([
             Value::Int(r.trial.into()),
@@ -283,15 +254,11 @@ impl RecordingWriter {
             Value::Num(r.greedy.unwrap_or(f64::NAN)),
             Value::Num(r.sim_time_s),
         ]);
-        let t = self.log_time_ns;
-        self.rec.write(ch, t, t, &self.values)
+        self.rec.write(self.returns, t, t, &self.values)
     }
 
-    /// An action's latency on `/latency` (live view only).
+    /// An action's latency on `/latency`.
     fn latency(&mut self, msg: &Action, t: u64) -> Result<(), RecordError> {
-        let Some((_, ch)) = self.live else {
-            return Ok(());
-        };
         let us = |from: u64, to: u64| (to as f64 - from as f64) / 1e3;
         self.values.clear();
         self.values.extend([
@@ -299,7 +266,7 @@ impl RecordingWriter {
             Value::Num(us(msg.t_sample_ns, msg.t_publish_ns)),
             Value::Num(us(msg.t_received_ns, msg.t_publish_ns)),
         ]);
-        self.rec.write(ch, t, t, &self.values)
+        self.rec.write(self.latency, t, t, &self.values)
     }
 
     /// Starts a message with the header fields; returns its log time (simulated, ns).
@@ -353,13 +320,18 @@ impl RecordingWriter {
             self.t_measurement,
             msg.header.seq,
             &[msg.t_sample_ns, msg.t_publish_ns, msg.t_action_ns],
-        )
+        )?;
+        // The state measured is drawn, unless the truth is recorded.
+        match self.truth {
+            Some(_) => Ok(()),
+            None => self.picture(&msg.header, &msg.y[..self.n], t),
+        }
     }
 
     /// Adds the channel of the plant's ground truth.
     pub(super) fn add_truth(&mut self) -> Result<(), RecordError> {
-        let fields = header_fields(vec![Field::array("x", self.n, FieldKind::Number)]);
-        self.truth = Some(self.rec.channel("/plant/truth", "rig.Truth", &fields)?);
+        let fields = fields::truth(self.n);
+        self.truth = Some(self.rec.channel(channels::TRUTH, schema::TRUTH, &fields)?);
         Ok(())
     }
 
@@ -371,7 +343,8 @@ impl RecordingWriter {
         self.t_sample_ns = msg.t_sample_ns;
         let t = self.header(&msg.header);
         self.nums(&msg.x[..self.n]);
-        self.rec.write(ch, t, t, &self.values)
+        self.rec.write(ch, t, t, &self.values)?;
+        self.picture(&msg.header, &msg.x[..self.n], t)
     }
 
     pub(super) fn estimate(&mut self, msg: &Estimate) -> Result<(), RecordError> {
@@ -392,24 +365,21 @@ impl RecordingWriter {
     /// Adds the channels of an external driver's samples and commands.
     pub(super) fn add_driver(&mut self) -> Result<(), RecordError> {
         let (n, m) = (self.n, self.m);
-        let ints =
-            |names: &[&str]| -> Vec<Field> { names.iter().map(|f| Field::integer(f)).collect() };
-        let mut sample = ints(&["seq", "t_sample_ns", "status", "reset_id", "last_command"]);
-        sample.extend(Field::array("x", n, FieldKind::Number));
-        sample.extend(Field::array("u_applied", m, FieldKind::Number));
-        sample.extend(ints(&["clamped", "rejected", "watchdog_trips"]));
-        let mut command = ints(&["seq", "kind", "sample_seq", "t_publish_ns"]);
-        command.extend(Field::array("u", m, FieldKind::Number));
-        command.extend(Field::array("x0", n, FieldKind::Number));
-        let s = self
-            .rec
-            .channel("/driver/sample", "rig.DriverSample", &sample)?;
-        let c = self
-            .rec
-            .channel("/driver/command", "rig.DriverCommand", &command)?;
-        let mut link = ints(&LINK_INTS);
-        link.push(Field::number("clock_offset_ns"));
-        let l = self.rec.channel("/driver/link", "rig.LinkSample", &link)?;
+        let s = self.rec.channel(
+            channels::DRIVER_SAMPLE,
+            schema::DRIVER_SAMPLE,
+            &fields::driver_sample(n, m),
+        )?;
+        let c = self.rec.channel(
+            channels::DRIVER_COMMAND,
+            schema::DRIVER_COMMAND,
+            &fields::driver_command(n, m),
+        )?;
+        let l = self.rec.channel(
+            channels::DRIVER_LINK,
+            schema::DRIVER_LINK,
+            &fields::driver_link(),
+        )?;
         self.driver = Some((s, c, l));
         Ok(())
     }

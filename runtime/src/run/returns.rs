@@ -44,6 +44,11 @@ pub(super) struct Returns {
     /// Per row written by this run: its trial and the sequence number of the first sample
     /// after it and its greedy evaluations.
     pub(super) ends: Vec<(u32, u64)>,
+    /// Per row written by this run, its log time in the recording: that of the last end
+    /// of its trial or of its evaluations.
+    pub(super) log_times: Vec<u64>,
+    /// The log time of the last end of the pending trial or of its evaluations.
+    end_log_time: u64,
     /// The sequence number of the sample being accounted for.
     seq: u64,
 }
@@ -78,6 +83,8 @@ impl Returns {
             greedy: (0.0, 0),
             records: kept.to_vec(),
             ends: Vec::new(),
+            log_times: Vec::new(),
+            end_log_time: 0,
             seq: 0,
             task,
         })
@@ -86,8 +93,15 @@ impl Returns {
     /// Accounts for the sample with header `h` and reward `reward`; `x` is its state for
     /// a finite horizon's terminal reward. From the plant's measurements: the true state
     /// (the measurement's `y` with full-state sensing); with [`flags::ESTIMATED_REWARD`]
-    /// from the observer's estimates instead: their rewards and `x̂`.
-    pub(super) fn sample(&mut self, h: &wire::Header, reward: f64, x: &[f64]) -> Result<()> {
+    /// from the observer's estimates instead: their rewards and `x̂`. `log_time` is its
+    /// log time in the recording.
+    pub(super) fn sample(
+        &mut self,
+        h: &wire::Header,
+        reward: f64,
+        x: &[f64],
+        log_time: u64,
+    ) -> Result<()> {
         let f = h.flags;
         self.seq = h.seq;
         let greedy = f & flags::GREEDY != 0;
@@ -122,6 +136,9 @@ impl Returns {
         }
         let pending = self.pending.as_mut().ok_or(RunError::OutsideTrial)?;
         let end = f & flags::END != 0;
+        if end {
+            self.end_log_time = log_time;
+        }
         let final_reward = if end {
             self.horizon.final_reward(&self.reward, x)
         } else {
@@ -156,6 +173,7 @@ impl Returns {
                 .and_then(|()| self.out.flush())
                 .at("cannot write", &self.path)?;
             self.ends.push((r.trial, self.seq));
+            self.log_times.push(self.end_log_time);
             self.records.push(r);
         }
         Ok(())

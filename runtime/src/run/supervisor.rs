@@ -113,8 +113,9 @@ pub(super) struct Supervisor {
     pub(super) retention: Retention,
     /// The flags beside `--resume DIR` that continue this run (an external driver's).
     pub(super) resume_flags: String,
-    /// The rows of `returns.csv` handed to the live view so far.
-    pub(super) live_rows: usize,
+    /// The rows of `returns.csv` recorded on `/returns` so far (those kept by a resumed
+    /// run, copied).
+    pub(super) rows_recorded: usize,
 }
 
 impl Supervisor {
@@ -156,7 +157,7 @@ impl Supervisor {
             grace,
             retention: Retention::new(crate::resume::checkpoint_dir(out)),
             resume_flags: String::new(),
-            live_rows: 0,
+            rows_recorded: 0,
         })
     }
 
@@ -168,10 +169,6 @@ impl Supervisor {
             rows: self.returns.ends.len(),
         };
         let done = self.record_waiting(bar)?;
-        for r in &self.returns.records[self.live_rows..] {
-            self.recording.trial(r)?;
-        }
-        self.live_rows = self.returns.records.len();
         self.retention
             .after_drain(before, self.recording.rec.flushes(), &self.returns.ends);
         Ok(done)
@@ -223,10 +220,10 @@ impl Supervisor {
                 };
                 self.recording.truth(&t)?;
                 if !estimated {
-                    self.returns.sample(&m.header, m.reward, &t.x[..n])?;
+                    self.sample(&m.header, m.reward, &t.x[..n])?;
                 }
             } else if !estimated {
-                self.returns.sample(&m.header, m.reward, &m.y[..n])?;
+                self.sample(&m.header, m.reward, &m.y[..n])?;
             }
         }
         self.batch = batch;
@@ -235,8 +232,7 @@ impl Supervisor {
             self.recording.estimate(&e)?;
             self.messages += 1;
             if e.header.flags & flags::ESTIMATED_REWARD != 0 {
-                self.returns
-                    .sample(&e.header, e.reward, &e.x[..e.n_x as usize])?;
+                self.sample(&e.header, e.reward, &e.x[..e.n_x as usize])?;
             }
         }
         if let Some(d) = &self.driver {
@@ -252,6 +248,30 @@ impl Supervisor {
             }
         }
         Ok(done)
+    }
+
+    /// Accounts for a sample in `returns.csv` (the message just recorded), and records
+    /// the rows it completed.
+    fn sample(&mut self, h: &wire::Header, reward: f64, x: &[f64]) -> Result<()> {
+        self.returns
+            .sample(h, reward, x, self.recording.log_time_ns)?;
+        self.record_rows()
+    }
+
+    /// Records on `/returns` the rows of `returns.csv` not recorded yet, each at the log
+    /// time of its trial's end; a row kept by a resumed run from a recording without
+    /// `/returns`, at the current one.
+    fn record_rows(&mut self) -> Result<()> {
+        let records = &self.returns.records;
+        let kept = records.len() - self.returns.log_times.len();
+        for (i, r) in records.iter().enumerate().skip(self.rows_recorded) {
+            let t = i
+                .checked_sub(kept)
+                .map_or(self.recording.log_time_ns, |j| self.returns.log_times[j]);
+            self.recording.trial(r, t)?;
+        }
+        self.rows_recorded = records.len();
+        Ok(())
     }
 
     pub(super) fn action(&mut self, a: Action) -> Result<bool> {
@@ -332,9 +352,11 @@ impl Supervisor {
     pub(super) fn finish(mut self, outcome: Result<()>) -> Result<(Vec<TrialRecord>, u64, u64)> {
         drop(std::mem::replace(&mut self.children, Children(Vec::new())));
         let _ = self.returns.flush_complete();
+        let rows = self.record_rows();
         let counted = self.recording.rec.metadata("gaps", &self.gaps.metadata());
         let finished = self.recording.rec.finish();
         outcome?;
+        rows?;
         counted?;
         finished?;
         Ok((self.returns.records, self.messages, self.deadline_misses))

@@ -1,13 +1,17 @@
-//! The picture of the system for the live view: the pendulum, the two-link arm or, for a
+//! The picture of the system that `rig run` records on `/scene` ([`scene`], a
+//! [`runtime::record::scene::SceneMaker`]): the pendulum, the two-link arm or, for a
 //! system the rig does not simulate, a bar per state component — a Foxglove
-//! `SceneUpdate` drawn from a state. Every picture fits a 1 m radius around the origin
-//! (the arms' reach scaled to it), so one camera of the layout shows each.
+//! `SceneUpdate` drawn from a state, protobuf-encoded by the official `foxglove` crate.
+//! Every picture fits a 1 m radius around the origin (the arms' reach scaled to it), so
+//! one camera of the layout shows each.
 
+use foxglove::Encode;
 use foxglove::schemas::{
     Color, CubePrimitive, LinePrimitive, Point3, Pose, SceneEntity, SceneUpdate, SpherePrimitive,
     Timestamp, Vector3, line_primitive,
 };
 use plant::task::{SystemName, Task};
+use runtime::record::scene::{Encoding, Scene};
 
 /// The frame the picture is drawn in.
 pub const FRAME: &str = "world";
@@ -106,6 +110,34 @@ impl Body {
             entities: vec![entity],
         }
     }
+}
+
+/// The pictures of a task's system, for the recording's `/scene`.
+struct Pictures(Body);
+
+impl Scene for Pictures {
+    fn encoding(&self) -> Encoding {
+        let schema = SceneUpdate::get_schema().expect("a Foxglove schema has its descriptor");
+        Encoding {
+            schema_name: schema.name,
+            schema_encoding: schema.encoding,
+            schema: schema.data.into_owned(),
+            message_encoding: SceneUpdate::get_message_encoding(),
+        }
+    }
+
+    fn draw(&mut self, x: &[f64], t_ns: u64, out: &mut Vec<u8>) {
+        out.clear();
+        self.0
+            .draw(x, t_ns)
+            .encode(out)
+            .expect("a growing buffer holds any message");
+    }
+}
+
+/// The `/scene` of `task`'s system (`runtime::run::RunOptions::scene`).
+pub fn scene(task: &Task) -> Box<dyn Scene> {
+    Box::new(Pictures(Body::of(task)))
 }
 
 /// Links through `joints`, a ball at each joint.
@@ -216,6 +248,18 @@ mod tests {
         };
         let p = points(&hanging.draw(&[0.0, 0.0, 0.0, 0.0], 0));
         assert!(close(p[2], (0.0, 0.0, -1.0)), "{p:?}");
+    }
+
+    #[test]
+    fn a_recorded_picture_is_the_scene_update_protobuf_encoded() {
+        use foxglove::Decode;
+        let mut pictures = scene(&Task::pendulum());
+        assert_eq!(pictures.encoding().schema_name, "foxglove.SceneUpdate");
+        assert_eq!(pictures.encoding().message_encoding, "protobuf");
+        let mut out = vec![1, 2, 3];
+        pictures.draw(&[std::f64::consts::PI, f64::NAN], 5, &mut out);
+        let back = SceneUpdate::decode(&out[..]).unwrap();
+        assert_eq!(back, Body::Pendulum.draw(&[std::f64::consts::PI, 0.0], 5));
     }
 
     #[test]
