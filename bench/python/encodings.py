@@ -4,7 +4,8 @@ JSON (jsonschema) and ROS 2 CDR (ros2msg schemas, one float64/uint64 per field).
 
 Usage: python3 bench/python/encodings.py DIR/run.mcap [--out DIR]
 
-Reads every message of the recording with the official `mcap` reader and writes it again,
+Reads every JSON message of the recording with the official `mcap` reader (the system's
+pictures on `/scene` are protobuf already, and left out) and writes it again,
 with the official writers (`mcap` for JSON, `mcap-ros2-support` for CDR), into
 OUT/json-<c>.mcap and OUT/cdr-<c>.mcap, for each chunk compression c (none, lz4, zstd at
 the writer's default level 3), the same chunk size (1 MiB) and indexes as the rig's. It
@@ -37,10 +38,13 @@ from mcap_ros2.writer import Writer as Ros2Writer  # noqa: E402
 
 
 def read(path):
-    """Every message of the recording: (topic, schema name, field kinds, JSON, times)."""
+    """Every JSON message of the recording: (topic, schema name, field kinds, JSON, times).
+    The system's pictures (`/scene`) are protobuf already, and left out."""
     out = []
     with open(path, "rb") as f:
         for schema, channel, m in make_reader(f).iter_messages(log_time_order=False):
+            if channel.message_encoding != "json":
+                continue
             props = json.loads(schema.data)["properties"]
             kinds = [(k, v["type"]) for k, v in props.items()]
             out.append((channel.topic, schema.name, kinds, m.data, m.log_time, m.publish_time))

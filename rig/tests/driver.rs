@@ -693,12 +693,13 @@ fn driver_traffic(
     let (mut samples, mut commands) = (std::collections::BTreeMap::new(), Vec::new());
     for m in mcap::MessageStream::new(&bytes).unwrap() {
         let m = m.unwrap();
-        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        let json = || -> serde_json::Value { serde_json::from_slice(&m.data).unwrap() };
         match m.channel.topic.as_str() {
             "/driver/sample" => {
+                let v = json();
                 samples.insert(v["seq"].as_u64().unwrap(), v);
             }
-            "/driver/command" => commands.push(v),
+            "/driver/command" => commands.push(json()),
             _ => {}
         }
     }
