@@ -35,7 +35,7 @@ use crate::error::AtFile;
 use crate::experiment::TrialRecord;
 use crate::lock::FolderLock;
 use crate::output::{progress_bar, write_atomic};
-use crate::process::{CpuLayout, Scheduling, Spin};
+use crate::process::{Scheduling, Spin};
 use crate::record::Tap;
 use crate::resume;
 
@@ -278,9 +278,7 @@ fn driver_options(opts: &RunOptions, info: &DriverInfo) -> Result<RunOptions, Cl
         && let Some(w) = opts.lockstep_waiting
     {
         with.waiting = w;
-        if with.scheduling.layout().is_none() {
-            with.scheduling.cpus = Some(CpuLayout::lockstep(w));
-        }
+        with.scheduling = with.scheduling.in_lockstep(w);
     }
     Clock::check_driver_waiting(info, with.waiting)?;
     Ok(with)
