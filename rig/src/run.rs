@@ -175,7 +175,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
     )?;
     let (lockstep, external) = (clock.is_lockstep(), clock.is_external());
     let waiting = args.wait.waiting_in(lockstep);
-    clock.check(&cfg, waiting)?;
+    let checked = clock.check(&cfg, waiting)?;
     let mut scheduling = args.scheduling;
     if let Some(layout) = scheduling.layout() {
         layout.check()?;
@@ -189,6 +189,7 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         run_id: args.run_id.clone(),
         progress: !args.quiet,
         clock,
+        checked,
         nodes: node_command()?,
         cycles_out: None,
         scheduling,

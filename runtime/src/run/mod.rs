@@ -29,7 +29,7 @@ use driver::contract::DriverInfo;
 use driver::link::DriverWatch;
 use wire::{Bus, Waiting};
 
-use crate::clock::{Clock, ClockError, ExternalDriver};
+use crate::clock::{Checked, Clock, ClockError, ExternalDriver};
 use crate::config::ExperimentConfig;
 use crate::error::AtFile;
 use crate::experiment::TrialRecord;
@@ -68,6 +68,8 @@ pub struct RunOptions {
     pub progress: bool,
     /// What moves the run from one sample to the next.
     pub clock: Clock,
+    /// The clock checked against the experiment and `waiting`: [`Clock::check`].
+    pub checked: Checked,
     /// How each of the three processes is started: the application's program.
     pub nodes: NodeCommand,
     /// Continue the run in `out` from its last complete trial ([`crate::resume`]).
@@ -124,7 +126,6 @@ pub fn run_with(
     opts: &RunOptions,
     tap: Option<Box<dyn Tap>>,
 ) -> Result<RunSummary> {
-    opts.clock.check(cfg, opts.waiting)?;
     let cfg = cfg.one_run();
     let run_id = free_run_id(opts)?;
     // A folder this run creates is removed again if the run is refused before it
@@ -330,6 +331,7 @@ mod tests {
                 timeout: Duration::from_secs(1),
                 reset_timeout: Duration::from_secs(1),
             }),
+            checked: Checked(()),
             nodes: NodeCommand {
                 program: "node".into(),
                 plant: vec![],

@@ -118,25 +118,15 @@ impl Instants {
 
 #[cfg(test)]
 mod tests {
+    use super::super::state::tests::action;
     use super::*;
     use crate::Simulated;
-    use crate::contract::{kind, status};
+    use crate::contract::status;
     use plant::SystemName;
     use std::time::Duration;
     use wire::Scripted;
 
     const MS: u64 = 1_000_000;
-
-    fn action(seq: u64, u: f64) -> DriverCommand {
-        let mut c = DriverCommand {
-            seq,
-            kind: kind::ACTION,
-            n_u: 1,
-            ..Default::default()
-        };
-        c.u[0] = u;
-        c
-    }
 
     /// On a mock clock, periods of 10 ms from 0, READY: an action at 5 ms is applied
     /// at its arrival and keeps the watchdog off at 10 ms; the period to 20 ms without
