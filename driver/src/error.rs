@@ -103,7 +103,7 @@ pub enum Error {
         /// How long the rig waited.
         timeout: Duration,
         /// The last sample.
-        last: LastSample,
+        last: Box<LastSample>,
         /// What the driver's side last said of this rig's commands (across hosts: who
         /// holds the driver), if anything.
         said: Option<String>,

@@ -319,6 +319,7 @@ fn wait_for_driver(
 mod tests {
     use super::*;
     use driver::contract::clock;
+    use crate::process::CpuLayout;
     use wire::FOREVER;
 
     fn options(waiting: Waiting, lockstep_waiting: Option<Waiting>) -> RunOptions {
