@@ -318,8 +318,8 @@ fn wait_for_driver(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use driver::contract::clock;
     use crate::process::CpuLayout;
+    use driver::contract::clock;
     use wire::FOREVER;
 
     fn options(waiting: Waiting, lockstep_waiting: Option<Waiting>) -> RunOptions {
