@@ -423,6 +423,37 @@ mod tests {
         assert_eq!(t.holder().unwrap().peer, peer("b"));
     }
 
+    /// On a mock clock, the default lease of a driver of period 10 ms (100 ms) is 250
+    /// ms of silence: a command at 0 and a hold at 200 ms keep the driver held until
+    /// 450 ms; it is free a millisecond later. A driver of period 40 ms: 400 ms.
+    #[test]
+    fn a_lease_lapses_after_its_silence() {
+        let (clock, time) = wire::Monotonic::mock();
+        let ms = |n: u64| std::time::Duration::from_millis(n);
+        let mut t = Tenure::default();
+        t.command(&claim(1, 1, 1), None, clock.now_ns(), || peer("a"));
+        time.advance(ms(200));
+        let hold = Claim {
+            kind: kind::HOLD,
+            ..claim(1, 1, 1)
+        };
+        assert!(t.claim(&hold, clock.now_ns()).is_none());
+        let lease = Lease::DEFAULT.ns(10_000_000);
+        time.advance(ms(250));
+        assert!(t.lapse(clock.now_ns(), lease).is_none());
+        assert!(
+            t.lapse(clock.now_ns(), Lease::DEFAULT.ns(40_000_000))
+                .is_none()
+        );
+        time.advance(ms(1));
+        assert!(
+            t.lapse(clock.now_ns(), Lease::DEFAULT.ns(40_000_000))
+                .is_none()
+        );
+        assert!(t.lapse(clock.now_ns(), lease).is_some());
+        assert!(t.holder().is_none());
+    }
+
     #[test]
     fn a_claimant_numbers_each_session_from_one() {
         let mut c = Claimant::new([7; 16]);

@@ -8,7 +8,7 @@ use std::time::Duration;
 
 use crate::error::{Error, Result, zenoh};
 use driver::contract::{DRIVER_QOS, DriverCommand, kind, service, topic};
-use wire::{Bus, Tx, now_ns};
+use wire::{Bus, Monotonic, Tx};
 use zenoh::Wait;
 use zenoh::pubsub::Publisher;
 use zenoh::sample::Sample;
@@ -24,6 +24,8 @@ pub(crate) struct Gate<'a> {
     session: &'a zenoh::Session,
     shared: &'a Shared,
     tenure: Tenure,
+    /// The time commands, claims and leases are judged on.
+    time: Monotonic,
     /// The driver's command publisher on this host.
     tx: Tx<DriverCommand>,
     /// Who holds the driver, to the sessions refused.
@@ -53,6 +55,7 @@ impl<'a> Gate<'a> {
             session,
             shared,
             tenure: Tenure::default(),
+            time: Monotonic::host(),
             tx,
             refusals: publisher(session, &Topic::Refused.key(&opts.id))?,
             timing: match &opts.timing_out {
@@ -98,15 +101,15 @@ impl<'a> Gate<'a> {
             self.counts.malformed += 1;
             return;
         };
-        if let Some(h) = self.tenure.claim(&c, now_ns()) {
-            let held = h.describe(now_ns());
+        if let Some(h) = self.tenure.claim(&c, self.time.now_ns()) {
+            let held = h.describe(self.time.now_ns());
             self.say(format_args!("{held} let go of the driver"));
         }
     }
 
     /// Frees the driver when its holder's lease lapsed.
     fn lapse(&mut self) {
-        let now = now_ns();
+        let now = self.time.now_ns();
         let lease = self.opts.lease.ns(self.shared.period_ns.load(Relaxed));
         let silent = self.tenure.heard().map(|t| now.saturating_sub(t));
         if let Some(h) = self.tenure.lapse(now, lease) {
@@ -120,7 +123,7 @@ impl<'a> Gate<'a> {
 
     /// One command from the network: judged, then passed on or dropped.
     fn command(&mut self, s: &Sample) -> Result<()> {
-        let arrived = now_ns();
+        let arrived = self.time.now_ns();
         let parsed = from_bytes::<DriverCommand>(&s.payload().to_bytes()).and_then(|c| {
             let claim = s.attachment().map(|a| from_bytes::<Claim>(&a.to_bytes()));
             Ok((c, claim.ok_or(Error::Unclaimed)??))
@@ -181,7 +184,7 @@ impl<'a> Gate<'a> {
     /// Says who holds the driver: in this side's log the first time (with who was
     /// refused), to the refused session when `notify`.
     fn refuse(&mut self, claim: &Claim, s: &Sample, first: bool, notify: bool) {
-        let now = now_ns();
+        let now = self.time.now_ns();
         let Some(held) = self.tenure.holder().map(|h| h.describe(now)) else {
             return;
         };

@@ -24,7 +24,7 @@ use iceoryx2::prelude::*;
 
 use wire::{Bus, MAX_U, MAX_X, Qos};
 
-use crate::error::{Error, InfoError, SampleError};
+use crate::error::{Error, InfoError, LastSample, SampleError};
 
 // A task's states and actions fit the messages: the plant's bounds are the wire's (a
 // build fails where they part).
@@ -519,6 +519,17 @@ pub fn check_id(driver_id: &str) -> Result<(), Error> {
         return Err(Error::Id(driver_id.to_string()));
     }
     Ok(())
+}
+
+impl From<&DriverSample> for LastSample {
+    fn from(s: &DriverSample) -> Self {
+        Self {
+            seq: s.seq,
+            status: s.status,
+            reset_id: s.reset_id,
+            x: s.state().to_vec(),
+        }
+    }
 }
 
 #[cfg(test)]

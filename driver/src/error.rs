@@ -4,8 +4,6 @@
 
 use std::time::Duration;
 
-use crate::contract::DriverSample;
-
 /// An error of the driver kit, on either end of the contract.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
@@ -96,7 +94,7 @@ pub enum Error {
     /// A reset not done in time; `last` is the last sample.
     #[error(
         "driver {id:?} did not finish the reset within {:.0} s (last sample {}: status {:#x}, reset_id {}, x = {:?}){}",
-        .timeout.as_secs_f64(), .last.seq, .last.status, .last.reset_id, .last.state(),
+        .timeout.as_secs_f64(), .last.seq, .last.status, .last.reset_id, .last.x,
         .said.as_deref().map(|s| format!("; the driver's side says: {s}")).unwrap_or_default()
     )]
     ResetTimeout {
@@ -105,7 +103,7 @@ pub enum Error {
         /// How long the rig waited.
         timeout: Duration,
         /// The last sample.
-        last: Box<DriverSample>,
+        last: Box<LastSample>,
         /// What the driver's side last said of this rig's commands (across hosts: who
         /// holds the driver), if anything.
         said: Option<String>,
@@ -137,6 +135,19 @@ pub enum Error {
     NoCounts,
 }
 
+/// What an error says of a driver's last sample.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LastSample {
+    /// Its sequence number.
+    pub seq: u64,
+    /// Its status bits.
+    pub status: u64,
+    /// The reset it belongs to.
+    pub reset_id: u64,
+    /// Its state, `n_x` components.
+    pub x: Vec<f64>,
+}
+
 impl Error {
     /// Wraps a transport error of driver `id`'s process, naming the driver.
     pub fn transport(id: &str) -> impl Fn(wire::Error) -> Error + '_ {
@@ -158,7 +169,7 @@ pub enum Unfit {
     Task(#[from] TaskMismatch),
 }
 
-/// What is wrong with a driver's info ([`crate::contract::DriverInfo::validate`]).
+/// What is wrong with a driver's info (`DriverInfo::validate`).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum InfoError {
     /// Another protocol version.
@@ -233,7 +244,7 @@ pub enum InfoError {
     },
 }
 
-/// What is wrong with a driver's sample ([`DriverSample::validate`]).
+/// What is wrong with a driver's sample (`DriverSample::validate`).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SampleError {
     /// Dimensions other than the info's.

@@ -27,7 +27,7 @@ mod error;
 pub mod kit;
 pub mod link;
 
-pub use error::{Error, InfoError, SampleError, TaskMismatch, Unfit};
+pub use error::{Error, InfoError, LastSample, SampleError, TaskMismatch, Unfit};
 pub use kit::{
     Device, Lockstep, Outcome, REST_SAMPLES, Served, Serving, Simulated, safety, serve,
     serve_lockstep,

@@ -2,11 +2,12 @@
 //! transport's limits, and against external drivers in lockstep; and the ping-pong's
 //! processes (`rig pong`).
 
+use crate::exit::{Failed, Fails, Outcome};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args as Flags;
-use runtime::process::{CpuLayout, Wait, WaitKind};
+use runtime::process::{CpuLayout, Scheduling, Wait, WaitKind};
 
 #[derive(Flags)]
 pub struct Args {
@@ -50,15 +51,19 @@ pub struct Args {
 }
 
 /// Runs the command.
-pub fn main(args: &Args) -> ExitCode {
-    let waiting = args.wait.waiting(crate::run::LOCKSTEP_WAIT);
+pub fn main(args: &Args) -> Outcome {
+    let waiting = args.wait.waiting_in(true);
     let opts = bench::loop_bench::LoopOptions {
         out: args.out.clone(),
         trials: args.trials,
         repetitions: args.repetitions as usize,
         samples: args.samples as usize,
         waiting,
-        layout: args.cpus.unwrap_or_else(|| CpuLayout::lockstep(waiting)),
+        layout: Scheduling {
+            cpus: args.cpus,
+            ..Scheduling::default()
+        }
+        .lockstep_layout(waiting),
         external: args.external.then(|| bench::loop_bench::ExternalOptions {
             python: args.python.clone(),
             root: args.root.clone(),
@@ -69,22 +74,15 @@ pub fn main(args: &Args) -> ExitCode {
             eprintln!("rig bench-loop: {what} ...");
         }
     };
-    match bench::loop_bench::bench_loop(&opts, &progress) {
-        Ok(r) => {
-            print!("{}", r.summary());
-            println!("wrote {}/{{loop.csv, summary.txt}}", args.out.display());
-            if r.identical {
-                ExitCode::SUCCESS
-            } else {
-                eprintln!("error: rig run and rig learn --runs 1 wrote different returns");
-                ExitCode::FAILURE
-            }
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+    let r = bench::loop_bench::bench_loop(&opts, &progress).failure()?;
+    print!("{}", r.summary());
+    println!("wrote {}/{{loop.csv, summary.txt}}", args.out.display());
+    if !r.identical {
+        return Err(Failed::failure(
+            "rig run and rig learn --runs 1 wrote different returns",
+        ));
     }
+    Ok(ExitCode::SUCCESS)
 }
 
 /// One side of the ping-pong (`rig pong`, hidden).
@@ -109,18 +107,14 @@ pub struct PongArgs {
 }
 
 /// Runs one side of the ping-pong.
-pub fn pong(args: &PongArgs) -> ExitCode {
+pub fn pong(args: &PongArgs) -> Outcome {
     let ping = args.ping.zip(args.rtt_out.as_deref());
-    match bench::loop_bench::pong(
+    bench::loop_bench::pong(
         &args.run_id,
         args.pin_cpus,
         args.wait.waiting(WaitKind::Block),
         ping,
-    ) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+    )
+    .failure()?;
+    Ok(ExitCode::SUCCESS)
 }

@@ -1,6 +1,7 @@
 //! `rig bridge driver|rig`: one driver's services across two hosts over Zenoh
 //! (docs/across-hosts.md).
 
+use crate::exit::{Fails, Outcome};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -121,7 +122,7 @@ impl Common {
 }
 
 /// Runs the command.
-pub fn main(args: &Args) -> ExitCode {
+pub fn main(args: &Args) -> Outcome {
     let result: anyhow::Result<()> = match &args.side {
         Side::Driver {
             common,
@@ -189,11 +190,6 @@ pub fn main(args: &Args) -> ExitCode {
             }
         }),
     };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+    result.failure()?;
+    Ok(ExitCode::SUCCESS)
 }

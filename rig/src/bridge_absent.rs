@@ -1,7 +1,7 @@
 //! `rig bridge` in a rig built without the Zenoh bridge (the `bridge` feature): says how
 //! to build one that has it.
 
-use std::process::ExitCode;
+use crate::exit::{Failed, Outcome};
 
 use clap::Args as Flags;
 
@@ -13,11 +13,10 @@ pub struct Args {
 }
 
 /// Refuses with the command that builds the bridge; exit code 2, as for a bad argument.
-pub fn main(_: &Args) -> ExitCode {
-    eprintln!(
+pub fn main(_: &Args) -> Outcome {
+    Err(Failed::usage(
         "rig bridge: this rig was built without the Zenoh bridge; build it with the \
          `bridge` feature: cargo run --release -p rig --features bridge -- bridge … \
-         (docs/across-hosts.md)"
-    );
-    ExitCode::from(2)
+         (docs/across-hosts.md)",
+    ))
 }

@@ -1,5 +1,6 @@
 //! `rig check-driver`: a running driver checked against the driver contract.
 
+use crate::exit::{Fails, Outcome};
 use std::process::ExitCode;
 
 use std::sync::Arc;
@@ -33,7 +34,7 @@ pub struct Args {
 }
 
 /// Runs the command.
-pub fn main(args: &Args) -> ExitCode {
+pub fn main(args: &Args) -> Outcome {
     let fraction = |flag: &str, v: f64| {
         if v.is_finite() && (0.0..=1.0).contains(&v) {
             Ok(v)
@@ -59,35 +60,22 @@ pub fn main(args: &Args) -> ExitCode {
             max_missed: fraction("--max-missed", args.max_missed)?,
             step: fraction("--step", args.step)?,
         })
-    })();
-    let opts = match opts {
-        Ok(o) => o,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(2);
-        }
-    };
+    })()
+    .usage()?;
     println!(
         "rig check-driver: driver {:?} (rig/driver/{}/...) against the {} task",
         opts.driver, opts.driver, opts.task.name
     );
-    match check(&opts, &mut |o| println!("{o}")) {
-        Ok(outcomes) => {
-            let failed = outcomes.iter().filter(|o| !o.pass).count();
-            if failed == 0 {
-                println!("check-driver: PASS ({} checks)", outcomes.len());
-                ExitCode::SUCCESS
-            } else {
-                println!(
-                    "check-driver: FAIL ({failed} of {} checks failed)",
-                    outcomes.len()
-                );
-                ExitCode::FAILURE
-            }
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+    let outcomes = check(&opts, &mut |o| println!("{o}")).failure()?;
+    let failed = outcomes.iter().filter(|o| !o.pass).count();
+    if failed == 0 {
+        println!("check-driver: PASS ({} checks)", outcomes.len());
+        Ok(ExitCode::SUCCESS)
+    } else {
+        println!(
+            "check-driver: FAIL ({failed} of {} checks failed)",
+            outcomes.len()
+        );
+        Ok(ExitCode::FAILURE)
     }
 }

@@ -2,18 +2,12 @@
 
 use std::process::ExitCode;
 
+use crate::exit::{Fails, Outcome};
 use crate::selection::{Selection, resolve_selection};
 
 /// Runs the command.
-pub fn main(sel: &Selection) -> ExitCode {
-    match resolve_selection(sel) {
-        Ok(cfg) => {
-            print!("{}", cfg.to_toml());
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(2)
-        }
-    }
+pub fn main(sel: &Selection) -> Outcome {
+    let cfg = resolve_selection(sel).usage()?;
+    print!("{}", cfg.to_toml());
+    Ok(ExitCode::SUCCESS)
 }

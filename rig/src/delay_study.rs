@@ -1,6 +1,7 @@
 //! `rig delay-study`: how a sample-to-actuation delay hurts learning, and how much
 //! predictive timing recovers.
 
+use crate::exit::{Fails, Outcome};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -34,7 +35,7 @@ pub struct Args {
 }
 
 /// Runs the command.
-pub fn main(args: &Args) -> ExitCode {
+pub fn main(args: &Args) -> Outcome {
     let opts = bench::delay_study::DelayStudyOptions {
         runs: args.runs,
         trials: args.trials,
@@ -44,19 +45,12 @@ pub fn main(args: &Args) -> ExitCode {
         threads: args.threads,
         verbose: !args.quiet,
     };
-    match bench::delay_study::delay_study(&opts) {
-        Ok(_) => {
-            if !args.quiet {
-                println!(
-                    "wrote {}/{{cells.csv, summary.txt, final_return.png, final_return.svg, curves-*.png, curves-*.svg, */}}",
-                    args.out.display()
-                );
-            }
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+    bench::delay_study::delay_study(&opts).failure()?;
+    if !args.quiet {
+        println!(
+            "wrote {}/{{cells.csv, summary.txt, final_return.png, final_return.svg, curves-*.png, curves-*.svg, */}}",
+            args.out.display()
+        );
     }
+    Ok(ExitCode::SUCCESS)
 }

@@ -1,5 +1,6 @@
 //! `rig latency`: the latency budget of the three-process loop in real time.
 
+use crate::exit::{Fails, Outcome};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -61,7 +62,7 @@ pub struct Args {
 }
 
 /// Runs the command.
-pub fn main(args: &Args) -> ExitCode {
+pub fn main(args: &Args) -> Outcome {
     // `--driver` has no default here: without it, the simulated plant.
     let clock = match args.driver.driver.as_ref() {
         Some(_) => args
@@ -73,24 +74,12 @@ pub fn main(args: &Args) -> ExitCode {
             .map(|period| Clock::Realtime { period })
             .map_err(anyhow::Error::from),
     };
-    let clock = match clock {
-        Ok(c) => c,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
+    let clock = clock.failure()?;
     let mode = args.observer_mode.unwrap_or(match clock {
         Clock::External(_) => ObserverMode::Direct,
         _ => ObserverMode::Predictive,
     });
-    let nodes = match crate::run::node_command() {
-        Ok(n) => n,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            return ExitCode::FAILURE;
-        }
-    };
+    let nodes = crate::run::node_command().failure()?;
     let opts = bench::latency::LatencyOptions {
         cycles: args.cycles,
         clock,
@@ -121,11 +110,6 @@ pub fn main(args: &Args) -> ExitCode {
         bench::latency::latency(&opts)
             .map(|_| println!("wrote {}", bench::latency::describe(&args.out)))
     };
-    match done {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
-    }
+    done.failure()?;
+    Ok(ExitCode::SUCCESS)
 }

@@ -1,5 +1,6 @@
 //! `rig learn`: independent learning experiments in one process, in parallel.
 
+use crate::exit::{Fails, Outcome};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -26,18 +27,14 @@ pub struct Args {
 }
 
 /// Runs the command.
-pub fn main(args: &Args) -> ExitCode {
+pub fn main(args: &Args) -> Outcome {
     let simulated = |cfg: ExperimentConfig| match cfg.check_simulated() {
         Ok(()) => Ok(cfg),
         Err(e) => Err(anyhow::anyhow!(e)),
     };
-    let cfg = match resolve_selection(&args.selection).and_then(simulated) {
-        Ok(c) => c,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(2);
-        }
-    };
+    let cfg = resolve_selection(&args.selection)
+        .and_then(simulated)
+        .usage()?;
     let opts = LearnOptions {
         out: args.out.clone(),
         threads: args.threads,
@@ -47,18 +44,11 @@ pub fn main(args: &Args) -> ExitCode {
             runtime::learn::Progress::Bar
         },
     };
-    match learn(&cfg, &opts) {
-        Ok(s) => {
-            if !args.quiet {
-                print_summary(&cfg, &s, &args.out);
-            }
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+    let s = learn(&cfg, &opts).failure()?;
+    if !args.quiet {
+        print_summary(&cfg, &s, &args.out);
     }
+    Ok(ExitCode::SUCCESS)
 }
 
 fn print_summary(cfg: &ExperimentConfig, s: &runtime::learn::LearnSummary, out: &std::path::Path) {

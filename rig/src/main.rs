@@ -14,6 +14,7 @@ mod bridge;
 mod check_driver;
 mod config;
 mod delay_study;
+mod exit;
 mod external;
 mod latency;
 mod learn;
@@ -122,7 +123,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    match Cli::parse().command {
+    exit::report(match Cli::parse().command {
         Command::Learn(args) => learn::main(&args),
         Command::Run(args) => run::main(&args),
         Command::Replay(args) => replay::main(&args),
@@ -140,5 +141,5 @@ fn main() -> ExitCode {
         Command::Plant(node) => node.run(runtime::process::plant::run),
         Command::Observer(node) => node.run(runtime::process::observer::run),
         Command::Agent(node) => node.run(runtime::process::agent::run),
-    }
+    })
 }

@@ -4,6 +4,8 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use crate::exit::{Fails, Outcome};
+
 use clap::Args;
 use runtime::process::Settings;
 
@@ -18,12 +20,12 @@ pub struct NodeFile {
 }
 
 impl NodeFile {
-    /// Reads the settings and runs `node` with them; an error on one line.
-    pub fn run<S: Settings>(&self, node: fn(&S) -> runtime::process::Result<()>) -> ExitCode {
-        runtime::process::exit_code(
-            S::read(&self.node)
-                .map_err(Into::into)
-                .and_then(|s| node(&s)),
-        )
+    /// Reads the settings and runs `node` with them (an error: exit code 1).
+    pub fn run<S: Settings>(&self, node: fn(&S) -> runtime::process::Result<()>) -> Outcome {
+        S::read(&self.node)
+            .map_err(Into::into)
+            .and_then(|s| node(&s))
+            .failure()?;
+        Ok(ExitCode::SUCCESS)
     }
 }

@@ -1,5 +1,7 @@
 //! `rig optimal`: the optimal return of the pendulum swing-up, by dynamic programming.
 
+use crate::exit::{Fails, Outcome};
+use anyhow::Context as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -21,31 +23,21 @@ pub struct Args {
 }
 
 /// Runs the command.
-pub fn main(args: &Args) -> ExitCode {
+pub fn main(args: &Args) -> Outcome {
     use bench::optimal::{OptimumOptions, pendulum_optimum, write_trajectory};
     let opts = OptimumOptions {
         grid: args.grid,
         actions: args.actions,
     };
-    if let Err(e) = opts.validate() {
-        eprintln!("error: {e}");
-        return ExitCode::from(2);
-    }
-    let o = match pendulum_optimum(&opts) {
-        Ok(o) => o,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(2);
-        }
-    };
+    opts.validate().usage()?;
+    let o = pendulum_optimum(&opts).usage()?;
     let csv = args.out.join("optimal.csv");
     let written = std::fs::create_dir_all(&args.out)
         .map_err(anyhow::Error::from)
         .and_then(|()| write_trajectory(&csv, &o.trajectory).map_err(anyhow::Error::from));
-    if let Err(e) = written {
-        eprintln!("error: {}: {e:#}", csv.display());
-        return ExitCode::FAILURE;
-    }
+    written
+        .with_context(|| csv.display().to_string())
+        .failure()?;
     println!(
         "pendulum swing-up from [π, 0], 3 s (100 samples), Eq. 3.16: grid {0}×{0} (velocity ±{1:.2} rad/s), {2} action levels",
         opts.grid, o.velocity_limit, opts.actions
@@ -68,5 +60,5 @@ pub fn main(args: &Args) -> ExitCode {
         o.backups_time.as_secs_f64()
     );
     println!("  wrote {}", csv.display());
-    ExitCode::SUCCESS
+    Ok(ExitCode::SUCCESS)
 }

@@ -1,6 +1,7 @@
 //! `rig replay RUN_DIR`: the observer and the agent of a recorded run run again over its
 //! measurements; their estimates and actions are checked against the recording.
 
+use crate::exit::{Fails, Outcome};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -30,15 +31,11 @@ pub struct Args {
 
 /// Runs the command: exit 0 when every estimate and action replays as recorded, 1 at a
 /// difference, 2 for a recording that cannot be replayed.
-pub fn main(args: &Args) -> ExitCode {
-    match run(args) {
-        Ok(true) => ExitCode::SUCCESS,
-        Ok(false) => ExitCode::FAILURE,
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(2)
-        }
-    }
+pub fn main(args: &Args) -> Outcome {
+    Ok(match run(args).usage()? {
+        true => ExitCode::SUCCESS,
+        false => ExitCode::FAILURE,
+    })
 }
 
 /// Whether the replay was identical.

@@ -1,5 +1,6 @@
 //! `rig reproduce`: the thesis's learning-curve figures, regenerated.
 
+use crate::exit::{Failed, Fails, Outcome};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -26,10 +27,9 @@ pub struct Args {
 }
 
 /// Runs the command.
-pub fn main(args: &Args) -> ExitCode {
+pub fn main(args: &Args) -> Outcome {
     if args.runs == Some(0) || args.trials == Some(0) {
-        eprintln!("error: `--runs` and `--trials` must be at least 1");
-        return ExitCode::from(2);
+        return Err(Failed::usage("`--runs` and `--trials` must be at least 1"));
     }
     let opts = bench::reproduce::ReproduceOptions {
         out: args.out.clone(),
@@ -38,23 +38,16 @@ pub fn main(args: &Args) -> ExitCode {
         trials: args.trials,
         progress: !args.quiet,
     };
-    match bench::reproduce::reproduce(&opts) {
-        Ok(figs) => {
-            for f in &figs {
-                let confirmed = f.claims.iter().filter(|c| c.1).count();
-                println!(
-                    "Figure {}: {:.0} s, {confirmed} of {} claims confirmed",
-                    f.id,
-                    f.wall.as_secs_f64(),
-                    f.claims.len()
-                );
-            }
-            println!("wrote {}", args.out.join("REPORT.md").display());
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+    let figs = bench::reproduce::reproduce(&opts).failure()?;
+    for f in &figs {
+        let confirmed = f.claims.iter().filter(|c| c.1).count();
+        println!(
+            "Figure {}: {:.0} s, {confirmed} of {} claims confirmed",
+            f.id,
+            f.wall.as_secs_f64(),
+            f.claims.len()
+        );
     }
+    println!("wrote {}", args.out.join("REPORT.md").display());
+    Ok(ExitCode::SUCCESS)
 }

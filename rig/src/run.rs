@@ -1,6 +1,7 @@
 //! `rig run`: one experiment as three processes — plant, observer, agent — over
 //! iceoryx2, against the simulated plant or an external driver.
 
+use crate::exit::{Fails, Outcome};
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -9,7 +10,6 @@ use anyhow::{Context, Result, anyhow};
 use clap::Args as Flags;
 use runtime::clock::{Clock, Timing};
 use runtime::config::ExperimentConfig;
-use runtime::process::{CpuLayout, WaitKind};
 use runtime::run::{NodeCommand, RunOptions, RunSummary, run_with};
 
 use crate::external::DriverArgs;
@@ -90,22 +90,13 @@ pub struct Args {
 const LIVE_ADDR: &str = "127.0.0.1:8765";
 
 /// Runs the command.
-pub fn main(args: &Args) -> ExitCode {
-    let (cfg, opts) = match options(args) {
-        Ok(c) => c,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let live = match args.live.map(|addr| LiveView::start(addr, &cfg.task())) {
-        None => None,
-        Some(Ok(live)) => Some(live),
-        Some(Err(e)) => {
-            eprintln!("error: {e:#}");
-            return ExitCode::from(2);
-        }
-    };
+pub fn main(args: &Args) -> Outcome {
+    let (cfg, opts) = options(args).usage()?;
+    let live = args
+        .live
+        .map(|addr| LiveView::start(addr, &cfg.task()))
+        .transpose()
+        .usage()?;
     let (live, tap) = live.unzip();
     if let Some(l) = &live
         && !args.quiet
@@ -115,13 +106,7 @@ pub fn main(args: &Args) -> ExitCode {
             l.addr()
         );
     }
-    let wakeup = match args.wakeup.hold() {
-        Ok(w) => w,
-        Err(e) => {
-            eprintln!("error: {}", runtime::error::chain(&e));
-            return ExitCode::FAILURE;
-        }
-    };
+    let wakeup = args.wakeup.hold().failure()?;
     let done = run_with(&cfg, &opts, tap);
     drop(wakeup);
     if let Some(l) = live {
@@ -130,25 +115,12 @@ pub fn main(args: &Args) -> ExitCode {
             eprintln!("{served}");
         }
     }
-    match done {
-        Ok(s) => {
-            if !args.quiet {
-                print_summary(&cfg, &opts, &s);
-            }
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+    let s = done.failure()?;
+    if !args.quiet {
+        print_summary(&cfg, &opts, &s);
     }
+    Ok(ExitCode::SUCCESS)
 }
-
-/// How the processes of a lockstep run wait for their next message by default: polling
-/// without end, handing the CPU on between polls (measured with `rig bench-loop`,
-/// `docs/results/speed.md`: about 6 × faster than blocking on a 2-core machine, at the
-/// price of busy CPUs while the run lasts).
-pub const LOCKSTEP_WAIT: WaitKind = WaitKind::Yield;
 
 /// What the plant process is (`--plant`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -203,17 +175,14 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         driver,
     )?;
     let (lockstep, external) = (clock.is_lockstep(), clock.is_external());
-    let waiting = args.wait.waiting(if lockstep {
-        LOCKSTEP_WAIT
-    } else {
-        WaitKind::Block
-    });
-    clock.check(&cfg, waiting)?;
+    let waiting = args.wait.waiting_in(lockstep);
+    let checked = clock.check(&cfg, waiting)?;
     let mut scheduling = args.scheduling;
-    match scheduling.layout() {
-        Some(layout) => layout.check()?,
-        None if lockstep => scheduling.cpus = Some(CpuLayout::lockstep(waiting)),
-        None => {}
+    if let Some(layout) = scheduling.layout() {
+        layout.check()?;
+    }
+    if lockstep {
+        scheduling = scheduling.in_lockstep(waiting);
     }
     let opts = RunOptions {
         out: args.resume.clone().unwrap_or_else(|| args.out.clone()),
@@ -221,13 +190,14 @@ fn options(args: &Args) -> Result<(ExperimentConfig, RunOptions)> {
         run_id: args.run_id.clone(),
         progress: !args.quiet,
         clock,
+        checked,
         nodes: node_command()?,
         cycles_out: None,
         scheduling,
         spin: args.spin,
         waiting,
         // Known once the driver's info says which clock it keeps.
-        lockstep_waiting: external.then(|| args.wait.waiting(LOCKSTEP_WAIT)),
+        lockstep_waiting: external.then(|| args.wait.waiting_in(true)),
         learn_across_gaps: args.gaps == GapPolicy::Learn,
         scene: Some(crate::picture::scene),
     };

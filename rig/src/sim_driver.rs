@@ -1,5 +1,6 @@
 //! `rig sim-driver`: a simulated system served as a driver, through the driver kit.
 
+use crate::exit::{Fails, Outcome};
 use observer::config::SensorKind;
 use std::process::ExitCode;
 
@@ -56,7 +57,7 @@ pub struct Args {
 }
 
 /// Runs the command.
-pub fn main(args: &Args) -> ExitCode {
+pub fn main(args: &Args) -> Outcome {
     use driver::{Serving, Simulated, serve, serve_lockstep};
     let lockstep = args.clock == Timing::Lockstep;
     let device = driver::contract::check_id(&args.driver_id)
@@ -73,13 +74,7 @@ pub fn main(args: &Args) -> ExitCode {
             SensorKind::Angle => Ok(d.measuring_positions_only(args.counts_per_rev)?),
             SensorKind::Full => Ok(d),
         });
-    let mut device = match device {
-        Ok(d) => d,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(2);
-        }
-    };
+    let mut device = device.usage()?;
     let served = runtime::process::set_rt_priority(args.rt_priority)
         .map_err(anyhow::Error::from)
         .and_then(|()| {
@@ -115,17 +110,10 @@ pub fn main(args: &Args) -> ExitCode {
                 Ok(serve(&mut device, &args.driver_id, &how)?)
             }
         });
-    match served {
-        Ok(s) => {
-            eprintln!(
-                "driver: stopped after {} samples ({} periods missed)",
-                s.samples, s.missed
-            );
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::FAILURE
-        }
-    }
+    let s = served.failure()?;
+    eprintln!(
+        "driver: stopped after {} samples ({} periods missed)",
+        s.samples, s.missed
+    );
+    Ok(ExitCode::SUCCESS)
 }

@@ -5,10 +5,11 @@
 //! one entry point. Every argument goes to the study's own command line (`rig tune
 //! --help` is its help).
 
+use crate::exit::{Failed, Outcome};
 use std::ffi::OsString;
 use std::os::unix::process::CommandExt;
 use std::path::PathBuf;
-use std::process::{Command, ExitCode};
+use std::process::Command;
 
 /// The study's arguments, passed on as they are.
 #[derive(clap::Args)]
@@ -27,14 +28,13 @@ fn package_dir() -> PathBuf {
 }
 
 /// Replaces this process with the study (so that Ctrl-C and the exit status are its own).
-pub fn main(args: &Args) -> ExitCode {
+pub fn main(args: &Args) -> Outcome {
     let dir = package_dir();
     if !dir.join("rig_tune").is_dir() {
-        eprintln!(
-            "error: rig tune needs the study's Python package, {}/rig_tune (the source tree's tune/ folder; set RIG_TUNE_DIR to where it is)",
+        return Err(Failed::usage(format!(
+            "rig tune needs the study's Python package, {}/rig_tune (the source tree's tune/ folder; set RIG_TUNE_DIR to where it is)",
             dir.display()
-        );
-        return ExitCode::from(2);
+        )));
     }
     let python = std::env::var_os("RIG_PYTHON").unwrap_or_else(|| "python3".into());
     let mut path = OsString::from(&dir);
@@ -49,9 +49,8 @@ pub fn main(args: &Args) -> ExitCode {
         cmd.env("RIG_BIN", rig);
     }
     let e = cmd.exec();
-    eprintln!(
-        "error: cannot start {} for rig tune: {e} (set RIG_PYTHON to a Python with tune/requirements.txt installed)",
+    Err(Failed::usage(format!(
+        "cannot start {} for rig tune: {e} (set RIG_PYTHON to a Python with tune/requirements.txt installed)",
         PathBuf::from(python).display()
-    );
-    ExitCode::from(2)
+    )))
 }

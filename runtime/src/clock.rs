@@ -1,8 +1,8 @@
 //! The run's clock: what moves a run of three processes from one sample to the next —
 //! the plant in lockstep with the agent, the plant on the monotonic clock, or an
 //! external driver. Its rules (which configurations it refuses) are here, and nowhere
-//! else: `rig run` checks them before it starts anything, the plant node again when it
-//! is started by hand.
+//! else. They are checked once where a run is set up — a run's options carry the proof,
+//! [`Checked`] — and by a plant node, which reads its clock from its settings file.
 
 use std::time::Duration;
 
@@ -140,6 +140,11 @@ pub enum Clock {
     External(ExternalDriver),
 }
 
+/// Proof that a run's clock was checked against its experiment ([`Clock::check`]):
+/// what [`crate::run::RunOptions`] asks for, so that the run does not check it again.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Checked(pub(crate) ());
+
 /// The fastest a simulated plant may run in real time, × its sampling time.
 pub const MAX_SPEED: f64 = 1000.0;
 
@@ -219,7 +224,7 @@ impl Clock {
     /// timing and the built-in simulations' checks need the simulated plant; polling
     /// without end needs lockstep (with an external driver, its own: checked once its
     /// info is read, [`Clock::check_driver_waiting`]).
-    pub fn check(&self, cfg: &ExperimentConfig, waiting: Waiting) -> Result<(), ClockError> {
+    pub fn check(&self, cfg: &ExperimentConfig, waiting: Waiting) -> Result<Checked, ClockError> {
         if let Self::Realtime { period } = self
             && period.is_zero()
         {
@@ -241,7 +246,8 @@ impl Clock {
             }
             _ => cfg.check_simulated()?,
         }
-        polls_only_in_lockstep(matches!(self, Self::Lockstep | Self::External(_)), waiting)
+        polls_only_in_lockstep(matches!(self, Self::Lockstep | Self::External(_)), waiting)?;
+        Ok(Checked(()))
     }
 
     /// Checks the processes' `waiting` against the clock an external driver keeps

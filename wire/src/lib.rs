@@ -16,19 +16,19 @@
 //! `rig/<run id>/`, so runs on one host never see each other.
 //!
 //! Timestamps are `CLOCK_MONOTONIC` nanoseconds ([`now_ns`]), shared by all processes on
-//! one host.
+//! one host; a component that keeps real time reads them from a [`Monotonic`], which a
+//! test replaces with a mock.
 
 mod bus;
-mod clock;
 mod error;
 mod messages;
 mod nodes;
 mod ports;
 mod service;
+mod time;
 mod waiting;
 
 pub use bus::Bus;
-pub use clock::now_ns;
 pub use error::Error;
 pub use messages::{Action, Estimate, Header, MAX_U, MAX_X, Measurement, Truth, flags, topic};
 pub use nodes::{DRIVER_RUN, Peer, node_name, peers};
@@ -36,4 +36,5 @@ pub use ports::{RecordedSignal, Rx, Tx};
 pub use service::{
     BUFFER, PATIENCE, Qos, RUN_QOS, describe_service, payload_type_name, type_name_of,
 };
+pub use time::{Inbox, MockTime, Monotonic, Scripted, now_ns};
 pub use waiting::{FOREVER, Waiting};

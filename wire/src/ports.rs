@@ -118,6 +118,16 @@ impl RecordedSignal {
 /// peer sent last may still be passed on by a process in between.
 const PASSING_ON: Duration = Duration::from_millis(250);
 
+impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> crate::Inbox<T> for Rx<T> {
+    fn try_recv(&self) -> Result<Option<T>, Error> {
+        Rx::try_recv(self)
+    }
+
+    fn wait_until(&self, t_ns: u64) -> Result<(), Error> {
+        Rx::wait_until(self, t_ns)
+    }
+}
+
 impl<T: std::fmt::Debug + ZeroCopySend + Copy + 'static> Rx<T> {
     /// Senders currently connected (a process that died may count until iceoryx2 has
     /// cleaned up after it).

@@ -388,6 +388,10 @@ fn run_realtime(
             run_id: None,
             progress: false,
             clock: opts.clock.clone(),
+            checked: opts
+                .clock
+                .check(&cfg, opts.waiting)
+                .map_err(runtime::run::RunError::from)?,
             nodes: opts.nodes.clone(),
             resume: false,
             cycles_out: opts.clock.is_realtime().then(|| cycles_path.to_owned()),

@@ -25,7 +25,7 @@ pub enum ReproduceError {
     #[error(transparent)]
     Learn(#[from] LearnError),
     /// `--runs` or `--trials` out of the range of `[run]`.
-    #[error("`--runs`/`--trials`: {0}")]
+    #[error("`--runs`/`--trials`")]
     RunCount(#[from] ConfigError),
     /// An output could not be written.
     #[error(transparent)]

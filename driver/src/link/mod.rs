@@ -316,7 +316,7 @@ impl DriverLink {
                 return Err(Error::ResetTimeout {
                     id: self.id.clone(),
                     timeout,
-                    last: Box::new(s),
+                    last: Box::new((&s).into()),
                     said: self.latest_notice()?,
                 });
             }

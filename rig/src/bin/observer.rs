@@ -2,6 +2,9 @@
 
 use clap::Parser;
 
+#[path = "../exit.rs"]
+#[allow(dead_code)] // a node fails in one way only
+mod exit;
 #[path = "../node.rs"]
 mod node;
 
@@ -15,5 +18,5 @@ struct Cli {
 }
 
 fn main() -> std::process::ExitCode {
-    Cli::parse().node.run(runtime::process::observer::run)
+    exit::report(Cli::parse().node.run(runtime::process::observer::run))
 }

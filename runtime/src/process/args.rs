@@ -50,6 +50,22 @@ impl Scheduling {
         }
     }
 
+    /// The layout of a lockstep run whose processes wait as `waiting` says: the one
+    /// asked for, or else [`CpuLayout::lockstep`] — the one place this is decided.
+    pub fn lockstep_layout(&self, waiting: Waiting) -> CpuLayout {
+        self.layout()
+            .unwrap_or_else(|| CpuLayout::lockstep(waiting))
+    }
+
+    /// This scheduling for a lockstep run whose processes wait as `waiting` says: the
+    /// layout [`Scheduling::lockstep_layout`].
+    pub fn in_lockstep(mut self, waiting: Waiting) -> Self {
+        if !self.pin_cpus {
+            self.cpus = Some(self.lockstep_layout(waiting));
+        }
+        self
+    }
+
     /// Places the calling process's `part` as [`Scheduling::layout`] says.
     pub fn place(&self, part: Part) -> Result<(), SystemError> {
         self.layout().unwrap_or(CpuLayout::Shared).place(part)
@@ -96,6 +112,12 @@ plant::choice! {
     }
 }
 
+/// How the processes of a lockstep run wait for their next message unless told
+/// (`--wait`): polling without end, handing the CPU on between polls (measured with
+/// `rig bench-loop`, `docs/results/speed.md`: about 6 × faster than blocking on a 2-core
+/// machine, at the price of busy CPUs while the run lasts). In real time they block.
+pub const LOCKSTEP_WAIT: WaitKind = WaitKind::Yield;
+
 /// How a process waits for its next message: a flag of `rig run` and a setting of
 /// each node.
 #[cfg_attr(feature = "cli", derive(clap::Args))]
@@ -125,6 +147,16 @@ impl Wait {
             WaitKind::Spin => Waiting::Spin(bound),
             WaitKind::Yield => Waiting::Yield(bound),
         }
+    }
+
+    /// The waiting asked for, or that of a run in `lockstep` ([`LOCKSTEP_WAIT`]) or in
+    /// real time (blocking) if none was.
+    pub fn waiting_in(&self, lockstep: bool) -> Waiting {
+        self.waiting(if lockstep {
+            LOCKSTEP_WAIT
+        } else {
+            WaitKind::Block
+        })
     }
 
     /// The flags that give a process `waiting` (`rig pong`).

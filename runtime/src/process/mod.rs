@@ -35,7 +35,7 @@ pub use error::{NodeError, Result, SystemError};
 pub use cpus::{CpuLayout, CpuSet, Part};
 pub use wakeup::{Wakeup, WakeupLimit};
 
-pub use args::{SPIN_US, Scheduling, Spin, Wait, WaitKind};
+pub use args::{LOCKSTEP_WAIT, SPIN_US, Scheduling, Spin, Wait, WaitKind};
 pub use node::{AgentSettings, NodeSettings, ObserverSettings, PlantSettings, Settings};
 
 /// How long a process waits for a message before deciding a peer has died.
@@ -78,20 +78,6 @@ pub fn pack<const N: usize>(v: &[f64]) -> [f64; N] {
     let mut a = [0.0; N];
     a[..v.len()].copy_from_slice(v);
     a
-}
-
-/// A node process's exit: success, or its error on one line of standard error and
-/// failure. Standard error is `rig run`'s pipe or a terminal; should it fail (the
-/// reader gone), the error is lost rather than turned into a panic.
-pub fn exit_code(done: Result<()>) -> std::process::ExitCode {
-    use std::io::Write;
-    match done {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            let _ = writeln!(std::io::stderr(), "error: {}", crate::error::chain(&e));
-            std::process::ExitCode::FAILURE
-        }
-    }
 }
 
 /// Marks the calling thread as batch work (SCHED_BATCH: a fair share of the CPU, but

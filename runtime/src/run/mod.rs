@@ -29,13 +29,13 @@ use driver::contract::DriverInfo;
 use driver::link::DriverWatch;
 use wire::{Bus, Waiting};
 
-use crate::clock::{Clock, ClockError, ExternalDriver};
+use crate::clock::{Checked, Clock, ClockError, ExternalDriver};
 use crate::config::ExperimentConfig;
 use crate::error::AtFile;
 use crate::experiment::TrialRecord;
 use crate::lock::FolderLock;
 use crate::output::{progress_bar, write_atomic};
-use crate::process::{CpuLayout, Scheduling, Spin};
+use crate::process::{Scheduling, Spin};
 use crate::record::Tap;
 use crate::record::channels::RETURNS;
 use crate::record::scene::SceneMaker;
@@ -70,6 +70,8 @@ pub struct RunOptions {
     pub progress: bool,
     /// What moves the run from one sample to the next.
     pub clock: Clock,
+    /// The clock checked against the experiment and `waiting`: [`Clock::check`].
+    pub checked: Checked,
     /// How each of the three processes is started: the application's program.
     pub nodes: NodeCommand,
     /// Continue the run in `out` from its last complete trial ([`crate::resume`]).
@@ -128,7 +130,6 @@ pub fn run_with(
     opts: &RunOptions,
     tap: Option<Box<dyn Tap>>,
 ) -> Result<RunSummary> {
-    opts.clock.check(cfg, opts.waiting)?;
     let cfg = cfg.one_run();
     let run_id = free_run_id(opts)?;
     // A folder this run creates is removed again if the run is refused before it
@@ -286,9 +287,7 @@ fn driver_options(opts: &RunOptions, info: &DriverInfo) -> Result<RunOptions, Cl
         && let Some(w) = opts.lockstep_waiting
     {
         with.waiting = w;
-        if with.scheduling.layout().is_none() {
-            with.scheduling.cpus = Some(CpuLayout::lockstep(w));
-        }
+        with.scheduling = with.scheduling.in_lockstep(w);
     }
     Clock::check_driver_waiting(info, with.waiting)?;
     Ok(with)
@@ -327,6 +326,7 @@ fn wait_for_driver(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::process::CpuLayout;
     use driver::contract::clock;
     use wire::FOREVER;
 
@@ -340,6 +340,7 @@ mod tests {
                 timeout: Duration::from_secs(1),
                 reset_timeout: Duration::from_secs(1),
             }),
+            checked: Checked(()),
             nodes: NodeCommand {
                 program: "node".into(),
                 plant: vec![],

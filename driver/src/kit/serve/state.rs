@@ -186,7 +186,7 @@ impl Driver {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use plant::SystemName;
 
@@ -215,7 +215,8 @@ mod tests {
         }
     }
 
-    fn action(seq: u64, u: f64) -> DriverCommand {
+    /// An action command `seq` of one component `u`.
+    pub(in crate::kit::serve) fn action(seq: u64, u: f64) -> DriverCommand {
         let mut c = DriverCommand {
             seq,
             kind: kind::ACTION,

@@ -2,7 +2,7 @@
 //! plant waits for them without letting the transport delay the next sampling instant.
 
 use crate::process::Result;
-use wire::{Action, MAX_U, now_ns};
+use wire::{Action, Inbox, MAX_U, Monotonic};
 
 /// The last stretch before a sampling instant in which the realtime plant only reads the
 /// clock: no transport call, whose duration varies, runs into the instant. An action
@@ -26,17 +26,21 @@ pub(super) struct Arrivals {
     /// The newest sample of the trial answered so far (before the trial: the one
     /// before its first).
     pub(super) newest: u64,
+    /// The time the arrivals are read on.
+    time: Monotonic,
 }
 
 impl Arrivals {
-    /// The arrivals of a trial whose first sample has sequence number `first_seq`.
-    pub(super) fn new(first_seq: u64) -> Self {
+    /// The arrivals of a trial whose first sample has sequence number `first_seq`,
+    /// timed on `time`.
+    pub(super) fn new(first_seq: u64, time: Monotonic) -> Self {
         Self {
             list: Vec::with_capacity(8),
             answered: None,
             first_seq,
             late: None,
             newest: first_seq.saturating_sub(1),
+            time,
         }
     }
 
@@ -68,7 +72,7 @@ impl Arrivals {
     /// operating system wakes it nor on the transport.
     pub(super) fn collect(
         &mut self,
-        actions: &wire::Rx<Action>,
+        actions: &impl Inbox<Action>,
         deadline: u64,
         waiting_for: u64,
         spin_ns: u64,
@@ -78,7 +82,7 @@ impl Arrivals {
             self.push(&a, t_a.min(deadline), waiting_for);
         }
         loop {
-            let now = now_ns();
+            let now = self.time.now_ns();
             if now + APPROACH_NS >= deadline {
                 break;
             }
@@ -91,7 +95,7 @@ impl Arrivals {
                 }
                 continue;
             };
-            let t_a = now_ns();
+            let t_a = self.time.now_ns();
             if t_a >= deadline {
                 // Received across the instant (the call was held up): the next
                 // interval's.
@@ -100,7 +104,7 @@ impl Arrivals {
             }
             self.push(&a, t_a, waiting_for);
         }
-        while now_ns() < deadline {
+        while self.time.now_ns() < deadline {
             std::hint::spin_loop();
         }
         Ok(())
@@ -110,6 +114,8 @@ impl Arrivals {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::time::Duration;
+    use wire::Scripted;
 
     fn action(seq: u64, u: f64) -> Action {
         let mut a = Action::default();
@@ -123,7 +129,7 @@ mod tests {
     /// trial; the answer to the interval's sample is marked; `clear` starts afresh.
     #[test]
     fn arrivals_keep_this_trials_actions() {
-        let mut arrivals = Arrivals::new(10);
+        let mut arrivals = Arrivals::new(10, Monotonic::host());
         arrivals.push(&action(9, 0.0), 100, 10);
         assert!(arrivals.list.is_empty() && arrivals.answered.is_none());
         arrivals.push(&action(10, 1.5), 200, 10);
@@ -135,5 +141,30 @@ mod tests {
         assert!(arrivals.list.is_empty() && arrivals.answered.is_none());
         arrivals.push(&action(11, -2.0), 400, 11);
         assert_eq!(arrivals.answered, Some(400));
+    }
+
+    /// On a mock clock, an interval of 10 ms from 0: actions that arrive within it are
+    /// its own, at their arrival; one whose receipt is held up across the deadline is the
+    /// next interval's, from its receipt on; `collect` returns no earlier than the
+    /// deadline.
+    #[test]
+    fn an_action_received_after_the_deadline_is_the_next_intervals() {
+        let (clock, time) = Monotonic::mock();
+        time.step_each_reading(Duration::from_micros(1));
+        let inbox = Scripted::new(&time)
+            .arrives(3_000_000, action(10, 1.0), Duration::ZERO)
+            .arrives(9_000_000, action(11, 2.0), Duration::from_micros(1_500));
+        let mut arrivals = Arrivals::new(10, clock.clone());
+        arrivals.collect(&inbox, 10_000_000, 10, 50_000).unwrap();
+        // Received at its arrival, a reading (1 µs) later.
+        let at = 3_000_000..3_010_000;
+        assert!(arrivals.answered.is_some_and(|t| at.contains(&t)));
+        assert!(matches!(arrivals.list[..], [(t, u)] if at.contains(&t) && u[0] == 1.0));
+        // Not before the deadline: the receipt held up until 10.5 ms.
+        assert!((10_500_000..10_510_000).contains(&time.now_ns()));
+        arrivals.collect(&inbox, 20_000_000, 11, 50_000).unwrap();
+        let at = 10_500_000..10_510_000;
+        assert!(arrivals.answered.is_some_and(|t| at.contains(&t)));
+        assert!(matches!(arrivals.list[..], [(t, u)] if at.contains(&t) && u[0] == 2.0));
     }
 }

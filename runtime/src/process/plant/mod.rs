@@ -209,9 +209,9 @@ fn runner(
     Ok(match period {
         Some(period) => Box::new(
             realtime::RealtimePlant::new(
-                link,
-                episode,
+                (link, episode),
                 (task.ts, period),
+                wire::Monotonic::host(),
                 args.spin.spin_us,
                 args.cycles_out.is_some(),
             )

@@ -24,15 +24,18 @@ use ::plant::Plant;
 use ::plant::episode::{Episode, Step};
 use ::plant::safety::SafetyCounts;
 use ::plant::schedule::Trial;
-use wire::{Header, MAX_U, flags, now_ns};
+use wire::{Header, MAX_U, Monotonic, flags};
 
 use super::super::SILENCE;
 use super::arrivals::Arrivals;
 use super::link::{Link, TrialHeader, end_flags};
 use super::{Ended, Gap, Trials};
 
-/// Absolute sampling deadlines on the monotonic clock.
+/// Absolute sampling deadlines on the monotonic clock, and the rules of real time that
+/// read it: a trial's first instant, and gaps.
 struct Deadlines {
+    /// The time the deadlines are on.
+    time: Monotonic,
     period_ns: u64,
     /// The next sampling instant \[ns\].
     next_ns: u64,
@@ -42,20 +45,61 @@ struct Deadlines {
     spin_ns: u64,
 }
 
-/// Sleeps, then spins the last `spin_ns`, until monotonic time `t_ns`: the sleep may
-/// overshoot (the operating system's wake-up latency, on a virtual machine up to
-/// milliseconds), the spin does not.
-fn sleep_until(t_ns: u64, spin_ns: u64) {
-    loop {
-        let now = now_ns();
-        if now >= t_ns {
-            return;
+impl Deadlines {
+    /// Deadlines every `period_ns` on `time`, the first a period from now.
+    fn new(time: Monotonic, period_ns: u64, speed: f64, spin_ns: u64) -> Self {
+        Self {
+            next_ns: time.now_ns() + period_ns,
+            time,
+            period_ns,
+            speed,
+            spin_ns,
         }
-        let left = t_ns - now;
-        if left > spin_ns + 100_000 {
-            std::thread::sleep(std::time::Duration::from_nanos(left - spin_ns));
-        } else {
-            std::hint::spin_loop();
+    }
+
+    /// Now, on the deadlines' time \[ns\].
+    fn now_ns(&self) -> u64 {
+        self.time.now_ns()
+    }
+
+    /// A trial's first instant: the next one, or now if that is more than a period past
+    /// (after an attempt cut short by a late plant, the clock moves on to now).
+    fn first_of_trial(&mut self) -> u64 {
+        let now = self.now_ns();
+        if now > self.next_ns + self.period_ns {
+            self.next_ns = now;
+        }
+        self.next_ns
+    }
+
+    /// The sample of instant `t_k`, taken at `woke`, is a gap if it was taken more than
+    /// a period after its instant or, `unanswered`, the sample before the last is still
+    /// unanswered ([module documentation](self)).
+    fn gap(&self, t_k: u64, woke: u64, unanswered: bool) -> Option<Gap> {
+        let late_ns = woke.saturating_sub(t_k);
+        (late_ns > self.period_ns || unanswered).then_some(Gap {
+            missing: 0,
+            span_ns: self.period_ns,
+            late_ns,
+            unanswered,
+        })
+    }
+
+    /// Sleeps, then spins the last `spin_ns`, until instant `t_ns`: the sleep may
+    /// overshoot (the operating system's wake-up latency, on a virtual machine up to
+    /// milliseconds), the spin does not.
+    fn sleep_until(&self, t_ns: u64) {
+        loop {
+            let now = self.now_ns();
+            if now >= t_ns {
+                return;
+            }
+            let left = t_ns - now;
+            if left > self.spin_ns + 100_000 && !self.time.is_mock() {
+                std::thread::sleep(std::time::Duration::from_nanos(left - self.spin_ns));
+            } else {
+                std::hint::spin_loop();
+            }
         }
     }
 }
@@ -115,7 +159,7 @@ impl Held {
 pub(super) struct RealtimePlant {
     episode: Episode,
     link: Link,
-    clock: Deadlines,
+    deadlines: Deadlines,
     /// Keep every sample's timing ([`Link::cycles`]).
     record_cycles: bool,
     /// Predictive timing (`observer.mode`): the action that answers sample `k` is
@@ -126,28 +170,23 @@ pub(super) struct RealtimePlant {
 }
 
 impl RealtimePlant {
-    /// Trials of `episode` in real time, a sample every `period` of the monotonic clock
+    /// Trials of `episode` in real time, a sample every `period` of monotonic `time`
     /// for a task of sampling time `ts` \[s\], published on `link`; the clock starts a
     /// period from now.
     pub(super) fn new(
-        link: Link,
-        episode: Episode,
+        (link, episode): (Link, Episode),
         (ts, period): (f64, Duration),
+        time: Monotonic,
         spin_us: u64,
         record_cycles: bool,
     ) -> Self {
-        let period_ns = period.as_nanos() as u64;
-        let clock = Deadlines {
-            period_ns,
-            next_ns: now_ns() + period_ns,
-            speed: crate::clock::Clock::speed(ts, period),
-            spin_ns: spin_us * 1000,
-        };
+        let speed = crate::clock::Clock::speed(ts, period);
+        let deadlines = Deadlines::new(time, period.as_nanos() as u64, speed, spin_us * 1000);
         Self {
             pipelined: episode.actuator().is_pipelined(),
             episode,
             link,
-            clock,
+            deadlines,
             record_cycles,
             cut_gaps: true,
         }
@@ -167,7 +206,7 @@ impl RealtimePlant {
         loop {
             let a = self.link.actions.recv(&self.link.bus, SILENCE)?;
             if a.header.seq >= seq {
-                self.clock.next_ns = now_ns();
+                self.deadlines.next_ns = self.deadlines.now_ns();
                 return Ok(());
             }
         }
@@ -189,7 +228,7 @@ impl RealtimePlant {
     /// (`h`, the start sample), before the clock starts (`observer::timing`, trial
     /// start), into `held`; the start instant moves on by one period for it.
     fn prime(&mut self, h: Header, held: &mut Held) -> Result<()> {
-        self.publish(h, 0.0, now_ns())?;
+        self.publish(h, 0.0, self.deadlines.now_ns())?;
         let a = loop {
             let a = self.link.actions.recv(&self.link.bus, SILENCE)?;
             // A late answer to the last trial's final sample is stale here: skip it.
@@ -198,12 +237,12 @@ impl RealtimePlant {
             }
         };
         Link::check_answer(&a, h.seq)?;
-        self.link.t_action_ns = now_ns();
+        self.link.t_action_ns = self.deadlines.now_ns();
         let m = held.u.len();
         held.u.copy_from_slice(&a.u[..m]);
         self.link.u_next.clone_from(&held.u);
-        let c = &mut self.clock;
-        c.next_ns = c.next_ns.max(now_ns()) + c.period_ns;
+        let c = &mut self.deadlines;
+        c.next_ns = c.next_ns.max(c.now_ns()) + c.period_ns;
         Ok(())
     }
 
@@ -227,7 +266,7 @@ impl RealtimePlant {
 
     /// The interval `[t_k, deadline)` with the actions that arrived in it.
     fn interval(&mut self, arrivals: &Arrivals, held: &mut Held, span: (u64, u64)) -> Step {
-        let (speed, pipelined) = (self.clock.speed, self.pipelined);
+        let (speed, pipelined) = (self.deadlines.speed, self.pipelined);
         let step = self
             .episode
             .step_with(|plant| held.integrate(plant, arrivals, span, speed, pipelined));
@@ -247,7 +286,7 @@ impl Trials for RealtimePlant {
             u: vec![0.0; self.link.task.action_dim()],
             pending: None,
         };
-        let mut arrivals = Arrivals::new(self.link.seq);
+        let mut arrivals = Arrivals::new(self.link.seq, self.deadlines.time.clone());
         let header = TrialHeader::new(trial, self.link.task.ts);
         let mut first = flags::START;
         if self.pipelined {
@@ -262,39 +301,30 @@ impl Trials for RealtimePlant {
         if self.record_cycles {
             self.link.cycles.reserve(steps + 2);
         }
-        // A trial starts within a period of its instant: after an attempt cut short by
-        // a late plant, the clock moves on to now.
-        let (c, now) = (&mut self.clock, now_ns());
-        if now > c.next_ns + c.period_ns {
-            c.next_ns = now;
-        }
-        let mut t_k = c.next_ns;
-        sleep_until(t_k, self.clock.spin_ns);
-        let mut woke = now_ns();
+        let mut t_k = self.deadlines.first_of_trial();
+        self.deadlines.sleep_until(t_k);
+        let mut woke = self.deadlines.now_ns();
         self.publish(header.at(self.link.seq, 0, first), 0.0, t_k)?;
         let mut ended = None;
         loop {
             let waiting_for = self.link.seq - 1;
-            let deadline = t_k + self.clock.period_ns;
+            let deadline = t_k + self.deadlines.period_ns;
             let actions = &self.link.actions;
-            arrivals.collect(actions, deadline, waiting_for, self.clock.spin_ns)?;
-            let woke_next = now_ns();
+            arrivals.collect(actions, deadline, waiting_for, self.deadlines.spin_ns)?;
+            let woke_next = self.deadlines.now_ns();
             self.account(&arrivals, waiting_for, t_k, woke);
             if let Some(end) = ended {
                 // The END sample's answer only acknowledges learning; the trial is over.
-                self.clock.next_ns = deadline;
+                self.deadlines.next_ns = deadline;
                 return Ok(end);
             }
             let step = self.interval(&arrivals, &mut held, (t_k, deadline));
             woke = woke_next;
             t_k = deadline;
-            let gap = Gap {
-                missing: 0,
-                span_ns: self.clock.period_ns,
-                late_ns: woke.saturating_sub(t_k),
-                unanswered: arrivals.newest + 1 < waiting_for,
-            };
-            if self.cut_gaps && (gap.late_ns > self.clock.period_ns || gap.unanswered) {
+            let unanswered = arrivals.newest + 1 < waiting_for;
+            if let Some(gap) = self.deadlines.gap(t_k, woke, unanswered)
+                && self.cut_gaps
+            {
                 // A gap: the sample only ends the attempt, without a reward to learn.
                 let h = header.at(self.link.seq, step.sample, flags::END | flags::GAP);
                 self.publish(h, 0.0, t_k)?;
@@ -315,5 +345,50 @@ impl Trials for RealtimePlant {
 
     fn safety(&mut self) -> SafetyCounts {
         self.episode.plant_mut().safety().counts()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MS: u64 = 1_000_000;
+
+    /// Deadlines every 10 ms on a mock clock that starts at 0.
+    fn deadlines() -> (Deadlines, wire::MockTime) {
+        let (clock, time) = Monotonic::mock();
+        (Deadlines::new(clock, 10 * MS, 1.0, 0), time)
+    }
+
+    /// A sample taken more than a period after its instant is a gap; one taken a
+    /// period after it, or earlier, is not; nor is one whose predecessor is answered.
+    #[test]
+    fn a_sample_more_than_a_period_late_is_a_gap() {
+        let (d, time) = deadlines();
+        let t_k = d.next_ns;
+        assert_eq!(t_k, 10 * MS);
+        time.advance_to(t_k + 10 * MS);
+        assert!(d.gap(t_k, d.now_ns(), false).is_none());
+        time.advance(Duration::from_nanos(1));
+        let gap = d.gap(t_k, d.now_ns(), false).expect("a gap");
+        assert_eq!(
+            (gap.late_ns, gap.span_ns, gap.missing),
+            (10 * MS + 1, 10 * MS, 0)
+        );
+        assert!(d.gap(t_k, t_k + MS, true).is_some_and(|g| g.unanswered));
+    }
+
+    /// A trial starts at the next instant — unless that is more than a period past:
+    /// then now; the deadlines' sleep returns at the instant.
+    #[test]
+    fn a_trial_starts_within_a_period_of_now() {
+        let (mut d, time) = deadlines();
+        time.advance_to(19 * MS);
+        assert_eq!(d.first_of_trial(), 10 * MS);
+        time.advance_to(20 * MS + 1);
+        assert_eq!(d.first_of_trial(), 20 * MS + 1);
+        time.step_each_reading(Duration::from_micros(1));
+        d.sleep_until(25 * MS);
+        assert!((25 * MS..25 * MS + 2_000).contains(&time.now_ns()));
     }
 }
