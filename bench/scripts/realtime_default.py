@@ -162,7 +162,6 @@ def main():
                    help="a further flag for the driver, e.g. --driver-flag=--realtime-priority=10 (repeatable)")
     args = p.parse_args()
     script.need(WHO, modules=["iceoryx2", "mcap"])
-    rig = script.rig_binary(WHO, args.rig)
     if not (math.isfinite(args.seconds) and args.seconds > 0):
         script.fail(WHO, f"--seconds {args.seconds}: must be positive")
     try:
@@ -174,6 +173,7 @@ def main():
     out = (args.out or ROOT / "out/realtime-default" / task.name).resolve()
     if out.exists():
         script.fail(WHO, f"--out {out}: exists; give another folder")
+    rig = script.rig_binary(WHO, args.rig)
     out.mkdir(parents=True)
     script.interrupt_on_sigterm()
     driver_id = f"realtime-default-{os.getpid()}"

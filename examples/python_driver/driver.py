@@ -455,28 +455,12 @@ def main():
         file=sys.stderr,
         flush=True,
     )
-    if args.realtime_priority is not None:
-        try:
-            realtime.set_priority(args.realtime_priority)
-        except (OSError, ValueError) as e:
-            print(
-                f"driver: --realtime-priority {args.realtime_priority}: {e} "
-                "(needs CAP_SYS_NICE; priority 1-99)",
-                file=sys.stderr,
-            )
-            return 1
-
-    wakeup_limit = None  # the request holds while the file stays open
-    if args.cpu_wakeup_us is not None:
-        try:
-            wakeup_limit = realtime.hold_cpu_wakeup_limit(args.cpu_wakeup_us)
-        except OSError as e:
-            print(
-                f"driver: --cpu-wakeup-us {args.cpu_wakeup_us}: cannot hold the limit "
-                f"through /dev/cpu_dma_latency: {e} (needs root)",
-                file=sys.stderr,
-            )
-            return 1
+    try:
+        # --realtime-priority, --cpu-wakeup-us: the limit holds while the file stays open.
+        wakeup_limit = realtime.timing(args.realtime_priority, args.cpu_wakeup_us)  # noqa: F841
+    except RuntimeError as e:
+        print(f"driver: {e}", file=sys.stderr)
+        return 1
 
     def stop(signum, frame):
         driver.stopping = True

@@ -186,3 +186,19 @@ def test_the_speed_is_checked() -> None:
     for bad in (0.0, -1.0, math.nan, 1001.0):
         with pytest.raises(ValueError, match=r"must be in \(0, 1000\]"):
             serve(FakeLink(lambda _: 0), 1, speed=bad)
+
+
+def test_a_model_driver_takes_the_realtime_clock_flags_or_says_why_not() -> None:
+    from conftest import run, said
+
+    helped = run(["python", "examples/furuta/driver.py", "--help"])
+    assert helped.returncode == 0, said(helped)
+    for flag in ("--clock {lockstep,realtime}", "--speed S", "--realtime-priority N", "--cpu-wakeup-us US"):
+        assert flag in helped.stdout, helped.stdout
+    for args, why in (
+        (["--speed", "2"], "--speed applies to the realtime clock only"),
+        (["--clock", "realtime", "--speed", "0"], "--speed 0.0: must be in (0, 1000]"),
+        (["--clock", "realtime", "--cpu-wakeup-us", "-1"], "--cpu-wakeup-us -1: must be in [0, 2147483647]"),
+    ):
+        done = run(["python", "examples/acrobot/driver.py", *args])
+        assert done.returncode == 2 and why in done.stderr, said(done)
