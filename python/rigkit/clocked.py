@@ -50,6 +50,7 @@ class Clocked:
         if getattr(simulation, "provides_reward", False):
             raise ValueError("a simulation that provides its own reward is served in lockstep only")
         self.task, self.simulation, self.speed = task, simulation, speed
+        self.period_ns = round(task.ts / speed * 1e9)
         self.counters = Counters(task.m)
         self.samples = Samples(task)
         self.t_sim = t_start  # the monotonic time the simulation has reached
@@ -70,11 +71,12 @@ class Clocked:
         counters, task = self.counters, self.task
         if c.kind == ACTION and counters.status & READY:
             before = counters.rejected
-            counters.admit(task, c)
+            self.admit(c)
             if counters.rejected != before:
                 return f"rejected action {c.seq}: n_u {c.n_u}, u {list(c.u[: task.m])}"
-            self.acted = self.acted_since_reset = True
-            counters.status &= ~WATCHDOG
+            if counters.last_command == c.seq:
+                self.acted = self.acted_since_reset = True
+                counters.status &= ~WATCHDOG
             return None
         if c.kind == RESET:
             x0 = list(c.x0[: task.n])
@@ -100,20 +102,46 @@ class Clocked:
         return s
 
     def decide(self) -> None:
-        """A sample instant's decisions: the reset completed, or the watchdog."""
+        """A sample instant's decisions: the reset's progress, or the watchdog."""
         counters = self.counters
         if counters.status & RESETTING and self.reset_to is not None:
-            self.simulation.place(self.reset_to)
-            counters.status, counters.u = READY, [0.0] * self.task.m
-            self.reset_to, self.acted, self.acted_since_reset = None, False, False
+            if self.reset(self.reset_to):
+                counters.status, counters.u = READY, [0.0] * self.task.m
+                self.reset_to, self.acted, self.acted_since_reset = None, False, False
             return
         if counters.status & READY:
-            engage = self.acted_since_reset and not self.acted and not counters.status & WATCHDOG
+            engage = self.watchdog_due() and not counters.status & WATCHDOG
             self.acted = False
             if engage:
                 counters.status |= WATCHDOG
                 counters.u = [0.0] * self.task.m
                 self.watchdog_trips += 1
+
+    # What a driver of its own (examples/python_driver/driver.py: a brake, and faults to
+    # show `rig check-driver` failing) may do otherwise.
+
+    def admit(self, c: DriverCommand) -> None:
+        """An ACTION while READY: clamped to the bounds and applied (`last_command` its
+        seq), or rejected (zero, counted)."""
+        self.counters.admit(self.task, c)
+
+    def reset(self, x0: list[float]) -> bool:
+        """A sample instant of the reset to `x0`: True once it is done (READY from this
+        instant, the action zero). Without a brake, the model is placed at x0 at once; a
+        driver with one sets the braking action (`counters.u`) until the system rests."""
+        self.simulation.place(x0)
+        return True
+
+    def watchdog_due(self) -> bool:
+        """Whether the watchdog engages at this instant: an action accepted since the
+        reset, none during the period this instant closes (`watchdog_periods` 1)."""
+        return self.acted_since_reset and not self.acted
+
+    def next_instant(self, seq: int, t_sample: int) -> int | None:
+        """The instant to wait for after sample `seq` taken at `t_sample`; None: the
+        next instant of the absolute grid, `t_start + (seq + 1) * period`, skipping
+        the periods woken too late for."""
+        return None
 
 
 class Link(Protocol):
@@ -140,16 +168,18 @@ def serve_realtime(
     stopping: Callable[[], bool] = lambda: False,
     log: Callable[[str], None] | None = None,
     clock: Callable[[], int] = time.monotonic_ns,
+    clocked: Callable[[Task, Simulation, float, int], Clocked] = Clocked,
 ) -> None:
     """Serves `simulation` as the driver of `task` on the realtime clock, `speed` times
     faster than real time, until `stopping()`; `log(text)`, if given, is told of resets,
     rejected commands, watchdog trips and missed periods. `clock` is the monotonic clock
-    (another only to test the timing)."""
+    (another only to test the timing); `clocked(task, simulation, speed, t_start)` makes
+    the driver's state (a subclass of Clocked for a driver of its own)."""
     if not (math.isfinite(speed) and 0.0 < speed <= 1000.0):
         raise ValueError(f"speed {speed}: must be in (0, 1000]")
     t_start = clock()
-    period = round(task.ts / speed * 1e9)
-    driver = Clocked(task, simulation, speed, t_start)
+    driver = clocked(task, simulation, speed, t_start)
+    period = driver.period_ns
     advertised = info(task, REALTIME, t_start, speed)
 
     def drain() -> None:
@@ -174,7 +204,11 @@ def serve_realtime(
             advertised.t_publish_ns = clock()
             services.publish_info(advertised)
             next_info = now + 1_000_000_000
+        chosen = driver.next_instant(seq, now)
         seq += 1
+        if chosen is not None:
+            services.sleep_until(chosen, drain, stopping)
+            continue
         services.sleep_until(t_start + seq * period, drain, stopping)
         late = (clock() - (t_start + seq * period)) // period
         if late > 0:  # woken a period late or more: those periods were missed

@@ -210,7 +210,7 @@ def descendants(pid: int) -> dict[int, str]:
 def test_realtime_default_counts_deadline_misses_as_the_rig_does() -> None:
     pytest.importorskip("mcap")
     sys.path.insert(0, str(ROOT / "bench/scripts"))
-    import realtime_default as rd
+    import realtime_default as rd  # type: ignore[import-not-found]
 
     # Driver samples 0-5, 20 ms apart; the plant took 0, 1, 2 and 5 (3 and 4 too late);
     # the action for 1 shows applied at 2, the one for 0 does not, the one for 2 only at 5.
