@@ -33,7 +33,10 @@ to DIR/figures.json:
   gaps.csv), and the last greedy return with the trial it followed.
 
 What it needs is checked before it starts (one line naming what is missing). Ctrl-C or
-SIGTERM stops the run and the driver it started, and exits 130 without figures.
+SIGTERM stops the run and the driver it started, and exits 130 without figures. A run
+that ends before `--seconds` (the rig gives up when the loop cannot keep the period:
+docs/run.md, "Gaps: cut and redone") gets its figures up to there, then the rig's last
+line as a one-line error, exit 1.
 """
 import argparse
 import bisect
@@ -179,6 +182,7 @@ def main():
     driver_id = f"realtime-default-{os.getpid()}"
     run_dir = out / "run"
     driver = run = None
+    ended = None  # why the run ended before --seconds, if it did
     try:
         with open(out / "driver.log", "w") as log:
             driver = processes.start(
@@ -194,7 +198,8 @@ def main():
         while time.monotonic() - t0 < args.seconds:
             if run.poll() is not None:
                 tail = (out / "rig.log").read_text().strip().splitlines()[-1:]
-                script.fail(WHO, f"rig run ended early ({run.returncode}): {' '.join(tail)} (see {out / 'rig.log'})", 1)
+                ended = f"rig run ended early ({run.returncode}): {' '.join(tail)} (see {out / 'rig.log'})"
+                break
             if driver.poll() is not None:
                 script.fail(WHO, f"the driver ended early ({driver.returncode}): see {out / 'driver.log'}", 1)
             if time.monotonic() >= next_progress:
@@ -204,7 +209,8 @@ def main():
             time.sleep(0.5)
         wall = time.monotonic() - t0
         load = os.getloadavg()
-        processes.stop(run)  # as Ctrl-C: every complete trial recorded
+        if ended is None:
+            processes.stop(run)  # as Ctrl-C: every complete trial recorded
         run = None
         processes.stop(driver)
         driver = None
@@ -215,15 +221,21 @@ def main():
         for child in (run, driver):
             if child is not None:
                 processes.stop(child)
+    if ended is not None and not (run_dir / "run.mcap").is_file():
+        script.fail(WHO, ended, 1)
     said = (out / "rig.log").read_text()
     learner = learner_of(said, tomllib.loads((run_dir / "config.toml").read_text()))
     f = figures(run_dir, said)
-    f.update(task=task.name, learner=learner, ts_ms=task.ts * 1e3, wall_s=wall, load_average=list(load))
+    f.update(task=task.name, learner=learner, ts_ms=task.ts * 1e3, wall_s=wall, load_average=list(load),
+             ended_early=ended)
     (out / "figures.json").write_text(json.dumps(f, indent=2) + "\n")
     head = (f"{task.name}: {learner} (the rig's default for the task), Ts {task.ts * 1e3:g} ms, real time, "
-            f"{wall:.0f} s wall; load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+            f"{wall:.0f} s wall; load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}"
+            + (f"; driver flags {' '.join(args.driver_flag)}" if args.driver_flag else ""))
     print(report(head, f))
     print(f"(run, logs and figures.json in {out})")
+    if ended is not None:  # the figures of what it did, then why it stopped
+        script.fail(WHO, ended, 1)
     return 0
 
 
