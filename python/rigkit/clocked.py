@@ -23,6 +23,11 @@ size, rejected (zero at once, not an action for the watchdog); a RESET (n_x, fin
 starts a reset and keeps the old action until the next instant; anything else is
 counted as rejected. A simulation that provides its own reward is served in lockstep
 only (its outcome is one step's, and a period here is several steps).
+
+A driver of its own subclasses Clocked (`serve_realtime(..., clocked=...)`) where it
+differs: `reset` (a brake to rest at x0 instead of placing), `admit`, `watchdog_due`,
+`next_instant` — examples/python_driver/driver.py's Motor brakes the pendulum and
+misbehaves on purpose (--inject-fault) through them.
 """
 
 from __future__ import annotations
