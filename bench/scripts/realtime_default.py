@@ -47,8 +47,12 @@ import os
 import subprocess
 import sys
 import time
-import tomllib
 from pathlib import Path
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: its PyPI twin, as rigkit.task
+    import tomli as tomllib
 
 if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: realtime_default.py needs the rig's Python package rigkit: pip install ./python")
