@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """A driver for the rig (docs/driver.md) that simulates the acrobot (acrobot.py) in
-lockstep: a system the rig does not contain, served through the official iceoryx2
-bindings with the task file acrobot.toml (or acrobot-balance.toml).
+lockstep (or, with --clock realtime, on the realtime clock): a system the rig does not
+contain, served through the official iceoryx2 bindings with the task file acrobot.toml
+(or acrobot-balance.toml).
 
-    python3 examples/acrobot/driver.py [--driver-id ID] [--task FILE] [--verbose]
+    python3 examples/acrobot/driver.py [--driver-id ID] [--task FILE]
+                                       [--clock realtime [--speed S]] [--verbose]
     rig run --plant external --task examples/acrobot/acrobot.toml
 
 The driver id defaults to the task's name, the one `rig run --task` looks for. Stop it

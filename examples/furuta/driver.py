@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """A driver for the rig (docs/driver.md) that simulates the rotary inverted pendulum of
-the Quanser QUBE-Servo 2 (furuta.py) in lockstep: a system the rig does not contain,
-served through the official iceoryx2 bindings with the task file furuta.toml (or
-furuta-balance.toml, furuta-swing-balance.toml).
+the Quanser QUBE-Servo 2 (furuta.py) in lockstep (or, with --clock realtime, on the
+realtime clock): a system the rig does not contain, served through the official iceoryx2
+bindings with the task file furuta.toml (or furuta-balance.toml, furuta-swing-balance.toml).
 
-    python3 examples/furuta/driver.py [--driver-id ID] [--task FILE] [--damping SET] [--verbose]
+    python3 examples/furuta/driver.py [--driver-id ID] [--task FILE] [--damping SET]
+                                      [--clock realtime [--speed S]] [--verbose]
     rig run --plant external --task examples/furuta/furuta.toml
 
 The driver id defaults to the task's name, the one `rig run --task` looks for. Stop it

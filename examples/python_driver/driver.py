@@ -30,7 +30,6 @@ import math
 import random
 import signal
 import sys
-import time
 from pathlib import Path
 
 if importlib.util.find_spec("rigkit") is None:
@@ -44,19 +43,9 @@ import iceoryx2 as iox2  # noqa: E402
 
 from rigkit import realtime  # noqa: E402
 from rigkit.angle import wrap  # noqa: E402
-from rigkit.lockstep import Services, info, serve  # noqa: E402
-
-# DriverSample, DriverCommand and the constants of docs/driver.md.
-from rigkit.messages import (  # noqa: E402
-    ACTION,
-    READY,
-    REALTIME,
-    RESET,
-    RESETTING,
-    WATCHDOG,
-    DriverCommand,
-    DriverSample,
-)
+from rigkit.clocked import Clocked, serve_realtime  # noqa: E402
+from rigkit.lockstep import Services, serve  # noqa: E402
+from rigkit.messages import DriverCommand, DriverSample  # noqa: E402
 from rigkit.task import Task, TaskError  # noqa: E402
 
 # The rig's pendulum task, shipped with it.
@@ -112,232 +101,121 @@ class Pendulum:
 ENCODER_COUNTS = 4096
 
 
-def finite(values):
-    return all(math.isfinite(v) for v in values)
+class Simulated:
+    """The pendulum as rigkit serves a simulation (place, step, state): its samples an
+    encoder's with --sensor angle."""
 
-
-class Driver:
-    """One driver instance: services, the simulated pendulum, the watchdog, resets."""
-
-    KP, KD = 1.0, 0.7  # reset controller [V/rad], [V s/rad]
-    REST_ANGLE, REST_SPEED = 0.02, 0.05  # "at rest" tolerance [rad], [rad/s]
-    REST_SAMPLES = 3  # consecutive samples at rest before READY
-
-    def __init__(self, args, task):
-        self.args = args
-        self.task = task
-        self.u_min, self.u_max = task.low[0], task.high[0]
-        self.speed = args.speed
-        self.period_ns = round(task.ts / self.speed * 1e9)
-        self.clock_error = random.Random(1)  # --inject-fault clock
+    def __init__(self, sensor):
         self.plant = Pendulum()
-        self.t_start = time.monotonic_ns()
-        self.t_phys = self.t_start  # monotonic time the physics has reached
-        self.u = 0.0  # the action in effect
-        self.status = 0  # no reset yet: actions are not applied
-        self.reset_id = 0
-        self.reset_target = None
-        self.at_rest = 0
-        self.last_command = 0
-        self.action_this_period = False
-        self.acted_since_reset = False
-        self.periods_without_action = 0
-        self.clamped = 0
-        self.rejected = 0
-        self.watchdog_trips = 0
-        self.held = []  # --inject-fault late: commands kept for the next sample instant
+        self.sensor = sensor
 
-        sample_type = BadSample if args.inject_fault == "layout" else DriverSample
-        io = Services(args.driver_id, sample_type)
-        self.io = io
-        self.sample_pub, self.sample_note = io.sample_pub, io.sample_note
-        self.commands = io.commands
-        self.stopping = False
+    def place(self, x0):
+        self.plant.x = [wrap(x0[0]), x0[1]]
 
-    def publish(self, pub, notifier, msg):
-        pub.loan_uninit().write_payload(msg).send()
-        notifier.notify()
+    def step(self, u, dt):
+        self.plant.advance(u[0], dt)
 
-    def publish_info(self):
-        """The info of the real-time clock (lockstep.serve publishes its own)."""
-        self.io.publish_info(info(self.task, REALTIME, self.t_start, self.speed))
-
-    def physics_to(self, t_ns):
-        """Advances the simulation to monotonic time t_ns with the action in effect."""
-        self.plant.advance(self.u, (t_ns - self.t_phys) * 1e-9 * self.speed)
-        self.t_phys = max(self.t_phys, t_ns)
-
-    def log(self, text):
-        if self.args.verbose:
-            print(f"driver: {text}", file=sys.stderr, flush=True)
-
-    def command(self, c):
-        """Handles one command, at its arrival (the physics is already there)."""
-        if c.kind == ACTION:
-            u = c.u[0]
-            if self.status & READY == 0:
-                self.rejected += 1  # not reset yet, or resetting: ignored
-            elif c.n_u != 1 or not finite([u]):
-                if self.args.inject_fault == "limits" and c.n_u == 1:
-                    return  # the fault: keep the previous action
-                self.rejected += 1
-                self.u = 0.0  # the safe action
-                self.log(f"rejected command {c.seq}: n_u {c.n_u}, u {u}")
-            else:
-                lo, hi = self.u_min, self.u_max
-                if not lo <= u <= hi and self.args.inject_fault != "limits":
-                    self.clamped += 1
-                    u = min(max(u, lo), hi)
-                self.u = u
-                self.last_command = c.seq
-                self.action_this_period = True
-                self.acted_since_reset = True
-                self.status &= ~WATCHDOG
-        elif c.kind == RESET:
-            x0 = [c.x0[0], c.x0[1]]
-            if c.n_x != 2 or not finite(x0):
-                self.rejected += 1
-                self.log(f"rejected reset {c.seq}: n_x {c.n_x}, x0 {x0}")
-                return
-            self.status = RESETTING
-            self.reset_id = c.seq
-            self.reset_target = x0
-            self.at_rest = 0
-            self.log(f"reset {c.seq} to {x0}")
-        else:
-            self.rejected += 1
-
-    def at_sample_instant(self):
-        """Decisions at a sample instant, after sampling: reset progress, watchdog."""
-        phi, omega = self.plant.x
-        if self.status & RESETTING:
-            target_phi, target_omega = self.reset_target
-            e_phi = wrap(target_phi - phi)
-            e_omega = target_omega - omega
-            rest = abs(e_phi) < self.REST_ANGLE and abs(e_omega) < self.REST_SPEED
-            self.at_rest = self.at_rest + 1 if rest else 0
-            if self.at_rest >= self.REST_SAMPLES:
-                self.status = READY
-                self.u = 0.0
-                self.action_this_period = False
-                self.acted_since_reset = False
-                self.periods_without_action = 0
-                self.log(f"reset {self.reset_id} done at {self.plant.x}")
-            else:
-                u = self.KP * e_phi + self.KD * e_omega
-                self.u = min(max(u, self.u_min), self.u_max)
-            return
-        if self.status & READY:
-            if self.action_this_period:
-                self.periods_without_action = 0
-            else:
-                self.periods_without_action += 1
-            self.action_this_period = False
-            # --inject-fault slow-watchdog: a period too late.
-            periods = 2 if self.args.inject_fault == "slow-watchdog" else 1
-            engage = self.periods_without_action >= periods and self.acted_since_reset
-            if engage and not self.status & WATCHDOG and self.args.inject_fault != "watchdog":
-                self.status |= WATCHDOG
-                self.watchdog_trips += 1
-                self.u = 0.0
-                self.log("watchdog: no action for a period, applying zero")
-
-    def sample(self, seq, t_sample):
-        s = (BadSample if self.args.inject_fault == "layout" else DriverSample)()
-        s.seq = seq
-        s.t_sample_ns = t_sample
-        s.status = self.status
-        s.reset_id = self.reset_id
-        s.last_command = self.last_command
-        s.n_x = 2
-        s.n_u = 1
-        s.x[0], s.x[1] = self.measured()
-        s.u_applied[0] = self.u
-        if self.args.inject_fault != "layout":
-            s.clamped = self.clamped
-            s.rejected = self.rejected
-            s.watchdog_trips = self.watchdog_trips
-        return s
-
-    def drain_commands(self):
-        """Handles every command waiting, each at the time it is taken."""
-        while True:
-            c = self.commands.receive()
-            if c is None:
-                return
-            cmd = DriverCommand.from_buffer_copy(c.payload().contents)
-            del c  # returns the slot
-            if self.args.inject_fault == "late":
-                self.held.append(cmd)  # the fault: handled a period late
-                continue
-            self.physics_to(time.monotonic_ns())
-            self.command(cmd)
-
-    def wait_until(self, deadline):
-        """Handles commands as they arrive until monotonic time `deadline`."""
-        self.io.sleep_until(deadline, self.drain_commands, lambda: self.stopping)
-
-    def measured(self):
+    def state(self):
         """The state as the samples report it (an encoder's counts with --sensor angle)."""
         x = list(self.plant.x)
-        if self.args.sensor == "angle":
+        if self.sensor == "angle":
             # An encoder: the angle in whole counts, the velocity not measured (NaN);
             # the rig's observer estimates it (docs/driver.md, "Positions only").
             q = 2.0 * math.pi / ENCODER_COUNTS
             x = [wrap(round(x[0] / q) * q), math.nan]
         return x
 
-    def run_lockstep(self):
-        """The lockstep clock (docs/driver.md, "Lockstep"), by lockstep.serve: resets
-        place the pendulum, each action integrates exactly one period."""
 
-        driver = self
+class Motor(Clocked):
+    """The realtime clock of rigkit.clocked as a motor driver keeps it: resets by a PD
+    brake to rest at the target, as hardware must, and the --inject-fault misbehaviours."""
 
-        class Simulation:
-            def place(self, x0):
-                driver.plant.x = [wrap(x0[0]), x0[1]]
+    KP, KD = 1.0, 0.7  # reset controller [V/rad], [V s/rad]
+    REST_ANGLE, REST_SPEED = 0.02, 0.05  # "at rest" tolerance [rad], [rad/s]
+    REST_SAMPLES = 3  # consecutive samples at rest before READY
 
-            def step(self, u, dt):
-                driver.plant.advance(u[0], dt)
+    def __init__(self, task, simulation, speed, t_start, fault, log):
+        super().__init__(task, simulation, speed, t_start)
+        self.fault, self.log = fault, log
+        self.at_rest = 0
+        self.braking_for = None  # the reset_id the brake is at
+        self.silent = 0  # periods without an accepted action
+        self.held = []  # --inject-fault late: commands kept for the next sample instant
+        self.clock_error = random.Random(1)  # --inject-fault clock
 
-            def state(self):
-                return driver.measured()
+    def command(self, c, t):
+        if self.fault == "late":  # the fault: handled at the next sample instant
+            self.held.append(DriverCommand.from_buffer_copy(c))
+            return None
+        return super().command(c, t)
 
-        log = self.log if self.args.verbose else None
-        serve(self.io, self.task, Simulation(), lambda: self.stopping, log)
+    def sample(self, seq, t):
+        s = super().sample(seq, t)
+        held, self.held = self.held, []
+        for c in held:  # --inject-fault late: last period's commands, now
+            super().command(c, t)
+        return s
 
-    def run(self):
-        if self.args.clock == "lockstep":
-            return self.run_lockstep()
-        period = self.period_ns
-        seq = 0
-        next_info = self.t_start
-        while not self.stopping:
-            t_sample = time.monotonic_ns()
-            self.physics_to(t_sample)
-            s = self.sample(seq, t_sample)
-            self.at_sample_instant()
-            s.status = self.status  # status after this instant's decisions
-            s.t_publish_ns = time.monotonic_ns()
-            self.publish(self.sample_pub, self.sample_note, s)
-            held, self.held = self.held, []
-            for cmd in held:  # --inject-fault late: last period's commands, now
-                self.command(cmd)
-            if t_sample >= next_info:
-                self.publish_info()
-                next_info = t_sample + 1_000_000_000
-            seq += 1
-            if self.args.inject_fault == "clock":
-                # The fault: a relative wait, each off by up to ±2 ms (a fixed seed).
-                error = self.clock_error.randint(-2_000_000, 2_000_000)
-                self.wait_until(t_sample + period + error)
-                continue
-            self.wait_until(self.t_start + seq * period)
-            # Woken late by a period or more: those periods were missed.
-            late = (time.monotonic_ns() - (self.t_start + seq * period)) // period
-            if late > 0:
-                seq += late
-                self.log(f"missed {late} period(s)")
+    def admit(self, c):
+        if self.fault != "limits":
+            return super().admit(c)
+        # The fault: out-of-range actions applied as they are, non-finite ones ignored.
+        if c.n_u == 1 and math.isfinite(c.u[0]):
+            self.counters.u, self.counters.last_command = [c.u[0]], c.seq
+        elif c.n_u != 1:
+            self.counters.rejected += 1
+            self.counters.u = [0.0]
+
+    def reset(self, x0):
+        """The PD brake toward x0 until at rest there for REST_SAMPLES samples."""
+        if self.braking_for != self.counters.reset_id:
+            self.braking_for, self.at_rest = self.counters.reset_id, 0
+        phi, omega = self.simulation.plant.x
+        e_phi, e_omega = wrap(x0[0] - phi), x0[1] - omega
+        rest = abs(e_phi) < self.REST_ANGLE and abs(e_omega) < self.REST_SPEED
+        self.at_rest = self.at_rest + 1 if rest else 0
+        if self.at_rest >= self.REST_SAMPLES:
+            self.silent, self.braking_for = 0, None
+            if self.log:
+                self.log(f"reset {self.counters.reset_id} done at {self.simulation.plant.x}")
+            return True
+        u = self.KP * e_phi + self.KD * e_omega
+        self.counters.u = [min(max(u, self.task.low[0]), self.task.high[0])]
+        return False
+
+    def watchdog_due(self):
+        self.silent = 0 if self.acted else self.silent + 1
+        if self.fault == "watchdog":
+            return False
+        # --inject-fault slow-watchdog: a period too late.
+        return self.acted_since_reset and self.silent >= (2 if self.fault == "slow-watchdog" else 1)
+
+    def next_instant(self, seq, t_sample):
+        if self.fault != "clock":
+            return None
+        # The fault: a relative wait, each off by up to ±2 ms (a fixed seed).
+        return t_sample + self.period_ns + self.clock_error.randint(-2_000_000, 2_000_000)
+
+
+class BadLayout(Services):
+    """--inject-fault layout: the samples published in BadSample's layout."""
+
+    def __init__(self, driver_id):
+        super().__init__(driver_id, BadSample)
+
+    def publish_sample(self, sample):
+        super().publish_sample(BadSample.from_buffer_copy(bytes(sample)[: ctypes.sizeof(BadSample)]))
+
+
+def serve_pendulum(args, task, io, stopping):
+    """The pendulum served on the clock `args.clock` until `stopping()`."""
+    simulation = Simulated(args.sensor)
+    log = (lambda text: print(f"driver: {text}", file=sys.stderr, flush=True)) if args.verbose else None
+    if args.clock == "lockstep":
+        # lockstep.serve: resets place the pendulum, each action integrates one period.
+        return serve(io, task, simulation, stopping, log)
+    serve_realtime(io, task, simulation, args.speed, stopping, log,
+                   clocked=lambda *a: Motor(*a, args.inject_fault, log))
 
 
 def main():
@@ -429,7 +307,7 @@ def main():
         p.error(f"--driver-id {e}")
 
     try:
-        driver = Driver(args, task)
+        io = BadLayout(args.driver_id) if args.inject_fault == "layout" else Services(args.driver_id)
     except iox2.PublishSubscribeOpenOrCreateError as e:
         print(
             f"driver: cannot open the services rig/driver/{args.driver_id}/*: {e!r} "
@@ -447,7 +325,7 @@ def main():
     clock = (
         "lockstep"
         if args.clock == "lockstep"
-        else f"period {driver.period_ns / 1e6:g} ms of wall time (speed {args.speed:g})"
+        else f"period {task.ts / args.speed * 1e3:g} ms of wall time (speed {args.speed:g})"
     )
     print(
         f"driver {args.driver_id!r}: task {task.name} (the pendulum), "
@@ -455,35 +333,17 @@ def main():
         file=sys.stderr,
         flush=True,
     )
-    if args.realtime_priority is not None:
-        try:
-            realtime.set_priority(args.realtime_priority)
-        except (OSError, ValueError) as e:
-            print(
-                f"driver: --realtime-priority {args.realtime_priority}: {e} "
-                "(needs CAP_SYS_NICE; priority 1-99)",
-                file=sys.stderr,
-            )
-            return 1
+    try:
+        # --realtime-priority, --cpu-wakeup-us: the limit holds while the file stays open.
+        wakeup_limit = realtime.timing(args.realtime_priority, args.cpu_wakeup_us)  # noqa: F841
+    except RuntimeError as e:
+        print(f"driver: {e}", file=sys.stderr)
+        return 1
 
-    wakeup_limit = None  # the request holds while the file stays open
-    if args.cpu_wakeup_us is not None:
-        try:
-            wakeup_limit = realtime.hold_cpu_wakeup_limit(args.cpu_wakeup_us)
-        except OSError as e:
-            print(
-                f"driver: --cpu-wakeup-us {args.cpu_wakeup_us}: cannot hold the limit "
-                f"through /dev/cpu_dma_latency: {e} (needs root)",
-                file=sys.stderr,
-            )
-            return 1
-
-    def stop(signum, frame):
-        driver.stopping = True
-
-    signal.signal(signal.SIGTERM, stop)
-    signal.signal(signal.SIGINT, stop)
-    driver.run()
+    stopping = []
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(sig, lambda *_: stopping.append(True))
+    serve_pendulum(args, task, io, lambda: bool(stopping))
     print("driver: stopped", file=sys.stderr)
     return 0
 

@@ -164,9 +164,19 @@ class Services:
             c = self.wait(time.monotonic_ns() + timeout_ms * 1_000_000)
             if c is None:
                 return None
+        self.poll_until = time.monotonic_ns() + POLL_AFTER_COMMAND_NS
+        return self.copy(c)
+
+    def take(self) -> DriverCommand | None:
+        """The next command waiting, or None at once: `self.command`, overwritten by the
+        next call (for a driver on its own clock, between its sample instants)."""
+        c = self.commands.receive()
+        return None if c is None else self.copy(c)
+
+    def copy(self, c: Any) -> DriverCommand:
+        """The received command `c` copied into `self.command`, its slot returned."""
         ctypes.memmove(self.command_at[0], c.payload_ptr, self.command_at[1])
         del c  # returns the slot
-        self.poll_until = time.monotonic_ns() + POLL_AFTER_COMMAND_NS
         return self.command
 
     def sleep_until(
@@ -347,9 +357,11 @@ def serve(
 
 
 def serve_until_signalled(
-    services: Services, task: Task, simulation: Simulation, who: str, verbose: bool
+    services: Services, task: Task, simulation: Simulation, who: str, verbose: bool,
+    speed: float | None = None,
 ) -> None:
-    """serve() until SIGTERM or Ctrl-C, logging resets to stderr as `who` if `verbose`."""
+    """serve() until SIGTERM or Ctrl-C, logging resets to stderr as `who` if `verbose`;
+    with a `speed`, clocked.serve_realtime at that speed instead."""
     stopping: list[bool] = []
     for sig in (signal.SIGTERM, signal.SIGINT):
         signal.signal(sig, lambda *_: stopping.append(True))
@@ -357,5 +369,11 @@ def serve_until_signalled(
     def log(text: str) -> None:
         print(f"{who}: {text}", file=sys.stderr, flush=True)
 
-    serve(services, task, simulation, lambda: bool(stopping), log if verbose else None)
+    told = log if verbose else None
+    if speed is None:
+        serve(services, task, simulation, lambda: bool(stopping), told)
+    else:
+        from .clocked import serve_realtime
+
+        serve_realtime(services, task, simulation, speed, lambda: bool(stopping), told)
     print(f"{who}: stopped", file=sys.stderr)

@@ -4,6 +4,7 @@ rig accepts, real-time scheduling, and the CPUs kept from deep idle states.
     check_driver_id(args.driver_id)        # ValueError: letters, digits, '-' and '_' only
     set_priority(10)                       # SCHED_FIFO 10 (CAP_SYS_NICE or root)
     limit = hold_cpu_wakeup_limit(0)       # while `limit` stays open (root)
+    limit = timing(10, 0)                  # both, as --realtime-priority/--cpu-wakeup-us ask
 """
 
 from __future__ import annotations
@@ -39,3 +40,24 @@ def hold_cpu_wakeup_limit(us: int) -> BinaryIO:
     f = open(CPU_DMA_LATENCY, "wb", buffering=0)
     f.write(struct.pack("=i", us))
     return f
+
+
+def timing(priority: int | None, wakeup_us: int | None) -> BinaryIO | None:
+    """What `--realtime-priority N` and `--cpu-wakeup-us US` ask for, each if given: the
+    open file holding the wake-up limit (None without one). RuntimeError in one line
+    naming the flag and what it needs if either cannot be had."""
+    if priority is not None:
+        try:
+            set_priority(priority)
+        except (OSError, ValueError) as e:
+            raise RuntimeError(
+                f"--realtime-priority {priority}: {e} (needs CAP_SYS_NICE; priority 1-99)"
+            ) from e
+    if wakeup_us is None:
+        return None
+    try:
+        return hold_cpu_wakeup_limit(wakeup_us)
+    except OSError as e:
+        raise RuntimeError(
+            f"--cpu-wakeup-us {wakeup_us}: cannot hold the limit through {CPU_DMA_LATENCY}: {e} (needs root)"
+        ) from e

@@ -205,3 +205,36 @@ def descendants(pid: int) -> dict[int, str]:
                 found[child] = line[child]
                 todo.append(child)
     return found
+
+
+def test_realtime_default_counts_deadline_misses_as_the_rig_does() -> None:
+    pytest.importorskip("mcap")
+    sys.path.insert(0, str(ROOT / "bench/scripts"))
+    import realtime_default as rd  # type: ignore[import-not-found]
+
+    # Driver samples 0-5, 20 ms apart; the plant took 0, 1, 2 and 5 (3 and 4 too late);
+    # the action for 1 shows applied at 2, the one for 0 does not, the one for 2 only at 5.
+    samples = [{"seq": k, "t_sample_ns": 20 * k, "last_command": {0: 0, 1: 0, 2: 11}.get(k, 12)} for k in range(6)]
+    commands = [{"kind": 2, "seq": 9, "sample_seq": 0, "t_publish_ns": 0}] + [
+        {"kind": 1, "seq": 10 + k, "sample_seq": k, "t_publish_ns": 20 * k + 3} for k in (0, 1, 2, 5)
+    ]
+    measured = [{"t_sample_ns": 20 * k} for k in (0, 1, 2, 5)]
+    # 0: next taken 1, not applied (1); 1: next 2, applied (0); 2: next 5, two periods
+    # without a sample taken, applied (2); 5: no next sample (not judged).
+    assert rd.deadline_misses(samples, commands, measured) == (3, 3, 1)
+    assert rd.sample_to_action_ns(samples, commands) == [3, 3, 3, 3]
+    assert rd.percentile([5, 1, 4, 2, 3], 0.5) == 3 and rd.percentile(range(1, 101), 0.99) == 99
+
+
+def test_realtime_default_says_what_is_wrong_in_one_line(tmp_path: Path) -> None:
+    pytest.importorskip("iceoryx2")
+    pytest.importorskip("mcap")
+    script = "bench/scripts/realtime_default.py"
+    for args, why in (
+        ([str(tmp_path / "absent.toml"), "examples/furuta/driver.py"], "absent.toml"),
+        (["examples/furuta/furuta.toml", str(tmp_path / "absent.py")], "absent.py: no such driver script"),
+        (["examples/furuta/furuta.toml", "examples/furuta/driver.py", "--seconds", "0"], "--seconds 0.0: must be positive"),
+        (["examples/furuta/furuta.toml", "examples/furuta/driver.py", "--out", str(tmp_path)], "exists; give another folder"),
+    ):
+        done = run(["python", script, *args])
+        assert done.returncode == 2 and done.stderr.count("\n") == 1 and why in done.stderr, said(done)
