@@ -7,6 +7,7 @@ a release rig):
 
     bench/scripts/realtime_default.py TASK DRIVER [--seconds 600] [--out DIR]
                                       [--rig PATH] [--python PATH] [--driver-flag F ...]
+                                      [--rig-flag F ...]
 
     bench/scripts/realtime_default.py examples/furuta/furuta-swing-balance.toml examples/furuta/driver.py
     bench/scripts/realtime_default.py examples/acrobot/acrobot.toml examples/acrobot/driver.py --seconds 60
@@ -167,6 +168,9 @@ def main():
     p.add_argument("--python", default=sys.executable, help="the Python that runs the driver [default: this one]")
     p.add_argument("--driver-flag", action="append", default=[], metavar="F",
                    help="a further flag for the driver, e.g. --driver-flag=--realtime-priority=10 (repeatable)")
+    p.add_argument("--rig-flag", action="append", default=[], metavar="F",
+                   help="a further flag for `rig run` that names no learner, e.g. --rig-flag=--rt-priority=20 "
+                        "(repeatable)")
     args = p.parse_args()
     script.need(WHO, modules=["iceoryx2", "mcap"])
     if not (math.isfinite(args.seconds) and args.seconds > 0):
@@ -195,7 +199,7 @@ def main():
         with open(out / "rig.log", "w") as log:
             run = processes.start(
                 [str(rig), "run", "--plant", "external", "--driver", driver_id, "--driver-timeout", "30",
-                 "--task", str(args.task), "--trials", str(TRIALS), "--out", str(run_dir)],
+                 "--task", str(args.task), "--trials", str(TRIALS), "--out", str(run_dir), *args.rig_flag],
                 stdout=log, stderr=subprocess.STDOUT)
         t0 = time.monotonic()
         next_progress = t0 + PROGRESS_S
@@ -235,7 +239,8 @@ def main():
     (out / "figures.json").write_text(json.dumps(f, indent=2) + "\n")
     head = (f"{task.name}: {learner} (the rig's default for the task), Ts {task.ts * 1e3:g} ms, real time, "
             f"{wall:.0f} s wall; load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}"
-            + (f"; driver flags {' '.join(args.driver_flag)}" if args.driver_flag else ""))
+            + (f"; driver flags {' '.join(args.driver_flag)}" if args.driver_flag else "")
+            + (f"; rig flags {' '.join(args.rig_flag)}" if args.rig_flag else ""))
     print(report(head, f))
     print(f"(run, logs and figures.json in {out})")
     if ended is not None:  # the figures of what it did, then why it stopped
