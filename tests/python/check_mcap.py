@@ -60,6 +60,11 @@ import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # the same parser, from PyPI (rigkit's dependency there)
+    import tomli as tomllib
+
 if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: check_mcap.py needs the rig's Python package rigkit: pip install ./python")
 
@@ -573,6 +578,18 @@ def check_scene(path: Path, state_topic: str, system: str) -> int:
     return len(pictures)
 
 
+def simulated_system(run_dir: Path, rec: recording.Recording) -> str:
+    """The system the rig simulates for the run's task, the one whose picture `rig run`
+    draws (rig/src/picture.rs): a built-in system's name (config.toml without a [task]:
+    the recording's metadata says which), a task file's `[task.simulation] system`, or ""
+    for a task only its driver knows (drawn as bars)."""
+    with open(run_dir / "config.toml", "rb") as f:
+        task = tomllib.load(f).get("task")
+    if task is None:
+        return str(rec.metadata.get("run", {}).get("system", ""))
+    return str(task.get("simulation", {}).get("system", ""))
+
+
 def check_run(run_dir: Path, log=print) -> None:
     """Every check on the run directory `run_dir`; raises CheckError at the first failure
     and calls `log` with a line per check passed."""
@@ -616,7 +633,7 @@ def check_run(run_dir: Path, log=print) -> None:
     check_returns_channel(rec.of(RETURNS_TOPIC), csv_path)
     check_latency(rec.of(LATENCY_TOPIC), rec.of(AGENT_TIMING_TOPIC))
     drawn = TRUTH_TOPIC if rec.of(TRUTH_TOPIC) else MEASUREMENT_TOPIC
-    pictures = check_scene(path, drawn, rec.metadata.get("run", {}).get("system", ""))
+    pictures = check_scene(path, drawn, simulated_system(run_dir, rec))
     log(
         f"ok: {RETURNS_TOPIC} holds the {len(rec.of(RETURNS_TOPIC))} rows of {csv_path.name}, "
         f"{LATENCY_TOPIC} the latency of every action, {SCENE_TOPIC} {pictures} pictures, "
