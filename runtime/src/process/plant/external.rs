@@ -187,21 +187,12 @@ impl ExternalPlant {
         Ok((s, reset_id, t_publish))
     }
 
-    /// Whether `next`, the sample after `s`, reached this process at `arrived` after a
-    /// gap: samples missing between them, its instant more than 1.5 periods after the
-    /// previous one's (the driver's clock slipped), or it more than a period after its
-    /// instant (a lockstep driver has no instants to keep).
+    /// The gap before `next`, the sample after `s` that reached this process at
+    /// `arrived`, if gaps cut trials ([`gap_between`]).
     fn gap(&self, s: &DriverSample, next: &DriverSample, arrived: u64) -> Option<Gap> {
         let clocked = !self.info.lockstep();
-        let gap = Gap {
-            missing: next.seq - s.seq - 1,
-            span_ns: next.t_sample_ns.saturating_sub(s.t_sample_ns),
-            late_ns: arrived.saturating_sub(next.t_sample_ns),
-            unanswered: false,
-        };
-        let period = self.info.period_ns;
-        let slipped = clocked && (gap.span_ns > period * 3 / 2 || gap.late_ns > period);
-        (self.cut_gaps && (gap.missing > 0 || slipped)).then_some(gap)
+        let gap = gap_between(s, next, arrived, self.info.period_ns, clocked);
+        gap.filter(|_| self.cut_gaps)
     }
 
     /// One period after driver sample `s` (of reset `reset_id`), published at
@@ -293,5 +284,68 @@ impl Trials for ExternalPlant {
 
     fn safety(&mut self) -> SafetyCounts {
         self.safety.counts()
+    }
+}
+
+/// Whether `next`, the sample after `s`, reached this process at `arrived` (monotonic ns)
+/// after a gap: samples missing between them, or — for a driver on its own clock
+/// (`clocked`) of period `period_ns` — its instant more than 1.5 periods after the
+/// previous one's (the driver's clock slipped) or it more than a period after its instant
+/// (a lockstep driver has no instants to keep).
+fn gap_between(
+    s: &DriverSample,
+    next: &DriverSample,
+    arrived: u64,
+    period_ns: u64,
+    clocked: bool,
+) -> Option<Gap> {
+    let gap = Gap {
+        missing: next.seq - s.seq - 1,
+        span_ns: next.t_sample_ns.saturating_sub(s.t_sample_ns),
+        late_ns: arrived.saturating_sub(next.t_sample_ns),
+        unanswered: false,
+    };
+    let slipped = clocked && (gap.span_ns > period_ns * 3 / 2 || gap.late_ns > period_ns);
+    (gap.missing > 0 || slipped).then_some(gap)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MS: u64 = 1_000_000;
+
+    fn sample(seq: u64, t_ms: u64) -> DriverSample {
+        DriverSample {
+            seq,
+            t_sample_ns: t_ms * MS,
+            ..DriverSample::default()
+        }
+    }
+
+    /// A driver's samples on the time line of their stamps, in milliseconds: the gap rule
+    /// at its edges, for a clocked driver of period 10 ms and for a lockstep one.
+    #[test]
+    fn a_gap_is_a_missing_sample_a_slipped_instant_or_a_late_arrival() {
+        let (s, period) = (sample(7, 100), 10 * MS);
+        let clocked = |next: DriverSample, arrived_ms: u64| {
+            gap_between(&s, &next, arrived_ms * MS, period, true)
+        };
+        // On time, and up to 1.5 periods apart and a period late: no gap.
+        assert_eq!(clocked(sample(8, 110), 111), None);
+        assert_eq!(clocked(sample(8, 115), 125), None);
+        // A sample missing.
+        let missing = clocked(sample(9, 120), 121).expect("a missing sample is a gap");
+        assert_eq!((missing.missing, missing.span_ns), (1, 20 * MS));
+        // The instant slipped past 1.5 periods; the sample a period late and a bit.
+        assert!(clocked(sample(8, 116), 117).is_some());
+        let late = clocked(sample(8, 110), 121).expect("arriving over a period late is a gap");
+        assert_eq!(late.late_ns, 11 * MS);
+        // In lockstep only missing samples count: instants and arrivals are not kept.
+        let lockstep = |next: DriverSample, arrived_ms: u64| {
+            gap_between(&s, &next, arrived_ms * MS, period, false)
+        };
+        assert_eq!(lockstep(sample(8, 500), 900), None);
+        assert!(lockstep(sample(9, 110), 110).is_some());
     }
 }
