@@ -11,7 +11,9 @@
 //! but not what was in flight) costs a resend, not the run. The driver's side passes a
 //! RESET of a session on once.
 
-use std::sync::atomic::Ordering::Relaxed;
+use std::collections::VecDeque;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicI64, AtomicU64, Ordering::Relaxed};
 use std::time::Duration;
 
 use crate::error::{Result, zenoh};
@@ -22,12 +24,25 @@ use zenoh::pubsub::Publisher;
 
 use crate::claim::{Claim, Claimant};
 use crate::message::{Topic, to_bytes};
-use crate::rig_side::Shared;
 use crate::{publisher, reliable_publisher};
 
 /// How long the commands' thread waits for a command at most, and how often a hold
 /// goes out while the rig is there and silent (a lease lasts at least 250 ms).
 const HOLD_EVERY: Duration = Duration::from_millis(50);
+
+/// What the commands' thread shares with the main one.
+#[derive(Default)]
+pub(crate) struct Shared {
+    pub(crate) stop: AtomicBool,
+    /// The driver's clock minus the rig's (ns).
+    pub(crate) offset: AtomicI64,
+    /// The driver's period (0 until its info came) \[ns\].
+    pub(crate) period_ns: AtomicU64,
+    /// The newest sample's `reset_id`: the RESET it acknowledges.
+    pub(crate) reset_id: AtomicU64,
+    /// Commands sent: `(seq, when)`, the newest last.
+    pub(crate) sent: Mutex<VecDeque<(u64, u64)>>,
+}
 
 /// The publishers and the session's claims.
 pub(crate) struct Outbox {

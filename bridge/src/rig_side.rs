@@ -8,12 +8,11 @@
 //! sample, the command it acknowledges gives the network's round trip through the loop;
 //! the one-way hops only where both hosts read one clock.
 
-use std::collections::VecDeque;
 use std::io::Write as _;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, AtomicI64, AtomicU64, Ordering::Relaxed};
+use std::sync::Arc;
+use std::sync::atomic::Ordering::Relaxed;
 use std::sync::mpsc::{Receiver, RecvTimeoutError, Sender, channel};
-use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use crate::error::{Error, Result, zenoh};
@@ -26,7 +25,7 @@ use zenoh::Wait;
 use crate::claim::Claim;
 use crate::clock::{ClockMap, Exchange};
 use crate::message::{Ping, Stamps, Topic, from_bytes, to_bytes};
-use crate::outbox::commands_up;
+use crate::outbox::{Shared, commands_up};
 use crate::refusal::{Heard, Refusal};
 use crate::session::{Network, own_user, rig_side};
 use crate::timing::{Durations, LinkTiming};
@@ -60,20 +59,6 @@ struct Arrival {
 
 /// How long the rig's bridge waits for a first answer before it says none came.
 const SILENT_START: Duration = Duration::from_secs(3);
-
-/// What the commands' thread shares with the main one.
-#[derive(Default)]
-pub(crate) struct Shared {
-    pub(crate) stop: AtomicBool,
-    /// The driver's clock minus the rig's (ns).
-    pub(crate) offset: AtomicI64,
-    /// The driver's period (0 until its info came) \[ns\].
-    pub(crate) period_ns: AtomicU64,
-    /// The newest sample's `reset_id`: the RESET it acknowledges.
-    pub(crate) reset_id: AtomicU64,
-    /// Commands sent: `(seq, when)`, the newest last.
-    pub(crate) sent: Mutex<VecDeque<(u64, u64)>>,
-}
 
 /// Serves until Ctrl-C or a termination request; returns what was forwarded and the
 /// link's timing.

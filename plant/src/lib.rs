@@ -7,6 +7,7 @@
 //! * [`reward::Reward`] — Eq. 3.16 / 5.1 / 5.2 / 6.20, and the terms a task file adds
 //!   (periodic, goal bonus, absolute action cost), with ∂ρ/∂x and ∂ρ/∂u.
 //! * [`region::Region`] — a box or a ball in the state space: goals.
+//! * [`operating_range::OperatingRange`] — the limits whose leaving ends a trial.
 //! * [`start::StartDistribution`] — start states drawn from the run seed.
 //! * [`sensor::Sensor`] — what is measured: the full state or encoder angles.
 //! * [`task::Task`] — everything an experiment needs to know about a system: dynamics,
@@ -32,6 +33,7 @@ pub mod config;
 pub mod delay;
 pub mod double_integrator;
 pub mod episode;
+pub mod operating_range;
 pub mod pendulum;
 pub mod region;
 pub mod reward;

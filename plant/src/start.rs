@@ -13,7 +13,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal, Uniform};
 
-use crate::task::OperatingRange;
+use crate::operating_range::OperatingRange;
 
 /// Stream id of the start states' draws (see the module documentation).
 pub const STREAM: u64 = 5;

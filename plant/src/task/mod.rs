@@ -3,6 +3,8 @@
 
 use std::path::Path;
 
+pub use crate::operating_range::OperatingRange;
+
 use crate::angle::wrap;
 use crate::config::ConfigError;
 use crate::region::Region;
@@ -95,16 +97,6 @@ pub struct Simulation {
     pub substeps: usize,
 }
 
-/// The operating range of a system with physical limits, and the penalty for leaving it:
-/// the failure region (its outside) of the trial's endings.
-#[derive(Clone, Debug, PartialEq)]
-pub struct OperatingRange {
-    /// `(low, high)` per state component; infinite bounds for unlimited components.
-    pub limits: Vec<(f64, f64)>,
-    /// The reward of the transition that leaves the range, which is the trial's last.
-    pub penalty: f64,
-}
-
 /// A terminal goal: the transition that reaches `region` ends the trial (termination,
 /// as leaving the operating range does) with `reward` as its reward, in place of `ρ`.
 #[derive(Clone, Debug, PartialEq)]
@@ -113,15 +105,6 @@ pub struct Goal {
     pub region: Region,
     /// The reward of the transition that reaches it.
     pub reward: f64,
-}
-
-impl OperatingRange {
-    /// Whether `x` lies outside the range (a non-finite component counts as outside).
-    pub fn excludes(&self, x: &[f64]) -> bool {
-        x.iter()
-            .zip(&self.limits)
-            .any(|(&xi, &(lo, hi))| !(lo..=hi).contains(&xi))
-    }
 }
 
 impl Task {
