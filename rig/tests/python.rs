@@ -43,37 +43,33 @@ fn the_python_package_passes_its_tests() {
     assert!(said.contains(" passed"), "{said}");
 }
 
-#[test]
-fn the_python_package_type_checks() {
-    let Some(py) = python::with("mypy") else {
-        return;
-    };
-    let out = python::command(&py)
-        .args(["-m", "mypy", "--no-incremental", "rigkit", "tests"])
-        .current_dir(python::root().join("python"))
+/// `python -m mypy --no-incremental ARGS` in the repository's folder `dir`, asserted to
+/// find no issue.
+fn type_checks(py: &str, dir: &str, args: &[&str]) {
+    let out = python::command(py)
+        .args(["-m", "mypy", "--no-incremental"])
+        .args(args)
+        .current_dir(python::root().join(dir))
         .output()
         .unwrap();
     let said = text(&out);
-    assert!(
-        out.status.success(),
-        "mypy (python/pyproject.toml):\n{said}"
-    );
+    assert!(out.status.success(), "mypy {args:?} in {dir}:\n{said}");
     assert!(said.starts_with("Success: no issues found"), "{said}");
+}
+
+/// The package, strictly (python/pyproject.toml).
+#[test]
+fn the_python_package_type_checks() {
+    if let Some(py) = python::with("mypy") {
+        type_checks(&py, "python", &["rigkit", "tests"]);
+    }
 }
 
 /// `rig tune`'s Python side (tune/rig_tune) type-checks strictly too, against the
 /// package it imports.
 #[test]
 fn the_tune_helpers_type_check() {
-    let Some(py) = python::with("mypy, optuna, matplotlib") else {
-        return;
-    };
-    let out = python::command(&py)
-        .args(["-m", "mypy", "--no-incremental", "--strict", "rig_tune"])
-        .current_dir(python::root().join("tune"))
-        .output()
-        .unwrap();
-    let said = text(&out);
-    assert!(out.status.success(), "mypy --strict tune/rig_tune:\n{said}");
-    assert!(said.starts_with("Success: no issues found"), "{said}");
+    if let Some(py) = python::with("mypy, optuna, matplotlib") {
+        type_checks(&py, "tune", &["--strict", "rig_tune"]);
+    }
 }
