@@ -202,3 +202,14 @@ def test_a_model_driver_takes_the_realtime_clock_flags_or_says_why_not() -> None
     ):
         done = run(["python", "examples/acrobot/driver.py", *args])
         assert done.returncode == 2 and why in done.stderr, said(done)
+
+
+def test_the_heap_built_before_serving_is_frozen_out_of_the_collector() -> None:
+    import gc
+
+    gc.unfreeze()
+    try:
+        serve(FakeLink(lambda k: 0), 3)
+        assert gc.get_freeze_count() > 0
+    finally:
+        gc.unfreeze()
