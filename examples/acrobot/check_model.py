@@ -16,6 +16,7 @@ if importlib.util.find_spec("rigkit") is None:
     sys.exit("error: check_model.py needs the rig's Python package rigkit: pip install ./python")
 
 from acrobot import Acrobot, derivative  # noqa: E402
+from rigkit.model_check import Check, verdict  # noqa: E402
 
 
 def energy_drift() -> float:
@@ -50,16 +51,11 @@ def gymnasium_difference() -> float | None:
 
 
 def main():
-    drift = energy_drift()
-    print(f"energy drift over 10 s without torque: {drift:.2e} J")
-    ok = drift < 1e-6
-    diff = gymnasium_difference()
-    if diff is None:
-        print("skipped: gymnasium is not installed (the comparison with Acrobot-v1)")
-    else:
-        print(f"largest difference from Acrobot-v1's derivative: {diff:.2e}")
-        ok = ok and diff == 0.0
-    return 0 if ok else 1
+    return verdict(
+        Check("energy drift over 10 s without torque", "J", energy_drift(), 1e-6),
+        Check("largest difference from Acrobot-v1's derivative", "", gymnasium_difference(), 0.0),
+        skipped="the comparison with Acrobot-v1",
+    )
 
 
 if __name__ == "__main__":

@@ -7,11 +7,16 @@ failure; without gymnasium, the second check is skipped and said so.
     python3 examples/cartpole/check_model.py
 """
 
+import importlib.util
 import math
 import random
 import sys
 
-from cartpole import CartPole, derivative, energy
+if importlib.util.find_spec("rigkit") is None:
+    sys.exit("error: check_model.py needs the rig's Python package rigkit: pip install ./python")
+
+from cartpole import CartPole, derivative, energy  # noqa: E402
+from rigkit.model_check import Check, verdict  # noqa: E402
 
 
 def energy_drift() -> float:
@@ -54,16 +59,11 @@ def gymnasium_difference() -> float | None:
 
 
 def main():
-    drift = energy_drift()
-    print(f"energy drift over 10 s without force: {drift:.2e} J")
-    ok = drift < 1e-9
-    diff = gymnasium_difference()
-    if diff is None:
-        print("skipped: gymnasium is not installed (the comparison with CartPole-v1)")
-    else:
-        print(f"largest difference from CartPole-v1's accelerations: {diff:.2e}")
-        ok = ok and diff < 1e-9
-    return 0 if ok else 1
+    return verdict(
+        Check("energy drift over 10 s without force", "J", energy_drift(), 1e-9),
+        Check("largest difference from CartPole-v1's accelerations", "", gymnasium_difference(), 1e-9),
+        skipped="the comparison with CartPole-v1",
+    )
 
 
 if __name__ == "__main__":
