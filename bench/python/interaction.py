@@ -12,6 +12,7 @@ median over its seeds, a seed that never got there counting as later than any th
 
 import csv
 import statistics
+from dataclasses import dataclass
 from pathlib import Path
 
 from rigkit.seeds import Seed, median_to_success, to_success
@@ -58,33 +59,46 @@ def rig_row(e, label, results: list[Seed]):
     }
 
 
-def read_sac(path: Path):
-    """sb3_sac.py's curves.csv: {seed: [(steps, sim_s, wall_s, return, success)]}."""
-    runs = {}
+@dataclass(frozen=True)
+class Evaluation:
+    """One greedy evaluation of SAC's learning: after `steps` learning steps (`sim_s`
+    simulated seconds, `wall_s` of wall time), its greedy return and whether it met the
+    experiment's success rule."""
+
+    steps: int
+    sim_s: float
+    wall_s: float
+    greedy_return: float
+    success: bool
+
+
+def read_sac(path: Path) -> dict[int, list[Evaluation]]:
+    """sb3_sac.py's curves.csv: {seed: its evaluations in order}."""
+    runs: dict[int, list[Evaluation]] = {}
     with open(path) as f:
         for r in csv.DictReader(f):
-            runs.setdefault(int(r["seed"]), []).append(
-                (int(r["steps"]), float(r["sim_s"]), float(r["wall_s"]), float(r["greedy_return"]),
-                 r["success"] == "1"))
+            runs.setdefault(int(r["seed"]), []).append(Evaluation(
+                int(r["steps"]), float(r["sim_s"]), float(r["wall_s"]), float(r["greedy_return"]),
+                r["success"] == "1"))
     return runs
 
 
-def sac_row(e, runs, seeds: int):
+def sac_row(e, runs: dict[int, list[Evaluation]], seeds: int):
     """The row of SB3's SAC from sb3_sac.py's runs of seeds 1..`seeds` (those there)."""
     curves = [runs[s] for s in range(1, seeds + 1) if s in runs]
-    steps = [to_success([(c[0], c[4]) for c in curve]) for curve in curves]
-    secs = [to_success([(c[1], c[4]) for c in curve]) for curve in curves]
+    steps = [to_success([(c.steps, c.success) for c in curve]) for curve in curves]
+    secs = [to_success([(c.sim_s, c.success) for c in curve]) for curve in curves]
     return {
         "experiment": e["name"], "system": e["system"], "held_out": bool(e.get("held_out")),
-        "learner": SAC_LABEL, "seeds": len(curves), "succeed": sum(c[-1][4] for c in curves),
+        "learner": SAC_LABEL, "seeds": len(curves), "succeed": sum(c[-1].success for c in curves),
         "ever_succeeded": sum(f is not None for f, _ in steps),
         "first_success_s": median_to_success([f for f, _ in secs]),
         "first_success_samples": median_to_success([f for f, _ in steps]),
         "holds_s": median_to_success([h for _, h in secs]),
         "holds_samples": median_to_success([h for _, h in steps]),
-        "run_samples": median([c[-1][0] for c in curves]),
-        "final_return": median([c[-1][3] for c in curves]),
-        "wall_s": median([c[-1][2] for c in curves]),
+        "run_samples": median([c[-1].steps for c in curves]),
+        "final_return": median([c[-1].greedy_return for c in curves]),
+        "wall_s": median([c[-1].wall_s for c in curves]),
         "agent_ms_median": None, "agent_ms_p99": None,
     }
 

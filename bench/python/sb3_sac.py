@@ -46,7 +46,7 @@ from rigkit.adapter import load  # noqa: E402
 from rigkit.seeds import TaskTimes, meets  # noqa: E402
 from rigkit.task import Task  # noqa: E402
 
-from interaction import read_sac  # noqa: E402  (beside this script)
+from interaction import Evaluation, read_sac  # noqa: E402  (beside this script)
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -129,8 +129,7 @@ def budget(env_id: str) -> int:
 
 
 def learn(e, mapping, task: Task, seed: int, steps: int):
-    """SB3 SAC on the experiment's environment: [(steps, sim_s, wall_s, greedy_return,
-    success)] every EVAL_EVERY steps."""
+    """SB3 SAC on the experiment's environment: its Evaluation every EVAL_EVERY steps."""
     import gymnasium
     import torch
     from stable_baselines3 import SAC
@@ -142,7 +141,8 @@ def learn(e, mapping, task: Task, seed: int, steps: int):
     times = TaskTimes(task.ts, task.trial_seconds, [i for i, a in enumerate(task.angles) if a])
     kwargs = {k: v for k, v in HYPERPARAMETERS[env_id].items() if k not in ("n_timesteps", "zoo_entry")}
     eval_env = gymnasium.make(env_id)
-    curve, t0 = [], time.monotonic()
+    curve: list[Evaluation] = []
+    t0 = time.monotonic()
 
     class Evaluate(BaseCallback):
         def _on_step(self) -> bool:
@@ -151,7 +151,7 @@ def learn(e, mapping, task: Task, seed: int, steps: int):
                 episodes = greedy_episodes(eval_env, mapping, task, act)
                 ret, ok = meets(e["success"], times, episodes)
                 n = self.num_timesteps
-                curve.append((n, n * task.ts, time.monotonic() - t0, ret, ok))
+                curve.append(Evaluation(n, n * task.ts, time.monotonic() - t0, ret, ok))
                 print(f"  seed {seed}, {n} steps: greedy {ret:.2f}, meets the rule: {'yes' if ok else 'no'}",
                       flush=True)
             return True
@@ -167,20 +167,20 @@ def kept_runs(path: Path, steps: int):
     if not path.exists():
         return {}
     runs = read_sac(path)
-    if other := sorted({c[-1][0] for c in runs.values()} - {steps}):
+    if other := sorted({c[-1].steps for c in runs.values()} - {steps}):
         fail(WHO, f"{path}: holds runs of {other[0]} steps, not {steps}: use another folder or the same --steps")
     return runs
 
 
-def append(path: Path, seed: int, curve):
+def append(path: Path, seed: int, curve: list[Evaluation]):
     """One finished seed's evaluations, appended to curves.csv (its header if new)."""
     new = not path.exists()
     with open(path, "a", newline="") as f:
         w = csv.writer(f)
         if new:
             w.writerow(HEADER)
-        for s, sim, wall, ret, ok in curve:
-            w.writerow([seed, s, f"{sim:g}", f"{wall:.3f}", ret, int(ok)])
+        for c in curve:
+            w.writerow([seed, c.steps, f"{c.sim_s:g}", f"{c.wall_s:.3f}", c.greedy_return, int(c.success)])
 
 
 def run(out: Path, e, seeds: int, steps: int | None = None):
