@@ -169,12 +169,11 @@ fn planning(task: &Task) -> PlanningConfig {
     }
 }
 
-/// The iterative LQR's iterations per sample of a swing-up's plan. With three, a plan
-/// that had swung the acrobot up at 19 of 20 evaluations let it fall at the last (seed 4
-/// of five, 100 trials): the first link upright, the second still folded, from where one
-/// iteration's step along the fits does not find the way up within the sample; with five,
-/// 5 of 5 seeds were up at the end and at all of the last ten evaluations
-/// (docs/results/systems.md). Each iteration costs about `1.5 H` local fits.
+/// The iterative LQR's iterations per sample of a swing-up's plan. With three, the
+/// acrobot's swing-up was upright at 49 of 50 evaluations (the last ten of five seeds),
+/// the one missed seed 4's last (the first link up, the second still swinging through
+/// hanging); with five, at 50 of 50, for a median step 1.2–1.4 times longer
+/// (docs/results/systems.md, "Iterations per sample of a swing-up's plan").
 pub const PLAN_ITERATIONS: u32 = 5;
 
 /// The part of a trial a swing-up's plan looks ahead.
