@@ -64,7 +64,7 @@ pub fn run(args: &PlantSettings) -> Result<()> {
         first_seq: 0,
     });
     let link = Link::join(
-        args.node.join("plant")?,
+        (args.node.join("plant")?, wire::Monotonic::host()),
         task.clone(),
         sensor,
         resume.first_seq,
@@ -206,12 +206,13 @@ fn runner(
     let task = link.task.clone();
     let actuator = crate::build::actuator(&task, cfg, run_seed);
     let episode = Episode::new(Plant::new(task.clone()), actuator);
+    let time = link.time.clone();
     Ok(match period {
         Some(period) => Box::new(
             realtime::RealtimePlant::new(
                 (link, episode),
                 (task.ts, period),
-                wire::Monotonic::host(),
+                time,
                 args.spin.spin_us,
                 args.cycles_out.is_some(),
             )
