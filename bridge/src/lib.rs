@@ -25,7 +25,6 @@ pub mod claim;
 pub mod clock;
 mod driver_side;
 pub mod error;
-mod gate;
 pub mod message;
 mod outbox;
 mod probe;
@@ -34,7 +33,7 @@ mod rig_side;
 pub mod session;
 pub mod timing;
 
-pub use driver_side::{DriverSide, serve_driver};
+pub use driver_side::{serve_driver, settings::DriverSide};
 pub use error::{Error, Result};
 pub use probe::{Probed, probe};
 pub use rig_side::{RigSide, serve_rig};

@@ -18,7 +18,7 @@ use std::time::Duration;
 
 use crate::error::{Result, zenoh};
 use driver::contract::{DRIVER_QOS, DriverCommand, kind, service, topic};
-use wire::{Bus, now_ns};
+use wire::{Bus, Monotonic};
 use zenoh::Wait;
 use zenoh::pubsub::Publisher;
 
@@ -56,9 +56,10 @@ pub(crate) struct Outbox {
     claimant: Claimant,
     /// When the last command or claim went out.
     last_put: u64,
-    /// The last RESET, when it went last, and how long to wait for its acknowledgement
-    /// before it goes again (doubling each time), until a sample acknowledges it.
-    pending: Option<(DriverCommand, u64, u64)>,
+    /// The last RESET, until a sample acknowledges it.
+    pending: Unacknowledged,
+    /// The time holds and resends are timed on.
+    time: Monotonic,
     /// Commands put.
     pub(crate) sent: u64,
     /// RESETs sent again.
@@ -73,8 +74,14 @@ const RESEND_AT_LEAST: Duration = Duration::from_millis(200);
 const RESEND_AT_MOST: Duration = Duration::from_secs(2);
 
 impl Outbox {
-    /// The way out for driver `id`'s commands, put as `user` by `session`.
-    pub(crate) fn new(session: &zenoh::Session, id: &str, user: &str) -> Result<Self> {
+    /// The way out for driver `id`'s commands, put as `user` by `session`, timed on
+    /// `time`.
+    pub(crate) fn new(
+        session: &zenoh::Session,
+        id: &str,
+        user: &str,
+        time: Monotonic,
+    ) -> Result<Self> {
         let commands = Topic::Command.key_of(id, user);
         Ok(Self {
             id: id.to_string(),
@@ -83,7 +90,8 @@ impl Outbox {
             claims: reliable_publisher(session, &Topic::Claim.key_of(id, user))?,
             claimant: Claimant::new(session.zid().to_le_bytes()),
             last_put: 0,
-            pending: None,
+            pending: Unacknowledged::default(),
+            time,
             sent: 0,
             resent: 0,
         })
@@ -93,15 +101,15 @@ impl Outbox {
     pub(crate) fn command(&mut self, c: &DriverCommand) -> Result<()> {
         let claim = self.claimant.command();
         let reset = c.kind == kind::RESET;
-        if reset && self.pending.is_none_or(|(p, ..)| p.seq != c.seq) {
-            self.pending = Some((*c, now_ns(), 0));
+        if reset {
+            self.pending.sent(c, self.time.now_ns());
         }
         let out = if reset { &self.resets } else { &self.actions };
         out.put(to_bytes(c))
             .attachment(to_bytes(&claim))
             .wait()
             .map_err(zenoh(|| "publishing a command".to_string()))?;
-        self.last_put = now_ns();
+        self.last_put = self.time.now_ns();
         self.sent += 1;
         Ok(())
     }
@@ -114,7 +122,9 @@ impl Outbox {
         }
         let claim = match there {
             false => self.claimant.release(),
-            true if now_ns().saturating_sub(self.last_put) >= HOLD_EVERY.as_nanos() as u64 => {
+            true if self.time.now_ns().saturating_sub(self.last_put)
+                >= HOLD_EVERY.as_nanos() as u64 =>
+            {
                 self.claimant.hold()
             }
             true => return Ok(()),
@@ -126,30 +136,19 @@ impl Outbox {
     /// newest sample's `reset_id`) in time: five periods of `period_ns`, at least
     /// 200 ms, twice as long after each resend, at most 2 s.
     pub(crate) fn repeat_reset(&mut self, acknowledged: u64, period_ns: u64) -> Result<()> {
-        let Some((c, sent, wait)) = self.pending else {
+        let now = self.time.now_ns();
+        let Some((c, waited)) = self.pending.due(acknowledged, period_ns, now) else {
             return Ok(());
         };
-        if acknowledged == c.seq {
-            self.pending = None;
-            return Ok(());
-        }
-        let wait = match wait {
-            0 => (RESEND_PERIODS * period_ns).max(RESEND_AT_LEAST.as_nanos() as u64),
-            w => w,
-        };
-        if now_ns().saturating_sub(sent) > wait {
-            eprintln!(
-                "bridge for driver {:?}: RESET {} sent again: no sample acknowledged it within {:.0} ms",
-                self.id,
-                c.seq,
-                wait as f64 * 1e-6
-            );
-            self.command(&c)?;
-            self.sent -= 1;
-            self.resent += 1;
-            let next = (2 * wait).min(RESEND_AT_MOST.as_nanos() as u64);
-            self.pending = Some((c, now_ns(), next));
-        }
+        eprintln!(
+            "bridge for driver {:?}: RESET {} sent again: no sample acknowledged it within {:.0} ms",
+            self.id,
+            c.seq,
+            waited as f64 * 1e-6
+        );
+        self.command(&c)?;
+        self.sent -= 1;
+        self.resent += 1;
         Ok(())
     }
 
@@ -167,22 +166,58 @@ impl Outbox {
             .put(to_bytes(claim))
             .wait()
             .map_err(zenoh(|| "publishing a claim".to_string()))?;
-        self.last_put = now_ns();
+        self.last_put = self.time.now_ns();
         Ok(())
     }
 }
 
-/// The rig's commands to the network, until stopped; how many were put, and how many
-/// RESETs were sent again.
+/// The RESET waiting for a sample to acknowledge it: when it went last, and how long
+/// to wait before it goes again (0: not sent again yet).
+#[derive(Default)]
+struct Unacknowledged(Option<(DriverCommand, u64, u64)>);
+
+impl Unacknowledged {
+    /// RESET `c` went out at `now`: a new one waits from now.
+    fn sent(&mut self, c: &DriverCommand, now: u64) {
+        if self.0.is_none_or(|(p, ..)| p.seq != c.seq) {
+            self.0 = Some((*c, now, 0));
+        }
+    }
+
+    /// The RESET to send again at `now`, with how long it waited, if no sample
+    /// acknowledged it (`acknowledged`: the newest sample's `reset_id`) in time: five
+    /// periods of `period_ns`, at least 200 ms, twice as long after each resend, at
+    /// most 2 s.
+    fn due(&mut self, acknowledged: u64, period_ns: u64, now: u64) -> Option<(DriverCommand, u64)> {
+        let (c, sent, wait) = self.0?;
+        if acknowledged == c.seq {
+            self.0 = None;
+            return None;
+        }
+        let wait = match wait {
+            0 => (RESEND_PERIODS * period_ns).max(RESEND_AT_LEAST.as_nanos() as u64),
+            w => w,
+        };
+        if now.saturating_sub(sent) <= wait {
+            return None;
+        }
+        let next = (2 * wait).min(RESEND_AT_MOST.as_nanos() as u64);
+        self.0 = Some((c, now, next));
+        Some((c, wait))
+    }
+}
+
+/// The rig's commands to the network, until stopped, timed on `time`; how many were
+/// put, and how many RESETs were sent again.
 pub(crate) fn commands_up(
     session: &zenoh::Session,
-    id: &str,
-    user: &str,
+    (id, user): (&str, &str),
     shared: &Shared,
+    time: &Monotonic,
 ) -> Result<(u64, u64)> {
     let bus = Bus::with_node(&format!("rig-bridge-{id}"), "driver")?;
     let rx = bus.rx_on::<DriverCommand>(&service(id, topic::COMMAND), DRIVER_QOS)?;
-    let mut out = Outbox::new(session, id, user)?;
+    let mut out = Outbox::new(session, id, user, time.clone())?;
     while !shared.stop.load(Relaxed) {
         out.repeat_reset(
             shared.reset_id.load(Relaxed),
@@ -193,7 +228,7 @@ pub(crate) fn commands_up(
             out.idle(rx.senders() > 0)?;
             continue;
         };
-        let sent = now_ns();
+        let sent = time.now_ns();
         c.t_publish_ns = c
             .t_publish_ns
             .saturating_add_signed(shared.offset.load(Relaxed));
@@ -206,4 +241,46 @@ pub(crate) fn commands_up(
     }
     out.close()?;
     Ok((out.sent, out.resent))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MS: u64 = 1_000_000;
+
+    /// A RESET goes again after five periods (at least 200 ms) without an
+    /// acknowledgement, then after twice as long each time, at most 2 s; an
+    /// acknowledgement ends it; a RESET sent again keeps its wait.
+    #[test]
+    fn an_unacknowledged_reset_goes_again_ever_more_patiently() {
+        let (clock, time) = Monotonic::mock();
+        let reset = DriverCommand {
+            seq: 7,
+            kind: kind::RESET,
+            ..Default::default()
+        };
+        let mut pending = Unacknowledged::default();
+        pending.sent(&reset, clock.now_ns());
+        let mut resent_at = Vec::new();
+        let period_ns = 10 * MS;
+        while time.now_ns() < 8_000 * MS {
+            time.advance(Duration::from_millis(1));
+            if let Some((c, _)) = pending.due(6, period_ns, clock.now_ns()) {
+                assert_eq!(c.seq, 7);
+                pending.sent(&c, clock.now_ns());
+                resent_at.push(time.now_ns() / MS);
+            }
+        }
+        assert_eq!(resent_at, [201, 602, 1403, 3004, 5005, 7006]);
+        // Five periods of 100 ms are longer than 200 ms.
+        let mut pending = Unacknowledged::default();
+        pending.sent(&reset, clock.now_ns());
+        time.advance(Duration::from_millis(500));
+        assert!(pending.due(6, 100 * MS, clock.now_ns()).is_none());
+        time.advance(Duration::from_millis(1));
+        assert!(pending.due(7, 100 * MS, clock.now_ns()).is_none());
+        time.advance(Duration::from_secs(5));
+        assert!(pending.due(6, 100 * MS, clock.now_ns()).is_none());
+    }
 }

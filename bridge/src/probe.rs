@@ -7,11 +7,11 @@
 
 use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use crate::error::{Result, zenoh};
 use driver::contract::{DriverCommand, DriverSample, kind};
-use wire::now_ns;
+use wire::Monotonic;
 use zenoh::Wait;
 
 use crate::claim::{Claim, Claimant};
@@ -39,6 +39,28 @@ impl Probed {
     /// Whether anything arrived from the driver.
     pub fn received(&self) -> bool {
         self.infos + self.samples > 0
+    }
+}
+
+/// How often a probe puts a zero action.
+const ZERO_ACTION_EVERY: Duration = Duration::from_millis(10);
+
+/// How long a probe listens after its last action, for a refusal on its way.
+const LAST_WORD: Duration = Duration::from_millis(100);
+
+/// Calls `tick` with the time every `period` of `time`, from now for `seconds`.
+fn every(time: &Monotonic, period: Duration, seconds: f64, mut tick: impl FnMut(u64)) {
+    let t0 = time.now_ns();
+    let end = t0 + (seconds * 1e9) as u64;
+    let mut next = t0;
+    loop {
+        let now = time.now_ns();
+        if now >= end {
+            return;
+        }
+        tick(now);
+        next = next.max(now) + period.as_nanos() as u64;
+        time.sleep_until(next);
     }
 }
 
@@ -101,14 +123,14 @@ pub fn probe(
     };
     let out = publisher(&session, &Topic::Command.key_of(id, &user))?;
     let mut commands = 0;
-    let t0 = Instant::now();
-    while t0.elapsed().as_secs_f64() < seconds {
+    let time = Monotonic::host();
+    every(&time, ZERO_ACTION_EVERY, seconds, |now| {
         if zero_actions {
             let c = DriverCommand {
-                seq: now_ns(),
+                seq: now,
                 kind: kind::ACTION,
                 sample_seq: counters[2].load(Relaxed),
-                t_publish_ns: now_ns(),
+                t_publish_ns: now,
                 n_u: 1,
                 ..Default::default()
             };
@@ -117,15 +139,14 @@ pub fn probe(
             let _ = out.put(to_bytes(&c)).attachment(claim).wait();
             commands += 1;
         }
-        std::thread::sleep(Duration::from_millis(10));
-    }
+    });
     if claimant.is_open() {
         let release = claimant.release();
         let claims = publisher(&session, &Topic::Claim.key_of(id, &user))?;
         let _ = claims.put(to_bytes(&release)).wait();
     }
     // Time for a last refusal on its way.
-    std::thread::sleep(Duration::from_millis(100));
+    time.sleep_until(time.now_ns() + LAST_WORD.as_nanos() as u64);
     let _ = session.close().wait();
     let refused = refused.lock().expect("no panics while holding it").take();
     Ok(Probed {
@@ -135,4 +156,23 @@ pub fn probe(
         refused,
         unconnected: heard.latest().map(|r| r.explain(&net.endpoint)),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A probe of 100 ms puts its zero actions every 10 ms, on time even when a put
+    /// takes a while.
+    #[test]
+    fn a_probe_acts_every_ten_milliseconds_for_its_length() {
+        let (clock, time) = Monotonic::mock();
+        let mut at = Vec::new();
+        every(&clock, ZERO_ACTION_EVERY, 0.1, |now| {
+            at.push(now / 1_000_000);
+            time.advance(Duration::from_millis(3));
+        });
+        assert_eq!(at, (0..10).map(|i| 10 * i).collect::<Vec<_>>());
+        assert_eq!(time.now_ns(), 100_000_000);
+    }
 }

@@ -11,7 +11,9 @@
 //!   a failed TLS handshake with its reason (Zenoh does not log the address of those).
 
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use wire::Monotonic;
 
 use tracing::field::{Field, Visit};
 use tracing::{Event, Level, Subscriber};
@@ -138,10 +140,26 @@ struct Listening {
     /// The listening side: prefix of its log lines, and the address of the link Zenoh
     /// accepted last; refusals said, to say each once a minute.
     listener: Option<(String, Said)>,
+    /// The time refusals are said on.
+    time: Monotonic,
 }
 
 /// The address of the link Zenoh accepted last, and each refusal said with when.
-type Said = Mutex<(String, Vec<(String, Instant)>)>;
+type Said = Mutex<(String, Vec<(String, u64)>)>;
+
+/// A refusal is said again after this long at the earliest.
+const SAY_AGAIN_AFTER: Duration = Duration::from_secs(60);
+
+/// Whether `line` is to be said at `now`: not said within [`SAY_AGAIN_AFTER`] before
+/// (`said`: the lines said, with when, which this keeps).
+fn to_say(said: &mut Vec<(String, u64)>, line: &str, now: u64) -> bool {
+    said.retain(|(_, t)| now.saturating_sub(*t) < SAY_AGAIN_AFTER.as_nanos() as u64);
+    if said.iter().any(|(l, _)| l == line) {
+        return false;
+    }
+    said.push((line.to_string(), now));
+    true
+}
 
 /// The message of an event.
 #[derive(Default)]
@@ -188,12 +206,8 @@ impl<S: Subscriber> Layer<S> for Listening {
             }
             _ => format!("refused a connection from {}: {why}", state.0),
         };
-        state
-            .1
-            .retain(|(_, t)| t.elapsed() < Duration::from_secs(60));
-        if !state.1.iter().any(|(l, _)| *l == line) {
+        if to_say(&mut state.1, &line, self.time.now_ns()) {
             eprintln!("{prefix}: {line}");
-            state.1.push((line, Instant::now()));
         }
     }
 }
@@ -213,6 +227,7 @@ pub fn listen(listener: Option<String>) -> Arc<Heard> {
                 Mutex::new((String::from("an unknown address"), Vec::new())),
             )
         }),
+        time: Monotonic::host(),
     };
     let targets = Targets::new()
         .with_target("zenoh_transport::unicast::manager", Level::TRACE)
@@ -270,5 +285,19 @@ mod tests {
             ),
             Some("TLS handshake failed")
         );
+    }
+
+    /// A refusal is said once a minute at most, each of its kind.
+    #[test]
+    fn a_refusal_is_said_once_a_minute() {
+        let (clock, time) = Monotonic::mock();
+        let mut said = Vec::new();
+        assert!(to_say(&mut said, "refused a", clock.now_ns()));
+        assert!(to_say(&mut said, "refused b", clock.now_ns()));
+        time.advance(Duration::from_millis(59_999));
+        assert!(!to_say(&mut said, "refused a", clock.now_ns()));
+        time.advance(Duration::from_millis(1));
+        assert!(to_say(&mut said, "refused a", clock.now_ns()));
+        assert_eq!(said.len(), 1);
     }
 }

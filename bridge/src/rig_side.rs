@@ -19,7 +19,7 @@ use crate::error::{Error, Result, zenoh};
 use driver::contract::{
     DRIVER_QOS, DriverInfo, DriverNotice, DriverSample, LinkSample, service, topic,
 };
-use wire::{Bus, Tx, now_ns};
+use wire::{Bus, Monotonic, Tx};
 use zenoh::Wait;
 
 use crate::claim::Claim;
@@ -73,24 +73,30 @@ pub fn serve_rig(opts: &RigSide) -> Result<(Counts, LinkTiming)> {
         opts.net.endpoint,
         session.zid()
     );
+    let time = Monotonic::host();
     let (tx, rx) = channel();
     let _subs: Vec<_> = [Topic::Info, Topic::Sample, Topic::Pong, Topic::Refused]
         .into_iter()
-        .map(|t| listen(&session, &opts.id, t, tx.clone()))
+        .map(|t| listen(&session, (&opts.id, t), tx.clone(), time.clone()))
         .collect::<Result<_>>()?;
     let shared = Arc::new(Shared::default());
     let up = {
-        let (session, id, shared) = (session.clone(), opts.id.clone(), shared.clone());
+        let (session, id, shared, time) = (
+            session.clone(),
+            opts.id.clone(),
+            shared.clone(),
+            time.clone(),
+        );
         std::thread::Builder::new()
             .name("bridge-commands".into())
             .spawn(move || {
                 // Whichever half ends, the other follows.
-                let r = commands_up(&session, &id, &user, &shared);
+                let r = commands_up(&session, (&id, &user), &shared, &time);
                 shared.stop.store(true, Relaxed);
                 r
             })?
     };
-    let mut side = Stand::new(opts, &session, shared.clone())?;
+    let mut side = Stand::new(opts, &session, shared.clone(), time)?;
     side.refusals = Some(refusals);
     let result = side.run(&rx);
     shared.stop.store(true, Relaxed);
@@ -117,12 +123,13 @@ fn timing_file(path: &PathBuf) -> Result<std::io::BufWriter<std::fs::File>> {
     Ok(f)
 }
 
-/// Subscribes to topic `t`, passing each message to `tx` with its arrival time.
+/// Subscribes to driver `id`'s topic `t`, passing each message to `tx` with its arrival
+/// time on `time`.
 fn listen(
     session: &zenoh::Session,
-    id: &str,
-    t: Topic,
+    (id, t): (&str, Topic),
     tx: Sender<Arrival>,
+    time: Monotonic,
 ) -> Result<zenoh::pubsub::Subscriber<()>> {
     session
         .declare_subscriber(t.key(id))
@@ -131,7 +138,7 @@ fn listen(
                 topic: t,
                 payload: s.payload().to_bytes().into_owned(),
                 attachment: s.attachment().map(|a| a.to_bytes().into_owned()),
-                at: now_ns(),
+                at: time.now_ns(),
             });
         })
         .wait()
@@ -169,10 +176,17 @@ struct Stand<'a> {
     /// Why this side's connection failed, as Zenoh said, and what was said of it.
     refusals: Option<Arc<Heard>>,
     said: Option<Refusal>,
+    /// The time pings, silences and arrivals are measured on.
+    time: Monotonic,
 }
 
 impl<'a> Stand<'a> {
-    fn new(opts: &'a RigSide, session: &zenoh::Session, shared: Arc<Shared>) -> Result<Self> {
+    fn new(
+        opts: &'a RigSide,
+        session: &zenoh::Session,
+        shared: Arc<Shared>,
+        time: Monotonic,
+    ) -> Result<Self> {
         let bus = driver::contract::bus(&opts.id)?;
         let taken = |error| Error::Taken {
             doing: format!("standing in for driver {:?}", opts.id),
@@ -212,7 +226,7 @@ impl<'a> Stand<'a> {
             counts: Counts::default(),
             heard: 0,
             lost_at: None,
-            started: now_ns(),
+            started: time.now_ns(),
             unanswered: false,
             acknowledged: 0,
             last_ping: 0,
@@ -222,14 +236,15 @@ impl<'a> Stand<'a> {
             refused_at: 0,
             refusals: None,
             said: None,
+            time,
         })
     }
 
     /// Pings every period and passes on what arrives, until interrupted.
     fn run(&mut self, rx: &Receiver<Arrival>) -> Result<()> {
-        let mut next_ping = now_ns();
+        let mut next_ping = self.time.now_ns();
         while !self.bus.interrupted() && !self.shared.stop.load(Relaxed) {
-            let now = now_ns();
+            let now = self.time.now_ns();
             if now >= next_ping {
                 let p = Ping {
                     sent: now,

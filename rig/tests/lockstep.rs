@@ -720,7 +720,16 @@ fn a_lockstep_driver_tells_a_new_rig_at_once_and_idles_once_the_rig_is_gone() {
         let info = |timeout| {
             let w = DriverWatch::open(&bus, &d.id).unwrap();
             let t0 = Instant::now();
-            wait_info(&bus, &w.info, &d.id, timeout, false, "").unwrap();
+            wait_info(
+                &bus,
+                &w.info,
+                &d.id,
+                timeout,
+                false,
+                "",
+                &wire::Monotonic::host(),
+            )
+            .unwrap();
             (w, t0.elapsed())
         };
         // As `rig run` and then its plant process: the first reader stays.

@@ -2,7 +2,8 @@
 //! the plant in lockstep with the agent, the plant on the monotonic clock, or an
 //! external driver. Its rules (which configurations it refuses) are here, and nowhere
 //! else. They are checked once where a run is set up — a run's options carry the proof,
-//! [`Checked`] — and by a plant node, which reads its clock from its settings file.
+//! [`Checked`], on to the plant node's settings file — or, by a plant node started by
+//! hand, from its settings file.
 
 use std::time::Duration;
 

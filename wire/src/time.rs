@@ -76,6 +76,16 @@ impl Monotonic {
         }
     }
 
+    /// Sleeps until `t_ns` (a mock: moves on to it, if it is earlier).
+    pub fn sleep_until(&self, t_ns: u64) {
+        match &self.mock {
+            None => std::thread::sleep(Duration::from_nanos(t_ns.saturating_sub(now_ns()))),
+            Some(m) => {
+                m.now_ns.fetch_max(t_ns, SeqCst);
+            }
+        }
+    }
+
     /// Whether this is a mock.
     pub fn is_mock(&self) -> bool {
         self.mock.is_some()
@@ -168,6 +178,9 @@ mod tests {
         assert!(now_ns() >= a + 1_000_000);
         let host = Monotonic::host();
         assert!(!host.is_mock() && host.now_ns() >= a + 1_000_000);
+        let b = host.now_ns();
+        host.sleep_until(b + 2_000_000);
+        assert!(now_ns() >= b + 2_000_000);
     }
 
     /// A mock stands still until moved; its clones share its time; a step moves it on
@@ -184,6 +197,10 @@ mod tests {
         time.step_each_reading(Duration::from_micros(1));
         assert_eq!((clock.now_ns(), clone.now_ns()), (3_000_000, 3_001_000));
         assert_eq!(time.now_ns(), 3_002_000);
+        time.step_each_reading(Duration::ZERO);
+        clone.sleep_until(9_000_000);
+        clock.sleep_until(4_000_000);
+        assert_eq!(clock.now_ns(), 9_000_000);
     }
 
     /// A scripted message is received only from its arrival on; waiting stops at the

@@ -6,7 +6,6 @@ use plant::config::{ConfigError, check_float, check_int, check_len};
 use serde::{Deserialize, Serialize};
 
 use super::{Algo, ApproxKind};
-use crate::learner::{Plain, Smooth, VgbpCritic};
 use crate::step_size::{Decay, StepSize};
 
 /// One approximator's parameters; which kind is given by the configuration's `approx`.
@@ -191,7 +190,7 @@ impl Component {
     }
 
     /// The error for a component of a kind not allowed in `at`.
-    fn misplaced(&self, at: &Slot) -> ConfigError {
+    pub(crate) fn misplaced(&self, at: &Slot) -> ConfigError {
         let names: Vec<&str> = at.kinds.iter().map(|k| k.as_str()).collect();
         ConfigError::new(
             at.section,
@@ -203,40 +202,6 @@ impl Component {
                 at.approx
             ),
         )
-    }
-
-    /// The component as an approximator with a gradient, checked for `at`.
-    pub(crate) fn smooth(&self, at: &Slot) -> Result<Smooth, ConfigError> {
-        self.validate(at)?;
-        match self {
-            Component::Llr(c) => Ok(Smooth::Llr(c.clone())),
-            Component::Rbf(c) => Ok(Smooth::Rbf(c.clone())),
-            _ => Err(self.misplaced(at)),
-        }
-    }
-
-    /// The component as any approximator but LSTD, checked for `at`.
-    pub(crate) fn plain(&self, at: &Slot) -> Result<Plain, ConfigError> {
-        match self {
-            Component::Tiles(c) => self.validate(at).map(|()| Plain::Tiles(c.clone())),
-            _ => self.smooth(at).map(Plain::Smooth),
-        }
-    }
-
-    /// The component as VGBP's critic, checked for `at`.
-    pub(crate) fn vgbp_critic(&self, at: &Slot) -> Result<VgbpCritic, ConfigError> {
-        match self {
-            Component::Lstd(c) => self.validate(at).map(|()| VgbpCritic::Lstd(c.clone())),
-            _ => self.smooth(at).map(VgbpCritic::Td),
-        }
-    }
-
-    /// The component as an RBF grid, checked for `at`.
-    pub(crate) fn rbf(&self, at: &Slot) -> Result<RbfConfig, ConfigError> {
-        match self.smooth(at)? {
-            Smooth::Rbf(c) => Ok(c),
-            Smooth::Llr(_) => Err(self.misplaced(at)),
-        }
     }
 
     /// Checks that the component is of a kind allowed in `at` and every value against

@@ -168,12 +168,19 @@ fn served(id: &str, log: &Path) -> Result<(), LoopError> {
     let bus = wire::Bus::join(&format!("benchwait{}", std::process::id()), "rig")?;
     let watch = driver::link::DriverWatch::open(&bus, id)?;
     let timeout = std::time::Duration::from_secs(60);
-    driver::link::wait_info(&bus, &watch.info, id, timeout, false, "").map_err(|source| {
-        LoopError::NotServed {
-            id: id.to_owned(),
-            log: log.to_owned(),
-            source: Box::new(source),
-        }
+    driver::link::wait_info(
+        &bus,
+        &watch.info,
+        id,
+        timeout,
+        false,
+        "",
+        &wire::Monotonic::host(),
+    )
+    .map_err(|source| LoopError::NotServed {
+        id: id.to_owned(),
+        log: log.to_owned(),
+        source: Box::new(source),
     })?;
     Ok(())
 }

@@ -8,7 +8,7 @@ use std::cell::Cell;
 use std::time::Duration;
 
 use iceoryx2::prelude::ZeroCopySend;
-use wire::{Bus, Rx, Tx, now_ns};
+use wire::{Bus, Monotonic, Rx, Tx};
 
 use crate::contract::{
     DRIVER_QOS, DriverCommand, DriverInfo, DriverNotice, DriverSample, LinkSample, check_id, kind,
@@ -38,7 +38,7 @@ pub fn running(bus: &Bus) -> Vec<(String, u32)> {
 /// [`DriverInfo::validate`]); waits in steps of 100 ms, so Ctrl-C ends the wait. With
 /// `say`, a driver silent for a second is said to be awaited, on stderr. The error names
 /// the service, the drivers that are running and `serve`: how to start one
-/// ([`how_to_serve`]).
+/// ([`how_to_serve`]). The timeout is kept on `time`.
 pub fn wait_info(
     bus: &Bus,
     rx: &Rx<DriverInfo>,
@@ -46,8 +46,10 @@ pub fn wait_info(
     timeout: Duration,
     say: bool,
     serve: &str,
+    time: &Monotonic,
 ) -> Result<DriverInfo, Error> {
-    let t0 = std::time::Instant::now();
+    let t0 = time.now_ns();
+    let elapsed = || Duration::from_nanos(time.now_ns().saturating_sub(t0));
     let mut said = !say;
     loop {
         let mut newest = rx.recv_timeout(Duration::from_millis(100))?;
@@ -60,7 +62,8 @@ pub fn wait_info(
         if bus.interrupted() {
             return Err(wire::Error::Interrupted.into());
         }
-        if !said && t0.elapsed() >= Duration::from_secs(1) && t0.elapsed() < timeout {
+        let waited = elapsed();
+        if !said && waited >= Duration::from_secs(1) && waited < timeout {
             said = true;
             eprintln!(
                 "waiting up to {:.0} s for driver {id:?} (services {}) ...",
@@ -68,7 +71,7 @@ pub fn wait_info(
                 service(id, "*")
             );
         }
-        if t0.elapsed() >= timeout {
+        if waited >= timeout {
             let others: Vec<String> = running(bus)
                 .into_iter()
                 .map(|(id, pid)| format!("{id:?} (pid {pid})"))
@@ -163,6 +166,8 @@ pub struct DriverLink {
     commands: Tx<DriverCommand>,
     notices: Rx<DriverNotice>,
     next_seq: Cell<u64>,
+    /// The time commands are stamped and silences measured on.
+    time: Monotonic,
 }
 
 impl DriverLink {
@@ -196,8 +201,19 @@ impl DriverLink {
             samples,
             commands,
             notices: bus.rx_on(&service(id, topic::NOTICE), DRIVER_QOS)?,
-            next_seq: Cell::new(now_ns().max(1)),
+            next_seq: Cell::new(wire::now_ns().max(1)),
+            time: Monotonic::host(),
         })
+    }
+
+    /// The link keeping its time on `time` (by default the host's clock).
+    pub fn on(self, time: Monotonic) -> Self {
+        Self { time, ..self }
+    }
+
+    /// The time now on the link's clock \[ns\].
+    pub fn now_ns(&self) -> u64 {
+        self.time.now_ns()
     }
 
     /// The driver's info: the newest one published within `timeout` (not validated:
@@ -209,14 +225,14 @@ impl DriverLink {
         say: bool,
         serve: &str,
     ) -> Result<DriverInfo, Error> {
-        wait_info(bus, &self.info, &self.id, timeout, say, serve)
+        wait_info(bus, &self.info, &self.id, timeout, say, serve, &self.time)
     }
 
     fn send(&self, mut cmd: DriverCommand) -> Result<u64, Error> {
         let seq = self.next_seq.get();
         self.next_seq.set(seq + 1);
         cmd.seq = seq;
-        cmd.t_publish_ns = now_ns();
+        cmd.t_publish_ns = self.time.now_ns();
         self.commands.send(cmd)?;
         Ok(seq)
     }
@@ -255,7 +271,7 @@ impl DriverLink {
     /// means the driver stopped), the way `bus` waits ([`wire::Waiting`]: polling, as a
     /// lockstep run does, or blocked until the driver wakes it).
     pub fn next_sample(&self, bus: &Bus, silence: Duration) -> Result<DriverSample, Error> {
-        let t0 = std::time::Instant::now();
+        let t0 = self.time.now_ns();
         loop {
             if let Some(s) = self.samples.recv_awhile()? {
                 return Ok(s);
@@ -263,7 +279,7 @@ impl DriverLink {
             if bus.interrupted() {
                 return Err(wire::Error::Interrupted.into());
             }
-            if t0.elapsed() > silence {
+            if self.time.now_ns().saturating_sub(t0) > silence.as_nanos() as u64 {
                 return Err(Error::Stopped {
                     id: self.id.clone(),
                     service: service(&self.id, topic::SAMPLE),
@@ -301,7 +317,7 @@ impl DriverLink {
         reset_id: u64,
         timeout: Duration,
     ) -> Result<DriverSample, Error> {
-        let t0 = std::time::Instant::now();
+        let t0 = self.time.now_ns();
         let silence = info.silence_limit(timeout);
         loop {
             let s = self.next_sample(bus, silence)?;
@@ -312,7 +328,7 @@ impl DriverLink {
             if s.reset_id == reset_id && s.has(status::READY) {
                 return Ok(s);
             }
-            if t0.elapsed() > timeout {
+            if self.time.now_ns().saturating_sub(t0) > timeout.as_nanos() as u64 {
                 return Err(Error::ResetTimeout {
                     id: self.id.clone(),
                     timeout,
@@ -344,5 +360,22 @@ mod tests {
             DriverLink::connect(&bus, "a/b"),
             Err(Error::Id(i)) if i == "a/b"
         ));
+    }
+
+    /// A driver silent for longer than the silence limit has stopped, on the link's
+    /// time.
+    #[test]
+    fn a_driver_silent_past_the_limit_has_stopped() {
+        let id = format!("silent{}", std::process::id());
+        let bus = Bus::join(&format!("silencetest{}", std::process::id()), "rig").unwrap();
+        let (clock, time) = Monotonic::mock();
+        time.step_each_reading(Duration::from_secs(1));
+        let link = DriverLink::connect(&bus, &id).unwrap().on(clock);
+        let e = link
+            .next_sample(&bus, Duration::from_millis(3_500))
+            .unwrap_err();
+        assert!(matches!(e, Error::Stopped { .. }), "{e:?}");
+        // Read at 0 (the start), then 1, 2 and 3 s within the limit, at 4 s past it.
+        assert_eq!(time.now_ns(), 5_000_000_000);
     }
 }

@@ -19,7 +19,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender, TrySendError, sync_channel};
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use anyhow::{Context as _, Result, anyhow};
 use foxglove::{
@@ -31,10 +31,13 @@ use runtime::record::channels::SCENE;
 use runtime::record::scene::Encoding;
 
 pub mod door;
+pub mod pace;
 pub mod watched;
 
 use door::Door;
+use pace::Pace;
 use watched::{REFRESH, Watched};
+use wire::Monotonic;
 
 /// The messages waiting between the recorder and the view's thread; beyond them, a
 /// message is dropped.
@@ -148,7 +151,7 @@ impl LiveView {
         let (queue, events) = sync_channel(QUEUE);
         let dropped = Arc::new(AtomicU64::new(0));
         let watched = Arc::new(Watched::default());
-        let view = View::new(ctx, watched.clone());
+        let view = View::new(ctx, watched.clone(), Monotonic::host());
         let thread = std::thread::Builder::new()
             .name("live view".into())
             .spawn(move || view.serve(&events))
@@ -201,32 +204,37 @@ struct View {
     scene: Option<usize>,
     /// The latest picture not served yet: its log time and message.
     latest: Option<(u64, Vec<u8>)>,
-    /// When a picture was last served.
-    shown: Option<Instant>,
+    /// The pictures' pace: [`PICTURES_PER_SECOND`].
+    pictures: Pace,
+    /// The subscriptions' pace: every [`REFRESH`].
+    refreshes: Pace,
     served: Served,
     /// The feed's flags, set from the server's subscriptions.
     watched: Arc<Watched>,
 }
 
 impl View {
-    fn new(ctx: Arc<Context>, watched: Arc<Watched>) -> View {
+    /// The view of the channels of `ctx`, their flags in `watched`, paced on `time`.
+    fn new(ctx: Arc<Context>, watched: Arc<Watched>, time: Monotonic) -> View {
+        let pictures = Duration::from_secs(1) / PICTURES_PER_SECOND;
         View {
             ctx,
             channels: Vec::new(),
             scene: None,
             latest: None,
-            shown: None,
+            pictures: Pace::every(pictures, time.clone()),
+            refreshes: Pace::every(REFRESH, time),
             served: Served::default(),
             watched,
         }
     }
 
     fn serve(mut self, events: &Receiver<Event>) -> Served {
-        let mut refreshed = Instant::now();
+        self.refreshes.went();
         loop {
-            if refreshed.elapsed() >= REFRESH {
+            if self.refreshes.due() {
                 self.refresh();
-                refreshed = Instant::now();
+                self.refreshes.went();
             }
             let event = match events.recv_timeout(REFRESH) {
                 Ok(event) => event,
@@ -272,8 +280,7 @@ impl View {
     fn message(&mut self, index: usize, log_time_ns: u64, data: Vec<u8>) {
         if self.scene == Some(index) {
             self.latest = Some((log_time_ns, data));
-            let period = Duration::from_secs(1) / PICTURES_PER_SECOND;
-            if self.shown.is_none_or(|t| t.elapsed() >= period) {
+            if self.pictures.due() {
                 self.show();
             }
             return;
@@ -293,6 +300,6 @@ impl View {
         self.channels[i].log_with_meta(&data, PartialMetadata::with_log_time(log_time_ns));
         self.served.messages += 1;
         self.served.pictures += 1;
-        self.shown = Some(Instant::now());
+        self.pictures.went();
     }
 }

@@ -7,7 +7,7 @@ use ::agent::checkpoint::{Checkpoint, Origin, Snapshot};
 use ::observer::config::ObserverMode;
 use ::observer::timing::{Call, ToAgent, act};
 
-use wire::{Action, Estimate, flags, now_ns, topic};
+use wire::{Action, Estimate, Monotonic, flags, topic};
 
 use super::{AgentSettings, NodeError, Result, SILENCE, STARTUP, pack};
 use crate::config::ExperimentConfig;
@@ -30,13 +30,15 @@ pub fn run(args: &AgentSettings) -> Result<()> {
     let out = bus.tx::<Action>(topic::ACTION)?;
     let linger = super::Linger::open(&bus, node.receivers)?;
     out.wait_for_receivers(node.receivers, STARTUP, &bus)?;
+    // The time the actions are stamped on.
+    let time = Monotonic::host();
     loop {
         let e = estimates.recv(&bus, STARTUP.max(SILENCE))?;
-        let t_received_ns = now_ns();
+        let t_received_ns = time.now_ns();
         let f = e.header.flags;
         let mut a = learner.action(&e, args.trivial)?;
         a.t_received_ns = t_received_ns;
-        a.t_publish_ns = now_ns();
+        a.t_publish_ns = time.now_ns();
         out.send(a)?;
         if f & flags::SHUTDOWN != 0 {
             if let Some(w) = &mut learner.checkpoints {

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use wire::{Bus, Waiting};
 
 use super::{Scheduling, Spin, Wait, WaitKind};
-use crate::clock::Clock;
+use crate::clock::{Checked, Clock};
 use crate::config::{ExperimentConfig, Overrides, resolve};
 
 /// A settings file that cannot be read, written or used; each names the file.
@@ -153,6 +153,16 @@ pub struct PlantSettings {
     /// What moves the run from one sample to the next [default: lockstep].
     #[serde(default = "lockstep")]
     pub clock: Clock,
+    /// `clock_checked = true`: `rig run` checked `clock` against the experiment where
+    /// it set the run up ([`Clock::check`]), and the node does not check it again. A
+    /// file by hand leaves it out: the node checks its clock as `rig run` does.
+    #[serde(
+        default,
+        rename = "clock_checked",
+        with = "checked",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub checked: Option<Checked>,
     /// Real time: how the plant waits for a sampling instant.
     #[serde(default)]
     pub spin: Spin,
@@ -177,12 +187,34 @@ fn lockstep() -> Clock {
     Clock::Lockstep
 }
 
+/// [`PlantSettings::checked`] in a settings file: `true`, or absent.
+mod checked {
+    use serde::de::Error;
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    use crate::clock::Checked;
+
+    pub fn serialize<S: Serializer>(c: &Option<Checked>, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_bool(c.is_some())
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Checked>, D::Error> {
+        match bool::deserialize(d)? {
+            true => Ok(Some(Checked(()))),
+            false => Err(D::Error::custom(
+                "`clock_checked` is `true` or absent: leave it out to have the clock checked",
+            )),
+        }
+    }
+}
+
 impl PlantSettings {
     /// The plant of `node` in lockstep, from the start of the run.
     pub fn new(node: NodeSettings) -> Self {
         Self {
             node,
             clock: Clock::Lockstep,
+            checked: None,
             spin: Spin::default(),
             learn_across_gaps: false,
             latency_out: None,
@@ -353,6 +385,15 @@ mod tests {
         };
         resumed.write(&file).unwrap();
         assert_eq!(PlantSettings::read(&file).unwrap(), resumed);
+        // The check `rig run` made goes with the clock, and comes back.
+        let checked = PlantSettings {
+            checked: Some(Checked(())),
+            ..resumed
+        };
+        checked.write(&file).unwrap();
+        let text = std::fs::read_to_string(&file).unwrap();
+        assert!(text.contains("clock_checked = true"), "{text}");
+        assert_eq!(PlantSettings::read(&file).unwrap(), checked);
         // A key the file may not have, a priority out of range: one line naming the file.
         for (text, says) in [
             (
@@ -366,6 +407,10 @@ mod tests {
             (
                 "resume = { after_trial = 1, sim_time = -1.0, first_seq = 0 }\n[node]\nrun_id = \"a\"\nconfig = \"c\"\n",
                 "is not a time",
+            ),
+            (
+                "clock_checked = false\n[node]\nrun_id = \"a\"\nconfig = \"c\"\n",
+                "`clock_checked` is `true` or absent",
             ),
         ] {
             std::fs::write(&file, text).unwrap();

@@ -6,7 +6,7 @@
 
 use super::Result;
 use ::observer::timing::{Call, Front, Sample};
-use wire::{Estimate, Measurement, flags, now_ns, topic};
+use wire::{Estimate, Measurement, Monotonic, flags, topic};
 
 use super::{ObserverSettings, SILENCE, STARTUP, pack};
 
@@ -88,13 +88,15 @@ pub fn run(settings: &ObserverSettings) -> Result<()> {
     let out = bus.tx::<Estimate>(topic::ESTIMATE)?;
     let linger = super::Linger::open(&bus, args.receivers)?;
     out.wait_for_receivers(args.receivers, STARTUP, &bus)?;
+    // The time the estimates are stamped on.
+    let time = Monotonic::host();
     loop {
         let m = measurements.recv(&bus, STARTUP.max(SILENCE))?;
-        let t_received_ns = now_ns();
+        let t_received_ns = time.now_ns();
         let f = m.header.flags;
         let mut e = estimate(&mut front, &m);
         e.t_received_ns = t_received_ns;
-        e.t_publish_ns = now_ns();
+        e.t_publish_ns = time.now_ns();
         out.send(e)?;
         if f & flags::SHUTDOWN != 0 {
             return linger.wait(&bus);

@@ -318,7 +318,15 @@ fn wait_for_driver(
 ) -> Result<(DriverWatch, DriverInfo)> {
     let watch = DriverWatch::open(bus, &d.id)?;
     let serve = driver::link::how_to_serve(task, &d.id, None);
-    let info = driver::link::wait_info(bus, &watch.info, &d.id, d.timeout, verbose, &serve)?;
+    let info = driver::link::wait_info(
+        bus,
+        &watch.info,
+        &d.id,
+        d.timeout,
+        verbose,
+        &serve,
+        &wire::Monotonic::host(),
+    )?;
     driver::link::check_info(&d.id, &info, task)?;
     Ok((watch, info))
 }

@@ -40,6 +40,7 @@ impl Nodes {
         };
         let plant = PlantSettings {
             clock: opts.clock.clone(),
+            checked: Some(opts.checked),
             spin: opts.spin,
             learn_across_gaps: opts.learn_across_gaps,
             cycles_out: opts.cycles_out.clone().filter(|_| opts.clock.is_realtime()),

@@ -4,11 +4,11 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Child;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use driver::link::DriverWatch;
 use indicatif::ProgressBar;
-use wire::{Action, Bus, Estimate, Measurement, Truth, flags, topic};
+use wire::{Action, Bus, Estimate, Measurement, Monotonic, Truth, flags, topic};
 
 use crate::experiment::TrialRecord;
 
@@ -27,6 +27,9 @@ pub(super) const CAUSE_WINDOW: Duration = Duration::from_millis(100);
 /// How long the observer and the agent are given, after Ctrl-C, to answer the samples
 /// the stopped plant sent.
 const ANSWER_WINDOW: Duration = Duration::from_secs(1);
+
+/// How long the processes are given to exit after the end of the run.
+const EXIT_WINDOW: Duration = Duration::from_secs(10);
 
 /// Checks that a topic's sequence numbers arrive without gaps.
 #[derive(Default)]
@@ -116,6 +119,8 @@ pub(super) struct Supervisor {
     /// The rows of `returns.csv` recorded on `/returns` so far (those kept by a resumed
     /// run, copied).
     pub(super) rows_recorded: usize,
+    /// The time the supervisor's windows are measured on.
+    pub(super) time: Monotonic,
 }
 
 impl Supervisor {
@@ -158,6 +163,7 @@ impl Supervisor {
             retention: Retention::new(crate::resume::checkpoint_dir(out)),
             resume_flags: String::new(),
             rows_recorded: 0,
+            time: Monotonic::host(),
         })
     }
 
@@ -310,27 +316,7 @@ impl Supervisor {
 
     /// Waits for every process to exit after the end of the run.
     pub(super) fn reap(&mut self) -> Result<()> {
-        let deadline = Instant::now() + Duration::from_secs(10);
-        for (role, child) in &mut self.children.0 {
-            loop {
-                if let Some(status) = child.try_wait()? {
-                    if !status.success() {
-                        return Err(RunError::Failed {
-                            role: role.name(),
-                            status,
-                            log: self.logs.last_lines(*role),
-                        });
-                    }
-                    break;
-                }
-                if Instant::now() > deadline {
-                    return Err(RunError::Lingered { role: role.name() });
-                }
-                std::thread::sleep(Duration::from_millis(5));
-            }
-        }
-        self.children.0.clear();
-        Ok(())
+        reap(&mut self.children, &self.logs, &self.time)
     }
 
     /// How far the run got — its complete trials written to `returns.csv` first —, and
@@ -368,12 +354,10 @@ impl Supervisor {
     /// without its action would leave that trial incomplete), then stop.
     fn record_the_rest(&mut self, bar: &ProgressBar) {
         self.children.freeze_where(|role| role == Role::Plant);
-        let deadline = Instant::now() + ANSWER_WINDOW;
-        while !self.answered() && Instant::now() < deadline {
-            if !matches!(self.drain(bar), Ok(false)) {
-                break;
-            }
-        }
+        let time = self.time.clone();
+        for_a_while(&time, ANSWER_WINDOW, || {
+            !self.answered() && matches!(self.drain(bar), Ok(false))
+        });
         self.children.freeze();
         loop {
             let before = self.messages;
@@ -416,19 +400,14 @@ impl Supervisor {
                 }
                 // Go on recording for a while: the plant's reaction (realtime), and the
                 // peers' exits, to tell the cause from its consequences.
-                let end = Instant::now() + self.grace.unwrap_or_default().max(CAUSE_WINDOW);
+                let (time, window) = (self.time.clone(), self.grace.unwrap_or_default());
                 let mut done = false;
-                while Instant::now() < end {
+                for_a_while(&time, window.max(CAUSE_WINDOW), || {
                     // Errors here are consequences of the death reported below.
-                    match self.drain(bar) {
-                        Ok(false) => {}
-                        Ok(true) => {
-                            done = true;
-                            break;
-                        }
-                        Err(_) => break,
-                    }
-                }
+                    let drained = self.drain(bar);
+                    done = matches!(drained, Ok(true));
+                    matches!(drained, Ok(false))
+                });
                 if done && self.cause().is_ok_and(|(_, s)| s.success()) {
                     // The run's end came after all: processes exit as it passes.
                     break;
@@ -452,5 +431,91 @@ impl Supervisor {
         self.recorded.announce()?;
         self.reap()?;
         self.returns.flush()
+    }
+}
+
+/// Calls `go_on` until it says to stop or `window` of `time` has passed.
+fn for_a_while(time: &Monotonic, window: Duration, mut go_on: impl FnMut() -> bool) {
+    let end = time.now_ns() + window.as_nanos() as u64;
+    while time.now_ns() < end && go_on() {}
+}
+
+/// Waits for every one of `children` to exit, [`EXIT_WINDOW`] of `time` at most; a
+/// failed one is reported with its last lines in `logs`.
+fn reap(children: &mut Children, logs: &Logs, time: &Monotonic) -> Result<()> {
+    let deadline = time.now_ns() + EXIT_WINDOW.as_nanos() as u64;
+    for (role, child) in &mut children.0 {
+        loop {
+            if let Some(status) = child.try_wait()? {
+                if !status.success() {
+                    return Err(RunError::Failed {
+                        role: role.name(),
+                        status,
+                        log: logs.last_lines(*role),
+                    });
+                }
+                break;
+            }
+            if time.now_ns() > deadline {
+                return Err(RunError::Lingered { role: role.name() });
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+    children.0.clear();
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::process::Command;
+
+    const MS: u64 = 1_000_000;
+
+    /// A window lasts its length of the time it is measured on, and no longer; it ends
+    /// early when told to.
+    #[test]
+    fn a_window_lasts_its_length_of_mock_time() {
+        let (clock, time) = Monotonic::mock();
+        time.step_each_reading(Duration::from_millis(10));
+        let mut calls = 0;
+        for_a_while(&clock, ANSWER_WINDOW, || {
+            calls += 1;
+            true
+        });
+        // Readings at 0 (the start), 10, …, 1000 ms: calls at 10 … 990 ms.
+        assert_eq!((calls, time.now_ns()), (99, 1000 * MS + 10 * MS));
+        let mut calls = 0;
+        for_a_while(&clock, ANSWER_WINDOW, || {
+            calls += 1;
+            calls < 3
+        });
+        assert_eq!(calls, 3);
+    }
+
+    /// A process that does not exit within ten seconds of the run's end is named; one
+    /// that does is reaped.
+    #[test]
+    fn a_process_lingering_ten_seconds_is_named() {
+        let (clock, time) = Monotonic::mock();
+        time.step_each_reading(Duration::from_millis(500));
+        let child = Command::new("sleep").arg("60").spawn().unwrap();
+        let mut children = Children(vec![(Role::Observer, child)]);
+        let lingered = reap(&mut children, &Logs::default(), &clock);
+        assert!(
+            matches!(lingered, Err(RunError::Lingered { role: "observer" })),
+            "{lingered:?}"
+        );
+        // The deadline at 10 s, passed at the first reading after it.
+        assert_eq!(time.now_ns(), 10_500 * MS + 500 * MS);
+        drop(children);
+
+        let (clock, time) = Monotonic::mock();
+        let mut done = Command::new("true").spawn().unwrap();
+        done.wait().unwrap();
+        let mut children = Children(vec![(Role::Plant, done)]);
+        reap(&mut children, &Logs::default(), &clock).unwrap();
+        assert!(children.0.is_empty() && time.now_ns() == 0);
     }
 }

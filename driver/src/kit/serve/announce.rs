@@ -3,8 +3,6 @@
 
 use std::time::Duration;
 
-use wire::now_ns;
-
 use super::Services;
 use crate::contract::DriverInfo;
 use crate::error::Error;
@@ -20,11 +18,11 @@ pub struct Announcer {
 }
 
 impl Announcer {
-    /// Announces `advertised`, published once already (at start).
+    /// Announces `advertised`, published once already (at start), on `io`'s time.
     pub fn new(advertised: DriverInfo, io: &Services) -> Self {
         Self {
             advertised,
-            next_ns: now_ns() + INFO_EVERY.as_nanos() as u64,
+            next_ns: io.time.now_ns() + INFO_EVERY.as_nanos() as u64,
             readers: io.infos.receivers(),
         }
     }
@@ -41,9 +39,9 @@ impl Announcer {
         let readers = io.infos.receivers();
         let changed = readers != self.readers;
         self.readers = readers;
-        if changed || now_ns() >= self.next_ns {
+        if changed || io.time.now_ns() >= self.next_ns {
             io.publish_info(self.advertised)?;
-            self.next_ns = now_ns() + INFO_EVERY.as_nanos() as u64;
+            self.next_ns = io.time.now_ns() + INFO_EVERY.as_nanos() as u64;
         }
         Ok(())
     }

@@ -5,7 +5,7 @@
 //! motor is one `impl Device` for its amplifier and encoder. [`serve_lockstep`] serves a
 //! simulation ([`Lockstep`]) without a clock: one period per action.
 
-use wire::{Bus, Rx, Tx, now_ns};
+use wire::{Bus, Monotonic, Rx, Tx};
 
 use crate::contract::{
     DRIVER_QOS, DriverCommand, DriverInfo, DriverSample, VERSION, provides, service, topic,
@@ -34,7 +34,7 @@ fn info(device: &impl Device, clock: u64, period_ns: u64, t_start_ns: u64) -> Dr
         time_scale,
         watchdog_periods: 1,
         t_start_ns,
-        t_publish_ns: now_ns(),
+        t_publish_ns: t_start_ns,
         provides: if device.provides_reward() {
             provides::REWARD
         } else {
@@ -78,12 +78,14 @@ struct Services {
     samples: Tx<DriverSample>,
     commands: Rx<DriverCommand>,
     id: String,
+    /// The time the driver keeps: its instants, stamps and info's second.
+    time: Monotonic,
 }
 
 impl Services {
-    /// Opens the services of driver `driver_id`; a second driver of the same id is a
-    /// one-line error.
-    fn open(driver_id: &str) -> Result<Self, Error> {
+    /// Opens the services of driver `driver_id`, keeping time on `time`; a second
+    /// driver of the same id is a one-line error.
+    fn open(driver_id: &str, time: Monotonic) -> Result<Self, Error> {
         crate::contract::check_id(driver_id)?;
         let bus = Bus::with_node(&crate::contract::node_name(driver_id), wire::DRIVER_RUN)
             .map_err(Error::transport(driver_id))?;
@@ -109,13 +111,14 @@ impl Services {
                 .map_err(|e| open(topic::COMMAND, e))?,
             bus,
             id: driver_id.to_string(),
+            time,
         })
     }
 
     /// Publishes `advertised`, stamped now.
     fn publish_info(&self, advertised: DriverInfo) -> Result<(), Error> {
         let mut i = advertised;
-        i.t_publish_ns = now_ns();
+        i.t_publish_ns = self.time.now_ns();
         self.infos.send(i).map_err(|e| self.err(e))
     }
 
@@ -145,17 +148,17 @@ struct Start {
 }
 
 impl Start {
-    /// Starts serving `device` as driver `driver_id`, keeping time by `clock`.
+    /// Starts serving `device` as driver `driver_id`, keeping time by `clock` on `time`.
     fn of(
         device: &mut impl Device,
-        driver_id: &str,
-        clock: u64,
+        (driver_id, clock): (&str, u64),
+        time: &Monotonic,
         verbose: bool,
     ) -> Result<Self, Error> {
         let period_ns = period_ns(device)?;
-        let io = Services::open(driver_id)?;
+        let io = Services::open(driver_id, time.clone())?;
         let d = state::Driver::new(device.task(), verbose);
-        let t_start = now_ns();
+        let t_start = time.now_ns();
         device.apply(t_start, &d.u[..d.n_u]);
         let advertised = info(device, clock, period_ns, t_start);
         io.publish_info(advertised)?;
@@ -176,8 +179,8 @@ mod tests {
     #[test]
     fn a_second_driver_of_one_id_is_already_served() {
         let id = format!("served{}", std::process::id());
-        let _first = Services::open(&id).unwrap();
-        let Err(e) = Services::open(&id) else {
+        let _first = Services::open(&id, Monotonic::host()).unwrap();
+        let Err(e) = Services::open(&id, Monotonic::host()) else {
             panic!("a second driver {id:?} opened its services");
         };
         assert!(
@@ -190,6 +193,7 @@ mod tests {
                 "another driver {id:?} is running: rig/driver/{id}/info has its one publisher already"
             )
         );
-        assert!(matches!(Services::open("a b"), Err(Error::Id(i)) if i == "a b"));
+        let other = Services::open("a b", Monotonic::host());
+        assert!(matches!(other, Err(Error::Id(i)) if i == "a b"));
     }
 }

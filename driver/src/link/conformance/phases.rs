@@ -1,11 +1,10 @@
 //! The phases of the check after the info: reset, sample rate, step response,
 //! watchdog, out-of-range and non-finite actions.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use crate::Error;
 use crate::contract::{DriverCommand, DriverSample, kind, status};
-use wire::now_ns;
 
 use super::clock::{clock_diagnosis, interval_jitter, lateness, percentile};
 use super::{Probe, STEP_PERIODS, measures, same, vector};
@@ -110,7 +109,7 @@ impl Probe<'_> {
 
     fn reset(&mut self) -> Result<(), Error> {
         let x0 = self.task.initial_states[0].clone();
-        let t0 = Instant::now();
+        let t0 = self.link.now_ns();
         let id = self.link.reset(&x0)?;
         let s = self
             .link
@@ -126,7 +125,7 @@ impl Probe<'_> {
             off <= 0.05,
             format!(
                 "READY after {:.2} s at x = {} (asked {}; off by {:.1} % of the state range, bound 5 %)",
-                t0.elapsed().as_secs_f64(),
+                (self.link.now_ns() - t0) as f64 * 1e-9,
                 vector(s.state()),
                 vector(&x0),
                 off * 100.0
@@ -159,12 +158,12 @@ impl Probe<'_> {
         } else {
             self.opts.rate_seconds
         };
-        let t_end = Instant::now() + Duration::from_secs_f64(seconds);
+        let t_end = self.link.now_ns() + Duration::from_secs_f64(seconds).as_nanos() as u64;
         let mut samples: Vec<(DriverSample, u64)> = Vec::new();
         let mut problems: Vec<String> = Vec::new();
-        while Instant::now() < t_end || samples.len() < STEP_PERIODS + 2 {
+        while self.link.now_ns() < t_end || samples.len() < STEP_PERIODS + 2 {
             let s = self.sample()?;
-            let received = now_ns();
+            let received = self.link.now_ns();
             if !s.has(status::READY) || s.reset_id != self.reset_id {
                 problems.push(format!(
                     "sample {}: status {:#x}, reset_id {} (expected READY from {})",
@@ -284,7 +283,7 @@ impl Probe<'_> {
             shown.add(&s, sent, &u);
             sent = self.act(&u, &s)?;
         }
-        self.t_last_action = now_ns();
+        self.t_last_action = self.link.now_ns();
         self.last_action = sent;
         let response = self.change(s0.state(), s.state());
         let bound = (5.0 * self.drift).max(1e-3);

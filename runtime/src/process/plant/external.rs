@@ -34,7 +34,7 @@ use ::plant::safety::{SafetyCounts, SafetyLayer};
 use ::plant::schedule::Trial;
 use driver::contract::{DriverInfo, DriverSample, status};
 use driver::link::DriverLink;
-use wire::{flags, now_ns};
+use wire::flags;
 
 use super::super::{PlantSettings, SILENCE, STARTUP};
 use super::link::{Link, TrialHeader, end_flags};
@@ -154,7 +154,7 @@ impl ExternalPlant {
     fn action(&mut self, seq: u64, t_publish_ns: u64) -> Result<Vec<f64>> {
         let l = &mut self.link;
         let a = l.actions.recv(&l.bus, SILENCE)?;
-        l.t_action_ns = now_ns();
+        l.t_action_ns = l.time.now_ns();
         l.latencies.push(l.t_action_ns - t_publish_ns);
         Link::check_answer(&a, seq)?;
         Ok(a.u[..l.task.action_dim()].to_vec())
@@ -209,7 +209,7 @@ impl ExternalPlant {
         self.safety.admit(&requested, u);
         let command = self.driver.act(u, s.seq)?;
         let next = self.next_sample(s.seq, reset_id)?;
-        let gap = self.gap(s, &next, now_ns());
+        let gap = self.gap(s, &next, self.link.time.now_ns());
         // Periods that passed without a measurement, and an action the driver had not
         // applied by the next sample, are missed deadlines.
         self.link.misses += next.seq - s.seq - 1 + u64::from(next.last_command != command);

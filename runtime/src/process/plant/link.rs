@@ -8,7 +8,7 @@ use ::plant::Task;
 use ::plant::episode::Step;
 use ::plant::schedule::Trial;
 use ::plant::sensor::Sensor;
-use wire::{Action, Bus, Header, Measurement, Truth, flags, now_ns, topic};
+use wire::{Action, Bus, Header, Measurement, Monotonic, Truth, flags, topic};
 
 use super::super::pack;
 
@@ -16,6 +16,9 @@ use super::super::pack;
 pub(super) struct Link {
     pub(super) task: Arc<Task>,
     pub(super) bus: Bus,
+    /// The time the plant's messages are stamped on (the realtime plant's deadlines
+    /// too).
+    pub(super) time: Monotonic,
     pub(super) out: wire::Tx<Measurement>,
     /// What the plant measures of the true state.
     sensor: Sensor,
@@ -49,8 +52,13 @@ pub(super) struct Link {
 impl Link {
     /// The plant's topics on `bus`: actions in, measurements out — and, when `sensor`
     /// does not measure the full state, ground truth on [`topic::TRUTH`]. The first
-    /// sample's sequence number is `first_seq`.
-    pub(super) fn join(bus: Bus, task: Arc<Task>, sensor: Sensor, first_seq: u64) -> Result<Self> {
+    /// sample's sequence number is `first_seq`; its messages are stamped on `time`.
+    pub(super) fn join(
+        (bus, time): (Bus, Monotonic),
+        task: Arc<Task>,
+        sensor: Sensor,
+        first_seq: u64,
+    ) -> Result<Self> {
         let actions = bus.rx::<Action>(topic::ACTION)?;
         let out = bus.tx::<Measurement>(topic::MEASUREMENT)?;
         let truth = match sensor {
@@ -64,6 +72,7 @@ impl Link {
             u_next: vec![f64::NAN; task.action_dim()],
             task,
             bus,
+            time,
             out,
             actions,
             seq: first_seq,
@@ -117,7 +126,7 @@ impl Link {
             u_next: pack(&self.u_next),
             delay_s: self.delay_s,
             t_sample_ns,
-            t_publish_ns: now_ns(),
+            t_publish_ns: self.time.now_ns(),
             t_action_ns: match std::mem::take(&mut self.t_action_ns) {
                 _ if header.flags & flags::START != 0 => 0,
                 t => t,
@@ -164,7 +173,7 @@ impl Link {
             t_sim,
             ..Header::default()
         };
-        let now = now_ns();
+        let now = self.time.now_ns();
         self.out.send(Measurement {
             header,
             t_sample_ns: now,

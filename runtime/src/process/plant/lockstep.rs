@@ -5,7 +5,7 @@ use crate::process::Result;
 use ::plant::episode::Episode;
 use ::plant::safety::SafetyCounts;
 use ::plant::schedule::Trial;
-use wire::{Header, flags, now_ns};
+use wire::{Header, flags};
 
 use super::super::SILENCE;
 use super::link::{Link, TrialHeader, end_flags};
@@ -76,10 +76,10 @@ fn exchange(
         reward,
         plant.state(),
         plant.applied_action(),
-        now_ns(),
+        link.time.now_ns(),
     )?;
     let a = link.actions.recv(&link.bus, SILENCE)?;
-    link.t_action_ns = now_ns();
+    link.t_action_ns = link.time.now_ns();
     link.latencies.push(link.t_action_ns - t_publish_ns);
     Link::check_answer(&a, header.seq)?;
     u.copy_from_slice(&a.u[..u.len()]);

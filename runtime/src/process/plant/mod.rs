@@ -54,7 +54,10 @@ pub const CYCLES_HEADER: &str = "seq,t_sample_ns,t_woke_ns,t_action_ns";
 pub fn run(args: &PlantSettings) -> Result<()> {
     schedule_clock(&args.node.scheduling)?;
     let cfg = args.node.experiment()?;
-    args.clock.check(&cfg, args.node.waiting())?;
+    // Checked where `rig run` set the run up; a node started by hand checks it here.
+    if args.checked.is_none() {
+        args.clock.check(&cfg, args.node.waiting())?;
+    }
     let task = cfg.task();
     let run_seed = ::agent::seed::run_seed(cfg.run().seed, args.node.run_index);
     let sensor = crate::build::sensor(&task, cfg.observer(), run_seed);
@@ -64,7 +67,7 @@ pub fn run(args: &PlantSettings) -> Result<()> {
         first_seq: 0,
     });
     let link = Link::join(
-        args.node.join("plant")?,
+        (args.node.join("plant")?, wire::Monotonic::host()),
         task.clone(),
         sensor,
         resume.first_seq,
@@ -206,12 +209,13 @@ fn runner(
     let task = link.task.clone();
     let actuator = crate::build::actuator(&task, cfg, run_seed);
     let episode = Episode::new(Plant::new(task.clone()), actuator);
+    let time = link.time.clone();
     Ok(match period {
         Some(period) => Box::new(
             realtime::RealtimePlant::new(
                 (link, episode),
                 (task.ts, period),
-                wire::Monotonic::host(),
+                time,
                 args.spin.spin_us,
                 args.cycles_out.is_some(),
             )

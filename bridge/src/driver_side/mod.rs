@@ -1,5 +1,5 @@
 //! The bridge on the driver's host (`rig bridge driver`): the driver's info and samples
-//! out to the network, the rig's commands in to the driver ([`crate::gate`]), pings
+//! out to the network, the rig's commands in to the driver ([`gate`]), pings
 //! answered.
 //!
 //! Safety stays here, beside the motor, and needs nothing from the network: the driver's
@@ -10,62 +10,26 @@
 //! delivers late, after an outage) — and says, measured on this host, when the watchdog
 //! engaged and how long after the last command.
 
-use std::collections::VecDeque;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
+use std::sync::atomic::Ordering::Relaxed;
 use std::time::Duration;
 
 use crate::error::{Error, Result, zenoh};
 use driver::contract::{DRIVER_QOS, DriverInfo, DriverSample, service, status, topic};
-use wire::{Bus, now_ns};
+use wire::{Bus, Monotonic};
 use zenoh::Wait;
 use zenoh::pubsub::Publisher;
 
-use crate::claim::Lease;
-use crate::gate::Gate;
 use crate::message::{Ping, Stamps, Topic, from_bytes, to_bytes};
-use crate::session::{Network, driver_side};
+use crate::session::driver_side;
 use crate::{Counts, publisher};
+use gate::Gate;
+use settings::DriverSide;
+use shared::Shared;
 
-/// What `rig bridge driver` serves.
-#[derive(Clone, Debug)]
-pub struct DriverSide {
-    /// The driver's id on this host.
-    pub id: String,
-    /// Where the rig's bridge connects, and who may.
-    pub net: Network,
-    /// Commands answering a sample more than this many periods older than the newest
-    /// are dropped.
-    pub max_age_periods: u64,
-    /// Silence of the rig's pings after which the link is reported lost.
-    pub link_timeout: Duration,
-    /// How long a rig session holds the driver without a word from it.
-    pub lease: Lease,
-    /// Each action's sample-to-actuation delay across the link as CSV, if given
-    /// (`seq,t_sample_ns,t_arrived_ns,sample_to_actuation`, ns on this host's clock: a
-    /// file `rig learn --delay-from` takes).
-    pub timing_out: Option<std::path::PathBuf>,
-}
-
-/// What the two halves share.
-#[derive(Default)]
-pub(crate) struct Shared {
-    pub(crate) stop: AtomicBool,
-    /// `seq` of the last command passed to the driver, and when it arrived.
-    pub(crate) command: AtomicU64,
-    pub(crate) command_arrived: AtomicU64,
-    /// When the last ACTION passed to the driver arrived; 0 once a RESET or another
-    /// control command followed it.
-    pub(crate) action_arrived: AtomicU64,
-    /// The newest sample's `seq`.
-    pub(crate) newest: AtomicU64,
-    /// The driver's period (0 until its info came) \[ns\].
-    pub(crate) period_ns: AtomicU64,
-    /// When the last ping arrived.
-    pinged: AtomicU64,
-    /// The recent samples' `(seq, t_sample_ns)`, the newest last.
-    pub(crate) sampled: Mutex<VecDeque<(u64, u64)>>,
-}
+mod gate;
+pub(crate) mod settings;
+mod shared;
 
 /// Samples remembered for the actions that answer them.
 const RECENT: usize = 1024;
@@ -82,19 +46,21 @@ pub fn serve_driver(opts: &DriverSide) -> Result<Counts> {
         session.zid()
     );
     let shared = Arc::new(Shared::default());
-    let _pong = answer_pings(&session, &opts.id, &shared)?;
+    let time = Monotonic::host();
+    let _pong = answer_pings(&session, &opts.id, &shared, time.clone())?;
     let up = {
         let (session, opts, shared) = (session.clone(), opts.clone(), shared.clone());
+        let time = time.clone();
         std::thread::Builder::new()
             .name("bridge-up".into())
             .spawn(move || {
                 // Whichever half ends, the other follows.
-                let r = samples_up(&session, &opts, &shared);
+                let r = samples_up(&session, &opts, &shared, &time);
                 shared.stop.store(true, Relaxed);
                 r
             })?
     };
-    let down = commands_down(&session, opts, &shared);
+    let down = commands_down(&session, opts, &shared, time);
     shared.stop.store(true, Relaxed);
     let up = up.join().map_err(|_| Error::Panicked("samples'"))?;
     let (mut counts, up) = (down?, up?);
@@ -105,22 +71,23 @@ pub fn serve_driver(opts: &DriverSide) -> Result<Counts> {
     Ok(counts)
 }
 
-/// Answers each ping at once, from Zenoh's own thread.
+/// Answers each ping at once, from Zenoh's own thread, stamped on `time`.
 fn answer_pings(
     session: &zenoh::Session,
     id: &str,
     shared: &Arc<Shared>,
+    time: Monotonic,
 ) -> Result<zenoh::pubsub::Subscriber<()>> {
     let pong = publisher(session, &Topic::Pong.key(id))?;
     let shared = shared.clone();
     session
         .declare_subscriber(Topic::Ping.key(id))
         .callback(move |s| {
-            let arrived = now_ns();
+            let arrived = time.now_ns();
             if let Ok(mut p) = from_bytes::<Ping>(&s.payload().to_bytes()) {
                 shared.pinged.store(arrived, Relaxed);
                 p.arrived = arrived;
-                p.answered = now_ns();
+                p.answered = time.now_ns();
                 let _ = pong.put(to_bytes(&p)).wait();
             }
         })
@@ -128,15 +95,25 @@ fn answer_pings(
         .map_err(zenoh(|| "subscribing to pings".to_string()))
 }
 
-/// The rig's commands, from the network to the driver, until stopped.
-fn commands_down(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -> Result<Counts> {
+/// The rig's commands, from the network to the driver, until stopped; judged on `time`.
+fn commands_down(
+    session: &zenoh::Session,
+    opts: &DriverSide,
+    shared: &Shared,
+    time: Monotonic,
+) -> Result<Counts> {
     let bus = Bus::with_node(&format!("rig-bridge-{}", opts.id), "driver")?;
-    Gate::open(opts, session, shared, &bus)?.serve(&bus)
+    Gate::open((opts, session, shared), &bus, time)?.serve(&bus)
 }
 
 /// The driver's info and samples, to the network, until stopped; what the driver's
-/// watchdog did, and the link's state, said on the way.
-fn samples_up(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -> Result<Counts> {
+/// watchdog did, and the link's state, said on the way; stamped on `time`.
+fn samples_up(
+    session: &zenoh::Session,
+    opts: &DriverSide,
+    shared: &Shared,
+    time: &Monotonic,
+) -> Result<Counts> {
     let id = &opts.id;
     let bus = Bus::with_node(&format!("rig-bridge-{id}-samples"), "driver")?;
     let info_rx = bus.rx_on::<DriverInfo>(&service(id, topic::INFO), DRIVER_QOS)?;
@@ -164,13 +141,13 @@ fn samples_up(session: &zenoh::Session, opts: &DriverSide, shared: &Shared) -> R
             let stamps = Stamps {
                 command: shared.command.load(Relaxed),
                 command_arrived: shared.command_arrived.load(Relaxed),
-                forwarded: now_ns(),
+                forwarded: time.now_ns(),
             };
             put(&sample_pub, to_bytes(&s), Some(to_bytes(&stamps)))?;
             counts.samples += 1;
             counts.watchdog += watch.sample(&s, shared.action_arrived.load(Relaxed)) as u64;
         }
-        watch.link(shared.pinged.load(Relaxed));
+        watch.link(shared.pinged.load(Relaxed), time.now_ns());
     }
     Ok(counts)
 }
@@ -216,12 +193,12 @@ impl<'a> Watch<'a> {
         engaged
     }
 
-    /// Reports the link lost when no ping came for the timeout, and back when one does.
-    fn link(&mut self, pinged: u64) {
+    /// Reports the link lost when no ping came for the timeout (`pinged`: when the last
+    /// came; `now`: the time now), and back when one does.
+    fn link(&mut self, pinged: u64, now: u64) {
         if pinged == 0 {
             return;
         }
-        let now = now_ns();
         let silent = now.saturating_sub(pinged);
         match self.lost_at {
             None if silent > self.timeout.as_nanos() as u64 => {
@@ -292,5 +269,25 @@ mod tests {
             "{after_reset}"
         );
         assert!(!after_reset.contains("periods after"), "{after_reset}");
+    }
+
+    /// The link is lost once the rig's pings are silent for longer than the timeout,
+    /// and back with the next ping.
+    #[test]
+    fn the_link_is_lost_after_the_timeout_of_silence() {
+        let (clock, time) = Monotonic::mock();
+        let mut watch = Watch::new("pend", Duration::from_millis(500));
+        watch.link(0, clock.now_ns());
+        time.advance(Duration::from_millis(1));
+        let pinged = clock.now_ns();
+        time.advance(Duration::from_millis(500));
+        watch.link(pinged, clock.now_ns());
+        assert_eq!(watch.lost_at, None);
+        time.advance(Duration::from_millis(1));
+        watch.link(pinged, clock.now_ns());
+        assert_eq!(watch.lost_at, Some(pinged));
+        time.advance(Duration::from_secs(2));
+        watch.link(clock.now_ns(), clock.now_ns());
+        assert_eq!(watch.lost_at, None);
     }
 }

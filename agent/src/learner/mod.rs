@@ -7,6 +7,8 @@ use crate::config::{HorizonKind, LearningConfig, LlrConfig, LstdConfig, RbfConfi
 use crate::config::{LqrConfig, PlanningConfig, SarsaConfig, TilesConfig, VgbpConfig};
 use crate::step_size::StepSize;
 
+mod resolve;
+
 /// An approximator with a gradient (§3.5): what a process model, an MLAC or RMAC actor
 /// and their critics are.
 #[derive(Clone, Debug, PartialEq)]

@@ -13,8 +13,9 @@ use zenoh::Wait;
 use zenoh::pubsub::Publisher;
 use zenoh::sample::Sample;
 
+use super::settings::DriverSide;
+use super::shared::Shared;
 use crate::claim::{Claim, CommandSource, Tenure, Verdict};
-use crate::driver_side::{DriverSide, Shared};
 use crate::message::{Topic, from_bytes, to_bytes, user_of};
 use crate::{Counts, publisher};
 
@@ -36,12 +37,11 @@ pub(crate) struct Gate<'a> {
 
 impl<'a> Gate<'a> {
     /// Takes the driver's command service on this host (so that no rig here commands
-    /// it meanwhile).
+    /// it meanwhile); judges on `time`.
     pub(crate) fn open(
-        opts: &'a DriverSide,
-        session: &'a zenoh::Session,
-        shared: &'a Shared,
+        (opts, session, shared): (&'a DriverSide, &'a zenoh::Session, &'a Shared),
         bus: &Bus,
+        time: Monotonic,
     ) -> Result<Self> {
         let tx = bus
             .tx_on::<DriverCommand>(&service(&opts.id, topic::COMMAND), DRIVER_QOS)
@@ -55,7 +55,7 @@ impl<'a> Gate<'a> {
             session,
             shared,
             tenure: Tenure::default(),
-            time: Monotonic::host(),
+            time,
             tx,
             refusals: publisher(session, &Topic::Refused.key(&opts.id))?,
             timing: match &opts.timing_out {
