@@ -35,7 +35,8 @@ from typing import Any
 import gymnasium
 import numpy as np
 
-from .lockstep import Outcome, Services, serve_until_signalled
+from .lockstep import Outcome, Services
+from .serving import serve_until_signalled
 from .model_driver import task_and_driver_id
 from .task import Task
 

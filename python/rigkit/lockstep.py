@@ -36,8 +36,6 @@ from __future__ import annotations
 import ctypes
 import math
 import os
-import signal
-import sys
 import time
 from collections.abc import Callable, Sequence
 from typing import Any, Protocol
@@ -354,26 +352,3 @@ def serve(
             continue
         newest = 0 if newest is None else newest + 1
         services.publish_sample(samples.fill(counters, newest, simulation.state(), outcome))
-
-
-def serve_until_signalled(
-    services: Services, task: Task, simulation: Simulation, who: str, verbose: bool,
-    speed: float | None = None,
-) -> None:
-    """serve() until SIGTERM or Ctrl-C, logging resets to stderr as `who` if `verbose`;
-    with a `speed`, clocked.serve_realtime at that speed instead."""
-    stopping: list[bool] = []
-    for sig in (signal.SIGTERM, signal.SIGINT):
-        signal.signal(sig, lambda *_: stopping.append(True))
-
-    def log(text: str) -> None:
-        print(f"{who}: {text}", file=sys.stderr, flush=True)
-
-    told = log if verbose else None
-    if speed is None:
-        serve(services, task, simulation, lambda: bool(stopping), told)
-    else:
-        from .clocked import serve_realtime
-
-        serve_realtime(services, task, simulation, speed, lambda: bool(stopping), told)
-    print(f"{who}: stopped", file=sys.stderr)

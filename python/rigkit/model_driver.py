@@ -39,7 +39,8 @@ def run(
     argparse's add_argument)` pairs; `what` names the model, a string or a function of
     the parsed arguments. Ends in one line if iceoryx2 is not installed."""
     script.need(Path(sys.argv[0]).name, modules=["iceoryx2"])
-    from .lockstep import Services, serve_until_signalled
+    from .lockstep import Services
+    from .serving import serve_until_signalled
 
     p = parser(doc, default_task, shape)
     for flag, keywords in options:

@@ -16,7 +16,8 @@ from pathlib import Path
 
 from rigkit import messages
 from rigkit.angle import wrap
-from rigkit.lockstep import Services, serve_until_signalled
+from rigkit.lockstep import Services
+from rigkit.serving import serve_until_signalled
 from rigkit.task import Task
 
 ROOT = Path(__file__).resolve().parents[3]
