@@ -10,7 +10,9 @@
 use std::fs::{File, OpenOptions, TryLockError};
 use std::io::{Read, Seek, Write};
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use wire::Monotonic;
 
 /// The lock file's name inside the folder it guards.
 pub const LOCK_FILE: &str = ".lock";
@@ -60,6 +62,11 @@ pub struct FolderLock {
 impl FolderLock {
     /// Locks the existing folder `folder` for this process, or says who holds it.
     pub fn acquire(folder: &Path) -> Result<Self, LockError> {
+        Self::acquire_at(folder, &Monotonic::host())
+    }
+
+    /// [`Self::acquire`], waiting for a holder to name itself on `time`.
+    fn acquire_at(folder: &Path, time: &Monotonic) -> Result<Self, LockError> {
         let path = folder.join(LOCK_FILE);
         let io = |error| LockError::Io {
             path: path.display().to_string(),
@@ -74,7 +81,7 @@ impl FolderLock {
             .map_err(io)?;
         match file.try_lock() {
             Ok(()) => {}
-            Err(TryLockError::WouldBlock) => return Err(holder(folder, &mut file)),
+            Err(TryLockError::WouldBlock) => return Err(holder(folder, &mut file, time)),
             Err(TryLockError::Error(e)) => return Err(io(e)),
         }
         file.set_len(0).map_err(io)?;
@@ -88,9 +95,9 @@ impl FolderLock {
 }
 
 /// The error naming the process that holds `folder` (whose lock file is `file`), as it
-/// wrote itself into the file.
-fn holder(folder: &Path, file: &mut File) -> LockError {
-    let t0 = Instant::now();
+/// wrote itself into the file within [`HOLDER_NAMED`] on `time`.
+fn holder(folder: &Path, file: &mut File, time: &Monotonic) -> LockError {
+    let end = time.now_ns() + HOLDER_NAMED.as_nanos() as u64;
     loop {
         if let Some((pid, command)) = read_holder(file) {
             return LockError::Held {
@@ -99,14 +106,18 @@ fn holder(folder: &Path, file: &mut File) -> LockError {
                 command,
             };
         }
-        if t0.elapsed() > HOLDER_NAMED {
+        let now = time.now_ns();
+        if now > end {
             return LockError::HeldByUnknown {
                 folder: folder.display().to_string(),
             };
         }
-        std::thread::sleep(Duration::from_millis(10));
+        time.sleep_until(now + LOOK_AGAIN.as_nanos() as u64);
     }
 }
+
+/// How often a refused command reads the lock file again for its holder's name.
+const LOOK_AGAIN: Duration = Duration::from_millis(10);
 
 /// The process id and command line in a lock file, if they name a live process.
 fn read_holder(file: &mut File) -> Option<(u32, String)> {
@@ -169,5 +180,22 @@ mod tests {
             err.contains(".lock") && err.contains("No such file"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn a_holder_that_never_names_itself_is_unknown_after_half_a_second() {
+        let dir = std::env::temp_dir().join(format!("rig-lock-unnamed-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // Held, and nothing written into it.
+        let held = File::create(dir.join(LOCK_FILE)).unwrap();
+        held.try_lock().unwrap();
+        let (time, _) = Monotonic::mock();
+        let err = FolderLock::acquire_at(&dir, &time).err().unwrap();
+        assert!(matches!(err, LockError::HeldByUnknown { .. }), "{err}");
+        let waited = time.now_ns();
+        let (most, look) = (HOLDER_NAMED.as_nanos() as u64, LOOK_AGAIN.as_nanos() as u64);
+        assert!((most..=most + look).contains(&waited), "{waited} ns");
+        drop(held);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -9,7 +9,9 @@ use std::io::{BufRead, BufReader, PipeReader, PipeWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use wire::Monotonic;
 
 use super::command::Role;
 use super::error::Result;
@@ -88,9 +90,18 @@ impl Log {
     /// The last lines the process wrote, once it has exited (waiting a moment for those
     /// still in the pipe), and why the log could not be written if it could not.
     pub(super) fn tail(&self) -> String {
-        let t0 = Instant::now();
-        while self.thread.as_ref().is_some_and(|t| !t.is_finished()) && t0.elapsed() < LAST_WORDS {
-            std::thread::sleep(Duration::from_millis(2));
+        self.tail_on(&Monotonic::host())
+    }
+
+    /// [`Self::tail`], waiting at most [`LAST_WORDS`] of `time` for the pipe to close.
+    fn tail_on(&self, time: &Monotonic) -> String {
+        let end = time.now_ns() + LAST_WORDS.as_nanos() as u64;
+        while self.thread.as_ref().is_some_and(|t| !t.is_finished()) {
+            let now = time.now_ns();
+            if now >= end {
+                break;
+            }
+            time.sleep_until(now + 2_000_000);
         }
         let r = self.relayed.lock().unwrap_or_else(|e| e.into_inner());
         let mut lines: Vec<&str> = r.tail.iter().map(String::as_str).collect();
@@ -184,5 +195,20 @@ mod tests {
             "{tail}"
         );
         assert!(log.error().is_some());
+    }
+
+    #[test]
+    fn the_last_words_are_waited_for_a_second_at_most() {
+        let dir = std::env::temp_dir().join(format!("rig-logs-open-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // A process that has not closed its output: the relay never finishes.
+        let (log, writer) = Log::open(&dir.join("agent.log")).unwrap();
+        let (time, _) = Monotonic::mock();
+        log.tail_on(&time);
+        let waited = time.now_ns();
+        let most = LAST_WORDS.as_nanos() as u64;
+        assert!((most..most + 2_000_000).contains(&waited), "{waited} ns");
+        drop(writer);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
