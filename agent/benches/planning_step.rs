@@ -176,6 +176,7 @@ fn setup(case: Case, seed: u64) -> (Task, Box<dyn Agent>) {
                 samples: None,
                 elites: None,
                 iterations: 3,
+                start_from_regulator: false,
             });
             if let Some(Component::Llr(a)) = &mut cfg.actor {
                 a.alpha = 0.02;

@@ -23,9 +23,10 @@
 //! optimization", IROS 2012), the LQR's cost as the terminal cost (D. Q. Mayne et al.,
 //! "Constrained model predictive control: stability and optimality", Automatica 36, 2000):
 //!
-//! 1. the sequence starts as the better (lower `J`) of the last sample's plan, shifted by
-//!    one sample, its last action repeated, and the actor's rollout through the model
-//!    (the rollout alone at a trial's first sample);
+//! 1. the sequence starts as the best (lowest `J`) of the last sample's plan, shifted by
+//!    one sample, its last action repeated, the actor's rollout through the model, and,
+//!    with `start_from_regulator`, the regulator's: the LQR of `S`, `u_i = −K z̃_i`, in
+//!    closed loop through the model (at a trial's first sample there is no last plan);
 //! 2. backward pass, along the rollout `x̄_i, ū_i` with the model's fit there,
 //!    `δx_{i+1} = A_i δx_i + B_i δu_i` (`A = I + ∂Δ̂/∂x`, `B = ∂Δ̂/∂u`), `ℓ`'s gradient
 //!    and the reward's curvature at the reference plus the barrier's at `x̄_i`
@@ -71,7 +72,7 @@ use crate::actor_critic::{Improver, TaskInfo};
 use crate::barrier::Barrier;
 use crate::config::PlanningConfig;
 use crate::critic::ValueWithGradient;
-use crate::lqr::{LastSolution, affine_model, quadratic_weights};
+use crate::lqr::{LastSolution, affine_model, quadratic_weights, regulator_action};
 use crate::mlac::{ChoosesActions, Mlac};
 use plant::OperatingRange;
 use plant::angle::wrap;
@@ -169,25 +170,24 @@ impl Ilqr {
         )
     }
 
-    /// `S` of the terminal cost `zᵀ S z`: the LQR's of the model's fit at the reference,
-    /// or the stage cost's quadratic form where that LQR has no finite solution.
-    fn terminal(&self) -> DMatrix<f64> {
+    /// `S` of the terminal cost `zᵀ S z` and the gain `K` of the LQR of the model's fit at
+    /// the reference, or the stage cost's quadratic form and no gain where that LQR has no
+    /// finite solution.
+    fn terminal(&self) -> (DMatrix<f64>, Option<DMatrix<f64>>) {
         let m = self.info().m();
         let (a, b) = affine_model(&self.mlac, &self.info().reward.reference, &vec![0.0; m]);
         let reward = &self.info().reward;
-        self.solved
-            .riccati(&a, &b, &self.q, &reward.p, self.gamma)
-            .map_or_else(
-                || {
-                    let n = self.q.len();
-                    let mut s = DMatrix::zeros(n + 1, n + 1);
-                    for (i, q) in self.q.iter().enumerate() {
-                        s[(i, i)] = *q;
-                    }
-                    s
-                },
-                |(_, s)| s,
-            )
+        match self.solved.riccati(&a, &b, &self.q, &reward.p, self.gamma) {
+            Some((k, s)) => (s, Some(k)),
+            None => {
+                let n = self.q.len();
+                let mut s = DMatrix::zeros(n + 1, n + 1);
+                for (i, q) in self.q.iter().enumerate() {
+                    s[(i, i)] = *q;
+                }
+                (s, None)
+            }
+        }
     }
 
     /// `x̃_{i+1} = f̂(x̃_i, u_i)` and the model's fit `(A, B)` there.
@@ -242,23 +242,29 @@ impl Ilqr {
         r
     }
 
-    /// Step 1: the better of the last plan, shifted, and the actor's rollout.
-    fn initial(&self, x: &[f64], s: &DMatrix<f64>) -> Rollout {
+    /// Step 1: the best of the actor's rollout, the last plan, shifted, and — with
+    /// `start_from_regulator` and a finite gain `K` — the regulator's rollout,
+    /// `u_i = −K z̃_i`; a tie goes to the earlier.
+    fn initial(&self, x: &[f64], s: &DMatrix<f64>, gain: Option<&DMatrix<f64>>) -> Rollout {
         let (m, h) = (self.info().m(), self.horizon());
-        let actor = self.rollout(x, s, |_, xi, u| self.mlac.actor().value(xi, u));
+        let mut best = self.rollout(x, s, |_, xi, u| self.mlac.actor().value(xi, u));
         let last = self.last.lock().expect("the plan's lock").clone();
-        if last.len() != h * m {
-            return actor;
+        if last.len() == h * m {
+            let shifted = self.rollout(x, s, |i, _, u| {
+                let j = (i + 1).min(h - 1);
+                u.copy_from_slice(&last[j * m..(j + 1) * m]);
+            });
+            if shifted.cost <= best.cost {
+                best = shifted;
+            }
         }
-        let shifted = self.rollout(x, s, |i, _, u| {
-            let j = (i + 1).min(h - 1);
-            u.copy_from_slice(&last[j * m..(j + 1) * m]);
-        });
-        if shifted.cost <= actor.cost {
-            shifted
-        } else {
-            actor
+        if let Some(k) = gain.filter(|_| self.config.start_from_regulator) {
+            let regulated = self.rollout(x, s, |_, xi, u| regulator_action(k, &self.error(xi), u));
+            if regulated.cost < best.cost {
+                best = regulated;
+            }
         }
+        best
     }
 
     /// Step 2 with regularisation `μ`; `None` if some `Q_uu` is not positive definite.
@@ -368,8 +374,8 @@ impl Ilqr {
 
     /// The plan from `x`: the initial sequence improved by the configured iterations.
     fn plan(&self, x: &[f64]) -> Rollout {
-        let s = self.terminal();
-        let mut r = self.initial(x, &s);
+        let (s, gain) = self.terminal();
+        let mut r = self.initial(x, &s, gain.as_ref());
         for _ in 0..self.config.iterations {
             let Some(fb) = REGULARISATION
                 .iter()
@@ -443,6 +449,7 @@ mod tests {
             samples: None,
             elites: None,
             iterations: 3,
+            start_from_regulator: false,
         };
         Ilqr::new(mlac, config, gamma)
     }
@@ -455,6 +462,30 @@ mod tests {
             let p = planner(0.5, 0.9, horizon);
             testing::acts_as_lqr(&p, 0.5, 0.9, 1e-6, &format!("H = {horizon}"));
         }
+    }
+
+    /// With `start_from_regulator` the search starts from the regulator's rollout where the
+    /// actor's (`π = 0.1`) costs more: on a linear model that rollout's cost is the
+    /// terminal cost at the start, `z₀ᵀ S z₀`, and its first action the LQR's, `−K z₀`.
+    #[test]
+    fn the_regulator_s_rollout_is_a_start() {
+        let mut p = planner(0.5, 0.9, 10);
+        let (s, gain) = p.terminal();
+        let actor = p.initial(&[0.8], &s, gain.as_ref());
+        p.config.start_from_regulator = true;
+        let regulated = p.initial(&[0.8], &s, gain.as_ref());
+        let k = gain.expect("the linear model's LQR");
+        let z = DVector::from_vec(vec![0.8, 1.0]);
+        let cost_to_go = (z.transpose() * &s * &z)[(0, 0)];
+        assert!(
+            regulated.cost < actor.cost - 0.01,
+            "{} {}",
+            regulated.cost,
+            actor.cost
+        );
+        assert!((regulated.cost - cost_to_go).abs() < 1e-9 * cost_to_go);
+        assert!((regulated.us[0] + k[(0, 0)] * 0.8 + k[(0, 1)]).abs() < 1e-12);
+        assert_eq!(actor.us[0], 0.1);
     }
 
     /// `x' = x + 0.3 sin 2x + 0.4 u`, the tiny task's state kept within ±2.

@@ -122,12 +122,17 @@ impl Lqr {
         let Some(k) = self.gain(&a, &b) else {
             return false;
         };
-        let n = e.len();
-        for (j, v) in u.iter_mut().enumerate() {
-            *v = -(0..n).map(|i| k[(j, i)] * e[i]).sum::<f64>() - k[(j, n)];
-        }
+        regulator_action(&k, e, u);
         self.info().saturate(u);
         u.iter().all(|v| v.is_finite())
+    }
+}
+
+/// `u = −K z`, `z = [e; 1]`: the regulator's action for the state error `e`, unsaturated.
+pub(crate) fn regulator_action(k: &DMatrix<f64>, e: &[f64], u: &mut [f64]) {
+    let n = e.len();
+    for (j, v) in u.iter_mut().enumerate() {
+        *v = -(0..n).map(|i| k[(j, i)] * e[i]).sum::<f64>() - k[(j, n)];
     }
 }
 

@@ -230,6 +230,7 @@ mod tests {
             samples: Some(64),
             elites: Some(8),
             iterations: 6,
+            start_from_regulator: false,
         };
         Planner::new(mlac, config, 1.0, seed)
     }

@@ -30,6 +30,11 @@ pub struct PlanningConfig {
     pub elites: Option<u32>,
     /// Iterations of the search per sample.
     pub iterations: u32,
+    /// The iterative LQR's: whether the regulator's rollout — the LQR of the model's fit at
+    /// the reference, in closed loop through the model — competes with the last plan and
+    /// the actor's rollout as the sequence a sample's search starts from.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub start_from_regulator: bool,
 }
 
 /// How [`PlanningConfig`] searches its action sequence.
@@ -69,6 +74,12 @@ impl PlanningConfig {
         check_int("planning.iterations", self.iterations.into(), 1, 100)?;
         match self.method {
             PlanningMethod::Cem => {
+                if self.start_from_regulator {
+                    return Err(ConfigError::new(
+                        "planning.start_from_regulator",
+                        "start_from_regulator is the iterative LQR's: add method = \"ilqr\" or remove it",
+                    ));
+                }
                 check_int("planning.samples", self.samples().into(), 2, 10_000)?;
                 check_int(
                     "planning.elites",
@@ -105,6 +116,7 @@ mod tests {
             samples: Some(samples),
             elites: Some(elites),
             iterations: 2,
+            start_from_regulator: false,
         }
     }
 
@@ -135,6 +147,28 @@ mod tests {
         .unwrap_err();
         assert_eq!(e.key, "planning.samples", "{e}");
         assert!(e.message.contains("remove it"), "{e}");
+    }
+
+    /// Only the iterative LQR starts from the regulator's rollout: the cross-entropy method
+    /// refuses the key, naming it.
+    #[test]
+    fn only_the_ilqr_starts_from_the_regulator() {
+        let e = PlanningConfig {
+            start_from_regulator: true,
+            ..cem(16, 4)
+        }
+        .validate()
+        .unwrap_err();
+        assert_eq!(e.key, "planning.start_from_regulator", "{e}");
+        PlanningConfig {
+            method: PlanningMethod::Ilqr,
+            samples: None,
+            elites: None,
+            start_from_regulator: true,
+            ..cem(16, 4)
+        }
+        .validate()
+        .unwrap();
     }
 
     /// Without samples and elites the cross-entropy method takes 64 and 8.

@@ -9,7 +9,7 @@
 //! |---|---|---|
 //! | [`TaskKind::Goal`] | its reward has no state cost: a region is reached, no reference held | MLAC/LLR ([`rules`]) |
 //! | [`TaskKind::Balance`] | every start lies within [`BALANCE_ANGLE`] of the reward's reference in every angle | MLAC/LLR, its actions from the LQR of its learned model ([`crate::lqr`]) |
-//! | [`TaskKind::SwingUp`] | a start lies further from the reference | MLAC/LLR, its actions planned by the iterative LQR with its learned model ([`crate::ilqr`]) |
+//! | [`TaskKind::SwingUp`] | a start lies further from the reference | MLAC/LLR, its actions planned by the iterative LQR with its learned model ([`crate::ilqr`]), each plan started from the regulator's rollout where that predicts less cost |
 //!
 //! Near the reference the learned model's local fit is the linear model a regulator
 //! needs, and the regulator acts well from the first trials on; far from it no linear
@@ -154,10 +154,15 @@ pub fn regulator_discount(task: &Task) -> f64 {
 
 /// The plan of a swing-up: a tenth of the trial ahead (the acrobot's measured 1 s of its
 /// 10 s trials, docs/results/acrobot.md), [`PLAN_SAMPLES`] samples at most and fewest,
-/// [`PLAN_ITERATIONS`] iterations per sample. The most is counted in samples, not seconds: the learned
-/// model predicts one sample at a time and its errors compound with each (the Furuta
-/// pendulum's swing-up, 8 s trials of 20 ms: plans of 40 samples never held it up in 60
-/// trials, plans of 20 held it from trial 20 on, docs/results/systems.md).
+/// [`PLAN_ITERATIONS`] iterations per sample, each sample's search started from the best of
+/// the last plan, the actor's rollout and the regulator's (the LQR of the model's fit at
+/// the reference). The most is counted in samples, not seconds: the learned model predicts
+/// one sample at a time and its errors compound with each (the Furuta pendulum's
+/// swing-up, 8 s trials of 20 ms: plans of 40 samples never held it up in 60 trials, plans
+/// of 20 held it from trial 20 on, docs/results/systems.md). The regulator's rollout is
+/// the start the plan lacks near the reference: on the Furuta pendulum's swing-up, first
+/// upright after 27–40 s of interaction with it, 61–118 s without (five seeds each,
+/// docs/results/systems.md, "The regulator's rollout as a plan's start").
 fn planning(task: &Task) -> PlanningConfig {
     let samples = (PLAN_FRACTION * task.trial_seconds / task.ts).round() as u32;
     PlanningConfig {
@@ -166,6 +171,7 @@ fn planning(task: &Task) -> PlanningConfig {
         samples: None,
         elites: None,
         iterations: PLAN_ITERATIONS,
+        start_from_regulator: true,
     }
 }
 
@@ -348,6 +354,7 @@ high = 10
         assert_eq!(planning.method, PlanningMethod::Ilqr);
         // A tenth of the 5 s trial at 20 ms, 25 samples, is more than the most, 20.
         assert_eq!(planning.horizon, 20);
+        assert!(planning.start_from_regulator);
         assert!(preset.agent.lqr.is_none());
         let Some(Component::Llr(model)) = &preset.agent.model else {
             panic!("an LLR model")
