@@ -17,7 +17,8 @@ An evaluation succeeds
   --upright A --hold S  if every greedy trial of it (one per start state, read from the
                         run's recording, run.mcap) runs its full length and its last S
                         seconds keep every angle state within A rad of 0 (upright).
-Prints a Markdown table and a line "K of N seeds succeed at the last evaluation".
+Prints a Markdown table, every evaluation's verdict per seed (and how many of each seed's
+last ten succeed), and a line "K of N seeds succeed at the last evaluation".
 Needs mcap (the official reader); the judging is rigkit.seeds.
 """
 
@@ -36,7 +37,7 @@ need("seeds_report.py", modules=["mcap"])
 
 from rigkit.recording import RecordingError  # noqa: E402
 from rigkit.returns import ReturnsError  # noqa: E402
-from rigkit.seeds import seed_results  # noqa: E402
+from rigkit.seeds import last_successes, seed_results, verdict_line  # noqa: E402
 
 
 def seconds(s: float | None) -> str:
@@ -71,6 +72,13 @@ def main():
             f"| {seconds(first)} | {seconds(holds)} "
             f"| {r.learning_mean:.2f} | {r.wall_s:.1f} s | {step} |"
         )
+    print("\nEvery evaluation in order (1 succeeds, . misses), and of each seed's last ten:")
+    ok = total = 0
+    for r in results:
+        won, of = last_successes(r.verdicts)
+        ok, total = ok + won, total + of
+        print(f"- seed {r.seed}: {verdict_line(r.verdicts)} — {won} of {of}")
+    print(f"- the last ten of every seed: {ok} of {total}")
     notes = [n for r in results for n in r.notes]
     if notes:
         print(f"\nUpright: every angle within {args.upright} rad of 0.")

@@ -45,7 +45,8 @@ class Seed:
     learning, `learning_mean` the mean return of the
     last 100 learning trials, `agent_ms` the agent's step per sample (median and 99th
     percentile, ms; None without timing), `curve` [(simulated s, greedy return)] of
-    every evaluation, `notes` (with `upright`) when each last greedy trial is upright."""
+    every evaluation, `verdicts` whether each evaluation succeeds, in order, `notes` (with
+    `upright`) when each last greedy trial is upright."""
 
     seed: int
     ts: float
@@ -60,6 +61,7 @@ class Seed:
     wall_s: float
     agent_ms: tuple[float, float] | None
     curve: list[tuple[float, float]]
+    verdicts: list[bool] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
 
 
@@ -142,6 +144,17 @@ def to_success(evals: list[tuple[float, bool]]) -> tuple[float | None, float | N
     return first, holds
 
 
+def verdict_line(verdicts: list[bool]) -> str:
+    """Every evaluation's verdict in order, `1` a success and `.` a miss."""
+    return "".join("1" if v else "." for v in verdicts)
+
+
+def last_successes(verdicts: list[bool], last: int = 10) -> tuple[int, int]:
+    """(successes, evaluations) among the `last` evaluations (all, if fewer)."""
+    tail = verdicts[-last:] if last > 0 else []
+    return sum(tail), len(tail)
+
+
 def median_to_success(values: list[float | None]) -> float | None:
     """The median over seeds of `to_success`'s figures, a seed that never got there
     counting as later than any that did: None if the median seed never did."""
@@ -201,6 +214,7 @@ def judge(
         wall_s=wall_s,
         agent_ms=(percentile(steps, 50) / 1e6, percentile(steps, 99) / 1e6) if steps else None,
         curve=[(e.sim_time_s, e.greedy) for e in evals if e.greedy is not None],
+        verdicts=good,
         notes=notes,
     )
 

@@ -1,7 +1,22 @@
 """The benchmark's interaction-to-success figures (rigkit.seeds.to_success and
 median_to_success) and the success rules (rigkit.seeds.meets)."""
 
-from rigkit.seeds import TaskTimes, median_to_success, meets, to_success
+from rigkit.seeds import (
+    TaskTimes,
+    last_successes,
+    median_to_success,
+    meets,
+    to_success,
+    verdict_line,
+)
+
+
+def test_every_verdict_in_order_and_the_last_ten_counted() -> None:
+    verdicts = [False] + [True] * 5 + [False] + [True] * 8
+    assert verdict_line(verdicts) == ".11111.11111111"
+    assert last_successes(verdicts) == (9, 10)
+    assert last_successes(verdicts[:4]) == (3, 4)
+    assert last_successes([]) == (0, 0)
 
 
 def test_first_success_and_the_success_held_to_the_end() -> None:
