@@ -98,21 +98,14 @@ impl FolderLock {
 /// wrote itself into the file within [`HOLDER_NAMED`] on `time`.
 fn holder(folder: &Path, file: &mut File, time: &Monotonic) -> LockError {
     let end = time.now_ns() + HOLDER_NAMED.as_nanos() as u64;
-    loop {
-        if let Some((pid, command)) = read_holder(file) {
-            return LockError::Held {
-                folder: folder.display().to_string(),
-                pid,
-                command,
-            };
-        }
-        let now = time.now_ns();
-        if now > end {
-            return LockError::HeldByUnknown {
-                folder: folder.display().to_string(),
-            };
-        }
-        time.sleep_until(now + LOOK_AGAIN.as_nanos() as u64);
+    let folder = folder.display().to_string();
+    match time.poll_until(end, LOOK_AGAIN, || read_holder(file)) {
+        Some((pid, command)) => LockError::Held {
+            folder,
+            pid,
+            command,
+        },
+        None => LockError::HeldByUnknown { folder },
     }
 }
 

@@ -86,6 +86,26 @@ impl Monotonic {
         }
     }
 
+    /// Asks `ready` until it gives a value or the time reaches `end_ns`, asking again every
+    /// `every`: the value, or `None` if the time ran out first. It is asked at least once.
+    pub fn poll_until<T>(
+        &self,
+        end_ns: u64,
+        every: Duration,
+        mut ready: impl FnMut() -> Option<T>,
+    ) -> Option<T> {
+        loop {
+            if let Some(v) = ready() {
+                return Some(v);
+            }
+            let now = self.now_ns();
+            if now >= end_ns {
+                return None;
+            }
+            self.sleep_until(now + every.as_nanos() as u64);
+        }
+    }
+
     /// Whether this is a mock.
     pub fn is_mock(&self) -> bool {
         self.mock.is_some()
@@ -185,6 +205,24 @@ mod tests {
 
     /// A mock stands still until moved; its clones share its time; a step moves it on
     /// after each reading.
+    /// A poll asks until it is answered or its end is reached, sleeping its interval
+    /// between questions; answered at once, it takes no time.
+    #[test]
+    fn a_poll_asks_until_answered_or_out_of_time() {
+        let (time, _) = Monotonic::mock();
+        let every = Duration::from_millis(10);
+        let mut asked = 0;
+        let answer = time.poll_until(35_000_000, every, || {
+            asked += 1;
+            (asked == 3).then_some(asked)
+        });
+        assert_eq!((answer, time.now_ns()), (Some(3), 20_000_000));
+        let never = time.poll_until(50_000_000, every, || None::<()>);
+        assert_eq!((never, time.now_ns()), (None, 50_000_000));
+        let at_once = time.poll_until(0, every, || Some(()));
+        assert_eq!((at_once, time.now_ns()), (Some(()), 50_000_000));
+    }
+
     #[test]
     fn a_mock_moves_only_when_moved() {
         let (clock, time) = Monotonic::mock();

@@ -23,6 +23,9 @@ const TAIL: usize = 5;
 /// How long [`Log::tail`] waits for the lines a process wrote before it exited.
 const LAST_WORDS: Duration = Duration::from_secs(1);
 
+/// How often the wait for the last words looks whether the pipe has closed.
+const LOOK_AGAIN: Duration = Duration::from_millis(2);
+
 /// The logs of the run's processes, by role.
 #[derive(Default)]
 pub(super) struct Logs(pub(super) Vec<(Role, Log)>);
@@ -96,13 +99,13 @@ impl Log {
     /// [`Self::tail`], waiting at most [`LAST_WORDS`] of `time` for the pipe to close.
     fn tail_on(&self, time: &Monotonic) -> String {
         let end = time.now_ns() + LAST_WORDS.as_nanos() as u64;
-        while self.thread.as_ref().is_some_and(|t| !t.is_finished()) {
-            let now = time.now_ns();
-            if now >= end {
-                break;
-            }
-            time.sleep_until(now + 2_000_000);
-        }
+        let closed = || {
+            self.thread
+                .as_ref()
+                .is_none_or(|t| t.is_finished())
+                .then_some(())
+        };
+        time.poll_until(end, LOOK_AGAIN, closed);
         let r = self.relayed.lock().unwrap_or_else(|e| e.into_inner());
         let mut lines: Vec<&str> = r.tail.iter().map(String::as_str).collect();
         lines.extend(r.error.as_deref());
@@ -207,7 +210,10 @@ mod tests {
         log.tail_on(&time);
         let waited = time.now_ns();
         let most = LAST_WORDS.as_nanos() as u64;
-        assert!((most..most + 2_000_000).contains(&waited), "{waited} ns");
+        assert!(
+            (most..most + LOOK_AGAIN.as_nanos() as u64).contains(&waited),
+            "{waited} ns"
+        );
         drop(writer);
         std::fs::remove_dir_all(&dir).unwrap();
     }

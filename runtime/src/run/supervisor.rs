@@ -31,6 +31,9 @@ const ANSWER_WINDOW: Duration = Duration::from_secs(1);
 /// How long the processes are given to exit after the end of the run.
 const EXIT_WINDOW: Duration = Duration::from_secs(10);
 
+/// How often the wait for the processes' exit looks again.
+const LOOK_AGAIN: Duration = Duration::from_millis(5);
+
 /// Checks that a topic's sequence numbers arrive without gaps.
 #[derive(Default)]
 pub(super) struct Continuity {
@@ -445,21 +448,15 @@ fn for_a_while(time: &Monotonic, window: Duration, mut go_on: impl FnMut() -> bo
 fn reap(children: &mut Children, logs: &Logs, time: &Monotonic) -> Result<()> {
     let deadline = time.now_ns() + EXIT_WINDOW.as_nanos() as u64;
     for (role, child) in &mut children.0 {
-        loop {
-            if let Some(status) = child.try_wait()? {
-                if !status.success() {
-                    return Err(RunError::Failed {
-                        role: role.name(),
-                        status,
-                        log: logs.last_lines(*role),
-                    });
-                }
-                break;
-            }
-            if time.now_ns() > deadline {
-                return Err(RunError::Lingered { role: role.name() });
-            }
-            std::thread::sleep(Duration::from_millis(5));
+        let status = time
+            .poll_until(deadline, LOOK_AGAIN, || child.try_wait().transpose())
+            .ok_or(RunError::Lingered { role: role.name() })??;
+        if !status.success() {
+            return Err(RunError::Failed {
+                role: role.name(),
+                status,
+                log: logs.last_lines(*role),
+            });
         }
     }
     children.0.clear();
@@ -507,8 +504,8 @@ mod tests {
             matches!(lingered, Err(RunError::Lingered { role: "observer" })),
             "{lingered:?}"
         );
-        // The deadline at 10 s, passed at the first reading after it.
-        assert_eq!(time.now_ns(), 10_500 * MS + 500 * MS);
+        // The deadline at 10 s, reached at the reading at 10 s (each moving the time on).
+        assert_eq!(time.now_ns(), 10_000 * MS + 500 * MS);
         drop(children);
 
         let (clock, time) = Monotonic::mock();
