@@ -165,7 +165,7 @@ def plot(rows, out: Path, learners=("default", SAC_LABEL)):
     systems = list(dict.fromkeys((r["experiment"], r["system"], r["held_out"]) for r in rows))
     if not systems:
         return
-    fig, ax = plt.subplots(figsize=(10, 2.2 + 0.55 * len(systems)))
+    fig, ax = plt.subplots(figsize=(10, 2.2 + 0.55 * len(systems)), layout="constrained")
     styles = {learners[0]: ("tab:blue", -0.15), learners[1]: ("tab:orange", 0.15)}
     labelled = set()
 
@@ -193,7 +193,6 @@ def plot(rows, out: Path, learners=("default", SAC_LABEL)):
     ax.set_xscale("log")
     ax.set_xlabel("samples of interaction until success (median over seeds)")
     ax.grid(axis="x", which="major", alpha=0.3)
-    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=2)
-    fig.tight_layout()
+    fig.legend(fontsize=7, loc="outside lower center", ncol=3)
     fig.savefig(out / "interaction.png", dpi=110, bbox_inches="tight")
     plt.close(fig)
