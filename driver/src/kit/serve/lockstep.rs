@@ -51,7 +51,7 @@ pub fn serve_lockstep(
         mut d,
         advertised,
         ..
-    } = Start::of(device, (driver_id, clock::LOCKSTEP), &time, how.verbose)?;
+    } = Start::of(device, driver_id, clock::LOCKSTEP, &time, how.verbose)?;
     let mut info = Announcer::new(advertised, &io);
     let mut served = Served::default();
     let mut x = [0.0; MAX_X];
@@ -60,7 +60,10 @@ pub fn serve_lockstep(
     // Until when the driver polls for commands (not at all before the first).
     let mut poll_until = 0;
     while !io.bus.interrupted() && how.stop_after.is_none_or(|n| served.samples < n) {
-        let wait = (poll_until, info.next_ns());
+        let wait = Wait {
+            poll_until,
+            next_info: info.next_ns(),
+        };
         let Some(c) = next_command(&io.commands, &time, wait).map_err(|e| io.err(e))? else {
             info.publish_if_due(&io)?;
             continue;
@@ -106,15 +109,28 @@ const LOOK_UP_EVERY: Duration = Duration::from_millis(10);
 /// How often a sleeping driver looks up (for the readers of its info).
 const LOOK_UP_ASLEEP: Duration = Duration::from_millis(50);
 
-/// The next of `commands`, on `time`: polled for until `poll_until`, handing the CPU on
-/// between polls; after that, waited for asleep until the rig wakes the driver. `None`
-/// at `next_info`, after [`LOOK_UP_EVERY`] of polling or [`LOOK_UP_ASLEEP`] asleep, or
-/// after a signal or a wake-up without a command.
+/// How [`next_command`] waits, in monotonic time \[ns\].
+#[derive(Clone, Copy, Debug)]
+struct Wait {
+    /// Polled for until then (not at all before the first command), asleep after.
+    poll_until: u64,
+    /// When the info is next due.
+    next_info: u64,
+}
+
+/// The next of `commands`, on `time`: polled for until `wait.poll_until`, handing the CPU
+/// on between polls; after that, waited for asleep until the rig wakes the driver. `None`
+/// at `wait.next_info`, after [`LOOK_UP_EVERY`] of polling or [`LOOK_UP_ASLEEP`] asleep,
+/// or after a signal or a wake-up without a command.
 fn next_command(
     commands: &impl Inbox<DriverCommand>,
     time: &Monotonic,
-    (poll_until, next_info): (u64, u64),
+    wait: Wait,
 ) -> Result<Option<DriverCommand>, wire::Error> {
+    let Wait {
+        poll_until,
+        next_info,
+    } = wait;
     let look_up = time.now_ns() + LOOK_UP_EVERY.as_nanos() as u64;
     loop {
         if let Some(c) = commands.try_recv()? {
@@ -173,7 +189,10 @@ mod tests {
             .arrives(25 * MS, action(1), Duration::ZERO)
             .arrives(2_000 * MS, action(2), Duration::ZERO)
             .arrives(2_120 * MS, action(3), Duration::ZERO);
-        let polling = (POLL_AFTER_COMMAND.as_nanos() as u64, 5_000 * MS);
+        let polling = Wait {
+            poll_until: POLL_AFTER_COMMAND.as_nanos() as u64,
+            next_info: 5_000 * MS,
+        };
         // Polling: looks up after 10 ms, then again, then the command at 25 ms.
         assert_eq!(next_command(&commands, &clock, polling).unwrap(), None);
         assert!((10 * MS..11 * MS).contains(&time.now_ns()));
@@ -183,14 +202,20 @@ mod tests {
         assert!((25 * MS..26 * MS).contains(&time.now_ns()));
         // Past its second of polling: asleep until the command at 2 s wakes it.
         time.advance_to(1_990 * MS);
-        let asleep = (0, 5_000 * MS);
+        let asleep = Wait {
+            poll_until: 0,
+            next_info: 5_000 * MS,
+        };
         let c = next_command(&commands, &clock, asleep).unwrap();
         assert_eq!(c.map(|c| c.seq), Some(2));
         assert!((2_000 * MS..2_001 * MS).contains(&time.now_ns()));
         // Asleep, it looks up after 50 ms without a command, or at the info's time.
         assert_eq!(next_command(&commands, &clock, asleep).unwrap(), None);
         assert!((2_050 * MS..2_051 * MS).contains(&time.now_ns()));
-        let info_due = (0, 2_060 * MS);
+        let info_due = Wait {
+            poll_until: 0,
+            next_info: 2_060 * MS,
+        };
         assert_eq!(next_command(&commands, &clock, info_due).unwrap(), None);
         assert!((2_060 * MS..2_061 * MS).contains(&time.now_ns()));
     }

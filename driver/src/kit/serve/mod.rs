@@ -151,7 +151,8 @@ impl Start {
     /// Starts serving `device` as driver `driver_id`, keeping time by `clock` on `time`.
     fn of(
         device: &mut impl Device,
-        (driver_id, clock): (&str, u64),
+        driver_id: &str,
+        clock: u64,
         time: &Monotonic,
         verbose: bool,
     ) -> Result<Self, Error> {

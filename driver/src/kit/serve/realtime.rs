@@ -23,7 +23,7 @@ pub fn serve(device: &mut impl Device, driver_id: &str, how: &Serving) -> Result
         advertised,
         t_start,
         period_ns,
-    } = Start::of(device, (driver_id, clock::REALTIME), &time, how.verbose)?;
+    } = Start::of(device, driver_id, clock::REALTIME, &time, how.verbose)?;
     let (bus, samples, commands) = (&io.bus, &io.samples, &io.commands);
     let mut instants = Instants {
         time,
