@@ -455,8 +455,9 @@ fn a_planning_section_is_added_checked_and_round_trips() {
     assert!(e.message.contains("remove the [planning] section"), "{e}");
 }
 
-/// `[planning]` with `method = "ilqr"`: horizon and iterations only; it round-trips, and
-/// the cross-entropy method's keys or a wrong method are named.
+/// `[planning]` with `method = "ilqr"`: horizon, iterations and whether to start from the
+/// regulator's rollout; it round-trips, and the cross-entropy method's keys (or
+/// `start_from_regulator` given to it) or a wrong method are named.
 #[test]
 fn an_ilqr_planning_section_resolves_and_round_trips() {
     let ilqr = "[planning]\nmethod = \"ilqr\"\nhorizon = 40\niterations = 3\n";
@@ -475,6 +476,25 @@ fn an_ilqr_planning_section_resolves_and_round_trips() {
     assert!(e.to_string().contains("cem"), "names the methods: {e}");
     let e = resolve_str(&ilqr.replace("horizon = 40", "horizon = 0")).unwrap_err();
     assert_eq!(e.key, "planning.horizon", "{e}");
+    assert!(!p.start_from_regulator);
+    assert!(
+        !c.to_toml().contains("start_from_regulator"),
+        "{}",
+        c.to_toml()
+    );
+    let regulated = resolve_str(&format!("{ilqr}start_from_regulator = true\n")).unwrap();
+    assert!(
+        regulated
+            .agent()
+            .planning
+            .as_ref()
+            .unwrap()
+            .start_from_regulator
+    );
+    assert_eq!(resolve_str(&regulated.to_toml()).unwrap(), regulated);
+    let e = resolve_str("[planning]\nhorizon = 10\niterations = 2\nstart_from_regulator = true\n")
+        .unwrap_err();
+    assert_eq!(e.key, "planning.start_from_regulator", "{e}");
 }
 
 /// `[lqr]`, which no preset has: a file adds it (empty, or with a region), it round-trips,
