@@ -244,7 +244,7 @@ impl Ilqr {
 
     /// Step 1: the best of the actor's rollout, the last plan, shifted, and — with
     /// `start_from_regulator` and a finite gain `K` — the regulator's rollout,
-    /// `u_i = −K z̃_i`; a tie goes to the earlier.
+    /// `u_i = −K z̃_i`; a tie goes to the last plan, and never to the regulator's.
     fn initial(&self, x: &[f64], s: &DMatrix<f64>, gain: Option<&DMatrix<f64>>) -> Rollout {
         let (m, h) = (self.info().m(), self.horizon());
         let mut best = self.rollout(x, s, |_, xi, u| self.mlac.actor().value(xi, u));
