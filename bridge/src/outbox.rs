@@ -247,7 +247,7 @@ pub(crate) fn commands_up(
 mod tests {
     use super::*;
 
-    const MS: u64 = 1_000_000;
+    use wire::MS;
 
     /// A RESET goes again after five periods (at least 200 ms) without an
     /// acknowledgement, then after twice as long each time, at most 2 s; an

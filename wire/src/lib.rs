@@ -36,5 +36,5 @@ pub use ports::{RecordedSignal, Rx, Tx};
 pub use service::{
     BUFFER, PATIENCE, Qos, RUN_QOS, describe_service, payload_type_name, type_name_of,
 };
-pub use time::{Inbox, MockTime, Monotonic, Scripted, now_ns};
+pub use time::{Inbox, MS, MockTime, Monotonic, Scripted, now_ns};
 pub use waiting::{FOREVER, Waiting};

@@ -11,6 +11,9 @@ use std::time::Duration;
 
 use crate::Error;
 
+/// A millisecond in the nanoseconds a [`Monotonic`] counts (a mock's times read in ms).
+pub const MS: u64 = 1_000_000;
+
 /// `CLOCK_MONOTONIC` now, in nanoseconds.
 pub fn now_ns() -> u64 {
     let mut ts = libc_timespec {

@@ -468,7 +468,7 @@ mod tests {
     use super::*;
     use std::process::Command;
 
-    const MS: u64 = 1_000_000;
+    use wire::MS;
 
     /// A window lasts its length of the time it is measured on, and no longer; it ends
     /// early when told to.

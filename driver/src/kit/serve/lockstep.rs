@@ -168,7 +168,7 @@ mod tests {
     use super::*;
     use wire::Scripted;
 
-    const MS: u64 = 1_000_000;
+    use wire::MS;
 
     fn action(seq: u64) -> DriverCommand {
         DriverCommand {

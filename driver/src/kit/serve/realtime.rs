@@ -126,7 +126,7 @@ mod tests {
     use std::time::Duration;
     use wire::Scripted;
 
-    const MS: u64 = 1_000_000;
+    use wire::MS;
 
     /// On a mock clock, periods of 10 ms from 0, READY: an action at 5 ms is applied
     /// at its arrival and keeps the watchdog off at 10 ms; the period to 20 ms without

@@ -313,7 +313,7 @@ fn gap_between(
 mod tests {
     use super::*;
 
-    const MS: u64 = 1_000_000;
+    use wire::MS;
 
     fn sample(seq: u64, t_ms: u64) -> DriverSample {
         DriverSample {

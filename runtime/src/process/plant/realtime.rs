@@ -352,7 +352,7 @@ impl Trials for RealtimePlant {
 mod tests {
     use super::*;
 
-    const MS: u64 = 1_000_000;
+    use wire::MS;
 
     /// Deadlines every 10 ms on a mock clock that starts at 0.
     fn deadlines() -> (Deadlines, wire::MockTime) {
